@@ -1,0 +1,363 @@
+"""Constant-orientation position workspace on a voxel grid.
+
+Definition: a voxel is reachable when its centre ``P`` satisfies, for every chain ``i``, the
+existence test of :mod:`kinematics.feasibility` at the fixed platform orientation: SOME
+``(d_i, eta_i)`` inside the strokes puts both legs of chain ``i`` inside ``[l_min, l_max]``.
+The chains are independent, so the workspace is the intersection of three per-chain sets.
+
+Engine: a compiled kernel walks each vertical column of voxels (columns in parallel over the
+cores) and, per chain, (1) rejects with the conservative whole-stroke bound, then (2) searches the
+arc samples outward from the sample that worked for the previous voxel of the column (a warm
+start that makes reachable voxels cost about one sample per chain). The chain that failed last
+is tested first. Work is issued in chunks of columns so progress is reported and cancellation is
+honoured between chunks. With zero rotation and the centered arc range the mechanism is
+symmetric under the mirror ``y -> -y`` (chain 1 onto itself, chains 2 and 3 swapped), and only
+half of the columns are computed.
+
+Default bounds: a cheap analytical box (each chain bounds ``|P_xy|``) is scouted on a coarse grid;
+the reachable box plus two coarse cells is used. If the fine workspace touches a face of that
+box that is not a face of the analytical box, the box is enlarged and the computation repeated,
+so the default bounds never clip the workspace.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Optional
+
+import numpy as np
+from numba import njit, prange
+
+from .design import Design, ParameterError
+from .feasibility import ChainTables, _chain_excluded, chain_search, default_n_eta
+from .geometry import platform_points_local
+from .grid import GridSpec
+from .progress import CancelToken, Cancelled, ProgressFn, Reporter, check
+from .rotation import euler_zyx_deg
+
+ALL_CHAINS = 7  # bitmask with the three chain bits set
+
+
+@dataclasses.dataclass(frozen=True)
+class WorkspaceSettings:
+    """How the position workspace is sampled.
+
+    Attributes:
+        voxel: voxel edge ``h``.
+        orientation: constant platform orientation ``(psi, theta, phi)`` in degrees (eq. (2)).
+        eta_step: largest spacing of the arc-stroke samples, in degrees.
+        bounds: ``((xlo, ylo, zlo), (xhi, yhi, zhi))``; ``None`` derives them from the design.
+        z_floor: lowest platform height considered by the derived bounds (the platform stays
+            above the base plane; the mirror branch ``z < 0`` is excluded).
+        symmetry: use the ``y -> -y`` mirror symmetry when it holds exactly.
+        diagnostics: also evaluate every chain at every voxel (slower) to report which chain binds.
+    """
+
+    voxel: float = 2.0
+    orientation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    eta_step: float = 0.5
+    bounds: Optional[tuple[tuple[float, float, float], tuple[float, float, float]]] = None
+    z_floor: float = 0.0
+    symmetry: bool = True
+    diagnostics: bool = False
+
+    def __post_init__(self) -> None:
+        v = self.voxel
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.25 <= v <= 100.0):
+            raise ParameterError("voxel", v, "[0.25, 100]")
+        if not (isinstance(self.eta_step, (int, float)) and 0.01 <= self.eta_step <= 10.0):
+            raise ParameterError("eta_step", self.eta_step, "[0.01, 10] degrees")
+        o = tuple(float(x) for x in self.orientation)
+        if len(o) != 3 or not all(math.isfinite(x) for x in o):
+            raise ParameterError("orientation", self.orientation, "three angles psi,theta,phi in degrees")
+        for name, val, lim in zip(("psi", "theta", "phi"), o, (180.0, 90.0, 180.0)):
+            if abs(val) > lim:
+                raise ParameterError(name, val, f"[-{lim:g}, {lim:g}] degrees")
+        object.__setattr__(self, "orientation", o)
+        if self.bounds is not None:
+            lo, hi = (tuple(float(x) for x in self.bounds[0]), tuple(float(x) for x in self.bounds[1]))
+            if len(lo) != 3 or len(hi) != 3 or not all(a < b for a, b in zip(lo, hi)):
+                raise ParameterError("bounds", self.bounds, "lo < hi on each of x, y, z")
+            object.__setattr__(self, "bounds", (lo, hi))
+
+    def key(self) -> tuple:
+        return dataclasses.astuple(self)
+
+
+@dataclasses.dataclass
+class WorkspaceResult:
+    """A computed workspace: the occupancy grid and how it was obtained."""
+
+    design: Design
+    settings: WorkspaceSettings
+    grid: GridSpec
+    occupancy: np.ndarray  # bool, grid.shape
+    chain_mask: Optional[np.ndarray]  # uint8 bitmask per voxel (bit i: chain i feasible) if diagnostics
+    compute_seconds: float
+    n_eta: int
+
+    @property
+    def voxels(self) -> int:
+        """Number of reachable voxels."""
+        return int(self.occupancy.sum())
+
+    @property
+    def volume(self) -> float:
+        """Voxel volume ``V = N_reachable h^3``."""
+        return self.voxels * self.grid.voxel_volume
+
+
+# --------------------------------------------------------------------------------------------
+# compiled kernel
+
+
+@njit(parallel=True, cache=True)
+def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
+                    rho_lo, rho_hi, lmin2, lmax2, all_chains, out):
+    n_cols = col_ix.shape[0]
+    n_eta = cos_t.shape[1]
+    nz = zs.shape[0]
+    for c in prange(n_cols):
+        ix = col_ix[c]
+        iy = col_iy[c]
+        px = xs[ix]
+        py = ys[iy]
+        start = np.empty(3, np.int64)
+        for i in range(3):
+            start[i] = n_eta // 2
+        first = 0
+        for iz in range(nz):
+            pz = zs[iz]
+            mask = 0
+            for kk in range(3):
+                i = (first + kk) % 3
+                b1x = px + u[i, 0, 0]
+                b1y = py + u[i, 0, 1]
+                b1z = pz + u[i, 0, 2]
+                b2x = px + u[i, 1, 0]
+                b2y = py + u[i, 1, 1]
+                b2z = pz + u[i, 1, 2]
+                ok = False
+                if not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i],
+                                       rho_lo, rho_hi, lmin2, lmax2):
+                    k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
+                                     rho_lo, rho_hi, lmin2, lmax2, start[i])
+                    if k >= 0:
+                        ok = True
+                        start[i] = k
+                if ok:
+                    mask |= 1 << i
+                elif not all_chains:
+                    first = i
+                    break
+            out[ix, iy, iz] = mask
+
+
+@njit(parallel=True, cache=True)
+def _points_kernel(points, u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out):
+    """Bitmask of feasible chains for arbitrary points (all chains evaluated)."""
+    n_eta = cos_t.shape[1]
+    for p in prange(points.shape[0]):
+        mask = 0
+        for i in range(3):
+            b1x = points[p, 0] + u[i, 0, 0]
+            b1y = points[p, 1] + u[i, 0, 1]
+            b1z = points[p, 2] + u[i, 0, 2]
+            b2x = points[p, 0] + u[i, 1, 0]
+            b2y = points[p, 1] + u[i, 1, 1]
+            b2z = points[p, 2] + u[i, 1, 2]
+            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lmin2, lmax2):
+                continue
+            if chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
+                            rho_lo, rho_hi, lmin2, lmax2, n_eta // 2) >= 0:
+                mask |= 1 << i
+        out[p] = mask
+
+
+# --------------------------------------------------------------------------------------------
+# Python drivers
+
+
+def _kernel_args(design: Design, orientation_deg, n_eta: int) -> tuple:
+    """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
+    tab = ChainTables(design, n_eta)
+    o = np.asarray(orientation_deg, dtype=float)
+    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
+    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
+    return (u, tab.cos_t, tab.sin_t, tab.v0, tab.v1, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2)
+
+
+def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
+                   eta_step: float = 0.5) -> np.ndarray:
+    """Bitmask of the chains that can reach each point (bit ``i`` for chain ``i``) at one orientation.
+
+    Args:
+        points: platform-centre positions, shape (N, 3).
+        orientation: ``(psi, theta, phi)`` in degrees (eq. (2)) or a 3x3 rotation matrix.
+    Returns:
+        uint8 array (N,); 7 means reachable.
+    """
+    pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+    out = np.zeros(pts.shape[0], np.uint8)
+    args = _kernel_args(design, orientation, default_n_eta(design, eta_step))
+    _points_kernel(pts, *args, out)
+    return out
+
+
+def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
+              eta_step: float = 0.5) -> np.ndarray:
+    """Whether each point is reachable at one orientation (bool array (N,)).
+
+    ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
+    """
+    return chain_masks_at(design, points, orientation, eta_step) == ALL_CHAINS
+
+
+def reach_box(design: Design, orientation: tuple[float, float, float] = (0.0, 0.0, 0.0),
+              z_floor: float = 0.0) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Analytical box that contains the workspace (may be loose).
+
+    Each leg needs ``|B - D| <= l_max`` with ``|D_xy| <= sqrt(r^2 + b^2/4)`` and ``D_z = 0``, and
+    ``B = P + R1 u_bar``; so ``|P_xy + (R1 u_bar)_xy| <= sqrt(r^2 + b^2/4) + l_max`` and
+    ``|P_z + (R1 u_bar)_z| <= l_max`` for every platform point: we take the box of the tightest
+    per-point bound over x, y and z, and clip z below at ``z_floor``.
+    """
+    rot = euler_zyx_deg(*orientation)
+    u = (platform_points_local(design) @ rot.T).reshape(-1, 3)
+    reach_xy = math.hypot(design.r, design.b / 2.0) + design.l_max
+    lo = np.max(-reach_xy - u[:, :2], axis=0)
+    hi = np.min(reach_xy - u[:, :2], axis=0)
+    zlo = max(z_floor, float(np.max(-design.l_max - u[:, 2])))
+    zhi = float(np.min(design.l_max - u[:, 2]))
+    m = float(max(abs(lo).max(), abs(hi).max()))
+    return (-m, -m, zlo), (m, m, max(zhi, zlo + 1e-6))
+
+
+def _symmetric_box(lo, hi, h: float):
+    """Snap a box outward to multiples of h, symmetric in x and y about 0."""
+    m = max(abs(lo[0]), abs(lo[1]), abs(hi[0]), abs(hi[1]))
+    m = h * math.ceil(m / h - 1e-9)
+    zlo = h * math.floor(lo[2] / h + 1e-9)
+    zhi = h * math.ceil(hi[2] / h - 1e-9)
+    return (-m, -m, zlo), (m, m, zhi)
+
+
+def default_bounds(design: Design, settings: WorkspaceSettings, cancel: CancelToken = None):
+    """Box derived from the design's reach: the analytical box, tightened by a coarse scout."""
+    alo, ahi = reach_box(design, settings.orientation, settings.z_floor)
+    ext = max(b - a for a, b in zip(alo, ahi))
+    hs = max(4.0 * settings.voxel, ext / 48.0)
+    scout = GridSpec.from_bounds(alo, ahi, hs)
+    check(cancel)
+    occ = _run_grid(design, settings, scout, None, cancel)[0] == ALL_CHAINS
+    if not occ.any():
+        return _symmetric_box(alo, ahi, settings.voxel)
+    idx = np.argwhere(occ)
+    axes = scout.axes()
+    lo = [max(axes[a][idx[:, a].min()] - 2.5 * hs, alo[a]) for a in range(3)]
+    hi = [min(axes[a][idx[:, a].max()] + 2.5 * hs, ahi[a]) for a in range(3)]
+    lo[2] = max(lo[2], settings.z_floor)
+    return _symmetric_box(lo, hi, settings.voxel)
+
+
+def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> bool:
+    return (settings.symmetry and design.eta_range == "centered"
+            and all(abs(a) == 0.0 for a in settings.orientation) and grid.is_mirror_symmetric_y())
+
+
+def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
+              progress: Optional[Reporter], cancel: CancelToken, all_chains: bool = False):
+    n_eta = default_n_eta(design, settings.eta_step)
+    args = _kernel_args(design, settings.orientation, n_eta)
+    xs, ys, zs = grid.axes()
+    nx, ny, nz = grid.shape
+    out = np.zeros(grid.shape, np.uint8)
+    mirror = _use_mirror(design, settings, grid)
+    ny_eval = (ny + 1) // 2 if mirror else ny
+    ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
+    ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
+    n = ix.size
+    # chunks of about 64k voxels: progress/cancel granularity of a few ms
+    step = max(64, int(65536 // max(nz, 1)))
+    for s in range(0, n, step):
+        check(cancel)
+        _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
+        if progress is not None:
+            progress(min(1.0, (s + step) / n), "position workspace")
+    if mirror:
+        half = out[:, : ny - ny_eval]  # rows that have mirror images
+        b0 = half & 1
+        b1 = (half >> 1) & 1
+        b2 = (half >> 2) & 1
+        swapped = b0 | (b2 << 1) | (b1 << 2)
+        out[:, ny_eval:] = swapped[:, ::-1]
+    return out, n_eta
+
+
+def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSettings(),
+                      progress: Optional[ProgressFn] = None, cancel: CancelToken = None) -> WorkspaceResult:
+    """Compute the constant-orientation position workspace (see the module docstring).
+
+    ``compute_seconds`` is the engine time (excluding compilation, which happens on first use;
+    call :func:`warm_up` to trigger it early).
+
+    Raises:
+        Cancelled: when ``cancel`` is set.
+    """
+    rep = Reporter(progress)
+    t0 = time.perf_counter()
+    explicit = settings.bounds is not None
+    if explicit:
+        lo, hi = settings.bounds  # type: ignore[misc]
+    else:
+        lo, hi = default_bounds(design, settings, cancel)
+    alo, ahi = reach_box(design, settings.orientation, settings.z_floor)
+    for _attempt in range(4):
+        grid = GridSpec.from_bounds(lo, hi, settings.voxel)
+        mask, n_eta = _run_grid(design, settings, grid, rep.sub(0.05, 1.0), cancel,
+                                all_chains=settings.diagnostics)
+        occ = mask == ALL_CHAINS
+        if explicit:
+            break
+        grow = _touching_faces(occ)
+        lo2, hi2 = list(lo), list(hi)
+        changed = False
+        for axis in range(3):
+            span = 0.25 * (hi[axis] - lo[axis])
+            if grow[axis][0] and lo[axis] > alo[axis] + 1e-9:
+                lo2[axis] = max(alo[axis], lo[axis] - span)
+                changed = True
+            if grow[axis][1] and hi[axis] < ahi[axis] - 1e-9:
+                hi2[axis] = min(ahi[axis], hi[axis] + span)
+                changed = True
+        if not changed:
+            break
+        lo, hi = _symmetric_box(lo2, hi2, settings.voxel)
+    seconds = time.perf_counter() - t0
+    rep(1.0, "done")
+    return WorkspaceResult(design=design, settings=settings, grid=grid, occupancy=occ,
+                           chain_mask=mask if settings.diagnostics else None,
+                           compute_seconds=seconds, n_eta=n_eta)
+
+
+def _touching_faces(occ: np.ndarray) -> list[tuple[bool, bool]]:
+    return [(bool(np.take(occ, 0, axis=a).any()), bool(np.take(occ, -1, axis=a).any())) for a in range(3)]
+
+
+_WARM = False
+
+
+def warm_up() -> float:
+    """Compile the kernels (cached on disk by numba); returns the seconds it took."""
+    global _WARM
+    t0 = time.perf_counter()
+    if not _WARM:
+        d = Design()
+        compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=((-100, -100, 0), (100, 100, 160))))
+        compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=((-100, -100, 0), (100, 100, 160)),
+                                               diagnostics=True))
+        reachable(d, np.zeros((1, 3)))
+        _WARM = True
+    return time.perf_counter() - t0
