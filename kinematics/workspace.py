@@ -113,7 +113,7 @@ class WorkspaceResult:
 # compiled kernel
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, nogil=True)
 def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
                     rho_lo, rho_hi, lmin2, lmax2, all_chains, out):
     n_cols = col_ix.shape[0]
@@ -155,7 +155,7 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
             out[ix, iy, iz] = mask
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, nogil=True)
 def _points_kernel(points, u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out):
     """Bitmask of feasible chains for arbitrary points (all chains evaluated)."""
     n_eta = cos_t.shape[1]
