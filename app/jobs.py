@@ -1,0 +1,471 @@
+"""The one worker machinery shared by the explorer and the REST API.
+
+A :class:`JobManager` runs callables ``fn(progress, cancel)`` on a small pool of threads (the
+numba kernels release the GIL, so threads compute in parallel). Every job is a :class:`Job` that
+can be polled (status, progress, message), waited for and cancelled.
+
+Semantics:
+
+* **Cooperative cancellation.** ``fn`` receives ``cancel`` (a :class:`threading.Event`) and must
+  check it between chunks of work; the core raises :class:`kinematics.progress.Cancelled`, which
+  ends the job as ``"cancelled"``. The ``progress(fraction, message)`` callable given to ``fn``
+  also raises ``Cancelled`` once the token is set, so a function that reports progress is
+  cancellable even if it never looks at the token itself.
+* **Failures never escape.** Any other exception ends the job as ``"failed"`` with a one-line
+  ``error`` (``"ValueError: ..."``); the worker thread survives.
+* **Time limit.** A watchdog sets the cancel token of a job running longer than its time limit
+  (``max_seconds``); the job is reported ``"failed"`` with ``"time limit of N s exceeded"`` at
+  once, whether or not ``fn`` cooperates (a non-cooperating ``fn`` keeps its worker busy until it
+  returns, and its result is discarded).
+* **Limits.** ``submit`` raises :class:`LimitExceeded` at once when the client already has
+  ``max_jobs_per_client`` unfinished jobs or the manager ``max_jobs_total``: work is never queued
+  without bound. Jobs whose cancellation was requested do not count (they hold no queue slot and
+  at most ``max_workers`` of them are still winding down).
+* **Supersede** ("the last slider value wins"). ``submit(..., supersede=True)`` first cancels the
+  client's unfinished jobs of the same ``kind``. Once a job's cancellation is requested it can no
+  longer end ``"done"``: a result that arrives later is dropped and the job ends ``"cancelled"``.
+* **Dedupe by key.** When ``key`` is given and the same client already has an unfinished,
+  non-cancelled job of the same ``kind`` and ``key``, that job is returned instead of starting a
+  second identical computation (``on_done`` is attached to it).
+* **History.** Finished jobs are kept for polling, the most recent ``history`` of them.
+
+``on_done(job)`` is called exactly once per submission when the job reaches a final status
+(``done``, ``failed`` or ``cancelled``); check ``job.status``. It runs in the worker thread (or, for
+a job cancelled while still queued, in the thread that cancelled it) and must not block long;
+exceptions it raises are logged and ignored.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import logging
+import os
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, Callable, Hashable, Literal, Optional
+
+from kinematics.progress import Cancelled
+
+__all__ = ["Job", "JobManager", "LimitExceeded", "JobStatus", "ProgressFn", "FINAL_STATUSES"]
+
+log = logging.getLogger(__name__)
+
+JobStatus = Literal["queued", "running", "done", "failed", "cancelled"]
+FINAL_STATUSES: frozenset[str] = frozenset({"done", "failed", "cancelled"})
+ProgressFn = Callable[[float, str], None]
+JobFn = Callable[[ProgressFn, threading.Event], Any]
+
+
+class LimitExceeded(Exception):
+    """A submission would exceed a resource limit; the message names the limit and its value.
+
+    Attributes:
+        limit: name of the limit (``"max_jobs_per_client"``, ``"max_jobs_total"``, ...).
+        value: the limit's value.
+    """
+
+    def __init__(self, limit: str, value: Any, message: str) -> None:
+        self.limit = limit
+        self.value = value
+        super().__init__(message)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    name = type(exc).__name__
+    text = f"{name}: {text}" if text else name
+    return text if len(text) <= 500 else text[:497] + "..."
+
+
+class Job:
+    """One unit of work and its observable state.
+
+    Attributes:
+        id: unique id (hex string).
+        kind: what the job computes (``"workspace"``, ``"sweep"``, ...); supersede works per kind.
+        client: who submitted it (an IP address, a header value, ``"local"``, a viser client id).
+        key: optional hashable identity of the computation (used for dedupe).
+        status: ``"queued" | "running" | "done" | "failed" | "cancelled"``.
+        progress: fraction in ``[0, 1]``.
+        message: last progress message (or the reason of the final status).
+        result: ``fn``'s return value once ``done`` (``None`` otherwise).
+        error: one-line error of a ``failed`` job, else ``None``.
+        created, started, finished: ``time.time()`` stamps (``started``/``finished`` are ``None``
+            until then).
+    """
+
+    def __init__(self, manager: "JobManager", job_id: str, kind: str, client: str,
+                 key: Optional[Hashable], max_seconds: float) -> None:
+        self._manager = manager
+        self.id = job_id
+        self.kind = kind
+        self.client = client
+        self.key = key
+        self.max_seconds = max_seconds
+        self.status: JobStatus = "queued"
+        self.progress = 0.0
+        self.message = "queued"
+        self.result: Any = None
+        self.error: Optional[str] = None
+        self.created = time.time()
+        self.started: Optional[float] = None
+        self.finished: Optional[float] = None
+        self.cancel_token = threading.Event()
+        self._cancel_requested = False
+        self._timed_out = False
+        self._done_event = threading.Event()
+        self._callbacks: list[Callable[["Job"], None]] = []
+        self._progress_hooks: list[Callable[["Job"], None]] = []
+        self._t_start = 0.0  # perf_counter at start (watchdog)
+
+    # ----- public ------------------------------------------------------------------------
+    @property
+    def finished_ok(self) -> bool:
+        """Whether the job ended ``"done"``."""
+        return self.status == "done"
+
+    @property
+    def is_final(self) -> bool:
+        """Whether the job reached a final status."""
+        return self.status in FINAL_STATUSES
+
+    def wait(self, timeout: Optional[float] = None) -> bool:
+        """Block until the job is final; returns whether it is (False on timeout)."""
+        return self._done_event.wait(timeout)
+
+    def cancel(self) -> None:
+        """Request cancellation (no effect on a finished job)."""
+        self._manager.cancel(self.id)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serializable state (without ``result``)."""
+        now = time.time()
+        elapsed = None
+        if self.started is not None:
+            elapsed = round((self.finished or now) - self.started, 6)
+        return {
+            "id": self.id,
+            "kind": self.kind,
+            "client": self.client,
+            "status": self.status,
+            "progress": round(float(self.progress), 6),
+            "message": self.message,
+            "error": self.error,
+            "created": self.created,
+            "started": self.started,
+            "finished": self.finished,
+            "elapsed_seconds": elapsed,
+            "time_limit_seconds": self.max_seconds,
+        }
+
+    def __repr__(self) -> str:  # pragma: no cover - debugging aid
+        return f"<Job {self.id} {self.kind} {self.client} {self.status} {self.progress:.2f}>"
+
+
+class JobManager:
+    """Runs jobs on a bounded thread pool with limits, supersede, time limit and history.
+
+    Args:
+        max_workers: worker threads (jobs running at once).
+        max_jobs_total: unfinished (queued + running) jobs allowed over all clients.
+        max_jobs_per_client: unfinished jobs allowed per client.
+        max_seconds: default run-time limit of a job, in seconds.
+        history: finished jobs kept for polling (oldest dropped first).
+    """
+
+    def __init__(self, max_workers: int = 2, max_jobs_total: int = 16, max_jobs_per_client: int = 4,
+                 max_seconds: float = 300.0, history: int = 256) -> None:
+        for name, val in (("max_workers", max_workers), ("max_jobs_total", max_jobs_total),
+                          ("max_jobs_per_client", max_jobs_per_client), ("history", history)):
+            if not isinstance(val, int) or val < 1:
+                raise ValueError(f"{name} = {val!r} is invalid: valid range integers >= 1")
+        if not (isinstance(max_seconds, (int, float)) and max_seconds > 0):
+            raise ValueError(f"max_seconds = {max_seconds!r} is invalid: valid range > 0")
+        self.max_workers = max_workers
+        self.max_jobs_total = max_jobs_total
+        self.max_jobs_per_client = max_jobs_per_client
+        self.max_seconds = float(max_seconds)
+        self.history = history
+        self._lock = threading.RLock()
+        self._jobs: "collections.OrderedDict[str, Job]" = collections.OrderedDict()
+        self._unfinished: dict[str, Job] = {}
+        self._counter = itertools.count(1)
+        self._prefix = os.urandom(3).hex()
+        self._pool = ThreadPoolExecutor(max_workers=max_workers, thread_name_prefix="paraspace-job")
+        self._closed = False
+        self._wake = threading.Condition(self._lock)
+        self._watchdog = threading.Thread(target=self._watch, name="paraspace-job-watchdog", daemon=True)
+        self._watchdog.start()
+
+    # ----- submission ----------------------------------------------------------------------
+    def submit(self, fn: JobFn, *, kind: str, client: str = "local", key: Optional[Hashable] = None,
+               supersede: bool = False, on_done: Optional[Callable[[Job], None]] = None,
+               on_progress: Optional[Callable[[Job], None]] = None,
+               max_seconds: Optional[float] = None) -> Job:
+        """Queue ``fn(progress, cancel)`` and return its :class:`Job` at once.
+
+        Args:
+            fn: the work; gets ``progress(fraction, message)`` and ``cancel`` (an Event).
+            kind: job kind (supersede and dedupe are per kind).
+            client: submitter identity (limits are per client).
+            key: optional hashable identity of the computation; an unfinished identical job of
+                the same client and kind is returned instead of a new one.
+            supersede: cancel this client's unfinished jobs of the same kind first.
+            on_done: called once with the job when it reaches a final status.
+            on_progress: called with the job after each progress update (in the worker thread).
+            max_seconds: run-time limit of this job (default: the manager's; never above it).
+
+        Raises:
+            LimitExceeded: the client or the manager is at its limit of unfinished jobs.
+            RuntimeError: the manager was shut down.
+        """
+        limit = self.max_seconds if max_seconds is None else min(float(max_seconds), self.max_seconds)
+        to_finish: list[Job] = []
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("the job manager is shut down")
+            same = None
+            if key is not None:
+                for job in self._unfinished.values():
+                    if (job.client == client and job.kind == kind and job.key == key
+                            and not job._cancel_requested):
+                        same = job
+                        break
+            if same is not None:
+                if on_done is not None:
+                    same._callbacks.append(on_done)
+                if on_progress is not None:
+                    same._progress_hooks.append(on_progress)
+                if supersede:
+                    to_finish = self._supersede_locked(kind, client, keep=same)
+        if same is not None:
+            self._finish_all(to_finish)
+            return same
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("the job manager is shut down")
+            if supersede:
+                to_finish = self._supersede_locked(kind, client, keep=None)
+            live = [j for j in self._unfinished.values() if not j._cancel_requested]
+            n_client = sum(1 for j in live if j.client == client)
+            if n_client >= self.max_jobs_per_client:
+                exc = LimitExceeded(
+                    "max_jobs_per_client", self.max_jobs_per_client,
+                    f"too many jobs for client {client!r}: limit max_jobs_per_client = "
+                    f"{self.max_jobs_per_client} unfinished jobs; wait for one to finish or cancel it")
+            elif len(live) >= self.max_jobs_total:
+                exc = LimitExceeded(
+                    "max_jobs_total", self.max_jobs_total,
+                    f"server busy: limit max_jobs_total = {self.max_jobs_total} unfinished jobs "
+                    f"reached; retry later")
+            else:
+                exc = None
+            if exc is None:
+                job_id = f"{self._prefix}{next(self._counter):06x}"
+                job = Job(self, job_id, kind, client, key, limit)
+                if on_done is not None:
+                    job._callbacks.append(on_done)
+                if on_progress is not None:
+                    job._progress_hooks.append(on_progress)
+                self._jobs[job_id] = job
+                self._unfinished[job_id] = job
+                self._prune_locked()
+        self._finish_all(to_finish)
+        if exc is not None:
+            raise exc
+        self._pool.submit(self._run, job, fn)
+        return job
+
+    # ----- queries ---------------------------------------------------------------------------
+    def get(self, job_id: str) -> Job:
+        """The job with this id (also finished ones still in the history).
+
+        Raises:
+            KeyError: unknown (or forgotten) id.
+        """
+        with self._lock:
+            return self._jobs[job_id]
+
+    def active(self, client: Optional[str] = None) -> list[Job]:
+        """Unfinished jobs (queued or running), oldest first, optionally of one client."""
+        with self._lock:
+            jobs = list(self._unfinished.values())
+        jobs.sort(key=lambda j: j.created)
+        return [j for j in jobs if client is None or j.client == client]
+
+    def jobs(self) -> list[Job]:
+        """All jobs in the history (finished and unfinished), oldest first."""
+        with self._lock:
+            return list(self._jobs.values())
+
+    def stats(self) -> dict[str, Any]:
+        """Counts by status and the configured limits (JSON)."""
+        with self._lock:
+            counts = collections.Counter(j.status for j in self._jobs.values())
+        return {"workers": self.max_workers, "max_jobs_total": self.max_jobs_total,
+                "max_jobs_per_client": self.max_jobs_per_client, "max_seconds": self.max_seconds,
+                "counts": {s: counts.get(s, 0) for s in ("queued", "running", "done", "failed", "cancelled")}}
+
+    # ----- cancellation ----------------------------------------------------------------------
+    def cancel(self, job_id: str) -> bool:
+        """Request cancellation of a job; returns False when it is unknown or already final.
+
+        A queued job ends ``"cancelled"`` at once; a running job when ``fn`` notices the token.
+        """
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is None or job.is_final:
+                return False
+            finish = self._request_cancel_locked(job, "cancelled")
+        self._finish_all(finish)
+        return True
+
+    def shutdown(self, wait: bool = False) -> None:
+        """Cancel every unfinished job and stop accepting work.
+
+        Args:
+            wait: block until the worker threads have ended.
+        """
+        with self._lock:
+            self._closed = True
+            finish: list[Job] = []
+            for job in list(self._unfinished.values()):
+                finish += self._request_cancel_locked(job, "cancelled: server shutting down")
+            self._wake.notify_all()
+        self._finish_all(finish)
+        self._pool.shutdown(wait=wait, cancel_futures=True)
+
+    # ----- internals -------------------------------------------------------------------------
+    def _supersede_locked(self, kind: str, client: str, keep: Optional[Job]) -> list[Job]:
+        out: list[Job] = []
+        for job in list(self._unfinished.values()):
+            if job is not keep and job.client == client and job.kind == kind and not job._cancel_requested:
+                out += self._request_cancel_locked(job, "superseded by a newer request")
+        return out
+
+    def _request_cancel_locked(self, job: Job, why: str) -> list[Job]:
+        """Mark cancel requested; returns [job] when it can be finalized right away (queued)."""
+        job._cancel_requested = True
+        job.cancel_token.set()
+        job.message = why
+        if job.status == "queued":
+            self._finalize_locked(job, "cancelled", why)
+            return [job]
+        return []
+
+    def _finalize_locked(self, job: Job, status: JobStatus, message: str,
+                         result: Any = None, error: Optional[str] = None) -> bool:
+        if job.is_final:
+            return False
+        job.status = status
+        job.message = message
+        job.result = result if status == "done" else None
+        job.error = error
+        job.finished = time.time()
+        if status == "done":
+            job.progress = 1.0
+        self._unfinished.pop(job.id, None)
+        self._prune_locked()
+        return True
+
+    def _finish_all(self, jobs: list[Job]) -> None:
+        """Outside the lock: wake waiters and run on_done callbacks of finalized jobs."""
+        for job in jobs:
+            job._done_event.set()
+            callbacks, job._callbacks = job._callbacks, []
+            for cb in callbacks:
+                try:
+                    cb(job)
+                except Exception:  # noqa: BLE001 - a callback must not kill the worker
+                    log.exception("on_done callback of job %s raised", job.id)
+
+    def _prune_locked(self) -> None:
+        excess = len(self._jobs) - len(self._unfinished) - self.history
+        if excess <= 0:
+            return
+        for job_id in list(self._jobs):
+            if excess <= 0:
+                break
+            if self._jobs[job_id].is_final:
+                del self._jobs[job_id]
+                excess -= 1
+
+    def _make_progress(self, job: Job) -> ProgressFn:
+        def progress(fraction: float, message: str = "") -> None:
+            if job.cancel_token.is_set():
+                raise Cancelled()
+            try:
+                f = float(fraction)
+            except (TypeError, ValueError):
+                f = job.progress
+            if f != f:  # NaN
+                f = job.progress
+            job.progress = min(1.0, max(0.0, f))
+            if message:
+                job.message = str(message)
+            for hook in list(job._progress_hooks):
+                try:
+                    hook(job)
+                except Exception:  # noqa: BLE001
+                    log.exception("on_progress hook of job %s raised", job.id)
+        return progress
+
+    def _run(self, job: Job, fn: JobFn) -> None:
+        with self._lock:
+            if job.is_final or job._cancel_requested:
+                return  # cancelled while queued (already finalized)
+            job.status = "running"
+            job.started = time.time()
+            job._t_start = time.perf_counter()
+            job.message = "running"
+            self._wake.notify_all()
+        status: JobStatus
+        result: Any = None
+        error: Optional[str] = None
+        try:
+            result = fn(self._make_progress(job), job.cancel_token)
+            status, message = "done", "done"
+        except Cancelled:
+            status, message = "cancelled", "cancelled"
+        except BaseException as exc:  # noqa: BLE001 - every failure is reported, never raised
+            status, error = "failed", _one_line(exc)
+            message = "failed"
+            if not isinstance(exc, Exception):  # pragma: no cover - KeyboardInterrupt/SystemExit
+                log.warning("job %s interrupted: %s", job.id, error)
+        with self._lock:
+            if job._timed_out:
+                return  # the watchdog already reported it failed
+            if job._cancel_requested and status == "done":
+                status, message, result = "cancelled", job.message or "cancelled", None
+            elif job._cancel_requested and status == "cancelled":
+                message = job.message or "cancelled"
+            finalized = self._finalize_locked(job, status, message, result, error)
+        if finalized:
+            self._finish_all([job])
+
+    def _watch(self) -> None:
+        while True:
+            expired: list[Job] = []
+            with self._lock:
+                if self._closed and not self._unfinished:
+                    return
+                now = time.perf_counter()
+                next_due = 0.5
+                for job in list(self._unfinished.values()):
+                    if job.status != "running":
+                        continue
+                    due = job._t_start + job.max_seconds - now
+                    if due <= 0:
+                        job._timed_out = True
+                        job._cancel_requested = True
+                        job.cancel_token.set()
+                        err = f"time limit of {job.max_seconds:g} s exceeded"
+                        self._finalize_locked(job, "failed", err, error=err)
+                        expired.append(job)
+                    else:
+                        next_due = min(next_due, due)
+                if not expired:
+                    self._wake.wait(timeout=max(0.01, next_due))
+            self._finish_all(expired)
