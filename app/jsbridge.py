@@ -1,0 +1,80 @@
+"""The only place that touches viser's private API: running JavaScript in one browser.
+
+viser 1.1.1 offers no public way to read or write the page URL (notes §4). Its web client runs any
+``RunJavascriptMessage`` it receives with ``new Function(source)()`` (that is how Plotly is set
+up), and the public ``client.local_storage`` reads a value back. Together they form a small bridge:
+
+* :func:`read_location` makes the page store ``location.search`` and the page's base URL in
+  localStorage and reads them back (one round trip, about 0.1 s on localhost);
+* :func:`replace_query` rewrites the address bar with ``history.replaceState`` (no reload);
+* :func:`copy_to_clipboard` tries ``navigator.clipboard`` (may be refused outside a secure context;
+  the explorer always shows the link in a text field as well).
+
+The message is queued on the **client's** connection only, never on the server-wide buffer (that
+one is persistent and would replay the script to every future browser). Pinned to viser 1.1.1;
+``tests/test_explorer.py`` and ``tests/test_browser.py`` cover these functions.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Optional
+
+import viser
+from viser import _messages
+
+#: localStorage namespace prefix that viser's ``LocalStorageHandle`` adds in the browser.
+VISER_STORAGE_PREFIX = "viser-user:"
+
+
+def run_js(client: viser.ClientHandle, source: str) -> None:
+    """Run ``source`` in this client's page (errors are caught and logged in the browser console)."""
+    wrapped = f"try {{ {source} }} catch (e) {{ console.error('paraspace bridge:', e); }}"
+    client._websock_connection.queue_message(_messages.RunJavascriptMessage(source=wrapped))  # noqa: SLF001
+
+
+def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> Optional[tuple[str, str]]:
+    """The page's ``(location.search, origin + pathname)``, or ``None`` if the browser did not answer.
+
+    Blocks for one round trip: call it from a thread-pool callback (a ``def`` callback), never from
+    an ``async def`` one.
+    """
+    key = f"paraspace_location_{client.client_id}"
+    run_js(client, (
+        f"localStorage.setItem({json.dumps(VISER_STORAGE_PREFIX + key)}, "
+        "JSON.stringify({search: window.location.search, base: window.location.origin + window.location.pathname}));"
+    ))
+    try:
+        raw = client.local_storage.get_item(key, timeout=timeout)
+    except (TimeoutError, RuntimeError):
+        return None
+    try:
+        client.local_storage.remove_item(key)
+    except Exception:  # noqa: BLE001 - the client may be gone already
+        pass
+    if raw is None:
+        return None
+    try:
+        data = json.loads(raw)
+        return str(data.get("search", "")), str(data.get("base", ""))
+    except (ValueError, AttributeError):
+        return None
+
+
+def replace_query(client: viser.ClientHandle, query: str) -> None:
+    """Set the address bar to ``?query`` (same path, no reload, no history entry)."""
+    q = ("?" + query) if query else ""
+    run_js(client, (
+        f"var q = {json.dumps(q)};"
+        "if (window.location.search !== q) {"
+        " window.history.replaceState(window.history.state, '', window.location.pathname + q + window.location.hash); }"
+    ))
+
+
+def copy_to_clipboard(client: viser.ClientHandle, text: str) -> None:
+    """Try to put ``text`` on the clipboard of this client's browser (best effort)."""
+    run_js(client, (
+        f"var t = {json.dumps(text)};"
+        "if (navigator.clipboard && navigator.clipboard.writeText) {"
+        " navigator.clipboard.writeText(t).catch(function (e) { console.warn('clipboard:', e); }); }"
+    ))

@@ -1,0 +1,373 @@
+"""The explorer's state as a shareable URL query string.
+
+One :class:`ExplorerState` holds everything a link restores: the design (paper Table I), the
+platform pose, how the carriages are set (redundancy resolved automatically or by hand), the
+workspace sampling (voxel edge ``h``), the height ``z0`` of the orientation-map lines, and the view
+(camera preset, cut plane, shell opacity).
+
+URL format (keys are the CLI's names)::
+
+    ?a=60&b=14&d_s=40&r=100&l_min=114.5&l_s=50&eta_s=30&eta_range=centered
+     &x=0&y=0&z=130&psi=0&theta=0&phi=0
+     [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
+     [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.45]
+
+Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
+written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
+if the paper defaults of a later version change. Every other key is written only when it differs
+from its default (short links); the six carriage values are written whenever
+``carriages=manual`` or any of them is not 0. Numbers are written in Python's shortest round-trip form (``60``, ``114.5``),
+so ``parse_query(encode_query(s)) == (s, [])`` exactly.
+
+Parsing policy (:func:`parse_query`): never raises. Each bad field (not a number, not one of the
+choices, outside the slider range of the explorer, or inconsistent such as ``d_s > r``) produces one
+message naming the field, the value and the valid range; that field keeps its default and every
+other field still applies. Nothing is silently clamped. Query keys that viser's own web client reads
+(``websocket``, ``darkMode``, ...) are accepted without a message and returned by
+:func:`viser_passthrough` so the address bar can keep them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import urllib.parse
+from typing import Any, Literal, Optional
+
+from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from kinematics.pose import Pose
+
+CarriageMode = Literal["auto", "manual"]
+CameraPreset = Literal["iso", "top", "bottom", "side"]
+CutKeep = Literal["below", "above"]
+
+CARRIAGE_MODES: tuple[str, ...] = ("auto", "manual")
+CAMERA_PRESETS: tuple[str, ...] = ("iso", "top", "bottom", "side")
+CUT_KEEPS: tuple[str, ...] = ("below", "above")
+
+DESIGN_KEYS: tuple[str, ...] = ("a", "b", "d_s", "r", "l_min", "l_s", "eta_s")
+POSE_KEYS: tuple[str, ...] = ("x", "y", "z", "psi", "theta", "phi")
+D_KEYS: tuple[str, ...] = ("d_1", "d_2", "d_3")
+ETA_KEYS: tuple[str, ...] = ("eta_1", "eta_2", "eta_3")
+
+
+@dataclasses.dataclass(frozen=True)
+class Range:
+    """Closed slider range ``[lo, hi]`` with the slider step (the step is a UI hint only)."""
+
+    lo: float
+    hi: float
+    step: float
+
+    def text(self, unit: str = "") -> str:
+        """``"[lo, hi]"`` plus an optional unit."""
+        return f"[{self.lo:g}, {self.hi:g}]" + (f" {unit}" if unit else "")
+
+
+#: Slider ranges of the design parameters: paper Table I (from :data:`kinematics.design.PARAMS`).
+DESIGN_RANGES: dict[str, Range] = {
+    name: Range(spec.slider_min, spec.slider_max, 0.5) for name, spec in PARAMS.items()
+}
+#: Slider ranges of the pose. Positions cover the reach of every design in the Table I ranges
+#: (``|P_xy| <= sqrt(r^2 + b^2/4) + l_max <= 500`` is loose; the workspaces found stay well inside
+#: these); angles are limited to what a slider can still set precisely.
+POSE_RANGES: dict[str, Range] = {
+    "x": Range(-300.0, 300.0, 0.5),
+    "y": Range(-300.0, 300.0, 0.5),
+    "z": Range(0.0, 350.0, 0.5),
+    "psi": Range(-90.0, 90.0, 0.5),
+    "theta": Range(-60.0, 60.0, 0.5),
+    "phi": Range(-60.0, 60.0, 0.5),
+}
+#: Other numeric settings.
+SETTING_RANGES: dict[str, Range] = {
+    "voxel": Range(1.0, 10.0, 0.5),
+    "z0": Range(0.0, 350.0, 1.0),
+    "cut_z": Range(0.0, 350.0, 1.0),
+    "opacity": Range(0.1, 1.0, 0.05),
+}
+UNITS: dict[str, str] = {"eta_s": "deg", "psi": "deg", "theta": "deg", "phi": "deg"}
+
+#: Query keys read by viser's own web client; kept in the address bar, never reported.
+VISER_KEYS: frozenset[str] = frozenset({
+    "websocket", "darkMode", "hideViserLogo", "initialCameraPosition", "initialCameraLookAt",
+    "initialCameraUp", "initialCameraFov", "initialCameraNear", "initialCameraFar", "showStats",
+    "fixedDpr", "logCamera", "playbackPath", "dummyWindowDimensions",
+})
+
+
+@dataclasses.dataclass(frozen=True)
+class ExplorerState:
+    """Everything a shareable link restores.
+
+    Attributes:
+        design: the mechanism's geometry (Table I).
+        pose: platform pose ``(x, y, z, psi, theta, phi)``, degrees.
+        carriages: ``"auto"`` (redundancy resolved) or ``"manual"`` (``d``/``eta`` below apply).
+        d: hand-set radial carriage values ``d_1..d_3`` in ``[0, d_s]`` (used when manual).
+        eta: hand-set arc carriage values ``eta_1..eta_3`` in degrees, in the design's arc range.
+        voxel: voxel edge ``h`` of the full workspace computation.
+        z0: height of the x and y' lines of the orientation maps.
+        view: camera preset.
+        cut: whether the shell is cut by a horizontal plane.
+        cut_z: height of the cut plane.
+        cut_keep: which side of the cut plane stays visible.
+        opacity: shell opacity.
+    """
+
+    design: Design = dataclasses.field(default_factory=Design)
+    pose: Pose = dataclasses.field(default_factory=Pose)
+    carriages: CarriageMode = "auto"
+    d: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    eta: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    voxel: float = 2.0
+    z0: float = 130.0
+    view: CameraPreset = "iso"
+    cut: bool = False
+    cut_z: float = 80.0
+    cut_keep: CutKeep = "below"
+    opacity: float = 0.45
+
+    def replace(self, **changes: Any) -> "ExplorerState":
+        """A copy with some fields changed (no validation beyond the dataclasses')."""
+        return dataclasses.replace(self, **changes)
+
+
+DEFAULT_STATE = ExplorerState()
+
+
+def format_number(value: float) -> str:
+    """Shortest text that parses back to exactly ``value`` (``60.0 -> "60"``, ``0.1 -> "0.1"``)."""
+    v = float(value)
+    if v == 0.0:
+        return "0"  # also for -0.0
+    text = repr(v)
+    if text.endswith(".0"):
+        text = text[:-2]
+    return text
+
+
+def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
+                  range_text: Optional[str] = None) -> tuple[Optional[float], Optional[str]]:
+    """Parse one number and check it lies in ``rng``; returns (value, None) or (None, message)."""
+    valid = range_text or rng.text(unit)
+    try:
+        v = float(raw)
+    except ValueError:
+        return None, f"{key} = {raw!r} is not a number; valid range {valid}"
+    if not math.isfinite(v):
+        return None, f"{key} = {raw!r} is not a finite number; valid range {valid}"
+    if not (rng.lo <= v <= rng.hi):
+        return None, f"{key} = {raw} is out of range; valid range {valid}"
+    return (0.0 if v == 0.0 else v), None
+
+
+def _parse_choice(key: str, raw: str, options: tuple[str, ...]) -> tuple[Optional[str], Optional[str]]:
+    if raw in options:
+        return raw, None
+    return None, f"{key} = {raw!r} is invalid; valid values: {', '.join(options)}"
+
+
+_BOOL_TRUE = ("1", "true", "on", "yes")
+_BOOL_FALSE = ("0", "false", "off", "no")
+
+
+def known_keys() -> tuple[str, ...]:
+    """All query keys the explorer understands, in URL order."""
+    return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
+            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity"))
+
+
+def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
+    """Parse a URL query (with or without the leading ``?``) into a state and messages.
+
+    Never raises. Every invalid field yields one message naming it and its valid range and keeps
+    its default; all other fields apply. See the module docstring.
+
+    Returns:
+        ``(state, messages)``; ``messages`` is empty when every field was valid.
+    """
+    messages: list[str] = []
+    try:
+        pairs = urllib.parse.parse_qsl((query or "").lstrip("?"), keep_blank_values=True)
+    except Exception as exc:  # noqa: BLE001 - parse_qsl is lenient; this is only a safety net
+        return DEFAULT_STATE, [f"the link's query could not be read ({exc}); using the defaults"]
+    values: dict[str, str] = {}
+    known = set(known_keys())
+    for key, raw in pairs:
+        if key in VISER_KEYS:
+            continue
+        if key not in known:
+            messages.append(f"unknown parameter {key!r} ignored; known parameters: {', '.join(known_keys())}")
+            continue
+        if key in values:
+            messages.append(f"{key} is given more than once; the last value ({raw!r}) is used")
+        values[key] = raw.strip()
+
+    # ----- design: per-field ranges, then the model's cross-checks (d_s <= r) ------------------
+    design_fields: dict[str, Any] = {}
+    for key in DESIGN_KEYS:
+        if key in values:
+            v, msg = _parse_number(key, values[key], DESIGN_RANGES[key], UNITS.get(key, ""))
+            if msg:
+                messages.append(msg)
+            else:
+                design_fields[key] = v
+    if "eta_range" in values:
+        v, msg = _parse_choice("eta_range", values["eta_range"], ETA_RANGES)
+        if msg:
+            messages.append(msg)
+        else:
+            design_fields["eta_range"] = v
+    design = Design()
+    for _ in range(len(design_fields) + 1):
+        try:
+            design = Design(**design_fields)
+            break
+        except ParameterError as exc:
+            field = exc.field if exc.field in design_fields else next(iter(design_fields), None)
+            shown = format_number(exc.value) if isinstance(exc.value, float) else repr(exc.value)
+            messages.append(f"{exc.field} = {shown} is invalid with the other design values; "
+                            f"valid range {exc.valid}")
+            if field is None:  # pragma: no cover - defaults are always valid
+                break
+            design_fields.pop(field, None)
+
+    # ----- pose ----------------------------------------------------------------------------------
+    pose_fields: dict[str, float] = {}
+    for key in POSE_KEYS:
+        if key in values:
+            v, msg = _parse_number(key, values[key], POSE_RANGES[key], UNITS.get(key, ""))
+            if msg:
+                messages.append(msg)
+            else:
+                pose_fields[key] = v  # type: ignore[assignment]
+    pose = Pose(**pose_fields)
+
+    # ----- carriages -----------------------------------------------------------------------------
+    carriages = DEFAULT_STATE.carriages
+    if "carriages" in values:
+        v, msg = _parse_choice("carriages", values["carriages"], CARRIAGE_MODES)
+        if msg:
+            messages.append(msg)
+        else:
+            carriages = v  # type: ignore[assignment]
+    d = list(DEFAULT_STATE.d)
+    eta = list(DEFAULT_STATE.eta)
+    d_rng = Range(0.0, design.d_s, 0.5)
+    e_lo, e_hi = design.eta_limits
+    e_rng = Range(e_lo, e_hi, 0.5)
+    for i, key in enumerate(D_KEYS):
+        if key in values:
+            v, msg = _parse_number(key, values[key], d_rng, range_text=f"[0, d_s={design.d_s:g}]")
+            if msg:
+                messages.append(msg)
+            else:
+                d[i] = v  # type: ignore[assignment]
+    for i, key in enumerate(ETA_KEYS):
+        if key in values:
+            v, msg = _parse_number(key, values[key], e_rng, range_text=(
+                f"[{e_lo:g}, {e_hi:g}] deg (eta_s={design.eta_s:g}, {design.eta_range})"))
+            if msg:
+                messages.append(msg)
+            else:
+                eta[i] = v  # type: ignore[assignment]
+    # Defaults of d/eta (0) are always inside the strokes.
+
+    # ----- settings and view ------------------------------------------------------------------------
+    numbers: dict[str, float] = {}
+    for key in ("voxel", "z0", "cut_z", "opacity"):
+        if key in values:
+            v, msg = _parse_number(key, values[key], SETTING_RANGES[key])
+            if msg:
+                messages.append(msg)
+            else:
+                numbers[key] = v  # type: ignore[assignment]
+    view = DEFAULT_STATE.view
+    if "view" in values:
+        v, msg = _parse_choice("view", values["view"], CAMERA_PRESETS)
+        if msg:
+            messages.append(msg)
+        else:
+            view = v  # type: ignore[assignment]
+    cut = DEFAULT_STATE.cut
+    if "cut" in values:
+        raw = values["cut"].lower()
+        if raw in _BOOL_TRUE:
+            cut = True
+        elif raw in _BOOL_FALSE:
+            cut = False
+        else:
+            messages.append(f"cut = {values['cut']!r} is invalid; valid values: 1 (on) or 0 (off)")
+    cut_keep = DEFAULT_STATE.cut_keep
+    if "cut_keep" in values:
+        v, msg = _parse_choice("cut_keep", values["cut_keep"], CUT_KEEPS)
+        if msg:
+            messages.append(msg)
+        else:
+            cut_keep = v  # type: ignore[assignment]
+
+    state = ExplorerState(
+        design=design, pose=pose, carriages=carriages,
+        d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
+        voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
+        view=view, cut=cut, cut_z=numbers.get("cut_z", DEFAULT_STATE.cut_z), cut_keep=cut_keep,
+        opacity=numbers.get("opacity", DEFAULT_STATE.opacity),
+    )
+    return state, messages
+
+
+def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
+    """The ``(key, value)`` pairs of :func:`encode_query`, in URL order."""
+    pairs: list[tuple[str, str]] = []
+    for key in DESIGN_KEYS:
+        pairs.append((key, format_number(getattr(state.design, key))))
+    pairs.append(("eta_range", state.design.eta_range))
+    for key in POSE_KEYS:
+        pairs.append((key, format_number(getattr(state.pose, key))))
+    if state.carriages != DEFAULT_STATE.carriages:
+        pairs.append(("carriages", state.carriages))
+    if (state.carriages != DEFAULT_STATE.carriages or state.d != DEFAULT_STATE.d
+            or state.eta != DEFAULT_STATE.eta):
+        pairs += [(k, format_number(v)) for k, v in zip(D_KEYS, state.d)]
+        pairs += [(k, format_number(v)) for k, v in zip(ETA_KEYS, state.eta)]
+    for key in ("voxel", "z0"):
+        if getattr(state, key) != getattr(DEFAULT_STATE, key):
+            pairs.append((key, format_number(getattr(state, key))))
+    if state.view != DEFAULT_STATE.view:
+        pairs.append(("view", state.view))
+    if state.cut != DEFAULT_STATE.cut:
+        pairs.append(("cut", "1" if state.cut else "0"))
+    if state.cut_z != DEFAULT_STATE.cut_z:
+        pairs.append(("cut_z", format_number(state.cut_z)))
+    if state.cut_keep != DEFAULT_STATE.cut_keep:
+        pairs.append(("cut_keep", state.cut_keep))
+    if state.opacity != DEFAULT_STATE.opacity:
+        pairs.append(("opacity", format_number(state.opacity)))
+    return pairs
+
+
+def encode_query(state: ExplorerState) -> str:
+    """The query string (without ``?``) that :func:`parse_query` turns back into ``state``.
+
+    Design and pose keys are always written; the others only when they differ from their defaults
+    (the carriage values whenever ``carriages=manual`` or one is not 0). See the module docstring.
+    """
+    return urllib.parse.urlencode(encode_pairs(state), safe=",")
+
+
+def viser_passthrough(query: str) -> list[tuple[str, str]]:
+    """The ``(key, value)`` pairs of ``query`` that viser's web client itself reads (kept as is)."""
+    try:
+        pairs = urllib.parse.parse_qsl((query or "").lstrip("?"), keep_blank_values=True)
+    except Exception:  # noqa: BLE001
+        return []
+    return [(k, v) for k, v in pairs if k in VISER_KEYS]
+
+
+def full_query(state: ExplorerState, passthrough: Optional[list[tuple[str, str]]] = None) -> str:
+    """:func:`encode_query` followed by the viser keys to keep (e.g. ``websocket=...``)."""
+    q = encode_query(state)
+    if passthrough:
+        q += "&" + urllib.parse.urlencode(passthrough)
+    return q

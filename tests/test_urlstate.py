@@ -1,0 +1,125 @@
+"""Shareable-URL state: encode -> parse is the identity; bad fields are reported, the rest applies."""
+
+from __future__ import annotations
+
+import urllib.parse
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from app.urlstate import (
+    CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES,
+    ExplorerState, encode_query, full_query, parse_query, viser_passthrough,
+)
+from kinematics.design import ETA_RANGES, PARAMS, Design
+from kinematics.pose import Pose
+
+
+def _num(lo: float, hi: float) -> st.SearchStrategy[float]:
+    return st.floats(min_value=lo, max_value=hi, allow_nan=False, allow_infinity=False)
+
+
+@st.composite
+def states(draw: st.DrawFn) -> ExplorerState:
+    fields = {k: draw(_num(r.lo, r.hi)) for k, r in DESIGN_RANGES.items()}
+    fields["d_s"] = min(fields["d_s"], fields["r"])  # the model requires d_s <= r
+    design = Design(**fields, eta_range=draw(st.sampled_from(ETA_RANGES)))
+    pose = Pose(**{k: draw(_num(r.lo, r.hi)) for k, r in POSE_RANGES.items()})
+    lo, hi = design.eta_limits
+    return ExplorerState(
+        design=design, pose=pose,
+        carriages=draw(st.sampled_from(("auto", "manual"))),
+        d=tuple(draw(_num(0.0, design.d_s)) for _ in range(3)),  # type: ignore[arg-type]
+        eta=tuple(draw(_num(lo, hi)) for _ in range(3)),  # type: ignore[arg-type]
+        voxel=draw(_num(SETTING_RANGES["voxel"].lo, SETTING_RANGES["voxel"].hi)),
+        z0=draw(_num(SETTING_RANGES["z0"].lo, SETTING_RANGES["z0"].hi)),
+        view=draw(st.sampled_from(CAMERA_PRESETS)),
+        cut=draw(st.booleans()),
+        cut_z=draw(_num(SETTING_RANGES["cut_z"].lo, SETTING_RANGES["cut_z"].hi)),
+        cut_keep=draw(st.sampled_from(CUT_KEEPS)),
+        opacity=draw(_num(SETTING_RANGES["opacity"].lo, SETTING_RANGES["opacity"].hi)),
+    )
+
+
+@settings(max_examples=300, deadline=None)
+@given(states())
+def test_round_trip_is_identity(state: ExplorerState) -> None:
+    parsed, messages = parse_query(encode_query(state))
+    assert messages == []
+    assert parsed == state
+
+
+def test_round_trip_of_defaults_and_leading_question_mark() -> None:
+    q = encode_query(DEFAULT_STATE)
+    assert parse_query(q) == (DEFAULT_STATE, [])
+    assert parse_query("?" + q) == (DEFAULT_STATE, [])
+    assert parse_query("") == (DEFAULT_STATE, [])
+
+
+def test_encoding_is_readable_and_names_cli_keys() -> None:
+    state = DEFAULT_STATE.replace(design=Design(a=60, d_s=40, eta_s=30), pose=Pose(z=130.5))
+    q = dict(urllib.parse.parse_qsl(encode_query(state)))
+    # design and pose always written, with the CLI's names and short numbers
+    assert q["a"] == "60" and q["d_s"] == "40" and q["eta_s"] == "30" and q["l_min"] == "114.5"
+    assert q["z"] == "130.5" and q["eta_range"] == "centered"
+    # view settings at their defaults are left out
+    assert "view" not in q and "opacity" not in q and "carriages" not in q
+
+
+def test_bad_values_are_reported_by_field_and_the_rest_applies() -> None:
+    state, messages = parse_query("a=60&b=abc&l_s=500&eta_s=nan&eta_range=sideways&z=140&view=front&voxel=0.1")
+    assert state.design.a == 60.0 and state.pose.z == 140.0  # good fields applied
+    # bad fields keep their defaults: nothing clamped
+    assert state.design.b == PARAMS["b"].default
+    assert state.design.l_s == PARAMS["l_s"].default
+    assert state.design.eta_s == PARAMS["eta_s"].default
+    assert state.design.eta_range == "centered" and state.view == "iso" and state.voxel == 2.0
+    assert len(messages) == 6
+    text = "\n".join(messages)
+    for field, valid in (("b", "[0, 40]"), ("l_s", "[10, 100]"), ("eta_s", "[10, 100] deg"),
+                         ("eta_range", "centered, from-zero"), ("view", "iso, top, bottom, side"),
+                         ("voxel", "[1, 10]")):
+        assert any(m.startswith(field + " = ") and valid in m for m in messages), (field, text)
+
+
+def test_out_of_slider_range_is_rejected_not_clamped() -> None:
+    state, messages = parse_query("a=100.5&x=-301&theta=61")
+    assert state.design.a == 50.0 and state.pose.x == 0.0 and state.pose.theta == 0.0
+    assert [m.split(" ")[0] for m in messages] == ["a", "x", "theta"]
+    assert all("out of range" in m for m in messages)
+
+
+def test_inconsistent_design_names_the_field() -> None:
+    state, messages = parse_query("r=60&d_s=80&a=70")
+    assert state.design.r == 60.0 and state.design.a == 70.0
+    assert state.design.d_s == 50.0  # default kept (<= r)
+    assert len(messages) == 1 and messages[0].startswith("d_s = 80") and "r=60" in messages[0]
+
+
+def test_manual_carriages_are_checked_against_the_parsed_design() -> None:
+    state, messages = parse_query("d_s=30&eta_s=20&carriages=manual&d_1=25&d_2=31&eta_1=-10&eta_3=11")
+    assert state.carriages == "manual"
+    assert state.d == (25.0, 0.0, 0.0) and state.eta == (-10.0, 0.0, 0.0)
+    assert [m.split(" ")[0] for m in messages] == ["d_2", "eta_3"]
+    assert "d_s=30" in messages[0] and "[-10, 10]" in messages[1]
+
+
+def test_unknown_and_duplicate_keys_and_viser_keys() -> None:
+    state, messages = parse_query("a=20&a=30&color=red&websocket=ws://127.0.0.1:9/&darkMode=1")
+    assert state.design.a == 30.0
+    assert len(messages) == 2
+    assert any("a is given more than once" in m for m in messages)
+    assert any("'color'" in m for m in messages)
+    keep = viser_passthrough("a=20&websocket=ws://127.0.0.1:9/&darkMode=1")
+    assert keep == [("websocket", "ws://127.0.0.1:9/"), ("darkMode", "1")]
+    q = full_query(state, keep)
+    assert parse_query(q) == (state, [])
+    assert dict(urllib.parse.parse_qsl(q))["websocket"] == "ws://127.0.0.1:9/"
+
+
+@pytest.mark.parametrize("query", ["%zz=1", "&&&", "a", "a=", "=5", "a=1e999", "cut=maybe", "x=0x10"])
+def test_garbage_never_raises(query: str) -> None:
+    state, messages = parse_query(query)
+    assert isinstance(state, ExplorerState)
+    assert isinstance(messages, list)
