@@ -246,7 +246,7 @@ def _symmetric_box(lo, hi, h: float):
 
 def default_bounds(design: Design, settings: WorkspaceSettings, cancel: CancelToken = None):
     """Box derived from the design's reach: the analytical box, tightened by a coarse scout."""
-    alo, ahi = reach_box(design, settings.orientation, settings.z_floor)
+    alo, ahi = _padded_reach_box(design, settings)
     ext = max(b - a for a, b in zip(alo, ahi))
     hs = max(4.0 * settings.voxel, ext / 48.0)
     scout = GridSpec.from_bounds(alo, ahi, hs)
@@ -260,6 +260,14 @@ def default_bounds(design: Design, settings: WorkspaceSettings, cancel: CancelTo
     hi = [min(axes[a][idx[:, a].max()] + 2.5 * hs, ahi[a]) for a in range(3)]
     lo[2] = max(lo[2], settings.z_floor)
     return _symmetric_box(lo, hi, settings.voxel)
+
+
+def _padded_reach_box(design: Design, settings: WorkspaceSettings):
+    """The analytical box grown by one voxel (except below ``z_floor``): its outermost voxel layer
+    lies beyond the reach, so the derived grid never clips the workspace."""
+    lo, hi = reach_box(design, settings.orientation, settings.z_floor)
+    h = settings.voxel
+    return (lo[0] - h, lo[1] - h, lo[2] if lo[2] <= settings.z_floor else lo[2] - h), (hi[0] + h, hi[1] + h, hi[2] + h)
 
 
 def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> bool:
@@ -313,7 +321,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
         lo, hi = settings.bounds  # type: ignore[misc]
     else:
         lo, hi = default_bounds(design, settings, cancel)
-    alo, ahi = reach_box(design, settings.orientation, settings.z_floor)
+    alo, ahi = _padded_reach_box(design, settings)
     for _attempt in range(4):
         grid = GridSpec.from_bounds(lo, hi, settings.voxel)
         mask, n_eta = _run_grid(design, settings, grid, rep.sub(0.05, 1.0), cancel,
