@@ -31,7 +31,8 @@ class ParameterError(ValueError):
         self.field = field
         self.value = value
         self.valid = valid
-        super().__init__(f"{field} = {value!r} is invalid: valid range {valid}")
+        kind = "valid range" if valid.startswith("[") else "expected"
+        super().__init__(f"{field} = {value!r} is invalid: {kind} {valid}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,7 +69,7 @@ def _check_number(field: str, value: Any, lo: float, hi: float, hi_text: str | N
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(field, value, f"a number in [{lo:g}, {hi_text or f'{hi:g}'}]") from None
+        raise ParameterError(field, value, f"[{lo:g}, {hi_text or f'{hi:g}'}] (a number)") from None
     if not math.isfinite(v) or v < lo or v > hi:
         raise ParameterError(field, value, f"[{lo:g}, {hi_text or f'{hi:g}'}]")
     return v

@@ -126,7 +126,7 @@ def _best_carriage(design: Design, B: np.ndarray, chain: int) -> tuple[float, fl
         lo_r, hi_r = max(r_lo, best[1] - 2 * dr), min(r_hi, best[1] + 2 * dr)
         n_e = 1 if hi_e <= lo_e else 21
         n_r = 1 if hi_r <= lo_r else 21
-    return design.r - best[1], float(np.degrees(best[0]))
+    return design.r - best[1], float(np.degrees(best[0])) + 0.0  # + 0.0: no negative zero
 
 
 def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: str) -> Resolution:

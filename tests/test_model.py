@@ -24,13 +24,14 @@ def test_defaults_are_table_one():
 
 @pytest.mark.parametrize("field,value,needle", [
     ("a", -5, "a = -5"), ("d_s", 120, "r=100"), ("eta_s", 500, "180"), ("l_s", float("nan"), "l_s"),
-    ("b", "wide", "number"), ("eta_range", "sideways", "centered"),
+    ("b", "wide", "(a number)"), ("eta_range", "sideways", "centered"),
 ])
 def test_bad_design_names_field_and_range(field, value, needle):
     with pytest.raises(ParameterError) as err:
         Design(**{field: value})
     assert err.value.field == field
-    assert needle in str(err.value) and "valid range" in str(err.value)
+    assert needle in str(err.value)
+    assert ("valid range" in str(err.value)) or ("expected" in str(err.value))
 
 
 def test_special_case_strokes_zero_accepted():

@@ -1,0 +1,328 @@
+"""The ``paraspace`` command line.
+
+    paraspace workspace   [design flags] [--voxel H] [--json] [--export FILE.stl|.ply|.obj|.glb]
+    paraspace orientation [design flags] [--z0 Z] [--json]
+    paraspace sweep       [design flags] --param NAME --values V1,V2,... [--param2 NAME --values2 ...]
+                          [--voxel H] [--json] [--csv FILE] [--plot FILE.png] [--scheduler ADDR] [--workers N]
+    paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
+    paraspace serve       [--host H] [--port P] [--api-port Q]
+
+Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
+Every command except ``serve`` uses only the numerical core (no web packages are imported).
+Bad flags or values exit with status 2 and one line naming the field and its valid range.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+from typing import Any, Optional, Sequence
+
+from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2
+        self.exit(2, f"paraspace: error: {message}\n")
+
+
+def _floats(field: str, text: str, count: Optional[int] = None) -> list[float]:
+    try:
+        vals = [float(v) for v in text.split(",") if v.strip() != ""]
+    except ValueError:
+        raise ParameterError(field, text, "comma-separated numbers") from None
+    if not vals or (count is not None and len(vals) != count):
+        raise ParameterError(field, text, f"{count} comma-separated numbers" if count else "at least one number")
+    if not all(math.isfinite(v) for v in vals):
+        raise ParameterError(field, text, "finite numbers")
+    return vals
+
+
+def _add_design_flags(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("design (paper Table I; defaults are the paper's design)")
+    for name, spec in PARAMS.items():
+        g.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
+                       help=f"{spec.description} (default {spec.default:g}; Table I range "
+                            f"[{spec.slider_min:g}, {spec.slider_max:g}]{' deg' if spec.unit else ''})")
+    g.add_argument("--eta-range", dest="eta_range", default="centered", metavar="|".join(ETA_RANGES),
+                   help="zero of the arc stroke: eta in [-eta_s/2, eta_s/2] (centered) or [0, eta_s]")
+
+
+def _design(ns: argparse.Namespace) -> Design:
+    values: dict[str, Any] = {}
+    for name in PARAMS:
+        raw = getattr(ns, name)
+        try:
+            values[name] = float(raw)
+        except (TypeError, ValueError):
+            raise ParameterError(name, raw, f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
+    return Design(**values, eta_range=ns.eta_range)
+
+
+def _voxel(ns: argparse.Namespace) -> float:
+    try:
+        return float(ns.voxel)
+    except (TypeError, ValueError):
+        raise ParameterError("voxel", ns.voxel, "[0.25, 100] (a number)") from None
+
+
+def _emit(obj: Any) -> None:
+    json.dump(obj, sys.stdout, indent=2)
+    sys.stdout.write("\n")
+
+
+def cmd_workspace(ns: argparse.Namespace) -> int:
+    from kinematics.measures import measure_workspace
+    from kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
+
+    design = _design(ns)
+    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics)
+    fmt = None
+    if ns.export:
+        fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
+        if fmt not in ("stl", "ply", "obj", "glb"):
+            raise ParameterError("export", ns.export, "a file name ending in .stl, .ply, .obj or .glb")
+    warm_up()
+    result = compute_workspace(design, settings)
+    measures = measure_workspace(result)
+    out = {"design": design.to_dict(), **measures.to_dict(), "voxel_size": result.grid.h, "voxels": result.voxels,
+           "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
+           "eta_samples": result.n_eta}
+    if fmt:
+        from kinematics.shell import export_shell, workspace_shell
+
+        mesh = workspace_shell(result)
+        with open(ns.export, "wb") as fh:
+            fh.write(export_shell(mesh, fmt))
+        out["export"] = {"file": ns.export, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
+    if ns.json:
+        _emit(out)
+    else:
+        print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
+        for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
+            if key in out:
+                print(f"{key:<15} {out[key]}")
+        print(f"bounds          {out.get('bounds')}")
+        print(f"compute_seconds {out['compute_seconds']:.3f}")
+        if fmt:
+            print(f"exported        {ns.export} ({out['export']['faces']} faces)")
+    return 0
+
+
+def cmd_orientation(ns: argparse.Namespace) -> int:
+    from kinematics.orientation import OrientationSettings, orientation_workspace
+    from kinematics.workspace import warm_up
+
+    design = _design(ns)
+    try:
+        z0 = float(ns.z0)
+    except (TypeError, ValueError):
+        raise ParameterError("z0", ns.z0, "a number") from None
+    settings = OrientationSettings(z0=z0)
+    warm_up()
+    result = orientation_workspace(design, settings)
+    out = {"design": design.to_dict(), **result.to_dict()}
+    if ns.json:
+        _emit(out)
+    else:
+        print(f"TI_1 = {out['TI_1']:.6g}   TI_2 = {out['TI_2']:.6g}   (z0 = {z0:g})")
+        for name, val in out.get("deltas", {}).items():
+            print(f"  {name:<8} {val:.6g}")
+    return 0
+
+
+def cmd_sweep(ns: argparse.Namespace) -> int:
+    from kinematics.sweep import sweep_1d, sweep_2d
+    from kinematics.workspace import WorkspaceSettings, warm_up
+
+    design = _design(ns)
+    settings = WorkspaceSettings(voxel=_voxel(ns))
+    for field in ("param", "param2"):
+        name = getattr(ns, field)
+        if name is not None and name not in PARAMS:
+            raise ParameterError(field, name, "one of " + ", ".join(PARAMS))
+    values = _floats("values", ns.values)
+    if (ns.param2 is None) != (ns.values2 is None):
+        raise ParameterError("param2", ns.param2, "given together with --values2")
+    distributed = ns.scheduler is not None or ns.workers is not None
+    warm_up()
+    if ns.param2 is not None:
+        values2 = _floats("values2", ns.values2)
+        if distributed:
+            from kinematics.distributed import sweep_grid
+
+            rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings,
+                              scheduler=ns.scheduler, n_workers=ns.workers)
+        else:
+            rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings)["points"]
+    elif distributed:
+        from kinematics.distributed import sweep_grid
+
+        rows = sweep_grid(design, {ns.param: values}, settings, scheduler=ns.scheduler, n_workers=ns.workers)
+    else:
+        rows = sweep_1d(design, ns.param, values, settings)
+    rows = [_with_value(r, ns.param, ns.param2) for r in rows]
+    if ns.csv:
+        with open(ns.csv, "w", newline="") as fh:
+            fh.write(rows_to_csv(rows))
+    if ns.plot:
+        plot_sweep(rows, ns.param, ns.param2, ns.plot)
+    if ns.json:
+        _emit(rows)
+    else:
+        sys.stdout.write(rows_to_csv(rows))
+    return 0
+
+
+def _with_value(row: dict, param: str, param2: Optional[str]) -> dict:
+    out = dict(row)
+    if "value" not in out and param in out.get("design", {}):
+        out["value"] = out["design"][param]
+    if param2 is not None and "value2" not in out and param2 in out.get("design", {}):
+        out["value2"] = out["design"][param2]
+    return out
+
+
+def rows_to_csv(rows: Sequence[dict]) -> str:
+    """Flat CSV of sweep rows (scalar columns only)."""
+    if not rows:
+        return ""
+    keys = [k for k, v in rows[0].items() if isinstance(v, (int, float, str, bool)) or v is None]
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=keys, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: r.get(k) for k in keys})
+    return buf.getvalue()
+
+
+def plot_sweep(rows: Sequence[dict], param: str, param2: Optional[str], path: str) -> None:
+    """Volume against one parameter (paper Fig. 4) or a heat map over two (Fig. 5), as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, ax = plt.subplots(figsize=(6, 4.2), dpi=120)
+    if param2 is None:
+        ax.plot([r["value"] for r in rows], [r["volume"] for r in rows], "o-")
+        ax.set_xlabel(param)
+        ax.set_ylabel("workspace volume V")
+        ax.grid(alpha=0.3)
+    else:
+        xs = sorted({r["value"] for r in rows})
+        ys = sorted({r["value2"] for r in rows})
+        grid = np.full((len(ys), len(xs)), np.nan)
+        for r in rows:
+            grid[ys.index(r["value2"]), xs.index(r["value"])] = r["volume"]
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis",
+                       extent=(xs[0], xs[-1], ys[0], ys[-1]) if len(xs) > 1 and len(ys) > 1 else None)
+        fig.colorbar(im, ax=ax, label="workspace volume V")
+        ax.set_xlabel(param)
+        ax.set_ylabel(param2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def cmd_ik(ns: argparse.Namespace) -> int:
+    from kinematics.pose import Pose
+    from kinematics.redundancy import inverse_kinematics, resolve_redundancy
+
+    design = _design(ns)
+    pose = Pose.from_array(_floats("pose", ns.pose, 6))
+    if ns.carriage:
+        c = _floats("carriage", ns.carriage, 6)
+        res = inverse_kinematics(design, pose, c[:3], c[3:])
+    else:
+        res = resolve_redundancy(design, pose)
+    out = {"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()}
+    if ns.json:
+        _emit(out)
+    else:
+        print(res.message)
+        for ch in res.chains:
+            print(f"chain {ch.chain + 1}: d = {ch.d:8.3f}  eta = {ch.eta:8.3f} deg  lengths = "
+                  f"{ch.lengths[0]:8.3f} {ch.lengths[1]:8.3f}  ({', '.join(ch.leg_status)})")
+        print(f"condition number of J: {out['condition_number']}")
+    return 0 if res.feasible or not ns.strict else 1
+
+
+def cmd_serve(ns: argparse.Namespace) -> int:
+    from app.serve import serve
+
+    for field in ("port", "api_port"):
+        v = getattr(ns, field)
+        if not 0 <= v <= 65535:
+            raise ParameterError(field.replace("_", "-"), v, "[0, 65535]")
+    serve(host=ns.host, port=ns.port, api_port=ns.api_port, block=True)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="paraspace", description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    w = sub.add_parser("workspace", help="constant-orientation position workspace and its measures")
+    _add_design_flags(w)
+    w.add_argument("--voxel", default=2.0, help="voxel edge h (default 2)")
+    w.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
+    w.add_argument("--diagnostics", action="store_true", help="evaluate every chain everywhere (which chain binds)")
+    w.set_defaults(func=cmd_workspace)
+
+    o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")
+    _add_design_flags(o)
+    o.add_argument("--z0", default=130.0, help="height of the x and y' lines (default 130)")
+    o.add_argument("--json", action="store_true")
+    o.set_defaults(func=cmd_orientation)
+
+    s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
+    _add_design_flags(s)
+    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS))
+    s.add_argument("--values", required=True, help="comma-separated values")
+    s.add_argument("--param2", help="second parameter for a 2-D grid")
+    s.add_argument("--values2", help="values of the second parameter")
+    s.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
+    s.add_argument("--json", action="store_true", help="a JSON list of objects with value and volume")
+    s.add_argument("--csv", metavar="FILE")
+    s.add_argument("--plot", metavar="FILE.png")
+    s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
+    s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    s.set_defaults(func=cmd_sweep)
+
+    k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")
+    _add_design_flags(k)
+    k.add_argument("--pose", required=True, help="x,y,z,psi,theta,phi (degrees)")
+    k.add_argument("--carriage", help="hand-set d1,d2,d3,eta1,eta2,eta3 instead of the resolution")
+    k.add_argument("--json", action="store_true")
+    k.add_argument("--strict", action="store_true", help="exit 1 when the pose is unreachable")
+    k.set_defaults(func=cmd_ik)
+
+    v = sub.add_parser("serve", help="run the browser explorer and the REST API")
+    v.add_argument("--host", default="127.0.0.1")
+    v.add_argument("--port", type=int, default=8080, help="explorer port (default 8080)")
+    v.add_argument("--api-port", dest="api_port", type=int, default=8081, help="REST API port (default 8081)")
+    v.set_defaults(func=cmd_serve)
+    return p
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = build_parser()
+    ns = parser.parse_args(argv)
+    try:
+        return int(ns.func(ns))
+    except ParameterError as err:
+        sys.stderr.write(f"paraspace: error: {err}\n")
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
