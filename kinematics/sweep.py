@@ -1,0 +1,336 @@
+"""Parameter studies: workspace measures against one design parameter (paper Fig. 4) and over a
+2-D grid of two parameters (paper Fig. 5).
+
+The unit of work is :func:`evaluate_design`, a pure module-level function of picklable arguments
+(a :class:`~kinematics.design.Design`, a :class:`~kinematics.workspace.WorkspaceSettings`, an
+optional :class:`~kinematics.orientation.OrientationSettings`) that returns a JSON-serializable
+dict, so it can run on any worker (threads, processes, Dask). :func:`sweep_1d` and
+:func:`sweep_2d` call it point by point, with progress, cancellation between and inside points,
+and an optional :class:`ResultCache` keyed by a stable hash of (design fields, workspace settings
+fields, orientation settings fields, code version).
+
+Note (paper): Sec. III-E is titled "Combined effect of a and l_s" but Fig. 5 and its text vary
+``a`` and ``d_s``; :func:`sweep_2d` takes any two parameters.
+"""
+
+from __future__ import annotations
+
+import collections
+import copy
+import dataclasses
+import functools
+import hashlib
+import json
+import math
+import os
+import pathlib
+import tempfile
+import threading
+import time
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from .design import PARAMS, Design, ParameterError
+from .orientation import OrientationSettings, orientation_workspace
+from .progress import CancelToken, ProgressFn, Reporter, check
+from .workspace import WorkspaceSettings, compute_workspace
+
+#: Bump when the meaning of a cached result changes without a change of the kinematics sources.
+CACHE_SCHEMA = "sweep-1"
+
+
+# --------------------------------------------------------------------------------------------
+# the unit of work
+
+
+def _jsonable(obj: Any) -> Any:
+    """Plain JSON types: numpy scalars/arrays to Python, tuples to lists, non-finite floats to None."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return _jsonable(obj.item())
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if obj is None or isinstance(obj, (bool, int, str)):
+        return obj
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return _jsonable(dataclasses.asdict(obj))
+    return str(obj)
+
+
+def evaluate_design(design: Design, settings: WorkspaceSettings, *,
+                    orientation: Optional[OrientationSettings] = None, cancel: CancelToken = None) -> dict:
+    """Measures of one design: the position workspace (``compute_workspace`` + ``measure_workspace``)
+    and, when ``orientation`` is given, the indices TI_1, TI_2 of eq. (28).
+
+    Returns a JSON-serializable dict: every field of ``WorkspaceMeasures.to_dict()`` (``volume``,
+    ``voids``, ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
+    ``"TI_2"`` and ``"orientation_deltas"`` (the 18 Δ's and 9 products, named as in the paper), and
+    ``"compute_seconds"`` (wall time of this call; every other entry is deterministic).
+
+    Raises:
+        Cancelled: when ``cancel`` is set.
+    """
+    from .measures import measure_workspace  # imported here: a sibling module of the core
+
+    t0 = time.perf_counter()
+    check(cancel)
+    result = compute_workspace(design, settings, cancel=cancel)
+    check(cancel)
+    out: dict[str, Any] = dict(measure_workspace(result).to_dict())
+    if orientation is not None:
+        ori = orientation_workspace(design, orientation, cancel=cancel)
+        out["TI_1"] = ori.ti1
+        out["TI_2"] = ori.ti2
+        out["orientation_deltas"] = dict(ori.deltas)
+    out["design"] = design.to_dict()
+    out["compute_seconds"] = time.perf_counter() - t0
+    return _jsonable(out)
+
+
+# --------------------------------------------------------------------------------------------
+# cache
+
+
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """Version string of the numerical core: a hash of the sources of ``kinematics/*.py`` and
+    :data:`CACHE_SCHEMA` (so an on-disk cache never serves results of other code)."""
+    h = hashlib.sha256(CACHE_SCHEMA.encode())
+    for path in sorted(pathlib.Path(__file__).resolve().parent.glob("*.py")):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return f"{CACHE_SCHEMA}+{h.hexdigest()[:16]}"
+
+
+def _canon(obj: Any) -> Any:
+    """Canonical form for hashing: ints as floats (``2`` and ``2.0`` are the same setting)."""
+    if isinstance(obj, dict):
+        return {str(k): _canon(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_canon(v) for v in obj]
+    if isinstance(obj, bool) or obj is None or isinstance(obj, str):
+        return obj
+    if isinstance(obj, (int, float, np.integer, np.floating)):
+        return float(obj)
+    return str(obj)
+
+
+def cache_key(design: Design, settings: WorkspaceSettings, orientation: Optional[OrientationSettings] = None,
+              version: Optional[str] = None) -> str:
+    """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields
+    and the code version."""
+    payload = {
+        "design": design.to_dict(),
+        "settings": dataclasses.asdict(settings),
+        "orientation": None if orientation is None else dataclasses.asdict(orientation),
+        "version": code_version() if version is None else version,
+    }
+    text = json.dumps(_canon(payload), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class ResultCache:
+    """Thread-safe cache of :func:`evaluate_design` results: an in-memory LRU of at most
+    ``max_entries`` entries, backed by an optional directory of JSON files (one per key).
+
+    Values are deep-copied in and out, so callers may mutate what they get.
+    """
+
+    def __init__(self, max_entries: int = 256, directory: Optional[str | os.PathLike] = None,
+                 version: Optional[str] = None) -> None:
+        if not isinstance(max_entries, int) or isinstance(max_entries, bool) or max_entries < 0:
+            raise ParameterError("max_entries", max_entries, "an integer >= 0")
+        self.max_entries = max_entries
+        self.directory = None if directory is None else pathlib.Path(directory)
+        if self.directory is not None:
+            self.directory.mkdir(parents=True, exist_ok=True)
+        self.version = version
+        self._mem: "collections.OrderedDict[str, dict]" = collections.OrderedDict()
+        self._lock = threading.RLock()
+        self.hits = 0
+        self.misses = 0
+
+    def key(self, design: Design, settings: WorkspaceSettings,
+            orientation: Optional[OrientationSettings] = None) -> str:
+        """:func:`cache_key` with this cache's version."""
+        return cache_key(design, settings, orientation, self.version)
+
+    def _path(self, key: str) -> Optional[pathlib.Path]:
+        return None if self.directory is None else self.directory / f"{key}.json"
+
+    def _remember(self, key: str, value: dict) -> None:
+        if self.max_entries == 0:
+            return
+        self._mem[key] = value
+        self._mem.move_to_end(key)
+        while len(self._mem) > self.max_entries:
+            self._mem.popitem(last=False)
+
+    def get(self, key: str) -> Optional[dict]:
+        """The cached value (a copy), or ``None``."""
+        with self._lock:
+            if key in self._mem:
+                self._mem.move_to_end(key)
+                self.hits += 1
+                return copy.deepcopy(self._mem[key])
+            path = self._path(key)
+            if path is not None and path.is_file():
+                try:
+                    value = json.loads(path.read_text())["value"]
+                except (OSError, ValueError, KeyError, TypeError):
+                    value = None
+                if isinstance(value, dict):
+                    self._remember(key, value)
+                    self.hits += 1
+                    return copy.deepcopy(value)
+            self.misses += 1
+            return None
+
+    def put(self, key: str, value: dict) -> None:
+        """Store a copy of ``value`` (JSON-serializable) in memory and, if configured, on disk."""
+        value = copy.deepcopy(value)
+        with self._lock:
+            self._remember(key, value)
+            path = self._path(key)
+            if path is not None:
+                fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=str(path.parent))
+                try:
+                    with os.fdopen(fd, "w") as fh:
+                        json.dump({"key": key, "value": value}, fh)
+                    os.replace(tmp, path)
+                except BaseException:
+                    if os.path.exists(tmp):
+                        os.unlink(tmp)
+                    raise
+
+    def clear(self) -> None:
+        """Forget the in-memory entries (the directory is left alone)."""
+        with self._lock:
+            self._mem.clear()
+
+    def __len__(self) -> int:
+        with self._lock:
+            return len(self._mem)
+
+    def __contains__(self, key: str) -> bool:
+        with self._lock:
+            path = self._path(key)
+            return key in self._mem or (path is not None and path.is_file())
+
+
+# --------------------------------------------------------------------------------------------
+# sweeps
+
+
+def _check_param(param: Any, field: str = "param") -> str:
+    if not isinstance(param, str) or param not in PARAMS:
+        raise ParameterError(field, param, "one of " + ", ".join(PARAMS))
+    return param
+
+
+def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design]:
+    """Validate every value up front (``Design`` raises ``ParameterError`` naming the field)."""
+    try:
+        vals = list(values)
+    except TypeError:
+        raise ParameterError("values", values, "a sequence of numbers") from None
+    return [design.replace(**{param: v}) for v in vals]
+
+
+def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: Optional[OrientationSettings],
+                     cancel: CancelToken, cache: Optional[ResultCache]) -> dict:
+    key = cache.key(design, settings, orientation) if cache is not None else None
+    if cache is not None:
+        hit = cache.get(key)  # type: ignore[arg-type]
+        if hit is not None:
+            return hit
+    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel)
+    if cache is not None:
+        cache.put(key, value)  # type: ignore[arg-type]
+    return value
+
+
+def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
+             orientation: Optional[OrientationSettings] = None, progress: Optional[ProgressFn] = None,
+             cancel: CancelToken = None, cache: Optional[ResultCache] = None) -> list[dict]:
+    """Measures against one design parameter (paper Fig. 4): ``design`` with ``param`` set to each of
+    ``values``, the other fields fixed.
+
+    Returns:
+        One dict per value, ``{"param": param, "value": v, **evaluate_design(...)}``.
+    Raises:
+        ParameterError: unknown ``param`` or a value outside the parameter's valid range (checked
+            for every value before any computation).
+        Cancelled: when ``cancel`` is set.
+    """
+    _check_param(param)
+    designs = _designs(design, param, values)
+    rep = Reporter(progress)
+    out: list[dict] = []
+    n = len(designs)
+    for i, dsg in enumerate(designs):
+        check(cancel)
+        rep(i / n, f"{param} = {getattr(dsg, param):g} ({i + 1}/{n})")
+        res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+        out.append({"param": param, "value": float(getattr(dsg, param)), **res})
+    rep(1.0, "done")
+    return out
+
+
+def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
+             settings: WorkspaceSettings, *, orientation: Optional[OrientationSettings] = None,
+             progress: Optional[ProgressFn] = None, cancel: CancelToken = None,
+             cache: Optional[ResultCache] = None) -> dict:
+    """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
+
+    Returns:
+        ``{"param_x", "param_y", "values_x", "values_y", "volume": [iy][ix], "grids": {measure:
+        [iy][ix]} for every numeric scalar measure, "points": [...]}``; the points are in row-major
+        order (``iy`` outer) and each is ``{"param_x", "param_y", "x", "y", "ix", "iy",
+        **evaluate_design(...)}``.
+    Raises:
+        ParameterError: unknown parameter, ``param_x == param_y``, or an invalid value.
+        Cancelled: when ``cancel`` is set.
+    """
+    _check_param(param_x, "param_x")
+    _check_param(param_y, "param_y")
+    if param_x == param_y:
+        raise ParameterError("param_y", param_y, f"a parameter other than param_x={param_x!r}")
+    xs = [float(getattr(d, param_x)) for d in _designs(design, param_x, values_x)]
+    ys = [float(getattr(d, param_y)) for d in _designs(design, param_y, values_y)]
+    grid_designs = [[design.replace(**{param_x: x, param_y: y}) for x in xs] for y in ys]
+    rep = Reporter(progress)
+    n = len(xs) * len(ys)
+    points: list[dict] = []
+    for iy, row in enumerate(grid_designs):
+        for ix, dsg in enumerate(row):
+            check(cancel)
+            k = iy * len(xs) + ix
+            rep(k / max(n, 1), f"{param_x} = {xs[ix]:g}, {param_y} = {ys[iy]:g} ({k + 1}/{n})")
+            res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+            points.append({"param_x": param_x, "param_y": param_y, "x": xs[ix], "y": ys[iy],
+                           "ix": ix, "iy": iy, **res})
+    rep(1.0, "done")
+    scalar_names = [k for k, v in (points[0].items() if points else [])
+                    if isinstance(v, (int, float)) and not isinstance(v, bool)
+                    and k not in ("x", "y", "ix", "iy")]
+    grids = {name: [[points[iy * len(xs) + ix].get(name) for ix in range(len(xs))] for iy in range(len(ys))]
+             for name in scalar_names}
+    return {"param_x": param_x, "param_y": param_y, "values_x": xs, "values_y": ys,
+            "volume": grids.get("volume", [[None] * len(xs) for _ in ys]), "grids": grids, "points": points}
+
+
+def study_values(param: str, n: int = 10) -> list[float]:
+    """``n`` values evenly over the paper's Table I range of ``param`` (``PARAMS[param].slider_*``),
+    both ends included."""
+    _check_param(param)
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
+        raise ParameterError("n", n, "an integer >= 1")
+    spec = PARAMS[param]
+    return [float(v) for v in np.linspace(spec.slider_min, spec.slider_max, int(n))]
