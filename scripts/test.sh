@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Install everything the tests need and run the whole suite:
+#  - Debian's chromium (the browser test drives it through Playwright; `playwright install` cannot
+#    download here), with apt-get (as root, or through sudo);
+#  - ./.venv with the project and its test extras.
+# Extra arguments go to pytest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ ! -x /usr/bin/chromium ]; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
+fi
+[ -x .venv/bin/python ] || python3 -m venv .venv
+.venv/bin/python -m pip install -q --upgrade pip
+.venv/bin/python -m pip install -q ".[test]"
+exec .venv/bin/python -m pytest -ra "$@"

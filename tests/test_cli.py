@@ -1,0 +1,81 @@
+"""The `paraspace` command line as outside scripts call it (subprocesses, JSON contract)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from kinematics.design import Design
+from kinematics.inverse import leg_lengths
+from kinematics.pose import Pose
+from kinematics.workspace import WorkspaceSettings, compute_workspace
+
+
+def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    proc = subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=300)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def test_workspace_json_contract(tmp_path):
+    out = tmp_path / "shell.stl"
+    data = json.loads(run("workspace", "--voxel", "8", "--a", "60", "--json", "--export", str(out)).stdout)
+    for key in ("volume", "voxel_size", "voxels", "compute_seconds", "components", "void_volume", "void_ratio",
+                "hollowness", "boundary_closed", "genus", "bounds"):
+        assert key in data, key
+    ref = compute_workspace(Design(a=60), WorkspaceSettings(voxel=8.0))
+    assert data["volume"] == pytest.approx(ref.volume)
+    assert data["voxels"] == ref.voxels and data["voxel_size"] == 8.0
+    assert data["volume"] == pytest.approx(data["voxels"] * 8.0 ** 3)
+    assert 0 < data["compute_seconds"] < 60
+    import trimesh
+
+    mesh = trimesh.load(out)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(ref.volume, rel=0.1)
+
+
+def test_ik_json_matches_core():
+    data = json.loads(run("ik", "--pose", "10,-5,135,3,-2,4", "--json").stdout)
+    assert data["feasible"] is True
+    lengths = leg_lengths(Design(), Pose(10, -5, 135, 3, -2, 4), data["d"], data["eta"])
+    assert np.allclose(lengths, data["lengths"])
+    assert data["condition_number"] > 1
+    bad = json.loads(run("ik", "--pose", "0,0,60,0,0,0", "--json").stdout)
+    assert bad["feasible"] is False and "too short" in bad["message"]
+    assert run("ik", "--pose", "0,0,60,0,0,0", "--strict", check=False).returncode == 1
+
+
+def test_sweep_json_csv_plot(tmp_path):
+    csv_path, png = tmp_path / "s.csv", tmp_path / "s.png"
+    data = json.loads(run("sweep", "--param", "l_s", "--values", "30,60", "--voxel", "10", "--json",
+                          "--csv", str(csv_path), "--plot", str(png)).stdout)
+    assert [row["value"] for row in data] == [30, 60]
+    assert data[1]["volume"] > data[0]["volume"] > 0
+    for row, ls in zip(data, (30, 60)):
+        assert row["volume"] == pytest.approx(compute_workspace(Design(l_s=ls), WorkspaceSettings(voxel=10.0)).volume)
+    lines = csv_path.read_text().strip().splitlines()
+    assert len(lines) == 3 and "volume" in lines[0]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("args,field", [
+    (["workspace", "--a", "-5"], "a = "),
+    (["workspace", "--d-s", "150"], "d_s"),
+    (["workspace", "--voxel", "0"], "voxel"),
+    (["workspace", "--eta-range", "left"], "eta_range"),
+    (["workspace", "--export", "x.doc"], "export"),
+    (["ik", "--pose", "1,2"], "pose"),
+    (["sweep", "--param", "zeta", "--values", "1,2"], "param"),
+    (["sweep", "--param", "a", "--values", "1,x"], "values"),
+    (["serve", "--port", "99999"], "port"),
+])
+def test_bad_input_one_line_naming_field(args, field):
+    proc = run(*args, check=False)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0] and "Traceback" not in proc.stderr
