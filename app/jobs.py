@@ -38,9 +38,8 @@ exceptions it raises are logged and ignored.
 from __future__ import annotations
 
 import collections
-import itertools
 import logging
-import os
+import secrets
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -83,7 +82,7 @@ class Job:
     """One unit of work and its observable state.
 
     Attributes:
-        id: unique id (hex string).
+        id: unique, unguessable id (16 hex digits).
         kind: what the job computes (``"workspace"``, ``"sweep"``, ...); supersede works per kind.
         client: who submitted it (an IP address, a header value, ``"local"``, a viser client id).
         key: optional hashable identity of the computation (used for dedupe).
@@ -191,8 +190,6 @@ class JobManager:
         self._lock = threading.RLock()
         self._jobs: "collections.OrderedDict[str, Job]" = collections.OrderedDict()
         self._unfinished: dict[str, Job] = {}
-        self._counter = itertools.count(1)
-        self._prefix = os.urandom(3).hex()
         self._pool = ThreadPoolExecutor(max_workers=max_workers, thread_name_prefix="paraspace-job")
         self._closed = False
         self._wake = threading.Condition(self._lock)
@@ -263,7 +260,9 @@ class JobManager:
             else:
                 exc = None
             if exc is None:
-                job_id = f"{self._prefix}{next(self._counter):06x}"
+                job_id = secrets.token_hex(8)  # unguessable: ids are used to cancel over HTTP
+                while job_id in self._jobs:
+                    job_id = secrets.token_hex(8)
                 job = Job(self, job_id, kind, client, key, limit)
                 if on_done is not None:
                     job._callbacks.append(on_done)

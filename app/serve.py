@@ -1,0 +1,211 @@
+"""Run the explorer (viser) and the REST API (uvicorn) in one process, sharing one JobManager.
+
+``serve()`` is what ``paraspace serve`` calls::
+
+    paraspace serve --host 127.0.0.1 --port 8080 --api-port 8081
+
+viser runs its own websocket/HTTP server on ``port`` (it cannot be mounted into an ASGI app, see
+the viser notes §1); uvicorn serves the FastAPI app of :mod:`app.api` on ``api_port`` in a thread,
+on the same host. Ctrl-C (SIGINT) or SIGTERM (``docker stop``) stops both cleanly: running jobs are
+cancelled, the servers close their ports.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import signal
+import socket
+import sys
+import threading
+import time
+from typing import Any, Optional
+
+import uvicorn
+
+from .api import ApiLimits, create_api
+from .jobs import JobManager
+
+__all__ = ["ApiServer", "Running", "serve", "start_api", "free_port"]
+
+log = logging.getLogger(__name__)
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A currently free TCP port on ``host`` (for tests and ``--port 0``)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def _url_host(host: str) -> str:
+    """Host part for printed URLs: a wildcard bind is reachable on loopback."""
+    return "127.0.0.1" if host in ("0.0.0.0", "", "::") else host
+
+
+@dataclasses.dataclass
+class ApiServer:
+    """A uvicorn server running in a daemon thread."""
+
+    server: uvicorn.Server
+    thread: threading.Thread
+    host: str
+    port: int
+
+    @property
+    def url(self) -> str:
+        """Base URL (``http://host:port``)."""
+        return f"http://{_url_host(self.host)}:{self.port}"
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """Ask uvicorn to exit and join its thread."""
+        self.server.should_exit = True
+        self.thread.join(timeout)
+
+
+def start_api(app: Any, host: str = "127.0.0.1", port: int = 8081, *, log_level: str = "warning",
+              timeout: float = 20.0) -> ApiServer:
+    """Start uvicorn for ``app`` in a daemon thread and wait until it accepts connections.
+
+    Args:
+        port: TCP port; 0 picks a free one (read it from the returned ``port``).
+
+    Raises:
+        RuntimeError: the server did not start (e.g. the port is in use).
+    """
+    config = uvicorn.Config(app, host=host, port=port, log_level=log_level, access_log=False,
+                            lifespan="off", timeout_graceful_shutdown=3)
+    server = uvicorn.Server(config)
+    errors: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            server.run()
+        except BaseException as e:  # noqa: BLE001 - uvicorn calls sys.exit(1) on bind failures
+            errors.append(e)
+
+    thread = threading.Thread(target=run, name=f"paraspace-api-{port}", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout
+    while not server.started:
+        if not thread.is_alive() or time.monotonic() > deadline:
+            server.should_exit = True
+            why = f"{type(errors[0]).__name__}: {errors[0]}" if errors else "did not start in time"
+            raise RuntimeError(f"the API server could not listen on {host}:{port} ({why}); "
+                               f"is the port in use? choose another with --api-port")
+        time.sleep(0.01)
+    actual = port
+    for srv in getattr(server, "servers", []) or []:
+        for sock in srv.sockets:
+            actual = int(sock.getsockname()[1])
+            break
+    return ApiServer(server=server, thread=thread, host=host, port=actual)
+
+
+@dataclasses.dataclass
+class Running:
+    """The running explorer and API; ``stop()`` shuts everything down (idempotent)."""
+
+    jobs: JobManager
+    api: ApiServer
+    explorer: Any = None
+    _stopped: bool = False
+
+    @property
+    def api_url(self) -> str:
+        """Base URL of the REST API."""
+        return self.api.url
+
+    @property
+    def explorer_url(self) -> Optional[str]:
+        """URL of the viser explorer (``None`` when it was not started)."""
+        if self.explorer is None:
+            return None
+        return str(self.explorer.url)
+
+    def stop(self) -> None:
+        """Cancel running jobs, stop the explorer and the API server."""
+        if self._stopped:
+            return
+        self._stopped = True
+        self.jobs.shutdown(wait=False)
+        if self.explorer is not None:
+            try:
+                self.explorer.stop()
+            except Exception:  # noqa: BLE001 - stopping must not raise
+                log.exception("stopping the explorer failed")
+        self.api.stop()
+
+    def wait(self) -> None:
+        """Block until Ctrl-C / SIGTERM, then :meth:`stop`."""
+        stop = threading.Event()
+        previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                previous[sig] = signal.signal(sig, lambda *_: stop.set())
+        try:
+            while not stop.is_set() and self.api.thread.is_alive():
+                stop.wait(0.5)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+            print("\nparaspace: shutting down ...", file=sys.stderr, flush=True)
+            self.stop()
+
+
+def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, block: bool = True,
+          explorer: bool = True, limits: ApiLimits = ApiLimits(), max_workers: int = 2,
+          quiet: bool = False) -> Running:
+    """Start the explorer on ``port`` and the API on ``api_port`` (both on ``host``).
+
+    Args:
+        host: interface to bind (``0.0.0.0`` in a container; ``127.0.0.1`` by default).
+        port: viser explorer port (viser moves to the next free port when busy; the printed URL is
+            the real one). 0 picks a free port.
+        api_port: REST API port (fails clearly when busy). 0 picks a free port.
+        block: wait for Ctrl-C / SIGTERM, then stop everything and return.
+        explorer: also start the viser explorer (False: API only).
+        limits: API resource limits; ``limits.max_jobs_*`` also bound the shared JobManager.
+        max_workers: computation threads shared by the explorer and the API.
+        quiet: do not print the URLs.
+
+    Returns:
+        The :class:`Running` servers (already stopped when ``block`` is true).
+    """
+    jobs = JobManager(max_workers=max_workers, max_jobs_total=max(limits.max_jobs_total, 16),
+                      max_jobs_per_client=max(limits.max_jobs_per_client, 4),
+                      max_seconds=max(limits.max_job_seconds, 1.0))
+    exp = None
+    try:
+        if explorer:
+            from .explorer import Explorer
+
+            exp = Explorer(host, port if port else _free_or_zero(host), jobs)
+            exp.start()
+        explorer_url = None if exp is None else str(exp.url)
+        app = create_api(jobs, explorer_url=explorer_url, limits=limits)
+        api = start_api(app, host, api_port)
+    except BaseException:
+        jobs.shutdown(wait=False)
+        if exp is not None:
+            exp.stop()
+        raise
+    running = Running(jobs=jobs, api=api, explorer=exp)
+    if not quiet:
+        if exp is not None:
+            print(f"paraspace explorer: {running.explorer_url}", flush=True)
+        print(f"paraspace API:      {api.url}{'/api/v1'}  (docs: {api.url}/docs)", flush=True)
+        if host in ("0.0.0.0", "::"):
+            print(f"  (bound to {host}: reachable from other machines on these ports)", flush=True)
+    if block:
+        running.wait()
+    return running
+
+
+def _free_or_zero(host: str) -> int:
+    try:
+        return free_port(_url_host(host))
+    except OSError:
+        return 0
