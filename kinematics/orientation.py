@@ -91,6 +91,9 @@ DELTAS: tuple[str, ...] = ("extent", "area")
 REGION_MODES: tuple[str, ...] = ("all", "connected")
 POSITION_DELTAS: tuple[str, ...] = ("per_region", "line")
 
+#: Largest (positions x angles) grid of one line that :func:`orientation_workspace` accepts.
+MAX_SAMPLES = 20_000_000
+
 _LINE_DIRECTION = {"y_prime": np.array([0.5, math.sqrt(3.0) / 2.0, 0.0]), "x": np.array([1.0, 0.0, 0.0])}
 
 
@@ -155,9 +158,6 @@ class OrientationSettings:
         _choice("delta", self.delta, DELTAS)
         _choice("region", self.region, REGION_MODES)
         _choice("position_delta", self.position_delta, POSITION_DELTAS)
-        n_pos_max = 200_001
-        if self.s_max is not None and 2 * self.s_max / self.position_step > n_pos_max:
-            raise ParameterError("position_step", self.position_step, f">= {2 * self.s_max / n_pos_max:g} for s_max")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-serializable dict of the fields."""
@@ -451,6 +451,12 @@ def orientation_workspace(design: Design, settings: OrientationSettings = Orient
     """
     rep = Reporter(progress)
     t0 = time.perf_counter()
+    n_ang = angle_samples(settings).size
+    for ln in LINES:
+        n_pos = position_samples(design, ln, settings).size
+        if n_pos * n_ang > MAX_SAMPLES:
+            raise ParameterError("position_step", settings.position_step,
+                                 f"coarser: {n_pos} x {n_ang} samples on the {ln} line exceed {MAX_SAMPLES}")
     regions: dict[tuple[str, str], OrientationRegion] = {}
     keys = [(ln, rt) for ln in LINES for rt in ROTATIONS]
     for n, (ln, rt) in enumerate(keys):

@@ -321,3 +321,8 @@ def test_progress_and_cancel() -> None:
 
     with pytest.raises(Cancelled):
         orientation_workspace(Design(), COARSE, cancel=cancel_later)
+
+
+def test_oversized_grid_is_refused() -> None:
+    with pytest.raises(ParameterError, match="position_step"):
+        orientation_workspace(Design(), OrientationSettings(angle_step=0.01, position_step=0.01))
