@@ -1,0 +1,544 @@
+r"""Quantitative measures of a voxel workspace: size, topology, cavities, boundary completeness.
+
+The paper (Sec. III) describes workspaces in words -- "inverted bowl", "distinct cavities",
+"the boundary of the workspace is complete", "proportion of internal cavities". This module turns
+each of those words into a number with a precise definition on the voxel grid. Everything below
+is computed from the occupancy grid of a :class:`~kinematics.workspace.WorkspaceResult` only (and
+from its per-chain bitmask when present); nothing is resampled.
+
+Notation
+--------
+``G`` is the grid (``n_x x n_y x n_z`` voxels of edge ``h``, voxel ``(i, j, k)`` centred at
+``origin + h (i, j, k)``), ``W`` the set of reachable voxels, ``N = |W|``, ``|S|`` the number of
+voxels of a set ``S``. Volumes are voxel counts times ``h^3``.
+
+Adjacency (digital topology). ``connectivity=1`` (default) makes ``W`` 6-connected (voxels
+sharing a face are neighbours); ``connectivity=3`` makes it 26-connected (face, edge or corner).
+The complement always uses the *dual* adjacency (26 for 6, 6 for 26), a pairing for which
+a solid and its cavities separate each other consistently (a digital Jordan theorem holds) and
+for which the Euler characteristic below is well defined. Connectivity 2 (18) is not offered
+because the Euler-number tables of scikit-image cover only 6 and 26.
+
+Definitions
+-----------
+volume
+    ``V = N h^3`` (voxel-count volume; the same number as ``WorkspaceResult.volume``).
+bounds, extents
+    ``min_a = origin_a + h (min_{W} idx_a) - h/2``, ``max_a = origin_a + h (max_{W} idx_a) + h/2``
+    (the box of the reachable voxels' cubes); ``extents_a = max_a - min_a``. For an empty
+    workspace ``bounds`` is ``None`` and ``extents`` is ``[0, 0, 0]``.
+components
+    ``b0(W)``: number of connected components of ``W`` under the chosen adjacency.
+voids, void_volume, void_ratio
+    Pad ``G`` with one unreachable layer on every side; the complement ``C = pad(G) \ W`` is split
+    into components with the dual adjacency. The component holding the padding is the outside
+    ``O``; every other component is a *void* (a cavity enclosed by the workspace on all sides,
+    including not open to any face of the box). ``voids`` is their number,
+    ``V_void = |C \ O| h^3`` and ``void_ratio = V_void / (V + V_void)``.
+filled solid
+    ``F = W U (C \ O)`` (the workspace with its voids filled). ``F`` has no cavities.
+euler_characteristic
+    ``chi(W) = b0 - b1 + b2`` of the reachable set (components - tunnels + voids), computed by
+    the local-configuration formula of Ohser et al. (``skimage.measure.euler_number``) with the
+    chosen adjacency. Its boundary surface (inner and outer) has Euler characteristic
+    ``2 chi(W)``.
+genus
+    Total genus of the *outer* boundary ``dF``: ``g = b0(F) - chi(F) = b1(F)`` (``b2(F) = 0``
+    after filling). Each closed outer surface of genus ``g_c`` contributes ``g_c``; a solid ball
+    has ``g = 0``, a solid torus ``g = 1``, a shell with ``t`` through-holes (windows) ``g = t``.
+    ``chi(dF) = 2 b0(F) - 2 g``. A solid cut by a face of the box is closed by that face first
+    (the grid is zero-padded), so ``g`` is the genus of the box-capped solid.
+touched_faces, floor, clipped_faces
+    Faces of the grid box (``"x-"``, ``"x+"``, ``"y-"``, ``"y+"``, ``"z-"``, ``"z+"``) whose
+    outermost voxel layer holds a reachable voxel. The ``"z-"`` face is the *floor* when it lies
+    on the workspace's own lower limit, ``|lo_z - settings.z_floor| <= h/2``: the workspace is by
+    definition the reachable set above ``z_floor`` (the platform stays above the base plane), so
+    a surface ending on that plane is bounded by the definition, not cut by the computation box.
+    ``clipped_faces`` are the touched faces except the floor when ``floor_closes=True`` (default),
+    and all touched faces when ``floor_closes=False``.
+box_contact_fraction
+    ``|W n B| / |B|`` with ``B`` the voxels on the six faces of the grid (each counted once).
+hollowness (underside cavity ratio)
+    ``H / (H + V)`` with ``H = |U| h^3``. With ``hollowness="hull"`` (default) ``U`` is the set of
+    unreachable voxels ``(i, j, k)`` that are
+
+    * inside the convex hull of the reachable voxels' centres, ``K = conv{c(v) : v in W}``, and
+    * covered: some ``(i, j, k') in W`` with ``k' > k`` (reachable space lies directly above).
+
+    That is the part of the workspace's convexity deficit that lies *under* the workspace -- the
+    cavity seen in the paper's bottom views (it includes the voids). For a hemispherical shell of
+    radii ``R1 < R2`` standing on its rim ``hollowness = (R1/R2)^3``; for a hollow ball likewise;
+    for a convex solid 0 (exactly, for the digitisation of a convex set); for an upright cup 0
+    (its hollow is not covered). With ``hollowness="shadow"`` ``U`` is instead every unreachable
+    voxel that is covered and lies at or above the lowest reachable level ``k_min`` (the space
+    between ``k_min`` and the top of each occupied column); it counts everything under any
+    overhang, e.g. ``1/5`` for a solid ball, which is why it is not the default.
+
+    Why the hull: on the paper's eight one-parameter variants of the default design (Sec. III,
+    ``a`` 10/80, ``d_s`` 10/80, ``eta_s`` 10/60, ``l_s`` 20/80) the hull ratio moves in the
+    direction the paper states for "the proportion of internal cavities" in all eight cases
+    (default 0.40 at h = 4; e.g. ``l_s = 20``: 0.74, ``d_s = 80``: 0.22); "shadow" does too but is
+    not 0 for convex shapes, and a slice-enclosure definition (unreachable voxels ringed by
+    reachable ones in their horizontal slice) failed on the four fragmented, incomplete designs.
+solidity, hull_volume
+    ``hull_volume = |{v in G : c(v) in K}| h^3`` (grid voxels whose centre lies in the hull) and
+    ``solidity = V / hull_volume`` (1 for a convex workspace). A workspace whose centres are all
+    coplanar has no 3-D hull; ``K`` is then taken as ``W`` itself.
+column_gap_ratio
+    ``Q / (Q + V)`` with ``Q`` the volume of unreachable voxels lying *between* reachable voxels
+    of their own column (``k_bot(i, j) < k < k_top(i, j)``): gaps a vertical line through the
+    workspace crosses. It sees voids and pockets but not the open underside of a bowl (0 for a
+    simple dome; ``(R1/R2)^3`` for a hollow ball).
+boundary_closed
+    ``b0(F) == 1`` and ``clipped_faces`` is empty: the workspace is one piece whose surface is
+    not cut open by the computation box.
+largest_component_fraction
+    Volume of the largest component of ``W`` over ``V`` (tells real pieces from specks: thin
+    knife-edged sheets digitise into many 1-voxel 6-components whose count grows as ``h``
+    shrinks).
+sealed_cavity_volume, open_cavity_ratio
+    ``S`` = the voids of ``W u P``, ``P`` a solid layer just below the grid's bottom face when that
+    face is the floor (else ``P`` is empty and ``S`` is the voids of ``W``): the unreachable space
+    enclosed by the workspace together with the base plane. With ``U`` the hull-underside set of
+    ``hollowness``: ``sealed_cavity_volume = |U n S| h^3`` and ``open_cavity_ratio = |U \ S| /
+    (|U| + N)`` (the part of the underside cavity that leaks to the outside, relative to the same
+    denominator as ``hollowness``).
+boundary_complete
+    With ``completeness="sealed"`` (default): ``boundary_closed``, ``genus == 0`` and
+    ``open_cavity_ratio <= open_cavity_tolerance`` (0.02): one uncut piece, without tunnels or
+    windows, standing on the base so that it closes its underside cavity all around (an
+    "inverted bowl" whose rim meets the base). With ``completeness="topological"``:
+    ``boundary_closed and genus == 0`` only. ``completeness_reason`` names what fails.
+
+    Why "sealed": the paper calls the default, ``d_s = 80``, ``eta_s = 10``, ``eta_s = 60`` and
+    ``l_s = 80`` boundaries complete and ``a = 10``, ``a = 80``, ``d_s = 10``, ``l_s = 20``
+    incomplete. At h = 4 the incomplete four have ``open_cavity_ratio`` 0.6-0.74 (their skirts do
+    not meet the base: feet only, or a floating cap) and the complete five 0.000, for both
+    connectivities and at h = 1.5-4. The topological test agrees with 6-adjacency only because the
+    incomplete caps' knife edges digitise into specks and spurious tunnels (counts that grow as
+    ``h`` shrinks), and with 26-adjacency it calls ``a = 80``, ``d_s = 10``, ``l_s = 20`` complete.
+chain_binding (only when ``chain_mask`` is present)
+    ``F_c`` is the set of voxels where chain ``c`` (bit ``c-1``) is feasible, ``W = F_1 n F_2 n
+    F_3``, ``A = F_1 u F_2 u F_3`` (within the box) and the *lost region* ``L = A \ W``. Per chain:
+    ``feasible_volume = |F_c| h^3``; ``only_volume`` = volume where chain ``c`` alone is feasible;
+    ``fails_volume = |L \ F_c| h^3`` and ``fails_fraction = |L \ F_c| / |L|`` (the fractions sum
+    to >= 1 since several chains can fail at once); ``sole_limiter_volume`` = volume where every
+    other chain is feasible and ``c`` is not (what ``W`` would gain if chain ``c`` alone were
+    relaxed) and ``sole_limiter_fraction`` its share of ``L``; ``boundary_fails_fraction`` = share
+    of the unreachable voxels face-adjacent to ``W`` (the layer just outside the workspace surface)
+    where chain ``c`` fails, i.e. how much of the surface chain ``c`` shapes. ``summary`` is a
+    sentence a designer can read. The union is bounded by the computation box, which is sized for
+    ``W``, so ``L`` is the lost region *inside the box*.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Optional
+
+import numpy as np
+from numba import njit, prange
+from scipy import ndimage as ndi
+from scipy.spatial import ConvexHull
+from skimage.measure import euler_number
+
+from .workspace import WorkspaceResult
+
+FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
+HOLLOWNESS_MODES: tuple[str, ...] = ("hull", "shadow")
+COMPLETENESS_MODES: tuple[str, ...] = ("sealed", "topological")
+N_CHAINS = 3
+
+
+@dataclasses.dataclass
+class WorkspaceMeasures:
+    """Measures of one workspace; see the module docstring for every definition."""
+
+    volume: float
+    voxels: int
+    voxel_size: float
+    bounds: Optional[dict]
+    extents: list[float]
+    components: int
+    voids: int
+    void_volume: float
+    void_ratio: float
+    hollowness: float
+    column_gap_ratio: float
+    boundary_closed: bool
+    genus: int
+    euler_characteristic: int
+    box_contact_fraction: float
+    boundary_complete: bool
+    chain_binding: Optional[dict]
+    # --- supplementary fields (beyond the shared contract) ---------------------------------
+    connectivity: int = 1
+    hollowness_mode: str = "hull"
+    completeness_mode: str = "sealed"
+    completeness_reason: str = ""
+    open_cavity_ratio: float = 0.0
+    sealed_cavity_volume: float = 0.0
+    largest_component_fraction: float = 0.0
+    hollow_volume: float = 0.0
+    filled_components: int = 0
+    touched_faces: list[str] = dataclasses.field(default_factory=list)
+    clipped_faces: list[str] = dataclasses.field(default_factory=list)
+    floor_face: Optional[str] = None
+    hull_volume: float = 0.0
+    solidity: float = 0.0
+
+    def to_dict(self) -> dict:
+        """Plain JSON-serializable dict (Python floats/ints/bools/strings/lists/None only)."""
+        return _plain(dataclasses.asdict(self))
+
+
+def _plain(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x)
+    if isinstance(x, np.ndarray):
+        return _plain(x.tolist())
+    return x
+
+
+def _structure(connectivity: int) -> np.ndarray:
+    return ndi.generate_binary_structure(3, connectivity)
+
+
+def dual_connectivity(connectivity: int) -> int:
+    """Adjacency of the complement paired with ``connectivity`` (1 <-> 3, i.e. 6 <-> 26)."""
+    if connectivity not in (1, 3):
+        raise ValueError(f"connectivity = {connectivity!r} is invalid: valid values 1 (6-neighbours) "
+                         "or 3 (26-neighbours)")
+    return 4 - connectivity
+
+
+def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
+    """Voxels of the enclosed voids (complement components not connected to the padded outside)."""
+    occ = np.asarray(occupancy, dtype=bool)
+    comp = np.pad(~occ, 1, constant_values=True)
+    lab, _ = ndi.label(comp, structure=_structure(dual_connectivity(connectivity)))
+    outside = lab[0, 0, 0]
+    voids = (lab != outside) & comp
+    return voids[1:-1, 1:-1, 1:-1]
+
+
+def touched_faces(occupancy: np.ndarray) -> list[str]:
+    """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel."""
+    occ = np.asarray(occupancy, dtype=bool)
+    out = []
+    for a in range(3):
+        for side, idx in (("-", 0), ("+", -1)):
+            if occ.shape[a] and np.take(occ, idx, axis=a).any():
+                out.append("xyz"[a] + side)
+    return out
+
+
+def box_contact_fraction(occupancy: np.ndarray) -> float:
+    """``|W n B| / |B|``, ``B`` the voxels on the six faces of the grid box."""
+    occ = np.asarray(occupancy, dtype=bool)
+    if occ.size == 0:
+        return 0.0
+    inner = occ[1:-1, 1:-1, 1:-1] if min(occ.shape) > 2 else np.zeros((0,), bool)
+    n_inner = int(np.prod([max(0, s - 2) for s in occ.shape]))
+    n_face = occ.size - n_inner
+    return float((int(occ.sum()) - int(inner.sum())) / n_face) if n_face else 0.0
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _hull_columns_kernel(nx, ny, eq, tol, zlo, zhi):
+    """Per column ``(i, j)`` the z-interval ``[zlo, zhi]`` (index units) inside the hull ``eq``.
+
+    ``eq`` rows are qhull facet equations ``n . p + d <= 0`` (inside); an empty column gets
+    ``zlo > zhi``.
+    """
+    nf = eq.shape[0]
+    for c in prange(nx * ny):
+        i = c // ny
+        j = c - i * ny
+        lo = -np.inf
+        hi = np.inf
+        for f in range(nf):
+            s = eq[f, 0] * i + eq[f, 1] * j + eq[f, 3] - tol
+            nz = eq[f, 2]
+            if nz > 1e-12:
+                v = -s / nz
+                if v < hi:
+                    hi = v
+            elif nz < -1e-12:
+                v = -s / nz
+                if v > lo:
+                    lo = v
+            elif s > 0.0:
+                lo = np.inf
+                hi = -np.inf
+                break
+        zlo[i, j] = lo
+        zhi[i, j] = hi
+
+
+def hull_mask(occupancy: np.ndarray) -> np.ndarray:
+    """Voxels whose centre lies in the convex hull of the reachable voxels' centres.
+
+    The hull is that of each occupied column's lowest and highest centre (the same polytope as
+    the hull of all centres, from fewer points). A workspace whose centres are coplanar (no
+    3-D hull) returns the workspace itself.
+    """
+    occ = np.asarray(occupancy, dtype=bool)
+    if not occ.any():
+        return np.zeros_like(occ)
+    nx, ny, nz = occ.shape
+    col = occ.any(axis=2)
+    kbot = np.argmax(occ, axis=2)
+    ktop = nz - 1 - np.argmax(occ[:, :, ::-1], axis=2)
+    ii, jj = np.nonzero(col)
+    kb, kt = kbot[ii, jj], ktop[ii, jj]
+    two = kt != kb
+    pts = np.concatenate([np.stack([ii, jj, kb], 1), np.stack([ii[two], jj[two], kt[two]], 1)])
+    pts = pts.astype(np.float64)
+    if len(pts) < 4 or np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 3:
+        return occ.copy()
+    # coplanar triangles of one facet share an equation: keep one (about halves the planes)
+    eq = ConvexHull(pts).equations
+    _, first = np.unique(np.round(eq, 9), axis=0, return_index=True)
+    eq = np.ascontiguousarray(eq[np.sort(first)])
+    # the hull's footprint lies within the occupied columns' bounding rectangle
+    i0, i1, j0, j1 = ii.min(), ii.max() + 1, jj.min(), jj.max() + 1
+    zlo = np.empty((i1 - i0, j1 - j0))
+    zhi = np.empty((i1 - i0, j1 - j0))
+    sub = eq.copy()
+    sub[:, 3] += sub[:, 0] * i0 + sub[:, 1] * j0  # shift to sub-rectangle indices
+    _hull_columns_kernel(i1 - i0, j1 - j0, sub, 1e-7, zlo, zhi)
+    k = np.arange(nz, dtype=np.float64)
+    out = np.zeros_like(occ)
+    out[i0:i1, j0:j1] = (k >= zlo[:, :, None]) & (k <= zhi[:, :, None])
+    return out
+
+
+def hollow_mask(occupancy: np.ndarray, mode: str = "hull", hull: Optional[np.ndarray] = None) -> np.ndarray:
+    """The set ``U`` of the hollowness definition (see the module docstring).
+
+    Args:
+        occupancy: the reachable set ``W``.
+        mode: ``"hull"`` (default) or ``"shadow"``.
+        hull: a precomputed :func:`hull_mask` (mode ``"hull"`` only).
+    """
+    if mode not in HOLLOWNESS_MODES:
+        raise ValueError(f"hollowness = {mode!r} is invalid: valid values {', '.join(HOLLOWNESS_MODES)}")
+    occ = np.asarray(occupancy, dtype=bool)
+    if not occ.any():
+        return np.zeros_like(occ)
+    covered = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1]
+    u = covered & ~occ
+    if mode == "shadow":
+        kmin = int(np.argmax(occ.any(axis=(0, 1))))
+        u[:, :, :kmin] = False
+        return u
+    return u & (hull_mask(occ) if hull is None else hull)
+
+
+def column_gap_mask(occupancy: np.ndarray) -> np.ndarray:
+    """Unreachable voxels with reachable voxels both above and below in their column."""
+    occ = np.asarray(occupancy, dtype=bool)
+    above = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1]
+    below = np.logical_or.accumulate(occ, axis=2)
+    return above & below & ~occ
+
+
+def _ratio(a: float, b: float) -> float:
+    return float(a / (a + b)) if a + b > 0 else 0.0
+
+
+def chain_binding(chain_mask: np.ndarray, h: float, occupancy: Optional[np.ndarray] = None) -> dict:
+    """Which chain limits the workspace (definitions in the module docstring, ``chain_binding``).
+
+    Args:
+        chain_mask: uint8 bitmask per voxel, bit ``c-1`` set when chain ``c`` is feasible.
+        h: voxel edge.
+        occupancy: the reachable set; defaults to ``chain_mask == 7``.
+    """
+    m = np.asarray(chain_mask).astype(np.uint8)
+    full = (1 << N_CHAINS) - 1
+    w = (m == full) if occupancy is None else np.asarray(occupancy, dtype=bool)
+    v = h ** 3
+    union = m != 0
+    lost = union & ~w
+    n_lost = int(lost.sum())
+    # the unreachable layer face-adjacent to W (inside the box)
+    rim = ndi.binary_dilation(w, structure=_structure(1)) & ~w
+    n_rim = int(rim.sum())
+    chains = []
+    for c in range(N_CHAINS):
+        bit = 1 << c
+        feas = (m & bit) != 0
+        fails_lost = int((lost & ~feas).sum())
+        sole = int((m == (full ^ bit)).sum())
+        chains.append({
+            "chain": c + 1,
+            "bit": c,
+            "feasible_volume": int(feas.sum()) * v,
+            "only_volume": int((m == bit).sum()) * v,
+            "fails_volume": fails_lost * v,
+            "fails_fraction": fails_lost / n_lost if n_lost else 0.0,
+            "sole_limiter_volume": sole * v,
+            "sole_limiter_fraction": sole / n_lost if n_lost else 0.0,
+            "boundary_fails_fraction": int((rim & ~feas).sum()) / n_rim if n_rim else 0.0,
+        })
+    if n_lost:
+        parts = [f"chain {c['chain']} fails in {100 * c['fails_fraction']:.0f}% "
+                 f"(alone in {100 * c['sole_limiter_fraction']:.0f}%)" for c in chains]
+        ff = [c["fails_fraction"] for c in chains]
+        if max(ff) - min(ff) <= 0.02:
+            verdict = " The chains limit it about equally."
+        else:
+            worst = max(chains, key=lambda c: (c["fails_fraction"], -c["chain"]))
+            verdict = f" Chain {worst['chain']} limits it the most."
+        summary = (f"Lost region (some but not all chains feasible, volume {n_lost * v:.4g}): "
+                   + "; ".join(parts) + "." + verdict)
+    else:
+        summary = "No lost region: wherever one chain is feasible all are."
+    return {
+        "union_volume": int(union.sum()) * v,
+        "lost_volume": n_lost * v,
+        "surface_layer_voxels": n_rim,
+        "chains": chains,
+        "summary": summary,
+    }
+
+
+def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True) -> np.ndarray:
+    """Unreachable voxels enclosed by the workspace together with the base plane.
+
+    The voids of ``W u P`` where ``P`` is a solid layer just below the grid's bottom face
+    (``floor=True``) -- the plane the workspace stands on; with ``floor=False`` the voids of ``W``.
+    """
+    occ = np.asarray(occupancy, dtype=bool)
+    if not floor:
+        return void_mask(occ, connectivity)
+    base = np.ones(occ.shape[:2] + (1,), dtype=bool)
+    return void_mask(np.concatenate([base, occ], axis=2), connectivity)[:, :, 1:]
+
+
+def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollowness: str = "hull",
+                      floor_closes: bool = True, completeness: str = "sealed",
+                      open_cavity_tolerance: float = 0.02) -> WorkspaceMeasures:
+    """Compute every measure of the module docstring for one workspace.
+
+    Args:
+        result: a computed workspace (its ``grid``, ``occupancy``, ``settings.z_floor`` and, if
+            present, ``chain_mask`` are used).
+        connectivity: 1 (6-adjacency of the reachable set, 26 for the complement; default) or 3
+            (26-adjacency, 6 for the complement).
+        hollowness: ``"hull"`` (default) or ``"shadow"``: which definition ``hollowness`` uses.
+        floor_closes: whether a surface ending on the floor plane ``z = settings.z_floor`` counts
+            as closed (default) rather than clipped.
+        completeness: ``"sealed"`` (default) or ``"topological"``: which definition
+            ``boundary_complete`` uses.
+        open_cavity_tolerance: largest ``open_cavity_ratio`` a ``"sealed"``-complete workspace may
+            have.
+
+    Raises:
+        ValueError: invalid ``connectivity``, ``hollowness`` or ``completeness``.
+    """
+    dual_connectivity(connectivity)  # validates
+    if hollowness not in HOLLOWNESS_MODES:
+        raise ValueError(f"hollowness = {hollowness!r} is invalid: valid values {', '.join(HOLLOWNESS_MODES)}")
+    if completeness not in COMPLETENESS_MODES:
+        raise ValueError(f"completeness = {completeness!r} is invalid: valid values "
+                         f"{', '.join(COMPLETENESS_MODES)}")
+    grid = result.grid
+    h = float(grid.h)
+    vv = h ** 3
+    occ = np.asarray(result.occupancy, dtype=bool)
+    n = int(occ.sum())
+    volume = n * vv
+
+    touched = touched_faces(occ)
+    floor_face = None
+    z_floor = getattr(result.settings, "z_floor", None)
+    if z_floor is not None and abs(grid.lo[2] - float(z_floor)) <= 0.5 * h + 1e-9 * max(1.0, h):
+        floor_face = "z-"
+    clipped = [f for f in touched if not (floor_closes and f == floor_face)]
+    binding = (chain_binding(result.chain_mask, h, occ) if result.chain_mask is not None else None)
+    options = dict(connectivity=connectivity, hollowness_mode=hollowness, completeness_mode=completeness,
+                   floor_face=floor_face)
+
+    if n == 0:
+        return WorkspaceMeasures(
+            volume=0.0, voxels=0, voxel_size=h, bounds=None, extents=[0.0, 0.0, 0.0], components=0,
+            voids=0, void_volume=0.0, void_ratio=0.0, hollowness=0.0, column_gap_ratio=0.0,
+            boundary_closed=False, genus=0, euler_characteristic=0, box_contact_fraction=0.0,
+            boundary_complete=False, chain_binding=binding, completeness_reason="empty workspace",
+            **options)
+
+    any_x, any_y, any_z = occ.any(axis=(1, 2)), occ.any(axis=(0, 2)), occ.any(axis=(0, 1))
+    bmin, bmax = [], []
+    for a, m in enumerate((any_x, any_y, any_z)):
+        lo_i = int(np.argmax(m))
+        hi_i = len(m) - 1 - int(np.argmax(m[::-1]))
+        bmin.append(float(grid.origin[a] + h * lo_i - 0.5 * h))
+        bmax.append(float(grid.origin[a] + h * hi_i + 0.5 * h))
+
+    # topology
+    labels, components = ndi.label(occ, structure=_structure(connectivity))
+    largest = float(np.bincount(labels.ravel())[1:].max() / n)
+    del labels
+    voids_m = void_mask(occ, connectivity)
+    _, n_voids = ndi.label(voids_m, structure=_structure(dual_connectivity(connectivity)))
+    void_volume = int(voids_m.sum()) * vv
+    chi_w = int(euler_number(occ, connectivity=connectivity))
+    if n_voids:
+        filled = occ | voids_m
+        _, filled_components = ndi.label(filled, structure=_structure(connectivity))
+        chi_f = int(euler_number(filled, connectivity=connectivity))
+    else:
+        filled_components, chi_f = components, chi_w
+    genus = int(filled_components - chi_f)
+
+    # cavities
+    hull = hull_mask(occ)
+    hull_volume = int(hull.sum()) * vv
+    under = hollow_mask(occ, "hull", hull)
+    n_under = int(under.sum())
+    hollow_volume = (n_under if hollowness == "hull" else int(hollow_mask(occ, hollowness).sum())) * vv
+    gap_volume = int(column_gap_mask(occ).sum()) * vv
+    sealed = sealed_mask(occ, connectivity, floor=floor_face is not None) if n_under else voids_m
+    n_open = int((under & ~sealed).sum())
+    open_ratio = n_open / (n_under + n) if n_under else 0.0
+
+    # boundary
+    closed = bool(filled_components == 1 and not clipped)
+    reasons = []
+    if filled_components != 1:
+        reasons.append(f"{filled_components} separate pieces (the largest holds {100 * largest:.1f}% of the volume)")
+    if clipped:
+        reasons.append("cut by the computation box at " + ", ".join(clipped))
+    if genus:
+        reasons.append(f"genus {genus} (tunnels or windows through the surface)")
+    if completeness == "sealed" and open_ratio > open_cavity_tolerance:
+        reasons.append(f"underside cavity not enclosed by the workspace and the base "
+                       f"(open cavity ratio {open_ratio:.2f})")
+    complete = not reasons
+
+    return WorkspaceMeasures(
+        volume=volume, voxels=n, voxel_size=h,
+        bounds={"min": bmin, "max": bmax}, extents=[b - a for a, b in zip(bmin, bmax)],
+        components=int(components), voids=int(n_voids), void_volume=void_volume,
+        void_ratio=_ratio(void_volume, volume),
+        hollowness=_ratio(hollow_volume, volume), column_gap_ratio=_ratio(gap_volume, volume),
+        boundary_closed=closed, genus=genus, euler_characteristic=chi_w,
+        box_contact_fraction=box_contact_fraction(occ),
+        boundary_complete=complete, chain_binding=binding,
+        hollow_volume=hollow_volume, filled_components=int(filled_components),
+        touched_faces=touched, clipped_faces=clipped, hull_volume=hull_volume,
+        solidity=float(volume / hull_volume) if hull_volume else 1.0,
+        open_cavity_ratio=float(open_ratio), sealed_cavity_volume=int((under & sealed).sum()) * vv,
+        completeness_reason="; ".join(reasons) if reasons else "complete",
+        largest_component_fraction=largest, **options)
