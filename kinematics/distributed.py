@@ -1,0 +1,220 @@
+"""Parameter studies on a Dask cluster: the Cartesian product of several design parameters.
+
+:func:`sweep_grid` evaluates :func:`kinematics.sweep.evaluate_design` (pure, picklable) at every
+point of ``product(params[p1], params[p2], ...)``, e.g. a 4-D study over ``a, d_s, eta_s, l_s``:
+
+* by default on a ``distributed.LocalCluster`` of processes (one single-threaded worker per core,
+  numba limited to one thread per worker so the cores are not oversubscribed), started and closed
+  by the call; or on an existing cluster with ``scheduler="tcp://host:8786"``;
+* progress is reported as points complete (``as_completed``); ``cancel`` stops waiting, cancels
+  the points not yet finished and raises :class:`~kinematics.progress.Cancelled`;
+* robust: every point has ``retries=1``; a point that still fails, or whose worker keeps dying
+  (the scheduler's ``allowed-failures``), is returned with ``"ok": False`` and a one-line
+  ``"error"`` while every other point is returned normally;
+* the rows are in grid order (first parameter outermost) and, apart from the bookkeeping keys
+  ``params``, ``index``, ``ok`` and the wall-clock ``compute_seconds``, identical to calling
+  ``evaluate_design`` serially.
+
+This module is part of the numerical core: it imports no web packages (Dask is imported lazily).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+import os
+import time
+from typing import Any, Callable, Mapping, Optional, Sequence
+
+from .design import PARAMS, Design, ParameterError
+from .progress import CancelToken, Cancelled, ProgressFn, is_cancelled
+from .workspace import WorkspaceSettings
+
+__all__ = ["sweep_grid", "grid_designs", "WORKER_ENV"]
+
+log = logging.getLogger(__name__)
+
+#: Environment of the worker processes of the local cluster: one numba/BLAS thread each.
+WORKER_ENV: dict[str, str] = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+                              "MKL_NUM_THREADS": "1"}
+
+
+def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
+                 ) -> tuple[list[tuple[int, ...]], list[dict[str, float]], list[Design]]:
+    """The points of the grid, validated before anything runs.
+
+    Returns:
+        ``(indices, values, designs)`` in grid order (first parameter outermost).
+    Raises:
+        ParameterError: an unknown parameter, an empty value list, a value outside the
+            parameter's range, or a combination the model rejects (e.g. ``d_s > r``).
+    """
+    if not isinstance(params, Mapping) or not params:
+        raise ParameterError("params", params, "a mapping of 1 or more design parameters to value lists")
+    names = list(params)
+    lists: list[list[float]] = []
+    for name in names:
+        if name not in PARAMS:
+            raise ParameterError("params", name, "design parameters " + ", ".join(PARAMS))
+        raw = params[name]
+        if isinstance(raw, (str, bytes)) or not hasattr(raw, "__len__") or len(raw) == 0:
+            raise ParameterError(name, raw, "a non-empty list of numbers")
+        spec = PARAMS[name]
+        vals = []
+        for v in raw:
+            try:
+                f = float(v)
+            except (TypeError, ValueError):
+                raise ParameterError(name, v, f"a number in [{spec.model_min:g}, {spec.model_max:g}]") from None
+            if not (math.isfinite(f) and spec.model_min <= f <= spec.model_max):
+                raise ParameterError(name, v, f"[{spec.model_min:g}, {spec.model_max:g}]")
+            vals.append(f)
+        lists.append(vals)
+    indices: list[tuple[int, ...]] = []
+    values: list[dict[str, float]] = []
+    designs: list[Design] = []
+    for idx in itertools.product(*[range(len(v)) for v in lists]):
+        point = {n: lists[k][i] for k, (n, i) in enumerate(zip(names, idx))}
+        designs.append(design.replace(**point))
+        indices.append(tuple(idx))
+        values.append(point)
+    return indices, values, designs
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return text if len(text) <= 500 else text[:497] + "..."
+
+
+def _open_client(scheduler: Optional[str], n_workers: Optional[int], connect_timeout: float) -> tuple[Any, Any]:
+    """``(client, cluster_or_None)``; the cluster is ours to close when we started it."""
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=connect_timeout)
+        except (OSError, TimeoutError) as e:
+            raise ConnectionError(f"could not reach the Dask scheduler at {scheduler!r} within "
+                                  f"{connect_timeout:g} s ({_one_line(e)}); start one with "
+                                  f"`dask scheduler` and `dask worker {scheduler}`") from None
+        return client, None
+    n = n_workers or max(1, os.cpu_count() or 1)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                           dashboard_address=None, silence_logs=logging.ERROR, env=dict(WORKER_ENV))
+    try:
+        client = Client(cluster)
+    except BaseException:
+        cluster.close()
+        raise
+    return client, cluster
+
+
+def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
+               orientation: Any = None, scheduler: Optional[str] = None, n_workers: Optional[int] = None,
+               progress: Optional[ProgressFn] = None, cancel: CancelToken = None, retries: int = 1,
+               evaluate: Optional[Callable[..., dict]] = None, connect_timeout: float = 10.0) -> list[dict]:
+    """Evaluate every design of the Cartesian product of ``params`` on a Dask cluster.
+
+    Args:
+        design: the base design; each point replaces the swept fields.
+        params: ``{name: values}``, e.g. ``{"a": [40, 60], "d_s": [30, 50], "eta_s": [20, 40],
+            "l_s": [40, 60]}``; the first name varies slowest.
+        settings: workspace sampling of every point.
+        orientation: optional ``OrientationSettings``: also TI_1, TI_2 per point.
+        scheduler: address of a running scheduler (``"tcp://host:8786"``); ``None`` starts a
+            local cluster of processes for this call.
+        n_workers: workers of the local cluster (default: the number of cores); only without
+            ``scheduler``.
+        progress: ``progress(fraction, message)`` as points complete.
+        cancel: stop waiting, cancel unfinished points, raise ``Cancelled``.
+        retries: automatic retries of a failing point (default 1).
+        evaluate: the unit of work (default :func:`kinematics.sweep.evaluate_design`); any
+            picklable ``f(design, settings, *, orientation) -> dict``.
+        connect_timeout: seconds to reach ``scheduler``.
+
+    Returns:
+        One dict per point in grid order: ``{"params": {name: value}, "index": [i, ...],
+        "ok": True, **evaluate(...)}`` or, for a point that failed, ``{"params", "index",
+        "ok": False, "error": "one line", "design": {...}}``.
+
+    Raises:
+        ParameterError: bad ``params`` (checked before anything starts), bad ``n_workers``, or
+            ``n_workers`` together with ``scheduler``.
+        ConnectionError: the scheduler cannot be reached.
+        Cancelled: when ``cancel`` is set.
+    """
+    if scheduler is not None and n_workers is not None:
+        raise ParameterError("workers", n_workers, "omit it with a scheduler address (the scheduler's "
+                                                   "workers are used)")
+    if n_workers is not None and (not isinstance(n_workers, int) or isinstance(n_workers, bool)
+                                  or not 1 <= n_workers <= 256):
+        raise ParameterError("workers", n_workers, "an integer in [1, 256]")
+    if not isinstance(retries, int) or retries < 0:
+        raise ParameterError("retries", retries, "an integer >= 0")
+    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
+        raise ParameterError("scheduler", scheduler, "an address such as tcp://host:8786")
+    indices, values, designs = grid_designs(design, params)
+    if evaluate is None:
+        from .sweep import evaluate_design as evaluate
+    n = len(designs)
+    rows: list[Optional[dict]] = [None] * n
+    if progress is not None:
+        progress(0.0, f"starting {'cluster' if scheduler is None else 'client'} for {n} points")
+    if is_cancelled(cancel):
+        raise Cancelled()
+
+    from distributed import as_completed
+
+    t0 = time.perf_counter()
+    client, cluster = _open_client(scheduler, n_workers, connect_timeout)
+    try:
+        futures = client.map(evaluate, designs, settings=settings, orientation=orientation,
+                             retries=retries, pure=False)
+        where = {f.key: i for i, f in enumerate(futures)}
+        ac = as_completed(futures)
+        done = failed = 0
+        pending = set(f.key for f in futures)
+        while pending:
+            if is_cancelled(cancel):
+                client.cancel([f for f in futures if f.key in pending])
+                raise Cancelled()
+            batch = ac.next_batch(block=False) if ac.has_ready() else []
+            if not batch:
+                time.sleep(0.02)
+                continue
+            for fut in batch:
+                i = where[fut.key]
+                pending.discard(fut.key)
+                base = {"params": values[i], "index": list(indices[i])}
+                if fut.status == "finished":
+                    try:
+                        res = fut.result()
+                    except Exception as e:  # noqa: BLE001 - e.g. the data was lost with its worker
+                        rows[i] = {**base, "ok": False, "error": _one_line(e), "design": designs[i].to_dict()}
+                        failed += 1
+                    else:
+                        rows[i] = {**base, "ok": True, **res}
+                else:
+                    exc = None
+                    try:
+                        exc = fut.exception()
+                    except Exception as e:  # noqa: BLE001 - cancelled futures raise here
+                        exc = e
+                    rows[i] = {**base, "ok": False, "error": _one_line(exc) if exc else f"point {fut.status}",
+                               "design": designs[i].to_dict()}
+                    failed += 1
+                fut.release()
+                done += 1
+                if progress is not None:
+                    msg = f"{done}/{n} points" + (f" ({failed} failed)" if failed else "")
+                    progress(done / n, msg)
+        log.info("sweep_grid: %d points (%d failed) in %.2f s", n, failed, time.perf_counter() - t0)
+    finally:
+        try:
+            client.close()
+        finally:
+            if cluster is not None:
+                cluster.close()
+    return [r for r in rows if r is not None]

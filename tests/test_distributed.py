@@ -1,0 +1,141 @@
+"""Dask sweeps on real LocalClusters of processes: identical to the serial path, partial results when
+a point fails or kills its worker, validation before anything starts, cancellation."""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+
+import pytest
+
+from kinematics.design import Design, ParameterError
+from kinematics.distributed import grid_designs, sweep_grid
+from kinematics.progress import Cancelled
+from kinematics.sweep import evaluate_design
+from kinematics.workspace import WorkspaceSettings
+
+BOOKKEEPING = ("params", "index", "ok", "compute_seconds")
+COARSE = WorkspaceSettings(voxel=10.0)
+
+
+def _strip(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k not in BOOKKEEPING}
+
+
+# ----- units of work used to inject failures (module level: pickled by value, see fixture) -----
+
+def evaluate_or_die(design, settings, *, orientation=None):
+    """Kills its worker process for a = 60, else the real evaluate_design."""
+    if design.a == 60.0:
+        os._exit(13)
+    return evaluate_design(design, settings, orientation=orientation)
+
+
+def evaluate_or_raise(design, settings, *, orientation=None):
+    """Raises for l_s = 60, else the real evaluate_design."""
+    if design.l_s == 60.0:
+        raise ArithmeticError("injected failure\nfor l_s = 60")
+    return evaluate_design(design, settings, orientation=orientation)
+
+
+def evaluate_slowly(design, settings, *, orientation=None):
+    time.sleep(0.5)
+    return evaluate_design(design, settings, orientation=orientation)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A separate LocalCluster (2 process workers) reached through its scheduler address."""
+    import cloudpickle
+    import dask
+    from distributed import LocalCluster
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    # a point whose worker dies is given up at the first death (default: after 3)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        c = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                         dashboard_address=None, silence_logs=50)
+        yield c
+        c.close()
+
+
+def test_validation_before_anything_starts():
+    with pytest.raises(ParameterError, match="a = -1 is invalid"):
+        sweep_grid(Design(), {"a": [50, -1]}, COARSE)
+    with pytest.raises(ParameterError, match="params"):
+        sweep_grid(Design(), {"zz": [1]}, COARSE)
+    with pytest.raises(ParameterError, match="d_s"):  # d_s > r is rejected per point
+        sweep_grid(Design(), {"d_s": [50, 150]}, COARSE)
+    with pytest.raises(ParameterError, match="workers"):
+        sweep_grid(Design(), {"a": [50]}, COARSE, scheduler="tcp://127.0.0.1:1", n_workers=2)
+    with pytest.raises(ParameterError, match="workers"):
+        sweep_grid(Design(), {"a": [50]}, COARSE, n_workers=0)
+    idx, vals, designs = grid_designs(Design(), {"a": [40, 60], "d_s": [30, 40, 50]})
+    assert idx[:4] == [(0, 0), (0, 1), (0, 2), (1, 0)]
+    assert vals[3] == {"a": 60.0, "d_s": 30.0} and designs[3].a == 60.0 and designs[3].d_s == 30.0
+
+
+@pytest.mark.slow
+def test_local_cluster_identical_to_serial():
+    """Default path: a LocalCluster of 2 process workers started and closed by the call."""
+    params = {"a": [40.0, 60.0], "l_s": [40.0, 60.0]}
+    seen = []
+    t0 = time.perf_counter()
+    rows = sweep_grid(Design(), params, COARSE, n_workers=2, progress=lambda f, m: seen.append((f, m)))
+    t_dist = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    serial = [evaluate_design(Design(a=a, l_s=l), COARSE) for a in params["a"] for l in params["l_s"]]
+    t_ser = time.perf_counter() - t0
+    print(f"4 points at h=10: dask (2 process workers, incl. start-up) {t_dist:.2f} s, serial {t_ser:.2f} s")
+    assert len(rows) == 4 and all(r["ok"] for r in rows)
+    assert [r["params"] for r in rows] == [{"a": a, "l_s": l} for a in params["a"] for l in params["l_s"]]
+    assert [r["index"] for r in rows] == [[0, 0], [0, 1], [1, 0], [1, 1]]
+    assert [_strip(r) for r in rows] == [_strip(s) for s in serial]
+    assert all(r["volume"] > 0 for r in rows)
+    assert seen[-1][0] == 1.0 and "4/4" in seen[-1][1]
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen)
+
+
+@pytest.mark.slow
+def test_worker_death_keeps_partial_results(cluster):
+    params = {"a": [40.0, 60.0], "l_s": [50.0]}
+    t0 = time.perf_counter()
+    rows = sweep_grid(Design(), params, COARSE, scheduler=cluster.scheduler_address, evaluate=evaluate_or_die)
+    print(f"sweep with a worker death: {time.perf_counter() - t0:.2f} s")
+    assert [r["ok"] for r in rows] == [True, False]
+    assert rows[0]["params"] == {"a": 40.0, "l_s": 50.0}
+    assert _strip(rows[0]) == _strip(evaluate_design(Design(a=40.0, l_s=50.0), COARSE))
+    bad = rows[1]
+    assert bad["params"] == {"a": 60.0, "l_s": 50.0} and bad["design"]["a"] == 60.0
+    assert "KilledWorker" in bad["error"] and "\n" not in bad["error"]
+
+
+@pytest.mark.slow
+def test_failing_point_retried_then_reported(cluster):
+    calls_before = time.perf_counter()
+    rows = sweep_grid(Design(), {"l_s": [40.0, 60.0, 50.0]}, COARSE, scheduler=cluster.scheduler_address,
+                      evaluate=evaluate_or_raise, retries=1)
+    print(f"sweep with a failing point: {time.perf_counter() - calls_before:.2f} s")
+    assert [r["ok"] for r in rows] == [True, False, True]
+    assert rows[1]["error"] == "ArithmeticError: injected failure for l_s = 60"
+    assert rows[2]["volume"] > 0
+
+
+@pytest.mark.slow
+def test_cancel(cluster):
+    cancel = threading.Event()
+
+    def progress(f, m):
+        if f > 0:
+            cancel.set()
+
+    with pytest.raises(Cancelled):
+        sweep_grid(Design(), {"a": [30.0, 40.0, 50.0, 60.0, 70.0, 80.0]}, COARSE,
+                   scheduler=cluster.scheduler_address, evaluate=evaluate_slowly, progress=progress, cancel=cancel)
+
+
+def test_unreachable_scheduler_is_a_clear_error():
+    with pytest.raises(ConnectionError, match="could not reach the Dask scheduler"):
+        sweep_grid(Design(), {"a": [50.0]}, COARSE, scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
