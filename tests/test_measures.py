@@ -1,0 +1,322 @@
+"""Workspace measures against shapes whose answers are known independently (analytic volumes,
+topology by construction, marching-cubes Euler characteristic)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from skimage.measure import marching_cubes
+
+from kinematics.design import Design
+from kinematics.grid import GridSpec
+from kinematics.measures import measure_workspace
+from kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
+
+H = 1.0
+N = 44  # grid edge in voxels
+
+
+def make_result(occ: np.ndarray, *, h: float = H, lo=(-N / 2, -N / 2, -N / 2), z_floor: float = -1000.0,
+                chain_mask=None) -> WorkspaceResult:
+    """A WorkspaceResult around a hand-made occupancy; by default the box bottom is far from the floor."""
+    grid = GridSpec(origin=tuple(float(a + 0.5 * h) for a in lo), h=h, shape=occ.shape)
+    settings = WorkspaceSettings(voxel=h, z_floor=z_floor, bounds=(tuple(lo), grid.hi))
+    return WorkspaceResult(design=Design(), settings=settings, grid=grid, occupancy=np.asarray(occ, bool),
+                           chain_mask=chain_mask, compute_seconds=0.0, n_eta=0)
+
+
+def coords(lo=(-N / 2, -N / 2, -N / 2), shape=(N, N, N), h=H):
+    axes = [lo[a] + h * (np.arange(shape[a]) + 0.5) for a in range(3)]
+    return np.meshgrid(*axes, indexing="ij")
+
+
+X, Y, Z = coords()
+R2 = X ** 2 + Y ** 2 + Z ** 2
+
+
+def ball(r, c=(0.0, 0.0, 0.0)):
+    return (X - c[0]) ** 2 + (Y - c[1]) ** 2 + (Z - c[2]) ** 2 <= r * r
+
+
+def mesh_euler(occ: np.ndarray) -> int:
+    """V - E + F of the marching-cubes surface of ``occ`` (independent of the voxel Euler formula)."""
+    verts, faces, _, _ = marching_cubes(np.pad(occ.astype(np.float32), 1), 0.5)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    n_edges = len(np.unique(edges, axis=0))
+    return len(verts) - n_edges + len(faces)
+
+
+def ball_volume(r):
+    return 4.0 / 3.0 * math.pi * r ** 3
+
+
+# ----------------------------------------------------------------------------- basic shapes
+
+
+def test_solid_ball():
+    r = 14.0
+    occ = ball(r)
+    m = measure_workspace(make_result(occ))
+    assert m.voxels == occ.sum() and m.volume == pytest.approx(occ.sum() * H ** 3)
+    assert m.volume == pytest.approx(ball_volume(r), rel=0.01)
+    assert (m.components, m.voids, m.genus, m.euler_characteristic) == (1, 0, 0, 1)
+    assert m.void_volume == 0 and m.void_ratio == 0
+    assert m.boundary_closed and m.boundary_complete and m.completeness_reason == "complete"
+    assert m.hollowness == 0.0 and m.column_gap_ratio == 0.0  # convex: no cavity of any kind
+    assert m.solidity == pytest.approx(1.0)  # digitised convex set fills its own hull
+    assert m.touched_faces == [] and m.box_contact_fraction == 0.0
+    # bounds: the extreme voxel cubes; the lattice points with |p| <= 14 reach +-13.5 at centres
+    assert m.bounds["min"] == pytest.approx([-14.0] * 3) and m.bounds["max"] == pytest.approx([14.0] * 3)
+    assert m.extents == pytest.approx([28.0] * 3)
+
+
+def test_hollow_ball_void_volume_and_ratios():
+    r_out, r_in = 16.0, 9.0
+    occ = ball(r_out) & ~ball(r_in)
+    m = measure_workspace(make_result(occ))
+    assert (m.components, m.voids, m.genus) == (1, 1, 0)
+    assert m.euler_characteristic == 2  # b0 - b1 + b2 = 1 - 0 + 1
+    assert m.void_volume == pytest.approx(ball_volume(r_in), rel=0.03)
+    expected = (r_in / r_out) ** 3
+    assert m.void_ratio == pytest.approx(expected, rel=0.05)
+    assert m.column_gap_ratio == pytest.approx(expected, rel=0.05)
+    assert m.hollowness == pytest.approx(expected, rel=0.05)  # the void is under the top and in the hull
+    assert m.boundary_closed and m.boundary_complete  # a sealed void is not a leak
+
+
+def test_solid_torus_genus_one():
+    big, small = 12.0, 5.0
+    occ = (np.sqrt(X ** 2 + Y ** 2) - big) ** 2 + Z ** 2 <= small ** 2
+    m = measure_workspace(make_result(occ))
+    assert (m.components, m.voids, m.genus, m.euler_characteristic) == (1, 0, 1, 0)
+    assert m.volume == pytest.approx(2 * math.pi ** 2 * big * small ** 2, rel=0.02)
+    assert m.boundary_closed and not m.boundary_complete
+    assert "genus 1" in m.completeness_reason
+    assert not measure_workspace(make_result(occ), completeness="topological").boundary_complete
+
+
+def test_two_separated_balls():
+    occ = ball(7.0, (-11.0, 0.0, 0.0)) | ball(7.0, (11.0, 0.0, 0.0))
+    m = measure_workspace(make_result(occ))
+    assert m.components == 2 and m.filled_components == 2
+    assert m.genus == 0 and m.euler_characteristic == 2
+    assert not m.boundary_closed and not m.boundary_complete
+    assert "2 separate pieces" in m.completeness_reason
+    assert m.largest_component_fraction == pytest.approx(0.5)
+    # hull = capsule; under each ball, on its inner half, lies the gap between the capsule's
+    # cylinder (z = -sqrt(R^2 - y^2)) and the ball: per ball (1/2)(8/3 - 2 pi/3) R^3
+    gap = 2 * (4.0 / 3.0 - math.pi / 3.0)
+    assert m.hollowness == pytest.approx(gap / (gap + 8.0 * math.pi / 3.0), rel=0.1)
+
+
+def test_connectivity_choice_on_diagonal_contact():
+    occ = np.zeros((6, 6, 6), bool)
+    occ[1:3, 1:3, 1:3] = True
+    occ[3:5, 3:5, 3:5] = True  # touches the first cube at one corner only
+    res = make_result(occ, lo=(0.0, 0.0, 0.0))
+    assert measure_workspace(res, connectivity=1).components == 2
+    assert measure_workspace(res, connectivity=3).components == 1
+    with pytest.raises(ValueError, match="connectivity"):
+        measure_workspace(res, connectivity=2)
+
+
+def test_void_needs_dual_connectivity():
+    """A hollow cube whose two-voxel wall has a staircase gap meeting only along an edge: a
+    6-connected solid leaks through it (its complement is 26-connected), a 26-connected solid
+    seals it (its complement is 6-connected)."""
+    occ = np.zeros((11, 11, 11), bool)
+    occ[1:10, 1:10, 1:10] = True
+    occ[3:8, 3:8, 3:8] = False  # cavity 5^3 behind walls two voxels thick
+    occ[1, 5, 5] = False  # outer wall layer, open to the outside
+    occ[2, 6, 5] = False  # inner wall layer, open to the cavity; shares only an edge with (1, 5, 5)
+    res = make_result(occ, lo=(0.0, 0.0, 0.0))
+    m6, m26 = measure_workspace(res, connectivity=1), measure_workspace(res, connectivity=3)
+    # for the 6-solid the cavity is a dent reached through the gap (a shell with one hole is a
+    # ball: chi = 1); for the 26-solid it is a sealed void (chi = 1 + 1)
+    assert (m6.voids, m6.genus, m6.euler_characteristic) == (0, 0, 1)
+    assert (m26.voids, m26.genus, m26.euler_characteristic) == (1, 0, 2)
+    assert m26.void_volume == pytest.approx(125.0 + 1.0)  # cavity + the inner gap voxel
+    occ[2, 5, 5] = False  # a straight hole: leaks for both
+    assert measure_workspace(make_result(occ, lo=(0.0, 0.0, 0.0)), connectivity=3).voids == 0
+
+
+# ----------------------------------------------------------------------------- box and floor
+
+
+def test_solid_touching_a_box_face_is_not_closed():
+    occ = ball(14.0, (16.0, 0.0, 0.0))  # sticks out of the x+ face (box ends at x = 22)
+    m = measure_workspace(make_result(occ))
+    assert m.touched_faces == ["x+"] and m.clipped_faces == ["x+"]
+    assert m.components == 1 and not m.boundary_closed and not m.boundary_complete
+    assert "x+" in m.completeness_reason
+    # fraction of the box's surface voxels that are reachable: the disc cut by the plane x = 21.5
+    face = occ[-1].sum()
+    n_surface = N ** 3 - (N - 2) ** 3
+    assert m.box_contact_fraction == pytest.approx(face / n_surface)
+    assert face == pytest.approx(math.pi * (14.0 ** 2 - 5.5 ** 2), rel=0.05)
+
+
+def bowl(r_out, r_in, z0=0.0, lo_z=0.0):
+    """Hemispherical shell open downward, centre at height z0, on a grid whose bottom is lo_z."""
+    lo = (-N / 2, -N / 2, lo_z)
+    x, y, z = coords(lo=lo, shape=(N, N, 28))
+    rr = x ** 2 + y ** 2 + (z - z0) ** 2
+    return (rr <= r_out ** 2) & (rr > r_in ** 2) & (z >= z0), lo
+
+
+def test_inverted_bowl_on_the_floor():
+    r_out, r_in = 20.0, 13.0
+    occ, lo = bowl(r_out, r_in)
+    res = make_result(occ, lo=lo, z_floor=0.0)
+    m = measure_workspace(res)
+    expected = (r_in / r_out) ** 3  # inner hemisphere / outer hemisphere
+    assert m.hollowness == pytest.approx(expected, rel=0.05)
+    assert measure_workspace(res, hollowness="shadow").hollowness == pytest.approx(expected, rel=0.05)
+    assert m.column_gap_ratio == 0.0  # every column crosses the shell once
+    assert m.voids == 0  # the underside is open downward
+    assert m.sealed_cavity_volume == pytest.approx(m.hollow_volume)  # ... but sealed by the base
+    assert m.open_cavity_ratio == 0.0
+    assert m.floor_face == "z-" and m.touched_faces == ["z-"] and m.clipped_faces == []
+    assert m.genus == 0 and m.boundary_closed and m.boundary_complete
+    strict = measure_workspace(res, floor_closes=False)
+    assert strict.clipped_faces == ["z-"] and not strict.boundary_closed and not strict.boundary_complete
+
+
+def test_floating_bowl_is_incomplete_and_a_window_adds_genus():
+    r_out, r_in = 20.0, 13.0
+    occ, lo = bowl(r_out, r_in, z0=3.0)  # rim 3 units above the floor: the cavity leaks
+    m = measure_workspace(make_result(occ, lo=lo, z_floor=0.0))
+    assert m.touched_faces == [] and m.boundary_closed and m.genus == 0
+    assert m.hollowness > 0.2
+    assert m.open_cavity_ratio == pytest.approx(m.hollowness, rel=0.05)
+    assert not m.boundary_complete and "not enclosed" in m.completeness_reason
+    assert measure_workspace(make_result(occ, lo=lo, z_floor=0.0), completeness="topological").boundary_complete
+
+    occ, lo = bowl(r_out, r_in)  # on the floor, but with a window drilled through the wall
+    x, y, z = coords(lo=lo, shape=occ.shape)
+    window = (y ** 2 + (z - 8.0) ** 2 <= 3.5 ** 2) & (x > 0)
+    m = measure_workspace(make_result(occ & ~window, lo=lo, z_floor=0.0))
+    assert m.genus == 1 and m.boundary_closed and not m.boundary_complete
+    assert m.open_cavity_ratio > 0.1  # the cavity leaks through the window
+
+
+def test_upright_cup_and_overhangs():
+    occ, lo = bowl(20.0, 13.0)
+    cup = occ[:, :, ::-1]  # open upward: its hollow is not under the workspace
+    m = measure_workspace(make_result(cup, lo=lo))
+    assert m.hollowness == 0.0 and m.column_gap_ratio == 0.0
+    # a solid ball: hull definition 0, shadow definition counts the space under its lower half
+    occ = ball(14.0)
+    shadow = measure_workspace(make_result(occ), hollowness="shadow").hollowness
+    assert shadow == pytest.approx(0.2, abs=0.02)  # (pi R^3 / 3) / (pi R^3 / 3 + 4 pi R^3 / 3)
+    with pytest.raises(ValueError, match="hull, shadow"):
+        measure_workspace(make_result(occ), hollowness="enclosed")
+
+
+# ----------------------------------------------------------------------------- Euler cross-check
+
+
+@pytest.mark.parametrize("name", ["ball", "hollow", "torus", "two", "double_torus"])
+def test_voxel_euler_matches_marching_cubes_surface(name):
+    """chi(surface) = 2 chi(solid); for the filled solid, chi(outer surface) = 2 (b0 - genus)."""
+    shapes = {
+        "ball": ball(13.0),
+        "hollow": ball(15.0) & ~ball(8.0),
+        "torus": (np.sqrt(X ** 2 + Y ** 2) - 12.0) ** 2 + Z ** 2 <= 25.0,
+        "two": ball(7.0, (-11.0, 0.0, 0.0)) | ball(7.0, (11.0, 0.0, 0.0)),
+        "double_torus": ((np.sqrt((X - 9.0) ** 2 + Y ** 2) - 7.0) ** 2 + Z ** 2 <= 9.0)
+        | ((np.sqrt((X + 9.0) ** 2 + Y ** 2) - 7.0) ** 2 + Z ** 2 <= 9.0),
+    }
+    occ = shapes[name]
+    m = measure_workspace(make_result(occ))
+    assert mesh_euler(occ) == 2 * m.euler_characteristic
+    from kinematics.measures import void_mask
+
+    filled = occ | void_mask(occ)
+    assert mesh_euler(filled) == 2 * (m.filled_components - m.genus)
+    assert m.genus == {"ball": 0, "hollow": 0, "torus": 1, "two": 0, "double_torus": 2}[name]
+
+
+# ----------------------------------------------------------------------------- chain binding
+
+
+def test_chain_binding_of_two_overlapping_balls():
+    """Chain 1 feasible in ball A, chain 2 in ball B, chain 3 everywhere: W = A n B."""
+    r, d = 10.0, 8.0
+    a, b = ball(r, (-d / 2, 0, 0)), ball(r, (d / 2, 0, 0))
+    mask = (a * 1 + b * 2 + 4).astype(np.uint8)
+    m = measure_workspace(make_result(a & b, chain_mask=mask))
+    cb = m.chain_binding
+    lens = math.pi * (4 * r + d) * (2 * r - d) ** 2 / 12.0
+    box = float(N ** 3)
+    assert m.volume == pytest.approx(lens, rel=0.03)
+    assert cb["union_volume"] == pytest.approx(box)  # chain 3 is feasible everywhere
+    assert cb["lost_volume"] == pytest.approx(box - lens, rel=0.01)
+    c1, c2, c3 = cb["chains"]
+    assert c1["feasible_volume"] == pytest.approx(ball_volume(r), rel=0.02)
+    # chain 1 fails outside A: everywhere in the box but A (the lost region excludes A n B)
+    assert c1["fails_volume"] == pytest.approx(box - ball_volume(r), rel=0.01)
+    assert c1["sole_limiter_volume"] == pytest.approx(ball_volume(r) - lens, rel=0.03)  # B \ A
+    assert c1["fails_fraction"] == pytest.approx(c2["fails_fraction"], rel=1e-6)  # mirror images
+    assert c3["fails_volume"] == 0 and c3["sole_limiter_volume"] == 0
+    assert c3["only_volume"] == pytest.approx(box - (2 * ball_volume(r) - lens), rel=0.01)
+    assert c3["boundary_fails_fraction"] == 0.0
+    # the surface of A n B is shaped by chain 1 on B's side and chain 2 on A's side, half each
+    assert c1["boundary_fails_fraction"] == pytest.approx(0.5, abs=0.05)
+    assert "chain 3 fails in 0%" in cb["summary"]
+
+
+# ----------------------------------------------------------------------------- serialisation
+
+
+def _plain_only(x):
+    if isinstance(x, dict):
+        return all(isinstance(k, str) and _plain_only(v) for k, v in x.items())
+    if isinstance(x, list):
+        return all(_plain_only(v) for v in x)
+    return x is None or type(x) in (bool, int, float, str)
+
+
+def test_to_dict_is_plain_json():
+    mask = (ball(10.0) * 7).astype(np.uint8)
+    for occ, cm in [(ball(10.0), mask), (np.zeros((N, N, N), bool), None)]:
+        d = measure_workspace(make_result(occ, chain_mask=cm)).to_dict()
+        assert _plain_only(d)
+        assert json.loads(json.dumps(d)) == d
+
+
+def test_empty_workspace():
+    m = measure_workspace(make_result(np.zeros((8, 8, 8), bool)))
+    assert m.volume == 0 and m.voxels == 0 and m.components == 0 and m.bounds is None
+    assert m.extents == [0.0, 0.0, 0.0] and not m.boundary_closed and not m.boundary_complete
+
+
+# ----------------------------------------------------------------------------- the real design
+
+
+@pytest.fixture(scope="module")
+def default_h6():
+    return compute_workspace(Design(), WorkspaceSettings(voxel=6.0, diagnostics=True))
+
+
+def test_default_design_measures(default_h6):
+    res = default_h6
+    m = measure_workspace(res)
+    assert m.volume == pytest.approx(res.volume) and m.volume == pytest.approx(5.12e6, rel=0.02)
+    assert (m.components, m.voids, m.genus) == (1, 0, 0)
+    assert m.touched_faces == ["z-"] and m.floor_face == "z-"  # the bowl stands on the base
+    assert m.boundary_closed and m.boundary_complete  # as the paper says for this design
+    assert 0.3 < m.hollowness < 0.5  # the inverted bowl's underside cavity
+    assert m.sealed_cavity_volume == pytest.approx(m.hollow_volume)
+    assert m.column_gap_ratio < 0.01
+    # the extents are those of the reachable voxels
+    idx = np.argwhere(res.occupancy)
+    assert m.extents[2] == pytest.approx((idx[:, 2].max() - idx[:, 2].min() + 1) * res.grid.h)
+    # 3-fold symmetric mechanism: the chains bind about equally; chains 2 and 3 are mirror images
+    c1, c2, c3 = m.chain_binding["chains"]
+    assert c2["fails_volume"] == c3["fails_volume"]
+    assert abs(c1["fails_fraction"] - c2["fails_fraction"]) < 0.02
+    assert c1["fails_fraction"] + c2["fails_fraction"] + c3["fails_fraction"] >= 1.0
