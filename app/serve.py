@@ -182,9 +182,10 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
         if explorer:
             from .explorer import Explorer
 
-            exp = Explorer(host, port if port else _free_or_zero(host), jobs)
+            exp = Explorer(host, port, jobs)
             exp.start()
-        explorer_url = None if exp is None else str(exp.url)
+        # For a wildcard bind the API substitutes the host name each caller used (short links).
+        explorer_url = None if exp is None else f"http://{_bracket(host)}:{int(exp.port)}/"
         app = create_api(jobs, explorer_url=explorer_url, limits=limits)
         api = start_api(app, host, api_port)
     except BaseException:
@@ -204,8 +205,5 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
     return running
 
 
-def _free_or_zero(host: str) -> int:
-    try:
-        return free_port(_url_host(host))
-    except OSError:
-        return 0
+def _bracket(host: str) -> str:
+    return f"[{host}]" if ":" in host and not host.startswith("[") else host
