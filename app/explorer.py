@@ -1,0 +1,1154 @@
+"""paraspace explorer: the interactive workspace explorer in the browser (viser).
+
+Every browser (viser client) gets its own :class:`ClientSession`: its own control panel on
+``client.gui`` and its own 3-D scene on ``client.scene``, built from the link it was opened with
+(:mod:`app.urlstate`). One user's slider never moves another's.
+
+What happens when something changes (all callbacks run on viser's thread pool, concurrently):
+
+* **pose** (x, y, z): inverse kinematics only (redundancy resolved, or hand-set carriages) --
+  about 2 ms -- and the mechanism is moved inside ``client.atomic()``; no workspace job.
+* **orientation** (psi, theta, phi), **design**, **voxel**: the mechanism is redrawn at once and a
+  ``"workspace"`` job is submitted to the shared :class:`~app.jobs.JobManager` with
+  ``supersede=True`` (the previous unfinished one is cancelled: the last slider value wins). The
+  job computes a coarse preview (h = 6) and shows its shell, then the full workspace (h from the
+  voxel slider) and its shell, then the measures. A per-session generation counter makes sure a
+  stale job can never overwrite a newer result, whatever the thread timing. When it finishes, the
+  orientation maps (TI_1, TI_2) are recomputed as an ``"orientation"`` job.
+* **view** (camera, cut plane, opacity): only the scene changes.
+* after any change the address bar is rewritten (debounced, ``history.replaceState``) so it always
+  holds a link to the current state; the Share tab shows the same link.
+
+Finished results are kept in a small LRU shared by all sessions (results are immutable), so
+returning to a design -- or a second browser opening the same link -- shows it at once.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import csv
+import dataclasses
+import io
+import json
+import logging
+import threading
+import time
+from typing import Any, Callable, Hashable, Iterator, Optional
+
+import numpy as np
+import viser
+
+from kinematics.design import PARAMS, Design, ParameterError
+from kinematics.orientation import OrientationSettings, orientation_workspace
+from kinematics.pose import Pose
+from kinematics.progress import Cancelled
+from kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
+from kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
+
+from . import jsbridge, plots
+from .jobs import Job, JobManager, LimitExceeded
+from .panels import Panels, build_panels
+from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
+from .urlstate import (
+    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, full_query, parse_query,
+    viser_passthrough,
+)
+
+log = logging.getLogger(__name__)
+
+#: Voxel edge of the coarse preview shell.
+PREVIEW_VOXEL = 6.0
+#: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
+PREVIEW_FACES = 20_000
+FULL_FACES = 60_000
+#: Debounce of the address-bar update, seconds.
+URL_DEBOUNCE = 0.25
+
+
+# --------------------------------------------------------------------------------------------
+# shared caches
+
+
+@dataclasses.dataclass
+class ShellBundle:
+    """A computed workspace and what is derived from it (immutable once built)."""
+
+    result: WorkspaceResult
+    mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
+    measures: Any = None  # kinematics.measures.WorkspaceMeasures
+    shell_seconds: float = 0.0
+
+
+class LRU:
+    """A small thread-safe LRU dictionary."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._data: "collections.OrderedDict[Hashable, Any]" = collections.OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key: Hashable) -> Any:
+        with self._lock:
+            if key not in self._data:
+                return None
+            self._data.move_to_end(key)
+            return self._data[key]
+
+    def put(self, key: Hashable, value: Any) -> None:
+        with self._lock:
+            self._data[key] = value
+            self._data.move_to_end(key)
+            while len(self._data) > self.size:
+                self._data.popitem(last=False)
+
+
+def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
+    """Marching-cubes shell of ``result`` colored by z, decimated to ``max_faces``."""
+    from kinematics.shell import workspace_shell
+
+    return workspace_shell(result, max_faces=max_faces, color_by_z=True)
+
+
+def _fmt(v: Optional[float], digits: int = 4) -> str:
+    if v is None:
+        return "-"
+    try:
+        if not np.isfinite(v):
+            return "-"
+    except TypeError:
+        return str(v)
+    return f"{v:.{digits}g}"
+
+
+# --------------------------------------------------------------------------------------------
+# one browser
+
+
+class ClientSession:
+    """State, GUI and scene of one browser (see the module docstring).
+
+    Args:
+        explorer: the owning :class:`Explorer` (shared job manager and caches).
+        client: the viser client.
+        state: initial state (from the link).
+        base_url: the page's URL without query (for the Share tab's link).
+        passthrough: viser's own query keys to keep in the address bar.
+        messages: problems found in the link (shown on screen).
+    """
+
+    def __init__(self, explorer: "Explorer", client: viser.ClientHandle, state: ExplorerState,
+                 base_url: str, passthrough: list[tuple[str, str]], messages: list[str]) -> None:
+        self.explorer = explorer
+        self.client = client
+        self.job_client = f"viser-{client.client_id}"
+        self.lock = threading.RLock()
+        self.view_lock = threading.Lock()
+        self.mech_lock = threading.Lock()
+        self.state = state
+        self.base_url = base_url
+        self.passthrough = passthrough
+        self.url_messages = list(messages)
+        self.closed = False
+        self._tls = threading.local()
+        self._ws_gen = 0
+        self._ws_job: Optional[Job] = None
+        self._ws_shown: Optional[tuple] = None  # key of the full result on screen
+        self._ws_info: dict[str, Any] = {}
+        self.bundle: Optional[ShellBundle] = None  # full result on screen
+        self.preview: Optional[ShellBundle] = None
+        self.resolution: Optional[Resolution] = None
+        self.in_workspace: Optional[bool] = None
+        self._or_gen = 0
+        self._or_job: Optional[Job] = None
+        self.orientation: Any = None
+        self._orientation_png: Optional[bytes] = None
+        self._sweep_job: Optional[Job] = None
+        self._sweep: Optional[dict] = None
+        self._surface_job: Optional[Job] = None
+        self._surface: Optional[dict] = None
+        self._url_timer: Optional[threading.Timer] = None
+        self.last_query: Optional[str] = None
+        self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
+        self.design_error: Optional[str] = None
+        self.ready = threading.Event()  # set when the GUI is built and wired
+        self.panels: Panels
+        self.mechanism: MechanismScene
+        self.shell: ShellScene
+
+    # ----- helpers ------------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def programmatic(self) -> Iterator[None]:
+        """GUI values assigned inside this block do not count as user input (same thread only)."""
+        self._tls.depth = getattr(self._tls, "depth", 0) + 1
+        try:
+            yield
+        finally:
+            self._tls.depth -= 1
+
+    def _is_programmatic(self) -> bool:
+        return getattr(self._tls, "depth", 0) > 0
+
+    def _callback(self, fn: Callable[[], None]) -> Callable[[Any], None]:
+        """Wrap a handler: ignore programmatic changes and closed sessions; log failures."""
+        def handler(_event: Any = None) -> None:
+            if self.closed or self._is_programmatic():
+                return
+            try:
+                fn()
+            except Exception:  # noqa: BLE001 - never kill viser's callback thread
+                log.exception("explorer callback failed")
+        return handler
+
+    def _event(self, what: str) -> None:
+        self.events.append((time.perf_counter(), what))
+        if len(self.events) > 500:
+            del self.events[:250]
+
+    def _notify(self, title: str, body: str, color: str = "red") -> None:
+        try:
+            self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)  # type: ignore[arg-type]
+        except Exception:  # noqa: BLE001
+            log.debug("notification failed", exc_info=True)
+
+    # ----- build --------------------------------------------------------------------------------
+    def build(self) -> None:
+        """Create this client's GUI and scene and start the first computations."""
+        s = self.state
+        self.panels = build_panels(self.client.gui, s)
+        res = self._resolve(s)
+        self.resolution = res
+        with self.client.atomic():
+            self.mechanism = MechanismScene(self.client.scene, s.design, s.pose, res.d, res.eta, res.leg_status)
+            self.shell = ShellScene(self.client.scene)
+            self.gizmo = self.client.scene.add_transform_controls(
+                "/gizmo", scale=max(25.0, 0.9 * s.design.a), position=s.pose.position,
+                wxyz=self.mechanism.platform.wxyz, depth_test=False, opacity=0.8,
+                translation_limits=tuple((POSE_RANGES[k].lo, POSE_RANGES[k].hi) for k in ("x", "y", "z")))
+        self._wire()
+        self._show_url_messages()
+        self._update_pose_views(res)
+        self.set_camera(s.view)
+        self._sync_url_now()
+        self.submit_workspace()
+        self.ready.set()
+
+    def _wire(self) -> None:
+        p = self.panels
+        for key in DESIGN_KEYS:
+            p.design[key].on_update(self._callback(self.on_design_input))
+        p.eta_range.on_update(self._callback(self.on_design_input))
+        p.reset.on_click(self._callback(self.reset_design))
+        p.voxel.on_update(self._callback(self.on_voxel))
+        for key in ("x", "y", "z"):
+            p.pose[key].on_update(self._callback(lambda: self.on_pose_input(orientation_changed=False)))
+        for key in ("psi", "theta", "phi"):
+            p.pose[key].on_update(self._callback(lambda: self.on_pose_input(orientation_changed=True)))
+        p.gizmo.on_update(self._callback(self.on_gizmo_toggle))
+        self.gizmo.on_update(self._callback_gizmo)
+        p.carriages.on_update(self._callback(self.on_carriage_mode))
+        for h in p.d + p.eta:
+            h.on_update(self._callback(self.on_manual_carriage))
+        p.view_buttons.on_click(lambda ev: None if self.closed else self.on_view(str(ev.target.value)))
+        for h in (p.cut, p.cut_z, p.cut_keep, p.opacity):
+            h.on_update(self._callback(self.on_view_settings))
+        p.stop.on_click(self._callback(self.stop_workspace))
+        p.z0.on_update(self._callback(self.on_z0))
+        p.orientation_png.on_click(self._callback(self.download_orientation_png))
+        p.sweep_run.on_click(self._callback(self.run_sweep))
+        p.sweep_stop.on_click(self._callback(lambda: self._cancel_job(self._sweep_job)))
+        p.sweep_csv.on_click(self._callback(self.download_sweep_csv))
+        p.sweep_png.on_click(self._callback(lambda: self._download_png("sweep")))
+        p.surface_run.on_click(self._callback(self.run_surface))
+        p.surface_stop.on_click(self._callback(lambda: self._cancel_job(self._surface_job)))
+        p.surface_csv.on_click(self._callback(self.download_surface_csv))
+        p.surface_png.on_click(self._callback(lambda: self._download_png("surface")))
+        p.copy_link.on_click(self._callback(self.copy_link))
+        p.download_stl.on_click(self._callback(lambda: self.download_shell("stl")))
+        p.download_ply.on_click(self._callback(lambda: self.download_shell("ply")))
+        p.download_glb.on_click(self._callback(lambda: self.download_shell("glb")))
+        p.download_json.on_click(self._callback(self.download_measures))
+
+    def _show_url_messages(self) -> None:
+        msgs = self.url_messages
+        if not msgs:
+            self.panels.url_messages.visible = False
+            return
+        body = "\n".join(f"- {m}" for m in msgs)
+        self.panels.url_messages.content = (
+            "**The link had problems; these fields keep their defaults, everything else applies:**\n\n" + body)
+        self.panels.url_messages.visible = True
+        self._notify("Link problems", "; ".join(msgs)[:600], color="orange")
+
+    # ----- kinematics ---------------------------------------------------------------------------
+    @staticmethod
+    def _resolve(state: ExplorerState) -> Resolution:
+        if state.carriages == "manual":
+            return inverse_kinematics(state.design, state.pose, state.d, state.eta)
+        return resolve_redundancy(state.design, state.pose)
+
+    def update_mechanism(self) -> Resolution:
+        """IK at the current state and move the mechanism (the latest state always wins)."""
+        with self.mech_lock:
+            with self.lock:
+                s = self.state
+            res = self._resolve(s)
+            inside = bool(reachable(s.design, s.pose.position[None, :], (s.pose.psi, s.pose.theta, s.pose.phi))[0])
+            with self.client.atomic():
+                if s.design != self.mechanism.design:
+                    self.mechanism.set_design(s.design, s.pose, res.d, res.eta, res.leg_status)
+                else:
+                    self.mechanism.update_pose(s.pose, res.d, res.eta, res.leg_status)
+                self.shell.set_marker(s.pose.position, inside)
+                self.gizmo.position = s.pose.position
+                self.gizmo.wxyz = self.mechanism.platform.wxyz
+            with self.lock:
+                self.resolution = res
+                self.in_workspace = inside
+            self._update_pose_views(res)
+            self._event("mechanism")
+            return res
+
+    def _update_pose_views(self, res: Resolution) -> None:
+        s = self.state
+        rows = ["| chain | d | η (°) | leg 1 | leg 2 | margin |", "|---|---|---|---|---|---|"]
+        for c in res.chains:
+            legs = [f"{c.lengths[j]:.2f} {_state_badge(c.leg_status[j])}" for j in range(2)]
+            rows.append(f"| {c.chain + 1} | {c.d:.2f} | {c.eta:.2f} | {legs[0]} | {legs[1]} | {c.margin:.2f} |")
+        verdict = ("**reachable**" if res.feasible else f"**{res.message}**")
+        cond = "-" if res.condition_number is None or not np.isfinite(res.condition_number) else \
+            f"{res.condition_number:.3g}"
+        text = (f"{verdict}  \ncarriages: {res.mode}; legs in [{s.design.l_min:g}, {s.design.l_max:g}]; "
+                f"cond(J) = {cond}\n\n" + "\n".join(rows))
+        self.panels.pose_table.content = text
+        self._render_numbers()
+
+    def _render_numbers(self) -> None:
+        with self.lock:
+            info = dict(self._ws_info)
+            res = self.resolution
+            inside = self.in_workspace
+            ori = self.orientation
+            s = self.state
+        lines: list[str] = []
+        if info:
+            m = info.get("measures")
+            kind = "preview" if info.get("preview") else "full"
+            lines.append(f"**Volume** {_fmt(info['volume'], 5)}  ({kind}, h = {info['h']:g})")
+            if m is not None:
+                lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
+                lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
+                closed = "closed" if m.boundary_closed else "open (cut or in pieces)"
+                lines.append(f"**Boundary** {closed}, genus {m.genus}  ")
+                lines.append(f"**Components** {m.components}  ")
+            else:
+                lines.append("*measures: computing...*  ")
+            lines.append(f"**Compute** {info['seconds']:.2f} s workspace"
+                         + (f", {info['shell_seconds']:.2f} s shell" if info.get("shell_seconds") else ""))
+        else:
+            lines.append("*workspace: computing...*")
+        if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design:
+            lines.append(f"**TI₁** {ori.ti1:.6g}  **TI₂** {ori.ti2:.6g}  (z0 = {ori.settings.z0:g})")
+        else:
+            lines.append("**TI₁ / TI₂** *computing...*")
+        if res is not None:
+            where = "" if inside is None else (" · inside the workspace" if inside else " · outside the workspace")
+            if res.feasible:
+                lines.append(f"**Pose** reachable{where}")
+            else:
+                lines.append(f"**Pose** {res.message}{where}")
+        if self.design_error:
+            lines.append(f"**Design not applied:** {self.design_error}")
+        self.panels.numbers.content = "\n\n".join(lines)
+
+    # ----- input handlers -----------------------------------------------------------------------
+    def on_design_input(self) -> None:
+        """A design slider or the arc-range convention changed."""
+        p = self.panels
+        fields: dict[str, Any] = {k: float(p.design[k].value) for k in DESIGN_KEYS}
+        fields["eta_range"] = str(p.eta_range.value)
+        try:
+            design = Design(**fields)
+        except ParameterError as exc:
+            self.design_error = f"{exc.field} = {exc.value:g} is invalid; valid range {exc.valid}" \
+                if isinstance(exc.value, float) else str(exc)
+            p.design_message.content = f"**Not applied:** {self.design_error}. The last valid design stays."
+            p.design_message.visible = True
+            self._render_numbers()
+            return
+        self.design_error = None
+        p.design_message.visible = False
+        self.apply_design(design)
+
+    def apply_design(self, design: Design) -> None:
+        """Make ``design`` current: carriages, mechanism, workspace job, URL."""
+        with self.lock:
+            s = self.state
+            if design == s.design:
+                return
+            d, eta = list(s.d), list(s.eta)
+            notes = []
+            lo, hi = design.eta_limits
+            for i in range(3):
+                if d[i] > design.d_s:
+                    notes.append(f"{D_KEYS[i]} {d[i]:g} -> {design.d_s:g}")
+                    d[i] = design.d_s
+                e = min(max(eta[i], lo), hi)
+                if e != eta[i]:
+                    notes.append(f"{ETA_KEYS[i]} {eta[i]:g} -> {e:g}")
+                    eta[i] = e
+            self.state = s.replace(design=design, d=tuple(d), eta=tuple(eta))
+        self._set_carriage_slider_ranges(design, d, eta)
+        if notes and self.state.carriages == "manual":
+            self._notify("Carriages moved into the new strokes", ", ".join(notes), color="orange")
+        self.update_mechanism()
+        self.submit_workspace()
+        self.schedule_url()
+
+    def _set_carriage_slider_ranges(self, design: Design, d: list[float], eta: list[float]) -> None:
+        p = self.panels
+        lo, hi = design.eta_limits
+        with self.programmatic():
+            for i in range(3):
+                p.d[i].max = max(design.d_s, 1e-6)
+                p.d[i].value = d[i]
+                p.eta[i].min = lo
+                p.eta[i].max = max(hi, lo + 1e-6)
+                p.eta[i].value = eta[i]
+
+    def reset_design(self) -> None:
+        """Reset the design sliders to the paper's defaults (Fig. 3 design)."""
+        default = Design()
+        with self.programmatic():
+            for key in DESIGN_KEYS:
+                self.panels.design[key].value = float(getattr(default, key))
+            self.panels.eta_range.value = default.eta_range
+        self.design_error = None
+        self.panels.design_message.visible = False
+        self.apply_design(default)
+
+    def on_voxel(self) -> None:
+        with self.lock:
+            self.state = self.state.replace(voxel=float(self.panels.voxel.value))
+        self.submit_workspace()
+        self.schedule_url()
+
+    def on_pose_input(self, orientation_changed: bool) -> None:
+        """A pose slider moved: IK only for x, y, z; the orientation also recomputes the workspace."""
+        p = self.panels
+        vals = {k: float(p.pose[k].value) for k in POSE_KEYS}
+        with self.lock:
+            old = self.state.pose
+            pose = Pose(**vals)
+            self.state = self.state.replace(pose=pose)
+        self.update_mechanism()
+        if orientation_changed and (old.psi, old.theta, old.phi) != (pose.psi, pose.theta, pose.phi):
+            self.submit_workspace()
+        self.schedule_url()
+
+    def _callback_gizmo(self, _event: Any = None) -> None:
+        if self.closed or self._is_programmatic():
+            return
+        try:
+            self.on_gizmo_drag()
+        except Exception:  # noqa: BLE001
+            log.exception("gizmo callback failed")
+
+    def on_gizmo_drag(self) -> None:
+        """The platform was dragged: set the pose sliders from the gizmo (0.1 resolution)."""
+        import viser.transforms as vtf
+
+        from kinematics.rotation import euler_zyx_from_matrix
+
+        pos = np.asarray(self.gizmo.position, float)
+        rot = vtf.SO3(np.asarray(self.gizmo.wxyz, float)).as_matrix()
+        psi, theta, phi = np.degrees(euler_zyx_from_matrix(rot))
+        vals = {"x": pos[0], "y": pos[1], "z": pos[2], "psi": psi, "theta": theta, "phi": phi}
+        vals = {k: round(float(v), 1) + 0.0 for k, v in vals.items()}
+        bad = [f"{k} = {v:g} outside {POSE_RANGES[k].text()}" for k, v in vals.items()
+               if not POSE_RANGES[k].lo <= v <= POSE_RANGES[k].hi]
+        if bad:
+            self._notify("Pose not applied", "; ".join(bad) + " (slider range)", color="orange")
+            with self.programmatic():
+                self.gizmo.position = self.state.pose.position
+                self.gizmo.wxyz = self.mechanism.platform.wxyz
+            return
+        with self.programmatic():
+            for k in POSE_KEYS:
+                self.panels.pose[k].value = vals[k]
+        with self.lock:
+            old = self.state.pose
+            pose = Pose(**vals)
+            self.state = self.state.replace(pose=pose)
+        self.update_mechanism()
+        if (old.psi, old.theta, old.phi) != (pose.psi, pose.theta, pose.phi):
+            self.submit_workspace()
+        self.schedule_url()
+
+    def on_gizmo_toggle(self) -> None:
+        self.gizmo.visible = bool(self.panels.gizmo.value)
+
+    def on_carriage_mode(self) -> None:
+        """auto <-> manual. Entering manual starts from the resolved carriage values."""
+        mode = str(self.panels.carriages.value)
+        p = self.panels
+        with self.lock:
+            res = self.resolution
+            s = self.state
+            if mode == "manual" and res is not None:
+                d = tuple(float(np.clip(round(v, 2), 0.0, s.design.d_s)) for v in res.d)
+                lo, hi = s.design.eta_limits
+                eta = tuple(float(np.clip(round(v, 2), lo, hi)) + 0.0 for v in res.eta)
+            else:
+                d, eta = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            self.state = s.replace(carriages=mode, d=d, eta=eta)  # type: ignore[arg-type]
+        with self.programmatic():
+            for i in range(3):
+                p.d[i].value = d[i]
+                p.eta[i].value = eta[i]
+                p.d[i].visible = mode == "manual"
+                p.eta[i].visible = mode == "manual"
+        self.update_mechanism()
+        self.schedule_url()
+
+    def on_manual_carriage(self) -> None:
+        p = self.panels
+        with self.lock:
+            if self.state.carriages != "manual":
+                return
+            d = tuple(float(h.value) for h in p.d)
+            eta = tuple(float(h.value) for h in p.eta)
+            self.state = self.state.replace(d=d, eta=eta)  # type: ignore[arg-type]
+        self.update_mechanism()
+        self.schedule_url()
+
+    # ----- view -----------------------------------------------------------------------------------
+    def set_camera(self, preset: str) -> None:
+        """Move this client's camera to a preset (iso, top, bottom, side)."""
+        d = self.state.design
+        zc = 0.45 * d.l_max
+        R = 1.45 * (d.r + 0.6 * d.l_max)
+        positions = {
+            "iso": (0.75 * R, -0.95 * R, zc + 0.75 * R),
+            "top": (0.0, -0.002 * R, zc + 1.6 * R),
+            "bottom": (0.0, -0.002 * R, zc - 1.6 * R),
+            "side": (0.0, -1.6 * R, zc),
+        }
+        cam = self.client.camera
+        with self.client.atomic():
+            cam.up_direction = (0.0, 0.0, 1.0)
+            # position first: viser moves look_at along with the position, then aims at look_at
+            cam.position = positions.get(preset, positions["iso"])
+            cam.look_at = (0.0, 0.0, zc)
+
+    def on_view(self, preset: str) -> None:
+        with self.lock:
+            self.state = self.state.replace(view=preset)  # type: ignore[arg-type]
+        self.set_camera(preset)
+        self.schedule_url()
+
+    def on_view_settings(self) -> None:
+        p = self.panels
+        with self.lock:
+            self.state = self.state.replace(cut=bool(p.cut.value), cut_z=float(p.cut_z.value),
+                                            cut_keep=str(p.cut_keep.value), opacity=float(p.opacity.value))
+        self.refresh_shell()
+        self.schedule_url()
+
+    def refresh_shell(self) -> None:
+        """Re-send the shell on screen with the current view settings."""
+        with self.view_lock:
+            s = self.state
+            with self.client.atomic():
+                size = self.shell.refresh(s.opacity, s.cut, s.cut_z, s.cut_keep)
+            self._show_payload(size)
+
+    def _show_payload(self, size: int) -> None:
+        self.panels.payload.content = (f"shell on screen: {self.shell.last_faces:,} faces, "
+                                       f"{size / 1e6:.2f} MB (GLB)")
+
+    # ----- workspace job -------------------------------------------------------------------------
+    def _ws_key(self, s: ExplorerState, voxel: float) -> tuple:
+        return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel))
+
+    def submit_workspace(self) -> None:
+        """(Re)compute the workspace for the current design/orientation/voxel; the last call wins."""
+        with self.lock:
+            self._ws_gen += 1
+            gen = self._ws_gen
+            s = self.state
+        cache = self.explorer.shell_cache
+        key = self._ws_key(s, s.voxel)
+        hit = cache.get(key)
+        if hit is not None and hit.measures is not None:
+            self._cancel_job(self._ws_job)
+            self._publish(gen, hit, preview=False, seconds=hit.result.compute_seconds, from_cache=True)
+            self._publish_measures(gen, hit)
+            self._set_status(gen, f"full workspace h = {s.voxel:g} (cached)", 100.0, running=False)
+            self.submit_orientation()
+            return
+        self._event("workspace-submit")
+        fn = self._workspace_fn(gen, s)
+        try:
+            job = self.explorer.jobs.submit(fn, kind="workspace", client=self.job_client, supersede=True,
+                                            on_progress=lambda j, g=gen: self._on_ws_progress(g, j),
+                                            on_done=lambda j, g=gen: self._on_ws_done(g, j))
+        except LimitExceeded as exc:
+            self._set_status(gen, f"not started: {exc}", 0.0, running=False)
+            return
+        except RuntimeError as exc:  # shut down
+            self._set_status(gen, f"not started: {exc}", 0.0, running=False)
+            return
+        with self.lock:
+            if gen == self._ws_gen:
+                self._ws_job = job
+        self._set_status(gen, "queued...", 0.0, running=True)
+
+    def _workspace_fn(self, gen: int, s: ExplorerState) -> Callable[[Callable[[float, str], None], threading.Event], Any]:
+        design = s.design
+        orientation = (s.pose.psi, s.pose.theta, s.pose.phi)
+        voxel = s.voxel
+        cache = self.explorer.shell_cache
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> ShellBundle:
+            t0 = time.perf_counter()
+            full_key = self._ws_key(s, voxel)
+            if voxel < PREVIEW_VOXEL:
+                pkey = self._ws_key(s, PREVIEW_VOXEL)
+                pre = cache.get(pkey)
+                if pre is None:
+                    res = compute_workspace(design, WorkspaceSettings(voxel=PREVIEW_VOXEL, orientation=orientation),
+                                            progress=lambda f, m: progress(0.12 * f, f"preview: {m}"), cancel=cancel)
+                    t1 = time.perf_counter()
+                    pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
+                    pre.shell_seconds = time.perf_counter() - t1
+                    pre.measures = _measure(res)
+                    cache.put(pkey, pre)
+                if cancel.is_set():
+                    raise Cancelled()
+                self._publish(gen, pre, preview=True, seconds=time.perf_counter() - t0)
+                self._publish_measures(gen, pre, preview=True)
+                progress(0.15, f"full workspace h = {voxel:g}...")
+            res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation),
+                                    progress=lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"),
+                                    cancel=cancel)
+            progress(0.78, "meshing the shell...")
+            t1 = time.perf_counter()
+            bundle = ShellBundle(res, make_shell(res, FULL_FACES))
+            bundle.shell_seconds = time.perf_counter() - t1
+            if cancel.is_set():
+                raise Cancelled()
+            self._publish(gen, bundle, preview=False, seconds=time.perf_counter() - t0)
+            progress(0.9, "measuring (voids, genus, hollowness)...")
+            bundle.measures = _measure(res)
+            cache.put(full_key, bundle)
+            if cancel.is_set():
+                raise Cancelled()
+            self._publish_measures(gen, bundle)
+            return bundle
+
+        return fn
+
+    def _on_ws_progress(self, gen: int, job: Job) -> None:
+        self._set_status(gen, job.message, 100.0 * job.progress, running=True)
+
+    def _on_ws_done(self, gen: int, job: Job) -> None:
+        if self.closed:
+            return
+        if job.status == "done":
+            b: ShellBundle = job.result
+            self._set_status(gen, f"full workspace h = {b.result.grid.h:g}: {b.result.compute_seconds:.2f} s "
+                                  f"+ shell {b.shell_seconds:.2f} s", 100.0, running=False)
+            with self.lock:
+                latest = gen == self._ws_gen
+            if latest:
+                self.submit_orientation()
+        elif job.status == "failed":
+            self._set_status(gen, f"**failed:** {job.error}", 0.0, running=False)
+        else:
+            with self.lock:
+                latest = gen == self._ws_gen
+            if latest:  # stopped by the user (a superseded job is followed by a newer one)
+                self._set_status(gen, "stopped; the shell shows the last finished result", 0.0, running=False)
+
+    def _set_status(self, gen: int, text: str, percent: float, running: bool) -> None:
+        with self.lock:
+            if gen != self._ws_gen or self.closed:
+                return
+            p = self.panels
+            p.status.content = text
+            p.progress.value = float(min(100.0, max(0.0, percent)))
+            p.progress.animated = running
+            p.stop.visible = running
+
+    def _publish(self, gen: int, bundle: ShellBundle, preview: bool, seconds: float,
+                 from_cache: bool = False) -> bool:
+        """Show a shell if ``gen`` is still the latest request; returns whether it was shown."""
+        with self.view_lock:
+            with self.lock:
+                if gen != self._ws_gen or self.closed:
+                    return False
+                s = self.state
+            with self.client.atomic():
+                size = self.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+            with self.lock:
+                if preview:
+                    self.preview = bundle
+                else:
+                    self.bundle = bundle
+                self._ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
+                                 "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
+                                 "measures": None, "gen": gen, "cached": from_cache}
+            self._show_payload(size)
+        self.client.flush()
+        self._event("preview-shown" if preview else "full-shown")
+        self._render_numbers()
+        return True
+
+    def _publish_measures(self, gen: int, bundle: ShellBundle, preview: bool = False) -> None:
+        with self.lock:
+            if gen != self._ws_gen or self.closed:
+                return
+            if self._ws_info.get("preview", False) != preview:
+                return
+            self._ws_info["measures"] = bundle.measures
+        self._render_numbers()
+        self._event("measures-preview" if preview else "measures-full")
+
+    def stop_workspace(self) -> None:
+        """The Stop button: cancel the running workspace job."""
+        self._cancel_job(self._ws_job)
+
+    def _cancel_job(self, job: Optional[Job]) -> None:
+        if job is not None and not job.is_final:
+            self.explorer.jobs.cancel(job.id)
+
+    # ----- orientation maps ------------------------------------------------------------------------
+    def on_z0(self) -> None:
+        with self.lock:
+            self.state = self.state.replace(z0=float(self.panels.z0.value))
+        self.submit_orientation()
+        self.schedule_url()
+
+    def submit_orientation(self) -> None:
+        """Recompute the orientation maps and TI_1/TI_2 for the current design and z0."""
+        with self.lock:
+            self._or_gen += 1
+            gen = self._or_gen
+            s = self.state
+        key = (s.design.key(), s.z0)
+        hit = self.explorer.orientation_cache.get(key)
+        if hit is not None:
+            self._cancel_job(self._or_job)
+            self._publish_orientation(gen, *hit)
+            return
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            res = orientation_workspace(s.design, OrientationSettings(z0=s.z0),
+                                        progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
+            progress(0.9, "drawing...")
+            img, png = plots.render(plots.orientation_figure(res, s.z0))
+            self.explorer.orientation_cache.put(key, (res, img, png))
+            return res, img, png
+
+        def done(job: Job) -> None:
+            if job.status == "done":
+                self._publish_orientation(gen, *job.result)
+            elif job.status == "failed":
+                self._set_orientation_status(gen, f"**failed:** {job.error}")
+
+        try:
+            job = self.explorer.jobs.submit(
+                fn, kind="orientation", client=self.job_client, supersede=True, on_done=done,
+                on_progress=lambda j: self._set_orientation_status(gen, f"computing... {100 * j.progress:.0f} %"))
+        except (LimitExceeded, RuntimeError) as exc:
+            self._set_orientation_status(gen, f"not started: {exc}")
+            return
+        self._or_job = job
+        self._set_orientation_status(gen, "computing...")
+
+    def _set_orientation_status(self, gen: int, text: str) -> None:
+        with self.lock:
+            if gen != self._or_gen or self.closed:
+                return
+            self.panels.orientation_status.content = text
+
+    def _publish_orientation(self, gen: int, res: Any, img: np.ndarray, png: bytes) -> None:
+        with self.lock:
+            if gen != self._or_gen or self.closed:
+                return
+            self.orientation = res
+            self._orientation_png = png
+            self.panels.orientation_image.image = img
+            self.panels.orientation_status.content = (
+                f"TI₁ = {res.ti1:.6g}, TI₂ = {res.ti2:.6g} (z0 = {res.settings.z0:g}; "
+                f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28).")
+        self._render_numbers()
+        self._event("orientation-shown")
+
+    def download_orientation_png(self) -> None:
+        if self._orientation_png is None:
+            self._notify("Not ready", "the orientation maps are still being computed", color="orange")
+            return
+        self.client.send_file_download("paraspace_orientation.png", self._orientation_png, save_immediately=True)
+
+    # ----- parameter studies --------------------------------------------------------------------------
+    def run_sweep(self) -> None:
+        """Volume against one design parameter (Fig. 4) on request, with progress and Stop."""
+        from kinematics.sweep import study_values, sweep_1d
+
+        p = self.panels
+        param = str(p.sweep_param.value)
+        n = int(p.sweep_points.value)
+        voxel = float(p.study_voxel.value)
+        s = self.state
+        values = study_values(param, n)
+        orient = (s.pose.psi, s.pose.theta, s.pose.phi)
+        settings = WorkspaceSettings(voxel=voxel, orientation=orient)
+        cache = self.explorer.study_cache
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
+            rows = sweep_1d(s.design, param, values, settings, progress=lambda f, m: progress(0.95 * f, m),
+                            cancel=cancel, cache=cache)
+            current = float(getattr(s.design, param))
+            cur_rows = sweep_1d(s.design, param, [current], settings, cancel=cancel, cache=cache)
+            cur_vol = cur_rows[0]["volume"]
+            fig = plots.sweep_figure(param, [r["value"] for r in rows], [r["volume"] for r in rows],
+                                     current, cur_vol, voxel)
+            img, png = plots.render(fig)
+            return {"param": param, "rows": rows, "current": current, "current_volume": cur_vol,
+                    "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": orient}
+
+        def done(job: Job) -> None:
+            p.sweep_stop.visible = False
+            p.sweep_run.disabled = False
+            if job.status == "done":
+                self._sweep = job.result
+                p.sweep_image.image = job.result["img"]
+                p.sweep_image.visible = True
+                p.sweep_progress.visible = False
+                p.sweep_csv.disabled = False
+                p.sweep_png.disabled = False
+            else:
+                p.sweep_progress.visible = False
+                if job.status == "failed":
+                    self._notify("Sweep failed", str(job.error))
+
+        self._sweep_job = self._start_study(fn, "sweep", p.sweep_progress, p.sweep_stop, p.sweep_run, done)
+
+    def run_surface(self) -> None:
+        """Volume over the (a, d_s) grid (Fig. 5) on request, with progress and Stop."""
+        from kinematics.sweep import study_values, sweep_2d
+
+        p = self.panels
+        n = int(p.surface_points.value)
+        voxel = float(p.study_voxel.value)
+        s = self.state
+        xs = study_values("a", n)
+        ys = [v for v in study_values("d_s", n) if v <= s.design.r]
+        orient = (s.pose.psi, s.pose.theta, s.pose.phi)
+        settings = WorkspaceSettings(voxel=voxel, orientation=orient)
+        cache = self.explorer.study_cache
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
+            out = sweep_2d(s.design, "a", xs, "d_s", ys, settings, progress=lambda f, m: progress(0.97 * f, m),
+                           cancel=cancel, cache=cache)
+            fig = plots.surface_figure(out["values_x"], out["values_y"], out["volume"],
+                                       (s.design.a, s.design.d_s), voxel)
+            img, png = plots.render(fig)
+            return {**out, "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": orient}
+
+        def done(job: Job) -> None:
+            p.surface_stop.visible = False
+            p.surface_run.disabled = False
+            p.surface_progress.visible = False
+            if job.status == "done":
+                self._surface = job.result
+                p.surface_image.image = job.result["img"]
+                p.surface_image.visible = True
+                p.surface_csv.disabled = False
+                p.surface_png.disabled = False
+            elif job.status == "failed":
+                self._notify("Study failed", str(job.error))
+
+        self._surface_job = self._start_study(fn, "surface", p.surface_progress, p.surface_stop, p.surface_run, done)
+
+    def _start_study(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any,
+                     done: Callable[[Job], None]) -> Optional[Job]:
+        def on_progress(job: Job) -> None:
+            bar.value = 100.0 * job.progress
+        try:
+            job = self.explorer.jobs.submit(fn, kind=kind, client=self.job_client, supersede=True,
+                                            on_done=done, on_progress=on_progress)
+        except (LimitExceeded, RuntimeError) as exc:
+            self._notify("Not started", str(exc), color="orange")
+            return None
+        bar.value = 0.0
+        bar.visible = True
+        bar.animated = True
+        stop.visible = True
+        run.disabled = True
+        return job
+
+    # ----- downloads --------------------------------------------------------------------------------
+    def _download_png(self, which: str) -> None:
+        data = self._sweep if which == "sweep" else self._surface
+        if data is None:
+            return
+        name = (f"paraspace_volume_vs_{data['param']}.png" if which == "sweep" else "paraspace_volume_a_d_s.png")
+        self.client.send_file_download(name, data["png"], save_immediately=True)
+
+    def download_sweep_csv(self) -> None:
+        data = self._sweep
+        if data is None:
+            return
+        cols = ["value", "volume", "voids", "void_ratio", "hollowness", "components", "genus",
+                "boundary_closed", "boundary_complete"]
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        w.writerow([data["param"]] + cols[1:])
+        for r in data["rows"]:
+            w.writerow([r.get(c) for c in cols])
+        self.client.send_file_download(f"paraspace_sweep_{data['param']}.csv", buf.getvalue().encode(),
+                                       save_immediately=True)
+
+    def download_surface_csv(self) -> None:
+        data = self._surface
+        if data is None:
+            return
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        w.writerow(["a", "d_s", "volume", "voids", "hollowness", "components", "genus", "boundary_closed"])
+        for pt in data["points"]:
+            w.writerow([pt["x"], pt["y"], pt.get("volume"), pt.get("voids"), pt.get("hollowness"),
+                        pt.get("components"), pt.get("genus"), pt.get("boundary_closed")])
+        self.client.send_file_download("paraspace_volume_a_d_s.csv", buf.getvalue().encode(), save_immediately=True)
+
+    def download_shell(self, fmt: str) -> None:
+        """Send the full (uncut) shell as STL, PLY or GLB."""
+        from kinematics.shell import export_shell
+
+        b = self.bundle
+        if b is None:
+            self._notify("Not ready", "the full workspace is still being computed", color="orange")
+            return
+        data = export_shell(b.mesh, fmt)
+        self.client.send_file_download(f"paraspace_workspace.{fmt}", data, save_immediately=True)
+
+    def measures_document(self) -> dict:
+        """JSON document of the current design, pose, settings, measures and indices."""
+        with self.lock:
+            s = self.state
+            b = self.bundle
+            ori = self.orientation
+            res = self.resolution
+        doc: dict[str, Any] = {
+            "link": self.link(),
+            "design": s.design.to_dict(),
+            "pose": s.pose.to_dict(),
+            "workspace_settings": None if b is None else dataclasses.asdict(b.result.settings),
+            "grid": None if b is None else b.result.grid.to_dict(),
+            "compute_seconds": None if b is None else b.result.compute_seconds,
+            "measures": None if b is None or b.measures is None else b.measures.to_dict(),
+            "orientation": None if ori is None else ori.to_dict(),
+            "pose_resolution": None if res is None else res.to_dict(),
+        }
+        return doc
+
+    def download_measures(self) -> None:
+        doc = self.measures_document()
+        data = json.dumps(doc, indent=2, default=_json_default).encode()
+        self.client.send_file_download("paraspace_measures.json", data, save_immediately=True)
+
+    # ----- URL --------------------------------------------------------------------------------------
+    def query(self) -> str:
+        """The query string of the current state (plus viser's own keys from the opened link)."""
+        with self.lock:
+            return full_query(self.state, self.passthrough)
+
+    def link(self) -> str:
+        """The shareable link of the current state."""
+        return f"{self.base_url}?{self.query()}"
+
+    def schedule_url(self) -> None:
+        """Rewrite the address bar after :data:`URL_DEBOUNCE` seconds without further changes."""
+        with self.lock:
+            if self._url_timer is not None:
+                self._url_timer.cancel()
+            t = threading.Timer(URL_DEBOUNCE, self._sync_url_now)
+            t.daemon = True
+            self._url_timer = t
+        t.start()
+
+    def _sync_url_now(self) -> None:
+        if self.closed:
+            return
+        q = self.query()
+        if q == self.last_query:
+            return
+        self.last_query = q
+        jsbridge.replace_query(self.client, q)
+        self.panels.link.value = f"{self.base_url}?{q}"
+        self._event("url")
+
+    def copy_link(self) -> None:
+        self._sync_url_now()
+        jsbridge.copy_to_clipboard(self.client, self.link())
+        self._notify("Link", "copied to the clipboard (if the browser allowed it); it is also in the text "
+                             "field above", color="blue")
+
+    # ----- teardown --------------------------------------------------------------------------------
+    def close(self) -> None:
+        """The browser left: cancel its jobs and timers."""
+        self.closed = True
+        with self.lock:
+            if self._url_timer is not None:
+                self._url_timer.cancel()
+        for job in self.explorer.jobs.active(self.job_client):
+            self.explorer.jobs.cancel(job.id)
+
+
+def _state_badge(status: str) -> str:
+    text = LEG_STATE_TEXT.get(status, status)
+    if status == "inside":
+        return f"({text})"
+    return f"**({text})**"
+
+
+def _measure(result: WorkspaceResult) -> Any:
+    from kinematics.measures import measure_workspace
+
+    return measure_workspace(result)
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return dataclasses.asdict(obj)
+    return str(obj)
+
+
+# --------------------------------------------------------------------------------------------
+# the server
+
+
+class Explorer:
+    """The viser server with one :class:`ClientSession` per browser.
+
+    Args:
+        host: interface to bind (default: localhost only).
+        port: port (viser moves to the next free one when busy; read :attr:`port`). 0: any free port.
+        jobs: the shared :class:`~app.jobs.JobManager` (a private one with 2 workers if ``None``).
+    """
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: Optional[JobManager] = None) -> None:
+        self.host = host
+        self._requested_port = port
+        self.jobs = jobs if jobs is not None else JobManager(max_workers=2)
+        self._own_jobs = jobs is None
+        self.server: Optional[viser.ViserServer] = None
+        self.sessions: dict[int, ClientSession] = {}
+        self._sessions_lock = threading.Lock()
+        self.shell_cache = LRU(8)
+        self.orientation_cache = LRU(8)
+        from kinematics.sweep import ResultCache
+
+        self.study_cache = ResultCache(max_entries=1024)
+        self.warm = threading.Event()
+        self.connect_seconds: list[float] = []
+
+    @property
+    def port(self) -> int:
+        """The port the server listens on (after :meth:`start`)."""
+        if self.server is None:
+            raise RuntimeError("the explorer is not started")
+        return int(self.server.get_port())
+
+    @property
+    def url(self) -> str:
+        """``http://host:port/`` of the explorer."""
+        host = self.host if self.host not in ("0.0.0.0", "::") else "127.0.0.1"
+        return f"http://{host}:{self.port}/"
+
+    def start(self) -> "Explorer":
+        """Start the viser server (returns at once; the numba kernels warm up in the background)."""
+        if self.server is not None:
+            return self
+        threading.Thread(target=self._warm_up, name="paraspace-warmup", daemon=True).start()
+        server = viser.ViserServer(host=self.host, port=self._requested_port, verbose=False)
+        server.gui.configure_theme(show_share_button=False, control_width="large",
+                                   brand_color=(40, 110, 180))
+        server.scene.set_up_direction("+z")
+        server.scene.configure_environment_map(None)
+        server.on_client_connect(self._on_connect)
+        server.on_client_disconnect(self._on_disconnect)
+        self.server = server
+        return self
+
+    def _warm_up(self) -> None:
+        try:
+            warm_up()
+            from kinematics.shell import workspace_shell  # noqa: F401 - import cost off the first request
+        except Exception:  # noqa: BLE001
+            log.exception("warm-up failed")
+        finally:
+            self.warm.set()
+
+    def stop(self) -> None:
+        """Stop the server, cancel this explorer's jobs (and the job manager if it owns it)."""
+        with self._sessions_lock:
+            sessions = list(self.sessions.values())
+            self.sessions.clear()
+        for s in sessions:
+            s.close()
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+        if self._own_jobs:
+            self.jobs.shutdown(wait=False)
+
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        t0 = time.perf_counter()
+        loc = jsbridge.read_location(client, timeout=5.0)
+        search, base = loc if loc is not None else ("", self.url.rstrip("/") + "/")
+        state, messages = parse_query(search)
+        session = ClientSession(self, client, state, base or self.url, viser_passthrough(search), messages)
+        with self._sessions_lock:
+            self.sessions[client.client_id] = session
+        try:
+            session.build()
+        except Exception:  # noqa: BLE001
+            log.exception("building the explorer for client %s failed", client.client_id)
+            raise
+        self.connect_seconds.append(time.perf_counter() - t0)
+
+    def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        with self._sessions_lock:
+            session = self.sessions.pop(client.client_id, None)
+        if session is not None:
+            session.close()
+
+    def session(self, client_id: int) -> Optional[ClientSession]:
+        """The session of a connected client (``None`` if unknown)."""
+        with self._sessions_lock:
+            return self.sessions.get(client_id)
+
+
+def main(host: str = "127.0.0.1", port: int = 8080) -> None:  # pragma: no cover - manual use
+    """Run the explorer alone until interrupted."""
+    exp = Explorer(host, port).start()
+    print(f"paraspace explorer: {exp.url}", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        exp.stop()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,211 @@
+"""Layout of one browser's control panel: every GUI element of the explorer, no behaviour.
+
+:func:`build_panels` creates the elements on a client's ``client.gui`` (so they belong to that
+browser only) from an :class:`~app.urlstate.ExplorerState` and returns them in a :class:`Panels`;
+:mod:`app.explorer` attaches the callbacks. Layout, top to bottom:
+
+* URL messages (only when the opened link had bad fields);
+* "Workspace" status: progress bar, one status line, Stop;
+* "Numbers": volume, voids, hollowness, boundary, genus, components, TI_1/TI_2, compute time,
+  the pose verdict;
+* tabs Design | Pose | View | Plots | Share.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import viser
+
+from kinematics.design import ETA_RANGES, PARAMS
+
+from .urlstate import (
+    CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, ETA_KEYS, POSE_KEYS, POSE_RANGES,
+    SETTING_RANGES, ExplorerState,
+)
+
+POSE_HINTS: dict[str, str] = {
+    "x": "platform centre P, x", "y": "platform centre P, y", "z": "platform centre P, height",
+    "psi": "Euler angle about z (eq. 2: R1 = Rz(psi) Ry(theta) Rx(phi)), degrees",
+    "theta": "Euler angle about y, degrees", "phi": "Euler angle about x, degrees",
+}
+STUDY_PARAMS: tuple[str, ...] = DESIGN_KEYS
+
+
+@dataclasses.dataclass
+class Panels:
+    """Handles of one client's GUI (see the module docstring)."""
+
+    url_messages: Any
+    progress: Any
+    status: Any
+    stop: Any
+    numbers: Any
+    tabs: Any
+    # design
+    design: dict[str, Any]
+    eta_range: Any
+    reset: Any
+    voxel: Any
+    design_message: Any
+    # pose
+    pose: dict[str, Any]
+    gizmo: Any
+    carriages: Any
+    d: list[Any]
+    eta: list[Any]
+    pose_table: Any
+    # view
+    view_buttons: Any
+    cut: Any
+    cut_z: Any
+    cut_keep: Any
+    opacity: Any
+    payload: Any
+    # plots
+    z0: Any
+    orientation_status: Any
+    orientation_image: Any
+    orientation_png: Any
+    study_voxel: Any
+    sweep_param: Any
+    sweep_points: Any
+    sweep_run: Any
+    sweep_stop: Any
+    sweep_progress: Any
+    sweep_image: Any
+    sweep_csv: Any
+    sweep_png: Any
+    surface_points: Any
+    surface_run: Any
+    surface_stop: Any
+    surface_progress: Any
+    surface_image: Any
+    surface_csv: Any
+    surface_png: Any
+    # share
+    link: Any
+    copy_link: Any
+    download_stl: Any
+    download_ply: Any
+    download_glb: Any
+    download_json: Any
+
+
+def _blank(h: int = 40, w: int = 320) -> np.ndarray:
+    return np.full((h, w, 3), 255, dtype=np.uint8)
+
+
+def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
+    """Create every GUI element on ``gui`` (a client's ``client.gui``) showing ``state``."""
+    url_messages = gui.add_markdown("", visible=False)
+    with gui.add_folder("Workspace", expand_by_default=True):
+        progress = gui.add_progress_bar(0.0, animated=False)
+        status = gui.add_markdown("*starting...*")
+        stop = gui.add_button("Stop computation", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
+    with gui.add_folder("Numbers", expand_by_default=True):
+        numbers = gui.add_markdown("*computing...*")
+    tabs = gui.add_tab_group()
+
+    with tabs.add_tab("Design", viser.Icon.RULER_MEASURE):
+        design = {}
+        for key in DESIGN_KEYS:
+            rng = DESIGN_RANGES[key]
+            spec = PARAMS[key]
+            design[key] = gui.add_slider(key, min=rng.lo, max=rng.hi, step=rng.step,
+                                         initial_value=float(getattr(state.design, key)),
+                                         hint=f"{spec.description}; Table I range {rng.text(spec.unit)}")
+        eta_range = gui.add_dropdown("eta_range", ETA_RANGES, initial_value=state.design.eta_range,
+                                     hint="arc stroke: centered [-eta_s/2, eta_s/2] or from-zero [0, eta_s]")
+        design_message = gui.add_markdown("", visible=False)
+        reset = gui.add_button("Reset to paper defaults", icon=viser.Icon.RESTORE)
+        rng = SETTING_RANGES["voxel"]
+        voxel = gui.add_slider("voxel h", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.voxel,
+                               hint="voxel edge of the full workspace computation (preview: h = 6)")
+
+    with tabs.add_tab("Pose", viser.Icon.ARROWS_MOVE):
+        pose = {}
+        for key in POSE_KEYS:
+            rng = POSE_RANGES[key]
+            pose[key] = gui.add_slider(key, min=rng.lo, max=rng.hi, step=rng.step,
+                                       initial_value=float(getattr(state.pose, key)), hint=POSE_HINTS[key])
+        gizmo = gui.add_checkbox("drag gizmo", True, hint="show the drag handle on the platform")
+        carriages = gui.add_dropdown("carriages", ("auto", "manual"), initial_value=state.carriages,
+                                     hint="auto: redundancy resolved (max leg margin); manual: set d_i, eta_i")
+        d, eta = [], []
+        lo, hi = state.design.eta_limits
+        for i in range(3):
+            d.append(gui.add_slider(D_KEYS[i], min=0.0, max=max(state.design.d_s, 1e-6), step=0.1,
+                                    initial_value=float(state.d[i]), visible=state.carriages == "manual",
+                                    hint=f"radial carriage of chain {i + 1}, [0, d_s]"))
+        for i in range(3):
+            eta.append(gui.add_slider(ETA_KEYS[i], min=lo, max=max(hi, lo + 1e-6), step=0.1,
+                                      initial_value=float(state.eta[i]), visible=state.carriages == "manual",
+                                      hint=f"arc carriage of chain {i + 1}, degrees"))
+        pose_table = gui.add_markdown("")
+
+    with tabs.add_tab("View", viser.Icon.EYE):
+        view_buttons = gui.add_button_group("camera", CAMERA_PRESETS)
+        cut = gui.add_checkbox("cut plane", state.cut, hint="cut the shell by a horizontal plane")
+        rng = SETTING_RANGES["cut_z"]
+        cut_z = gui.add_slider("cut height", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.cut_z)
+        cut_keep = gui.add_dropdown("keep", CUT_KEEPS, initial_value=state.cut_keep,
+                                    hint="which side of the cut plane stays visible")
+        rng = SETTING_RANGES["opacity"]
+        opacity = gui.add_slider("shell opacity", min=rng.lo, max=rng.hi, step=rng.step,
+                                 initial_value=state.opacity)
+        payload = gui.add_markdown("")
+
+    with tabs.add_tab("Plots", viser.Icon.CHART_LINE):
+        with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True):
+            rng = SETTING_RANGES["z0"]
+            z0 = gui.add_slider("z0", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.z0,
+                                hint="height of the x and y' lines")
+            orientation_status = gui.add_markdown("*waiting for the workspace...*")
+            orientation_image = gui.add_image(_blank(), format="png")
+            orientation_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD)
+        study_voxel = gui.add_slider("study voxel h", min=2.0, max=10.0, step=1.0, initial_value=4.0,
+                                     hint="voxel edge used by the parameter studies below")
+        with gui.add_folder("Volume vs parameter (Fig. 4)", expand_by_default=False):
+            sweep_param = gui.add_dropdown("parameter", STUDY_PARAMS, initial_value="a")
+            sweep_points = gui.add_slider("points", min=3, max=31, step=1, initial_value=10)
+            sweep_run = gui.add_button("Run sweep", icon=viser.Icon.PLAYER_PLAY)
+            sweep_stop = gui.add_button("Stop sweep", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
+            sweep_progress = gui.add_progress_bar(0.0, visible=False)
+            sweep_image = gui.add_image(_blank(), format="png", visible=False)
+            sweep_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
+            sweep_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD, disabled=True)
+        with gui.add_folder("Volume over (a, d_s) (Fig. 5)", expand_by_default=False):
+            surface_points = gui.add_slider("grid points per axis", min=3, max=15, step=1, initial_value=7)
+            surface_run = gui.add_button("Run (a, d_s) study", icon=viser.Icon.PLAYER_PLAY)
+            surface_stop = gui.add_button("Stop study", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
+            surface_progress = gui.add_progress_bar(0.0, visible=False)
+            surface_image = gui.add_image(_blank(), format="png", visible=False)
+            surface_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
+            surface_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD, disabled=True)
+
+    with tabs.add_tab("Share", viser.Icon.SHARE):
+        link = gui.add_text("link", "", hint="this link restores the design, pose and view")
+        copy_link = gui.add_button("Copy link", icon=viser.Icon.COPY)
+        gui.add_markdown("**Downloads**")
+        download_stl = gui.add_button("Shell STL", icon=viser.Icon.DOWNLOAD)
+        download_ply = gui.add_button("Shell PLY", icon=viser.Icon.DOWNLOAD)
+        download_glb = gui.add_button("Shell GLB", icon=viser.Icon.DOWNLOAD)
+        download_json = gui.add_button("Measures JSON", icon=viser.Icon.DOWNLOAD)
+
+    return Panels(
+        url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
+        design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message,
+        pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
+        view_buttons=view_buttons, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,
+        z0=z0, orientation_status=orientation_status, orientation_image=orientation_image,
+        orientation_png=orientation_png, study_voxel=study_voxel, sweep_param=sweep_param,
+        sweep_points=sweep_points, sweep_run=sweep_run, sweep_stop=sweep_stop, sweep_progress=sweep_progress,
+        sweep_image=sweep_image, sweep_csv=sweep_csv, sweep_png=sweep_png, surface_points=surface_points,
+        surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
+        surface_image=surface_image, surface_csv=surface_csv, surface_png=surface_png,
+        link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
+        download_glb=download_glb, download_json=download_json,
+    )

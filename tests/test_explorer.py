@@ -1,0 +1,366 @@
+"""Explorer app logic in-process (no browser).
+
+Each test connects one or more *protocol-level* fake browsers to a real :class:`app.explorer.Explorer`:
+a websocket client that speaks viser 1.1.1's wire format (notes §5), answers localStorage requests
+as a browser that has run the JS bridge would, and records what the server sends (scripts, file
+downloads). Inputs are sent as ``GuiUpdateMessage`` exactly like the web client does, so they go
+through viser's callback thread pool; assertions look at the server-side session.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import re
+import threading
+import time
+import urllib.parse
+from typing import Any, Callable, Optional
+
+import msgspec
+import numpy as np
+import pytest
+import viser
+import zstandard
+from websockets.sync.client import connect
+
+from app.explorer import ClientSession, Explorer
+from app.urlstate import encode_query, parse_query
+from kinematics.design import Design
+from kinematics.pose import Pose
+from kinematics.redundancy import inverse_kinematics, resolve_redundancy
+from kinematics.workspace import WorkspaceSettings, compute_workspace
+
+
+class FakeBrowser:
+    """A viser client over the websocket protocol, with a fake ``location`` and localStorage."""
+
+    def __init__(self, explorer: Explorer, search: str = "") -> None:
+        self.explorer = explorer
+        self.search = search if not search or search.startswith("?") else "?" + search
+        self.base = explorer.url
+        self.storage: dict[str, str] = {}
+        self.scripts: list[str] = []
+        self.downloads: dict[str, dict[str, Any]] = {}
+        self.lock = threading.Lock()
+        self.closed = False
+        before = set(explorer.sessions)
+        self.ws = connect(explorer.url.replace("http", "ws").rstrip("/"),
+                          subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
+        self._send({"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (0.0, 0.0, 500.0),
+                    "fov": 1.0, "near": 0.01, "far": 1000.0, "image_height": 720, "image_width": 1280,
+                    "look_at": (0.0, 0.0, 0.0), "up_direction": (0.0, 0.0, 1.0)})
+        self.thread = threading.Thread(target=self._recv_loop, daemon=True)
+        self.thread.start()
+        self.session: ClientSession = wait_for(
+            lambda: next((s for cid, s in explorer.sessions.items() if cid not in before and s.ready.is_set()),
+                         None), 20.0, "the session was not built")
+
+    # ----- wire ---------------------------------------------------------------------------------
+    def _send(self, msg: dict) -> None:
+        self.ws.send(msgspec.msgpack.encode(msg))
+
+    def _recv_loop(self) -> None:
+        dctx = zstandard.ZstdDecompressor()
+        while not self.closed:
+            try:
+                raw = self.ws.recv()
+            except Exception:  # noqa: BLE001 - closed
+                return
+            if not isinstance(raw, bytes):
+                continue
+            inner = int.from_bytes(raw[0:8], "little")
+            comp = int.from_bytes(raw[8:16], "little")
+            payload = msgspec.msgpack.decode(dctx.decompress(raw[16:16 + comp], max_output_size=inner))
+            for m in payload["messages"]:
+                self._handle(m)
+
+    def _handle(self, m: dict) -> None:
+        kind = m.get("type")
+        if kind == "RunJavascriptMessage":
+            src = m["source"]
+            with self.lock:
+                self.scripts.append(src)
+            # Play the browser: the two scripts of app/jsbridge.py that matter here.
+            set_loc = re.search(r"localStorage\.setItem\((\"[^\"]+\"),", src)
+            if set_loc and "location.search" in src:
+                key = json.loads(set_loc.group(1))
+                self.storage[key] = json.dumps({"search": self.search, "base": self.base})
+            q = re.search(r"var q = (\"(?:[^\"\\]|\\.)*\");", src)
+            if q and "replaceState" in src:
+                self.search = json.loads(q.group(1))
+        elif kind == "LocalStorageGetItemRequestMessage":
+            value = self.storage.get("viser-user:" + m["key"])
+            self._send({"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,
+                        "request_uuid": m["request_uuid"]})
+        elif kind == "LocalStorageRemoveItemMessage":
+            self.storage.pop("viser-user:" + m["key"], None)
+        elif kind == "FileTransferStartDownload":
+            with self.lock:
+                self.downloads[m["transfer_uuid"]] = {"filename": m["filename"], "parts": {},
+                                                      "count": m["part_count"]}
+        elif kind == "FileTransferPart":
+            with self.lock:
+                d = self.downloads.get(m["transfer_uuid"])
+                if d is not None:
+                    d["parts"][m["part_index"]] = bytes(m["content"])
+
+    # ----- actions -------------------------------------------------------------------------------
+    def set(self, handle: Any, value: Any) -> None:
+        """Change a GUI input the way the web client does."""
+        self._send({"type": "GuiUpdateMessage", "uuid": handle._impl.uuid, "updates": {"value": value}})
+
+    def click(self, handle: Any) -> None:
+        self.set(handle, True)
+
+    def download(self, filename: str, timeout: float = 20.0) -> bytes:
+        def done() -> Optional[bytes]:
+            with self.lock:
+                for d in self.downloads.values():
+                    if d["filename"] == filename and len(d["parts"]) == d["count"]:
+                        return b"".join(d["parts"][i] for i in range(d["count"]))
+            return None
+        return wait_for(done, timeout, f"download {filename}")
+
+    def close(self) -> None:
+        self.closed = True
+        self.ws.close()
+
+
+def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
+    """Poll ``fn`` until it returns a truthy value (returned) or fail after ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        v = fn()
+        if v:
+            return v
+        time.sleep(0.02)
+    raise AssertionError(f"timed out after {timeout} s waiting for: {what}")
+
+
+def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> None:
+    """Wait until the session has no unfinished jobs and a full result for its current state."""
+    def idle() -> bool:
+        if exp.jobs.active(session.job_client):
+            return False
+        b = session.bundle
+        s = session.state
+        return (b is not None and b.measures is not None and b.result.design == s.design
+                and session._ws_info.get("preview") is False and session._ws_info.get("measures") is not None)
+    wait_for(idle, timeout, "the session to become idle")
+
+
+@pytest.fixture(scope="module")
+def explorer():
+    exp = Explorer("127.0.0.1", 0).start()
+    exp.warm.wait(120)
+    yield exp
+    exp.stop()
+
+
+@pytest.fixture
+def browsers(explorer):
+    opened: list[FakeBrowser] = []
+
+    def open_(search: str = "") -> FakeBrowser:
+        b = FakeBrowser(explorer, search)
+        opened.append(b)
+        return b
+
+    yield open_
+    for b in opened:
+        b.close()
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def test_link_restores_state_and_names_bad_fields(explorer, browsers):
+    b = browsers("a=60&d_s=40&z=140&psi=5&voxel=4&view=top&b=99&color=red")
+    s = b.session
+    assert s.state.design.a == 60.0 and s.state.design.d_s == 40.0 and s.state.design.b == 14.0
+    assert s.state.pose.z == 140.0 and s.state.pose.psi == 5.0 and s.state.voxel == 4.0 and s.state.view == "top"
+    # the GUI shows the link's values
+    assert s.panels.design["a"].value == 60.0 and s.panels.pose["z"].value == 140.0
+    assert s.panels.voxel.value == 4.0
+    # one on-screen message per bad field, naming it and its range
+    text = s.panels.url_messages.content
+    assert s.panels.url_messages.visible
+    assert "b = 99" in text and "[0, 40]" in text and "'color'" in text
+    # the address bar is rewritten (JS bridge) to a link that parses back to the same state
+    wait_for(lambda: "eta_range=centered" in b.search, 5.0, "replaceState")
+    parsed, msgs = parse_query(b.search)
+    assert msgs == [] and parsed == s.state
+    assert s.panels.link.value == explorer.url + b.search
+    wait_idle(explorer, s)
+    assert s.bundle.result.settings.voxel == 4.0
+    assert s.bundle.result.settings.orientation == (5.0, 0.0, 0.0)
+
+
+def test_clients_have_separate_state(explorer, browsers):
+    b1 = browsers("voxel=5")
+    b2 = browsers("voxel=5")
+    wait_idle(explorer, b1.session)
+    wait_idle(explorer, b2.session)
+    b1.set(b1.session.panels.design["a"], 70.0)
+    wait_for(lambda: b1.session.state.design.a == 70.0, 10.0, "client 1 design")
+    wait_idle(explorer, b1.session)
+    time.sleep(0.3)
+    assert b2.session.state.design.a == 50.0
+    assert b2.session.panels.design["a"].value == 50.0
+    assert b2.session.bundle.result.design.a == 50.0
+    assert b1.session.bundle.result.design.a == 70.0
+    assert b1.session.panels is not b2.session.panels
+    wait_for(lambda: "a=70" in b1.search, 5.0, "client 1 URL")
+    assert "a=50" in b2.search
+
+
+def test_last_slider_value_wins(explorer, browsers):
+    b = browsers("voxel=3")
+    s = b.session
+    wait_idle(explorer, s)
+    values = [20.0 + 2.0 * k for k in range(15)]
+    for v in values:  # faster than any job finishes: every one supersedes the previous
+        b.set(s.panels.design["a"], v)
+        time.sleep(0.01)
+    wait_for(lambda: s.state.design.a == values[-1], 10.0, "last slider value")
+    wait_idle(explorer, s)
+    time.sleep(0.5)  # a stale job that would still publish has had every chance to
+    expected = Design(a=values[-1])
+    assert s.bundle.result.design == expected
+    assert s._ws_info["gen"] == s._ws_gen
+    ref = compute_workspace(expected, WorkspaceSettings(voxel=3.0))
+    assert s.bundle.result.volume == ref.volume
+    assert f"{ref.volume:.5g}" in s.panels.numbers.content
+    # the shell on screen was meshed from that result
+    assert s.shell.source is s.bundle.mesh
+    stale = [j for j in explorer.jobs.jobs() if j.client == s.job_client and j.kind == "workspace"]
+    assert any(j.status == "cancelled" for j in stale), "rapid updates should have cancelled stale jobs"
+
+
+def test_a_slow_job_is_cancelled_when_the_design_moves(explorer, browsers):
+    b = browsers("voxel=4")
+    s = b.session
+    wait_idle(explorer, s)
+    b.set(s.panels.voxel, 1.0)  # h = 1: seconds of work
+    job = wait_for(lambda: s._ws_job if s._ws_job is not None and s.state.voxel == 1.0 else None, 10.0, "h=1 job")
+    wait_for(lambda: job.status == "running", 10.0, "h=1 job running")
+    b.set(s.panels.voxel, 6.0)
+    wait_for(lambda: job.is_final, 10.0, "h=1 job to end")
+    assert job.status == "cancelled"
+    wait_idle(explorer, s)
+    assert s.bundle.result.settings.voxel == 6.0
+
+
+def test_pose_moves_do_not_start_workspace_jobs(explorer, browsers):
+    b = browsers("voxel=5")
+    s = b.session
+    wait_idle(explorer, s)
+    n_jobs = len([j for j in explorer.jobs.jobs() if j.client == s.job_client and j.kind == "workspace"])
+    legs_before = np.array(s.mechanism.legs.batched_positions)
+    for k, (x, z) in enumerate([(5.0, 131.0), (10.0, 132.0), (15.0, 133.0), (20.0, 135.0)]):
+        b.set(s.panels.pose["x"], x)
+        b.set(s.panels.pose["z"], z)
+    b.set(s.panels.pose["y"], -7.5)
+    wait_for(lambda: s.state.pose == Pose(x=20.0, y=-7.5, z=135.0), 10.0, "pose")
+    wait_for(lambda: s.resolution is not None and np.allclose(
+        s.resolution.d, resolve_redundancy(s.state.design, s.state.pose).d), 10.0, "IK at the last pose")
+    time.sleep(0.3)
+    after = [j for j in explorer.jobs.jobs() if j.client == s.job_client and j.kind == "workspace"]
+    assert len(after) == n_jobs, "position-only moves must not start workspace jobs"
+    assert not np.allclose(np.array(s.mechanism.legs.batched_positions), legs_before)
+    # leg cylinders end at the joints: lengths drawn == IK leg lengths
+    ref = resolve_redundancy(s.state.design, s.state.pose)
+    drawn = np.array(s.mechanism.legs.batched_scales)[:, 2]
+    assert np.allclose(np.sort(drawn), np.sort(ref.lengths.reshape(6)), atol=1e-6)
+    # an orientation change does start one
+    b.set(s.panels.pose["psi"], 10.0)
+    wait_for(lambda: len([j for j in explorer.jobs.jobs() if j.client == s.job_client and j.kind == "workspace"])
+             > n_jobs, 10.0, "a workspace job after an orientation change")
+    wait_idle(explorer, s)
+    assert s.bundle.result.settings.orientation == (10.0, 0.0, 0.0)
+
+
+def test_unreachable_pose_names_the_failing_chain(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    b.set(s.panels.pose["z"], 300.0)
+    wait_for(lambda: s.state.pose.z == 300.0 and s.resolution is not None and not s.resolution.feasible,
+             10.0, "unreachable verdict")
+    text = s.panels.numbers.content
+    assert "unreachable" in text and "chain" in text and "too long" in text
+    assert "outside the workspace" in text
+    assert "too long" in s.panels.pose_table.content
+
+
+def test_manual_carriages(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    resolved = resolve_redundancy(s.state.design, s.state.pose)
+    b.set(s.panels.carriages, "manual")
+    wait_for(lambda: s.state.carriages == "manual", 10.0, "manual mode")
+    assert np.allclose(s.state.d, np.round(resolved.d, 2))
+    assert s.panels.d[0].visible
+    b.set(s.panels.d[0], 5.0)
+    b.set(s.panels.eta[1], -10.0)
+    wait_for(lambda: s.resolution is not None and s.resolution.mode == "manual" and s.resolution.d[0] == 5.0
+             and s.resolution.eta[1] == -10.0, 10.0, "manual IK")
+    ref = inverse_kinematics(s.state.design, s.state.pose, s.state.d, s.state.eta)
+    assert np.allclose(s.resolution.lengths, ref.lengths)
+    wait_for(lambda: "carriages=manual" in b.search and "d_1=5" in b.search, 5.0, "manual carriages in the URL")
+
+
+def test_invalid_design_combination_is_reported_not_applied(explorer, browsers):
+    b = browsers("voxel=6&d_s=80")
+    s = b.session
+    b.set(s.panels.design["r"], 60.0)
+    wait_for(lambda: s.design_error is not None, 10.0, "design error")
+    assert "d_s" in s.design_error and "r=60" in s.design_error
+    assert s.state.design.r == 100.0 and s.state.design.d_s == 80.0
+    assert s.panels.design_message.visible and "Not applied" in s.panels.design_message.content
+
+
+def test_downloads(explorer, browsers):
+    b = browsers("voxel=6&a=40")
+    s = b.session
+    wait_idle(explorer, s)
+    b.click(s.panels.download_json)
+    doc = json.loads(b.download("paraspace_measures.json"))
+    assert doc["design"]["a"] == 40.0
+    assert doc["measures"]["volume"] == s.bundle.result.volume
+    parsed, msgs = parse_query(urllib.parse.urlsplit(doc["link"]).query)
+    assert msgs == [] and parsed == s.state
+    b.click(s.panels.download_stl)
+    stl = b.download("paraspace_workspace.stl")
+    assert len(stl) == 84 + 50 * len(s.bundle.mesh.faces)  # binary STL of the full (uncut) shell
+
+
+def test_view_settings_cut_the_shell(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    full_faces = s.shell.last_faces
+    b.set(s.panels.cut_z, 60.0)
+    b.set(s.panels.cut, True)
+    wait_for(lambda: s.state.cut and s.state.cut_z == 60.0 and s.shell.last_faces != full_faces, 10.0, "cut")
+    assert 0 < s.shell.last_faces < full_faces
+    wait_for(lambda: "cut=1" in b.search and "cut_z=60" in b.search, 5.0, "cut in the URL")
+
+
+def test_sweep_on_request_with_progress(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    b.set(s.panels.study_voxel, 10.0)
+    b.set(s.panels.sweep_param, "eta_s")
+    b.set(s.panels.sweep_points, 3)
+    wait_for(lambda: s.panels.sweep_points.value == 3 and s.panels.sweep_param.value == "eta_s", 5.0, "inputs")
+    b.click(s.panels.sweep_run)
+    wait_for(lambda: s._sweep is not None, 60.0, "sweep result")
+    rows = s._sweep["rows"]
+    assert [r["value"] for r in rows] == [10.0, 55.0, 100.0]
+    vols = [r["volume"] for r in rows]
+    assert vols == sorted(vols)  # paper Fig. 4: volume grows with eta_s
+    b.click(s.panels.sweep_csv)
+    table = list(csv.reader(io.StringIO(b.download("paraspace_sweep_eta_s.csv").decode())))
+    assert table[0][0] == "eta_s" and len(table) == 4
