@@ -31,6 +31,7 @@ Finished results are cached by (design, settings) in a small LRU: repeating a re
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import collections
 import dataclasses
@@ -47,6 +48,7 @@ import numpy as np
 from fastapi import APIRouter, FastAPI, Path, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, RedirectResponse, Response
+from starlette.concurrency import run_in_threadpool
 from pydantic import BaseModel, ConfigDict, Field
 
 from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
@@ -678,9 +680,15 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                 links[f"shell_{fmt}"] = f"{API_PREFIX}/workspace/{job.id}/shell.{fmt}"
         return links
 
-    def job_response(job: Job, wait: float, cached: bool) -> JSONResponse:
+    async def job_response(job: Job, wait: float, cached: bool) -> JSONResponse:
+        # Waiting happens on the event loop (no thread is held), so many waiting callers cannot
+        # exhaust the thread pool that runs the synchronous endpoints.
         if wait > 0:
-            job.wait(wait)
+            deadline = time.monotonic() + wait
+            step = 0.002
+            while not job.is_final and time.monotonic() < deadline:
+                await asyncio.sleep(min(step, max(0.0, deadline - time.monotonic())))
+                step = min(step * 1.5, 0.05)
         body: dict[str, Any] = {"job_id": job.id, "status": job.status, "cached": cached,
                                 "job": job.to_dict(), "links": job_links(job)}
         if job.status == "done" and isinstance(job.result, ApiResult):
@@ -718,13 +726,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     # ----- small synchronous endpoints ------------------------------------------------------
     @router.get("/health", summary="Liveness, job counts and limits")
-    def health() -> dict[str, Any]:
+    async def health() -> dict[str, Any]:
         """Always cheap; 200 while the server can answer."""
         return {"status": "ok", "api_version": "v1", "version": API_VERSION, "time": time.time(),
                 "explorer_url": explorer_url, "jobs": jobs.stats(), "limits": limits.to_dict()}
 
     @router.get("/design/defaults", summary="Design fields, defaults and ranges")
-    def design_defaults() -> dict[str, Any]:
+    async def design_defaults() -> dict[str, Any]:
         """Every design parameter with its default (the paper's Fig. 3 design), the range the
         model accepts and the slider range of paper Table I."""
         fields = {name: {"default": s.default, "description": s.description, "unit": s.unit or None,
@@ -756,8 +764,12 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                  responses={200: {"description": "finished within `wait`: the result is included"},
                             202: {"description": "job accepted"}, 413: {"description": "over max_voxels"},
                             422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
-    def workspace(req: WorkspaceRequest, request: Request, wait: float = wait_q) -> JSONResponse:
+    async def workspace(req: WorkspaceRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Constant-orientation position workspace; the result has the workspace measures."""
+        job, cached = await run_in_threadpool(_start_workspace, req, request)
+        return await job_response(job, wait, cached)
+
+    def _start_workspace(req: WorkspaceRequest, request: Request) -> tuple[Job, bool]:
         from kinematics.workspace import compute_workspace
 
         design, settings = req.design.build(), req.settings.build()
@@ -774,8 +786,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             res = compute_workspace(design, settings, progress, cancel)
             return ApiResult(raw=res, payload=_workspace_payload(res))
 
-        job = submit(request, "workspace", key, compute)
-        return job_response(job, wait, cached)
+        return submit(request, "workspace", key, compute), cached
 
     @router.get("/workspace/{job_id}", summary="Measures of a finished workspace job")
     def workspace_result(job_id: str, request: Request) -> dict[str, Any]:
@@ -818,9 +829,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                  responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"},
                             413: {"description": "over max_orientation_samples"},
                             422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
-    def orientation(req: OrientationRequest, request: Request, wait: float = wait_q) -> JSONResponse:
+    async def orientation(req: OrientationRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Orientation capability along the z, y' and x lines; the result has TI_1, TI_2, the Δ's
         and the nine regions."""
+        job, cached = await run_in_threadpool(_start_orientation, req, request)
+        return await job_response(job, wait, cached)
+
+    def _start_orientation(req: OrientationRequest, request: Request) -> tuple[Job, bool]:
         from kinematics.orientation import orientation_workspace
 
         design, settings = req.design.build(), req.settings.build()
@@ -837,17 +852,20 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             res = orientation_workspace(design, settings, progress, cancel)
             return ApiResult(raw=None, payload=_jsonable(res.to_dict(include_grids=False)))
 
-        job = submit(request, "orientation", key, compute)
-        return job_response(job, wait, cached)
+        return submit(request, "orientation", key, compute), cached
 
     # ----- sweeps ---------------------------------------------------------------------------
     @router.post("/sweep", status_code=202, summary="Start a 1-D or 2-D parameter study job",
                  responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"},
                             413: {"description": "over max_sweep_points / max_sweep_voxels"},
                             422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
-    def sweep(req: SweepRequest, request: Request, wait: float = wait_q) -> JSONResponse:
+    async def sweep(req: SweepRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Each point is ``kinematics.sweep.evaluate_design`` of the design with the swept
         parameter(s) replaced; 2-D when ``y`` is given."""
+        job, cached = await run_in_threadpool(_start_sweep, req, request)
+        return await job_response(job, wait, cached)
+
+    def _start_sweep(req: SweepRequest, request: Request) -> tuple[Job, bool]:
         from kinematics import sweep as sw
 
         design, settings = req.design.build(), req.settings.build()
@@ -906,17 +924,16 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                            "param_y": req.y.param, "values_y": vals[1], **dict(out)}  # type: ignore[union-attr]
             return ApiResult(raw=None, payload=_jsonable(payload))
 
-        job = submit(request, "sweep", key, compute)
-        return job_response(job, wait, cached)
+        return submit(request, "sweep", key, compute), cached
 
     # ----- generic jobs ---------------------------------------------------------------------
     @router.get("/jobs", summary="The caller's unfinished jobs")
-    def my_jobs(request: Request) -> dict[str, Any]:
+    async def my_jobs(request: Request) -> dict[str, Any]:
         """Queued and running jobs of this client (oldest first)."""
         return {"jobs": [j.to_dict() for j in jobs.active(client_of(request))]}
 
     @router.get("/jobs/{job_id}", summary="Status and progress of a job")
-    def job_status(job_id: str, request: Request) -> dict[str, Any]:
+    async def job_status(job_id: str, request: Request) -> dict[str, Any]:
         """``status`` is queued, running, done, failed or cancelled; ``progress`` in [0, 1]."""
         job = api_job(job_id, request)
         return _jsonable({**job.to_dict(), "links": job_links(job)})

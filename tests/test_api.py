@@ -275,3 +275,26 @@ def test_body_too_large_413(http):
     r = http.post(f"{V1}/sweep", json=big)
     assert r.status_code == 413 and "max_body_bytes" in r.json()["detail"]
     assert http.get(f"{V1}/health").status_code == 200
+
+
+@pytest.mark.slow
+def test_serve_starts_explorer_and_api_and_stops():
+    """serve(block=False): both servers answer on loopback, short links point at the explorer's real
+    port, stop() closes both ports."""
+    from app.serve import serve
+
+    running = serve("127.0.0.1", 0, 0, block=False, quiet=True)
+    try:
+        assert running.explorer_url and running.api_url.startswith("http://127.0.0.1:")
+        assert httpx.get(f"{running.api_url}{V1}/health", timeout=10).status_code == 200
+        page = httpx.get(running.explorer_url, timeout=10)
+        assert page.status_code == 200 and "<html" in page.text.lower()
+        r = httpx.get(f"{running.api_url}/s", params={"a": 60}, follow_redirects=False, timeout=10)
+        assert r.status_code == 307 and r.headers["location"] == running.explorer_url.rstrip("/") + "/?a=60"
+        # explorer and API share one JobManager
+        assert running.explorer.jobs is running.jobs
+    finally:
+        running.stop()
+        running.stop()  # idempotent
+    with pytest.raises(httpx.HTTPError):
+        httpx.get(f"{running.api_url}{V1}/health", timeout=2)

@@ -278,3 +278,17 @@ def test_real_workspace_job_cancel_and_progress(jm):
     j.cancel()
     assert j.wait(30)
     assert j.status == "cancelled", j.to_dict()
+
+
+def test_job_overhead_printed(jm):
+    """Submit-to-done latency of trivial jobs (printed, not asserted)."""
+    t0 = time.perf_counter()
+    lat = []
+    for i in range(200):
+        t = time.perf_counter()
+        j = jm.submit(lambda p, c, i=i: i, kind="trivial")
+        assert j.wait(5) and j.result == i
+        lat.append(time.perf_counter() - t)
+    lat.sort()
+    print(f"trivial job submit->done: median {1e6 * lat[100]:.0f} us, p95 {1e6 * lat[190]:.0f} us, "
+          f"{200 / (time.perf_counter() - t0):.0f} jobs/s sequential")
