@@ -96,9 +96,11 @@ def _open_client(scheduler: Optional[str], n_workers: Optional[int], connect_tim
         try:
             client = Client(scheduler, timeout=connect_timeout)
         except (OSError, TimeoutError) as e:
-            raise ConnectionError(f"could not reach the Dask scheduler at {scheduler!r} within "
-                                  f"{connect_timeout:g} s ({_one_line(e)}); start one with "
-                                  f"`dask scheduler` and `dask worker {scheduler}`") from None
+            # a ParameterError, so command-line and API callers report it like any other bad input
+            raise ParameterError("scheduler", scheduler,
+                                 f"the address of a reachable Dask scheduler, e.g. tcp://host:8786 (could not "
+                                 f"connect within {connect_timeout:g} s: {_one_line(e)}; start one with "
+                                 f"`dask scheduler` and `dask worker ADDRESS`)") from None
         return client, None
     n = n_workers or max(1, os.cpu_count() or 1)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -135,14 +137,14 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
         connect_timeout: seconds to reach ``scheduler``.
 
     Returns:
-        One dict per point in grid order: ``{"params": {name: value}, "index": [i, ...],
-        "ok": True, **evaluate(...)}`` or, for a point that failed, ``{"params", "index",
+        One dict per point in grid order: ``{**evaluate(...), "params": {name: value},
+        "index": [i, ...], "ok": True}`` or, for a point that failed, ``{"params", "index",
         "ok": False, "error": "one line", "design": {...}}``.
 
     Raises:
         ParameterError: bad ``params`` (checked before anything starts), bad ``n_workers``, or
             ``n_workers`` together with ``scheduler``.
-        ConnectionError: the scheduler cannot be reached.
+            A ``scheduler`` that cannot be reached is also a ParameterError naming ``scheduler``.
         Cancelled: when ``cancel`` is set.
     """
     if scheduler is not None and n_workers is not None:
@@ -195,7 +197,7 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
                         rows[i] = {**base, "ok": False, "error": _one_line(e), "design": designs[i].to_dict()}
                         failed += 1
                     else:
-                        rows[i] = {**base, "ok": True, **res}
+                        rows[i] = {**res, **base, "ok": True}
                 else:
                     exc = None
                     try:

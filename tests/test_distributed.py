@@ -137,5 +137,5 @@ def test_cancel(cluster):
 
 
 def test_unreachable_scheduler_is_a_clear_error():
-    with pytest.raises(ConnectionError, match="could not reach the Dask scheduler"):
+    with pytest.raises(ParameterError, match="scheduler = 'tcp://127.0.0.1:9' is invalid.*reachable Dask scheduler"):
         sweep_grid(Design(), {"a": [50.0]}, COARSE, scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
