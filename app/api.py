@@ -432,8 +432,9 @@ def _jsonable(x: Any) -> Any:
 class _LRU:
     """A small thread-safe LRU mapping."""
 
-    def __init__(self, size: int) -> None:
+    def __init__(self, size: int, on_evict: Optional[Callable[[Any], None]] = None) -> None:
         self.size = max(1, int(size))
+        self.on_evict = on_evict
         self._d: "collections.OrderedDict[Hashable, Any]" = collections.OrderedDict()
         self._lock = threading.Lock()
         self.hits = 0
@@ -452,8 +453,13 @@ class _LRU:
         with self._lock:
             self._d[key] = value
             self._d.move_to_end(key)
+            evicted = []
             while len(self._d) > self.size:
-                self._d.popitem(last=False)
+                evicted.append(self._d.popitem(last=False)[1])
+        if self.on_evict is not None:
+            for v in evicted:
+                if v is not value:
+                    self.on_evict(v)
 
     def __len__(self) -> int:
         return len(self._d)
@@ -596,8 +602,12 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     app.state.jobs = jobs
     app.state.limits = limits
     app.state.explorer_url = explorer_url
-    caches = {k: _LRU(limits.cache_entries) for k in ("workspace", "orientation", "sweep")}
+    # The workspace cache owns the voxel grids: an evicted result drops its grid (its measures stay),
+    # so memory is bounded by cache_entries grids however many jobs the history remembers.
+    caches = {"workspace": _LRU(limits.cache_entries, on_evict=_drop_raw),
+              "orientation": _LRU(limits.cache_entries), "sweep": _LRU(limits.cache_entries)}
     shells = _LRU(8)
+    shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
     app.state.caches = caches
     sweep_cache = None
     try:
@@ -814,10 +824,16 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             from kinematics.shell import export_shell
             from kinematics.shell import workspace_shell as make_shell
 
-            if res.raw is None or not getattr(res.raw, "occupancy", np.zeros(1)).any():
+            raw = res.raw
+            if raw is None:
+                raise ApiError(409, f"the voxel grid of job {job_id} was evicted from the result cache "
+                                    f"(limit cache_entries = {limits.cache_entries}); submit the workspace "
+                                    f"request again to export its shell")
+            if not raw.occupancy.any():
                 raise ApiError(409, "the workspace is empty: there is no shell to export")
-            mesh = make_shell(res.raw, max_faces=max_faces)
-            data = export_shell(mesh, fmt)
+            with shell_builds:
+                mesh = make_shell(raw, max_faces=max_faces)
+                data = export_shell(mesh, fmt)
             shells.put(skey, data)
         media = {"stl": "model/stl", "ply": "application/octet-stream", "obj": "model/obj",
                  "glb": "model/gltf-binary"}[fmt]
@@ -1028,6 +1044,11 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                 "health": f"{API_PREFIX}/health", "explorer_url": explorer_url}
 
     return app
+
+
+def _drop_raw(result: Any) -> None:
+    if isinstance(result, ApiResult):
+        result.raw = None
 
 
 def _error_field(message: str) -> str:

@@ -298,3 +298,22 @@ def test_serve_starts_explorer_and_api_and_stops():
         running.stop()  # idempotent
     with pytest.raises(httpx.HTTPError):
         httpx.get(f"{running.api_url}{V1}/health", timeout=2)
+
+
+def test_result_cache_bounds_memory():
+    """With cache_entries=1 the older workspace loses its voxel grid (shell: 409 with the reason) but
+    keeps its measures."""
+    jobs = JobManager(max_workers=1)
+    srv = start_api(create_api(jobs, limits=ApiLimits(cache_entries=1)), "127.0.0.1", 0)
+    try:
+        with httpx.Client(base_url=srv.url, timeout=60) as c:
+            a = c.post(f"{V1}/workspace", params={"wait": 30}, json={"settings": {"voxel": 13}}).json()
+            b = c.post(f"{V1}/workspace", params={"wait": 30}, json={"settings": {"voxel": 14}}).json()
+            assert a["status"] == b["status"] == "done"
+            assert c.get(f"{V1}/workspace/{b['job_id']}/shell.stl").status_code == 200
+            old = c.get(f"{V1}/workspace/{a['job_id']}/shell.stl")
+            assert old.status_code == 409 and "evicted" in old.json()["detail"]
+            assert c.get(f"{V1}/workspace/{a['job_id']}").json()["volume"] > 0
+    finally:
+        jobs.shutdown()
+        srv.stop()

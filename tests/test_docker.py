@@ -15,10 +15,12 @@ import signal
 import subprocess
 import sys
 import time
-import tomllib
+
 
 import httpx
 import pytest
+
+tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DOCKERFILE = ROOT / "Dockerfile"
