@@ -1,0 +1,388 @@
+r"""The boundary surface ("shell") of a voxel workspace as a triangle mesh, and its export.
+
+Construction (:func:`workspace_shell`)
+--------------------------------------
+1. Field. ``f = 1`` on reachable voxels, ``0`` elsewhere, padded with ``p`` empty voxels on every
+   side (``p = 1``, or ``ceil(3 sigma) + 1`` when smoothing) so the surface is closed even where
+   the workspace touches the computation box: there, and on the floor, the shell is capped by a
+   flat face lying on the box face.
+2. Optional smoothing. ``f <- G_sigma * f`` (Gaussian, ``sigma`` in voxels, ``smooth_sigma``).
+3. Marching cubes (``skimage.measure.marching_cubes``, Lewiner) of ``f`` at level ``t``. Vertex
+   ``v`` in padded index units maps to world ``origin + h (v - p)``, so a voxel centre maps to
+   its world centre. Faces are wound so the signed volume is positive (normals point outward).
+
+   * Binary field (``smooth_sigma = 0``, default): ``t = 1/2 + 1e-6``. Surface vertices are
+     (to 1e-6 h) the midpoints of the edges between a reachable and an unreachable centre, so
+     axis-aligned faces lie on the voxel faces; steps are chamfered (convex corners lose volume,
+     concave corners gain it, nearly cancelling). The ``1e-6`` matters: at exactly ``1/2`` the
+     face saddle of two diagonal voxels ties with the level, and Lewiner's decider then produced
+     non-manifold, non-watertight meshes on the paper's thin, knife-edged workspaces (``a = 10``,
+     ``d_s = 10``, ``l_s = 20``) and on random fields. Nudged up, the ties resolve as "apart", the
+     mesh is a closed 2-manifold on every case tried, and its topology is that of the 6-connected
+     voxel set: ``V - E + F = 2 chi_6(W)`` exactly (the default ``connectivity=1`` of
+     :mod:`kinematics.measures`), checked on those workspaces and on random fields.
+
+     Measured ``|V_mesh - V_voxel| / V_voxel`` on the default design: 1.7e-3 at h = 6 and 1.9e-4
+     at h = 2; 4.5e-3 for a ball of radius 10 voxels; 0.8-1.5 % for the thin caps of ``a = 10``,
+     ``d_s = 10``, ``l_s = 20`` at h = 4 (large surface per volume). Stated tolerance for the
+     default design: **0.5 % at h = 6, 0.1 % at h = 2** (the tests use these).
+   * Smoothed field (``smooth_sigma > 0``): Gaussian smoothing moves the ``1/2`` level inwards by
+     curvature (mean-curvature flow, ``~ sigma^2 kappa``), losing volume (default design:
+     0.35 % at sigma 0.5, 1.4 % at sigma 1, h = 6). With ``preserve_volume=True`` (default) the
+     level ``t`` is chosen so that ``V_mesh(t) = V_voxel``: a Newton step with
+     ``dV/dt = -sum_v A_v / |grad f|(v)`` (``A_v`` one third of the area of the faces at vertex
+     ``v``), then secant steps, at most four marching-cubes passes, stopping at a relative error
+     of 1e-4 (reached in 2-4 passes for sigma 0.5-1.5; t ~ 0.44-0.49). Cost: 2-4 times one
+     marching-cubes pass (about 1.2 s at h = 2 against 0.15-0.45 s binary).
+4. Optional reduction to ``max_faces``:
+
+   a. Components: if there are more than ``max_faces // 12`` the smallest are dropped (each
+      kept one keeps about a dozen faces or more).
+   b. Quadric edge collapse (``fast_simplification``), repeated with rising aggressiveness when a
+      pass stops short of the budget; components collapsed to zero volume are removed, and the
+      smallest ones dropped if the budget is still exceeded.
+   c. The quadric collapse has no manifold guard: on thin sheets it makes edges shared by four
+      faces. If the result is not closed (watertight, consistently wound, positive volume), the
+      field is re-meshed coarser instead -- the mean over blocks of ``k^3`` voxels, ``k = 2, 3,
+      ...`` up to 16, meshed at its volume-preserving level -- and quadric-reduced to the budget,
+      taking the first ``k`` whose mesh is closed (if none is, the quadric result is returned and
+      ``reduction`` says "not closed"). ``metadata["paraspace"]["reduction"]`` says which
+      path was taken.
+   d. Vertices that edge collapses brought to one point (two sides of a wall thinner than a
+      voxel) are moved ``1e-3 h`` apart along their normals, so that STL (which stores no shared
+      vertices and is re-indexed by position when read) reads back watertight.
+
+   Measured: the default design at h = 2 (204 436 faces) stays closed by quadric collapse alone
+   down to 100 faces; volume change 4e-4 at 20 000 faces, 3.3e-3 at 1000, 4 % at 100. The
+   ``a = 10`` and ``d_s = 10`` caps at 1000-5000 faces and random fields take the coarse path.
+   Every case tried (default, the eight paper variants at h = 4, random fields; budgets 100 to
+   50 000) ends closed and reads back watertight from all four formats.
+5. Vertex colours by z (``color_by_z``): viridis (perceptually uniform, from a built-in 17-entry
+   table interpolated linearly) over the mesh's z range, or over ``color_range`` when given (to
+   compare several shells on one scale); stored as trimesh vertex colours (RGBA uint8) so PLY,
+   OBJ and GLB (``COLOR_0``) keep them.
+
+The mesh's ``metadata["paraspace"]`` records ``h``, ``level``, ``smooth_sigma``, ``faces_marching``
+(before reduction), ``reduction``, ``dropped_components``, ``voxel_volume`` and ``volume_error``.
+
+An empty workspace gives an empty ``Trimesh``; :func:`export_shell` refuses it with a
+``ValueError``.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from typing import Optional
+
+import numpy as np
+import trimesh
+from scipy import ndimage as ndi
+from skimage.measure import marching_cubes
+
+from .workspace import WorkspaceResult
+
+SHELL_FORMATS: tuple[str, ...] = ("stl", "ply", "obj", "glb")
+
+# matplotlib's viridis sampled at 17 equally spaced points (RGB in [0, 1])
+_VIRIDIS = np.array([
+    (0.2670, 0.0049, 0.3294), (0.2823, 0.0950, 0.4173), (0.2788, 0.1755, 0.4834),
+    (0.2590, 0.2515, 0.5247), (0.2297, 0.3224, 0.5457), (0.1994, 0.3876, 0.5546),
+    (0.1727, 0.4488, 0.5579), (0.1490, 0.5081, 0.5573), (0.1276, 0.5669, 0.5506),
+    (0.1206, 0.6258, 0.5335), (0.1579, 0.6838, 0.5017), (0.2461, 0.7389, 0.4520),
+    (0.3692, 0.7889, 0.3829), (0.5160, 0.8312, 0.2943), (0.6785, 0.8637, 0.1895),
+    (0.8456, 0.8873, 0.0997), (0.9932, 0.9062, 0.1439),
+])
+
+_VOLUME_RTOL = 1e-4
+_MAX_MC_PASSES = 4
+# 1/2 nudged up: breaks the face-saddle ties of a binary field towards the 6-connected topology
+HALF_LEVEL = 0.5 + 1e-6
+_MIN_FACES_PER_PART = 12
+_MAX_BLOCK = 16  # coarsest re-mesh tried: blocks of 16^3 voxels
+
+
+def viridis(u: np.ndarray) -> np.ndarray:
+    """RGBA uint8 colours of values ``u`` in [0, 1] (clipped) on the viridis colormap."""
+    u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+    x = np.linspace(0.0, 1.0, len(_VIRIDIS))
+    rgb = np.stack([np.interp(u, x, _VIRIDIS[:, c]) for c in range(3)], axis=-1)
+    out = np.empty(u.shape + (4,), np.uint8)
+    out[..., :3] = np.round(255.0 * rgb).astype(np.uint8)
+    out[..., 3] = 255
+    return out
+
+
+def _mc(field: np.ndarray, level: float, h: float) -> trimesh.Trimesh:
+    verts, faces, _, _ = marching_cubes(field, level=level, spacing=(h, h, h))
+    mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
+    if _signed_volume(mesh) < 0:
+        mesh.faces = mesh.faces[:, ::-1]
+    return mesh
+
+
+def _volume_slope(mesh: trimesh.Trimesh, field: np.ndarray, h: float) -> float:
+    """``dV/dt`` of the iso-surface ``f = t``: ``-sum_v A_v / |grad f|(v)`` (world units)."""
+    grads = np.gradient(field.astype(np.float64))
+    idx = (mesh.vertices / h).T
+    gmag = np.sqrt(sum(ndi.map_coordinates(g, idx, order=1, mode="nearest") ** 2 for g in grads)) / h
+    area = np.zeros(len(mesh.vertices))
+    np.add.at(area, mesh.faces.ravel(), np.repeat(mesh.area_faces / 3.0, 3))
+    return -float(np.sum(area / np.maximum(gmag, 1e-3 / h)))
+
+
+def _volume_preserving(field: np.ndarray, h: float, target: float) -> tuple[trimesh.Trimesh, float]:
+    """Marching cubes at the level whose mesh volume matches ``target`` (Newton, then secant)."""
+    t0 = HALF_LEVEL
+    m0 = _mc(field, t0, h)
+    v0 = m0.volume
+    best = (abs(v0 - target), m0, t0)
+    if best[0] <= _VOLUME_RTOL * target:
+        return m0, t0
+    slope = _volume_slope(m0, field, h)
+    t1 = t0 + (target - v0) / slope if slope < 0 else t0
+    for _ in range(_MAX_MC_PASSES - 1):
+        t1 = float(min(0.95, max(0.05, t1)))
+        if t1 == t0:
+            break
+        m1 = _mc(field, t1, h)
+        v1 = m1.volume
+        if abs(v1 - target) < best[0]:
+            best = (abs(v1 - target), m1, t1)
+        if best[0] <= _VOLUME_RTOL * target or v1 == v0:
+            break
+        t0, v0, t1 = t1, v1, t1 + (target - v1) * (t1 - t0) / (v1 - v0)
+    return best[1], best[2]
+
+
+def _sub(vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
+    out = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    out.remove_unreferenced_vertices()
+    return out
+
+
+def _coincident(vertices: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices sharing a cell of edge ``cell`` with another one, as (indices, group ids) sorted by
+    group. Two staggered grids are tried (near-equal points can straddle a cell boundary); the one
+    catching more is returned, the caller repeats until none is left."""
+    best = (np.empty(0, np.int64), np.empty(0, np.int64))
+    for shift in (0.0, 0.5):
+        key = np.floor(vertices / cell + shift).astype(np.int64)
+        _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        inv = inv.ravel()
+        dup = np.nonzero(cnt[inv] > 1)[0]
+        order = dup[np.argsort(inv[dup], kind="stable")]
+        if len(order) > len(best[0]):
+            best = (order, inv[order])
+    return best
+
+
+def _separate_coincident(mesh: trimesh.Trimesh, h: float) -> int:
+    """Move apart distinct vertices that share a position (to within ``1e-5 h``).
+
+    Edge collapses can bring the two sides of a wall thinner than a voxel to one point; the mesh
+    stays a 2-manifold by connectivity, but a format without shared vertices (STL) is re-indexed
+    by position on reading and would turn that point into a non-manifold vertex. Each such vertex
+    moves ``1e-3 h (1 + rank in its group)`` along its normal (opposite sheets have opposite
+    normals). Returns the number of vertices moved.
+    """
+    moved = 0
+    for _ in range(3):
+        order, groups = _coincident(np.asarray(mesh.vertices), 1e-5 * h)
+        if len(order) == 0:
+            break
+        start = np.r_[0, np.nonzero(np.diff(groups))[0] + 1]
+        rank = np.arange(len(order)) - np.repeat(start, np.diff(np.r_[start, len(order)]))
+        verts = np.array(mesh.vertices)
+        verts[order] += (1e-3 * h * (1 + rank))[:, None] * mesh.vertex_normals[order]
+        mesh.vertices = verts
+        moved += len(order)
+    return moved
+
+
+def _signed_volume(mesh: trimesh.Trimesh) -> float:
+    """Signed enclosed volume ``sum det(v0, v1, v2) / 6`` (no mass-property warnings when 0)."""
+    tri = np.asarray(mesh.vertices)[np.asarray(mesh.faces)]
+    return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0) if len(tri) else 0.0
+
+
+def _closed(mesh: trimesh.Trimesh) -> bool:
+    return bool(len(mesh.faces) and mesh.is_watertight and mesh.is_winding_consistent and _signed_volume(mesh) > 0)
+
+
+def _block_mean(field: np.ndarray, k: int) -> np.ndarray:
+    """Mean of ``field`` over k^3 blocks, framed by one empty block on every side.
+
+    Coarse index ``b`` covers fine indices ``(b - 1) k .. b k - 1`` (centre ``(b - 1) k + (k - 1)/2``).
+    """
+    nb = [int(math.ceil(n / k)) + 2 for n in field.shape]
+    big = np.zeros([b * k for b in nb], np.float32)
+    big[k:k + field.shape[0], k:k + field.shape[1], k:k + field.shape[2]] = field
+    return big.reshape(nb[0], k, nb[1], k, nb[2], k).mean(axis=(1, 3, 5))
+
+
+def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.Trimesh, int]:
+    """Quadric decimation to at most ``max_faces``; returns the mesh and the components dropped.
+
+    Components beyond ``max_faces // 12`` (the smallest ones) are dropped first so that each
+    kept one keeps at least a dozen faces; components that collapse to zero volume (a flat,
+    doubly covered sliver) are removed after decimation.
+    """
+    import fast_simplification
+
+    verts, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    labels = trimesh.graph.connected_component_labels(mesh.face_adjacency, node_count=len(faces))
+    counts = np.bincount(labels)
+    dropped = 0
+    max_parts = max(1, max_faces // _MIN_FACES_PER_PART)
+    if len(counts) > max_parts:
+        keep = np.argsort(counts, kind="stable")[::-1][:max_parts]
+        dropped += len(counts) - max_parts
+        sub = _sub(verts, faces[np.isin(labels, keep)])
+        verts, faces = np.asarray(sub.vertices), np.asarray(sub.faces)
+    for agg in (7, 8, 9, 10):
+        if len(faces) <= max_faces:
+            break
+        verts, faces = fast_simplification.simplify(verts, faces, target_count=max_faces, agg=agg)
+    out = _sub(verts, faces)
+    parts = out.split(only_watertight=False)
+    good = sorted((p for p in parts if abs(_signed_volume(p)) > 1e-6 * h ** 3), key=lambda p: len(p.faces), reverse=True)
+    kept, total = [], 0
+    for part in good:
+        if total + len(part.faces) <= max_faces:
+            kept.append(part)
+            total += len(part.faces)
+    dropped += len(parts) - len(kept)
+    if len(kept) != len(parts):
+        out = trimesh.util.concatenate(kept) if kept else trimesh.Trimesh()
+    if len(out.vertices):
+        _separate_coincident(out, h)
+    return out, dropped
+
+
+def _reduce(mesh: trimesh.Trimesh, field: np.ndarray, pad: int, origin, h: float, max_faces: int,
+            target: float, meta: dict) -> trimesh.Trimesh:
+    """Bring ``mesh`` to at most ``max_faces`` faces, closed when at all possible (module docstring,
+    step 4); records the method in ``meta``."""
+    out, meta["dropped_components"] = _decimate(mesh, max_faces, h)
+    meta["reduction"] = "quadric"
+    if _closed(out):
+        return out
+    fallback = out
+    for k in range(2, min(max(field.shape), _MAX_BLOCK) + 1):
+        coarse = _block_mean(field, k)
+        m, _level = _volume_preserving(coarse, k * h, target)
+        m.vertices = m.vertices + (np.asarray(origin, dtype=float) - h * (pad + 0.5 * (k + 1)))
+        dropped, decimated = 0, len(m.faces) > max_faces
+        if decimated:
+            m, dropped = _decimate(m, max_faces, k * h)
+        if _closed(m):
+            meta["reduction"] = f"coarse remesh (blocks of {k}^3 voxels)" + (" + quadric" if decimated else "")
+            meta["dropped_components"] = dropped
+            return m
+    meta["reduction"] = "quadric (not closed)"
+    return fallback
+
+
+def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None, smooth_sigma: float = 0.0,
+                    color_by_z: bool = True, preserve_volume: bool = True,
+                    color_range: Optional[tuple[float, float]] = None) -> trimesh.Trimesh:
+    """The closed, outward-oriented boundary mesh of the workspace (module docstring, steps 1-5).
+
+    Args:
+        result: a computed workspace.
+        max_faces: decimate to at most this many faces (``None``: no decimation); at least 4.
+        smooth_sigma: Gaussian smoothing of the occupancy field, in voxels (0: binary field).
+        color_by_z: viridis vertex colours by height.
+        preserve_volume: with ``smooth_sigma > 0``, choose the iso-level so that the mesh volume
+            equals the voxel volume (otherwise level 1/2).
+        color_range: ``(z_low, z_high)`` mapped to the ends of the colormap (default: the mesh's
+            z range).
+
+    Returns:
+        A ``trimesh.Trimesh`` in world units (empty when the workspace is empty).
+
+    Raises:
+        ValueError: ``max_faces < 4`` or ``smooth_sigma`` negative or not finite.
+    """
+    if max_faces is not None and (int(max_faces) != max_faces or max_faces < 4):
+        raise ValueError(f"max_faces = {max_faces!r} is invalid: valid range integers >= 4 (or None)")
+    if not (math.isfinite(smooth_sigma) and smooth_sigma >= 0):
+        raise ValueError(f"smooth_sigma = {smooth_sigma!r} is invalid: valid range [0, inf) voxels")
+    grid = result.grid
+    h = float(grid.h)
+    occ = np.asarray(result.occupancy, dtype=bool)
+    meta = {"h": h, "smooth_sigma": float(smooth_sigma), "level": None, "faces_marching": 0,
+            "voxel_volume": float(occ.sum()) * h ** 3, "volume_error": 0.0, "dropped_components": 0,
+            "reduction": "none"}
+    if not occ.any():
+        empty = trimesh.Trimesh()
+        empty.metadata["paraspace"] = meta
+        return empty
+
+    pad = 1 if smooth_sigma == 0 else int(math.ceil(3.0 * smooth_sigma)) + 1
+    field = np.pad(occ.astype(np.float32), pad)
+    target = meta["voxel_volume"]
+    if smooth_sigma > 0:
+        field = ndi.gaussian_filter(field, smooth_sigma, mode="constant", cval=0.0)
+        if preserve_volume:
+            mesh, level = _volume_preserving(field, h, target)
+        else:
+            mesh, level = _mc(field, HALF_LEVEL, h), HALF_LEVEL
+    else:
+        mesh, level = _mc(field, HALF_LEVEL, h), HALF_LEVEL
+    mesh.vertices = mesh.vertices + (np.asarray(grid.origin, dtype=float) - pad * h)
+    meta["level"] = float(level)
+    meta["faces_marching"] = int(len(mesh.faces))
+
+    if max_faces is not None and len(mesh.faces) > max_faces:
+        mesh = _reduce(mesh, field, pad, grid.origin, h, int(max_faces), target, meta)
+
+    if color_by_z and len(mesh.vertices):
+        z = mesh.vertices[:, 2]
+        lo, hi = (float(z.min()), float(z.max())) if color_range is None else map(float, color_range)
+        u = (z - lo) / (hi - lo) if hi > lo else np.zeros_like(z)
+        mesh.visual.vertex_colors = viridis(u)
+    meta["volume_error"] = float(abs(mesh.volume - target) / target)
+    mesh.metadata["paraspace"] = meta
+    return mesh
+
+
+def export_shell(mesh: trimesh.Trimesh, fmt: str) -> bytes:
+    """The mesh as a file in format ``fmt`` (``stl`` binary, ``ply`` binary with vertex colours,
+    ``obj`` text with vertex colours, ``glb`` binary glTF with ``COLOR_0``).
+
+    Raises:
+        ValueError: unknown format (the message names the valid ones) or an empty mesh.
+    """
+    key = str(fmt).lower().lstrip(".")
+    if key not in SHELL_FORMATS:
+        raise ValueError(f"fmt = {fmt!r} is invalid: valid formats {', '.join(SHELL_FORMATS)}")
+    if len(mesh.faces) == 0:
+        raise ValueError("the shell is empty (the workspace has no reachable voxel): nothing to export")
+    if key == "obj":
+        data = mesh.export(file_type="obj", include_color=True, include_normals=False)
+    elif key == "glb":
+        data = trimesh.Scene(mesh).export(file_type="glb")
+    else:
+        data = mesh.export(file_type=key)
+    return data.encode("utf-8") if isinstance(data, str) else bytes(data)
+
+
+def load_shell(data: bytes, fmt: str) -> trimesh.Trimesh:
+    """Read back bytes written by :func:`export_shell` as one mesh (for checks and tests)."""
+    key = str(fmt).lower().lstrip(".")
+    if key not in SHELL_FORMATS:
+        raise ValueError(f"fmt = {fmt!r} is invalid: valid formats {', '.join(SHELL_FORMATS)}")
+    # STL stores a triangle soup: merge coincident vertices to recover the connectivity
+    return trimesh.load(io.BytesIO(data), file_type=key, force="mesh", process=key == "stl")
+
+
+def shell_volume_error(result: WorkspaceResult, mesh: trimesh.Trimesh) -> float:
+    """``|V_mesh - V_voxel| / V_voxel`` (0 when both are empty, ``inf`` for a mesh of an empty
+    workspace that has volume)."""
+    v_vox = float(result.volume)
+    v_mesh = float(mesh.volume) if len(mesh.faces) else 0.0
+    if v_vox == 0.0:
+        return 0.0 if v_mesh == 0.0 else math.inf
+    return abs(v_mesh - v_vox) / v_vox
