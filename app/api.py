@@ -451,9 +451,12 @@ class _LRU:
 
     def put(self, key: Hashable, value: Any) -> None:
         with self._lock:
+            evicted = []
+            old = self._d.get(key)
+            if old is not None and old is not value:
+                evicted.append(old)
             self._d[key] = value
             self._d.move_to_end(key)
-            evicted = []
             while len(self._d) > self.size:
                 evicted.append(self._d.popitem(last=False)[1])
         if self.on_evict is not None:
@@ -608,6 +611,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
               "orientation": _LRU(limits.cache_entries), "sweep": _LRU(limits.cache_entries)}
     shells = _LRU(8)
     shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
+    submit_lock = threading.Lock()
     app.state.caches = caches
     sweep_cache = None
     try:
@@ -657,6 +661,15 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         cached = cache.get(key)
         fn: Callable[[Any, Any], Any] = (lambda p, c: cached) if cached is not None else compute
         ckey = ("cached", key) if cached is not None else key
+        def on_done(job: Job) -> None:
+            if job.status == "done" and cached is None and isinstance(job.result, ApiResult):
+                cache.put(key, job.result)
+
+        with submit_lock:  # check and submit atomically: the limits hold under concurrent requests
+            return _submit_locked(client, kind, key, ckey, fn, on_done)
+
+    def _submit_locked(client: str, kind: str, key: Hashable, ckey: Hashable, fn: Callable[[Any, Any], Any],
+                       on_done: Callable[[Job], None]) -> Job:
         live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
         same = [j for j in live if j.client == client and j.kind == kind and j.key == ckey]
         if not same:
@@ -668,11 +681,6 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             if len(live) >= limits.max_jobs_total:
                 raise ApiError(429, f"server busy: limit max_jobs_total = {limits.max_jobs_total} unfinished "
                                     f"jobs reached; retry later", {"Retry-After": "2"})
-
-        def on_done(job: Job) -> None:
-            if job.status == "done" and cached is None and isinstance(job.result, ApiResult):
-                cache.put(key, job.result)
-
         try:
             return jobs.submit(fn, kind=kind, client=client, key=ckey, on_done=on_done,
                                max_seconds=limits.max_job_seconds)

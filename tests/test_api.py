@@ -317,3 +317,24 @@ def test_result_cache_bounds_memory():
     finally:
         jobs.shutdown()
         srv.stop()
+
+
+def test_limits_hold_under_concurrent_submissions(server):
+    """10 simultaneous submissions of distinct slow jobs by one client: exactly 4 accepted."""
+    import concurrent.futures
+
+    def post(i: int) -> httpx.Response:
+        with httpx.Client(base_url=server.url, timeout=30) as c:
+            return c.post(f"{V1}/workspace", json={"settings": {"voxel": 2.2 + 0.01 * i, "eta_step": 0.02}})
+
+    with concurrent.futures.ThreadPoolExecutor(10) as ex:
+        responses = list(ex.map(post, range(10)))
+    codes = sorted(r.status_code for r in responses)
+    assert codes == [202] * 4 + [429] * 6, codes
+    with httpx.Client(base_url=server.url, timeout=30) as c:
+        for r in responses:
+            if r.status_code == 202:
+                c.delete(f"{V1}/jobs/{r.json()['job_id']}")
+        for r in responses:
+            if r.status_code == 202:
+                assert _poll(c, r.json()["job_id"])["status"] == "cancelled"
