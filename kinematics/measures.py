@@ -139,7 +139,7 @@ from typing import Any, Optional
 import numpy as np
 from numba import njit, prange
 from scipy import ndimage as ndi
-from scipy.spatial import ConvexHull
+from scipy.spatial import ConvexHull, QhullError
 from skimage.measure import euler_number
 
 from .workspace import WorkspaceResult
@@ -306,7 +306,10 @@ def hull_mask(occupancy: np.ndarray) -> np.ndarray:
     if len(pts) < 4 or np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 3:
         return occ.copy()
     # coplanar triangles of one facet share an equation: keep one (about halves the planes)
-    eq = ConvexHull(pts).equations
+    try:
+        eq = ConvexHull(pts).equations
+    except QhullError:  # pragma: no cover - lattice points of rank 3 always have a hull
+        return occ.copy()
     _, first = np.unique(np.round(eq, 9), axis=0, return_index=True)
     eq = np.ascontiguousarray(eq[np.sort(first)])
     # the hull's footprint lies within the occupied columns' bounding rectangle
