@@ -401,8 +401,9 @@ def chain_binding(chain_mask: np.ndarray, h: float, occupancy: Optional[np.ndarr
         if max(ff) - min(ff) <= 0.02:
             verdict = " The chains limit it about equally."
         else:
-            worst = max(chains, key=lambda c: (c["fails_fraction"], -c["chain"]))
-            verdict = f" Chain {worst['chain']} limits it the most."
+            top = [str(c["chain"]) for c in chains if c["fails_fraction"] >= max(ff) - 0.02]
+            verdict = (f" Chain {top[0]} limits it the most." if len(top) == 1
+                       else f" Chains {' and '.join(top)} limit it the most.")
         summary = (f"Lost region (some but not all chains feasible, volume {n_lost * v:.4g}): "
                    + "; ".join(parts) + "." + verdict)
     else:
