@@ -666,13 +666,14 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                 cache.put(key, job.result)
 
         with submit_lock:  # check and submit atomically: the limits hold under concurrent requests
-            return _submit_locked(client, kind, key, ckey, fn, on_done)
+            return _submit_locked(client, kind, ckey, fn, on_done, hit=cached is not None)
 
-    def _submit_locked(client: str, kind: str, key: Hashable, ckey: Hashable, fn: Callable[[Any, Any], Any],
-                       on_done: Callable[[Job], None]) -> Job:
+    def _submit_locked(client: str, kind: str, ckey: Hashable, fn: Callable[[Any, Any], Any],
+                       on_done: Callable[[Job], None], *, hit: bool) -> Job:
         live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
         same = [j for j in live if j.client == client and j.kind == kind and j.key == ckey]
-        if not same:
+        # a cache hit computes nothing: only the job manager's own limits apply to it
+        if not same and not hit:
             mine = sum(1 for j in live if j.client == client)
             if mine >= limits.max_jobs_per_client:
                 raise ApiError(429, f"too many unfinished jobs for this client: limit max_jobs_per_client = "
