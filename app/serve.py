@@ -23,6 +23,8 @@ from typing import Any, Optional
 
 import uvicorn
 
+from kinematics.design import ParameterError
+
 from .api import ApiLimits, create_api
 from .jobs import JobManager
 
@@ -173,6 +175,9 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
 
     Returns:
         The :class:`Running` servers (already stopped when ``block`` is true).
+
+    Raises:
+        ParameterError: ``api_port`` cannot be bound (in use); names ``api-port``.
     """
     jobs = JobManager(max_workers=max_workers, max_jobs_total=max(limits.max_jobs_total, 16),
                       max_jobs_per_client=max(limits.max_jobs_per_client, 4),
@@ -187,7 +192,10 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
         # For a wildcard bind the API substitutes the host name each caller used (short links).
         explorer_url = None if exp is None else f"http://{_bracket(host)}:{int(exp.port)}/"
         app = create_api(jobs, explorer_url=explorer_url, limits=limits)
-        api = start_api(app, host, api_port)
+        try:
+            api = start_api(app, host, api_port)
+        except RuntimeError as e:
+            raise ParameterError("api-port", api_port, f"a free TCP port on {host} ({e})") from None
     except BaseException:
         jobs.shutdown(wait=False)
         if exp is not None:

@@ -338,3 +338,18 @@ def test_limits_hold_under_concurrent_submissions(server):
         for r in responses:
             if r.status_code == 202:
                 assert _poll(c, r.json()["job_id"])["status"] == "cancelled"
+
+
+def test_serve_busy_api_port_is_a_clear_error():
+    import socket
+
+    from app.serve import serve
+    from kinematics.design import ParameterError
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        busy = s.getsockname()[1]
+        with pytest.raises(ParameterError) as e:
+            serve("127.0.0.1", 0, busy, block=False, explorer=False, quiet=True)
+        assert e.value.field == "api-port" and "free TCP port" in str(e.value)
