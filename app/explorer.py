@@ -62,6 +62,8 @@ PREVIEW_VOXEL = 6.0
 #: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
+#: Smallest interval between two progress updates of one bar, seconds.
+PROGRESS_INTERVAL = 0.25
 #: Debounce of the address-bar update, seconds.
 URL_DEBOUNCE = 0.25
 
@@ -170,6 +172,8 @@ class ClientSession:
         self._url_timer: Optional[threading.Timer] = None
         self.last_query: Optional[str] = None
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
+        self._last_update: dict[str, float] = {}
+        self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.design_error: Optional[str] = None
         self.ready = threading.Event()  # set when the GUI is built and wired
         self.panels: Panels
@@ -227,7 +231,7 @@ class ClientSession:
                 translation_limits=tuple((POSE_RANGES[k].lo, POSE_RANGES[k].hi) for k in ("x", "y", "z")))
         self._wire()
         self._show_url_messages()
-        self._update_pose_views(res)
+        self.update_mechanism()  # pose marker, gizmo, tables
         self.set_camera(s.view)
         self._sync_url_now()
         self.submit_workspace()
@@ -649,7 +653,22 @@ class ClientSession:
 
         return fn
 
+    def _throttled(self, what: str, interval: float) -> bool:
+        """True when a GUI update of kind ``what`` should be skipped (one per ``interval`` seconds).
+
+        Every GUI message makes the browser redraw; on software WebGL a redraw costs a few hundred
+        milliseconds, so progress updates are rate-limited.
+        """
+        now = time.perf_counter()
+        with self.lock:
+            if now - self._last_update.get(what, -1e9) < interval:
+                return True
+            self._last_update[what] = now
+            return False
+
     def _on_ws_progress(self, gen: int, job: Job) -> None:
+        if self._throttled("ws-progress", PROGRESS_INTERVAL):
+            return
         self._set_status(gen, job.message, 100.0 * job.progress, running=True)
 
     def _on_ws_done(self, gen: int, job: Job) -> None:
@@ -700,6 +719,7 @@ class ClientSession:
                                  "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
                                  "measures": None, "gen": gen, "cached": from_cache}
             self._show_payload(size)
+            self.payloads["preview" if preview else "full"] = size
         self.client.flush()
         self._event("preview-shown" if preview else "full-shown")
         self._render_numbers()
@@ -760,7 +780,8 @@ class ClientSession:
         try:
             job = self.explorer.jobs.submit(
                 fn, kind="orientation", client=self.job_client, supersede=True, on_done=done,
-                on_progress=lambda j: self._set_orientation_status(gen, f"computing... {100 * j.progress:.0f} %"))
+                on_progress=lambda j: None if self._throttled("or-progress", 4 * PROGRESS_INTERVAL) else
+                self._set_orientation_status(gen, f"computing... {100 * j.progress:.0f} %"))
         except (LimitExceeded, RuntimeError) as exc:
             self._set_orientation_status(gen, f"not started: {exc}")
             return
@@ -876,7 +897,8 @@ class ClientSession:
     def _start_study(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any,
                      done: Callable[[Job], None]) -> Optional[Job]:
         def on_progress(job: Job) -> None:
-            bar.value = 100.0 * job.progress
+            if not self._throttled(kind + "-progress", PROGRESS_INTERVAL):
+                bar.value = 100.0 * job.progress
         try:
             job = self.explorer.jobs.submit(fn, kind=kind, client=self.job_client, supersede=True,
                                             on_done=done, on_progress=on_progress)
@@ -1083,6 +1105,8 @@ class Explorer:
                                    brand_color=(40, 110, 180))
         server.scene.set_up_direction("+z")
         server.scene.configure_environment_map(None)
+        # shadows double the geometry passes; software WebGL (no GPU) pays for every pass
+        server.scene.configure_default_lights(True, cast_shadow=False)
         server.on_client_connect(self._on_connect)
         server.on_client_disconnect(self._on_disconnect)
         self.server = server

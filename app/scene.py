@@ -92,6 +92,9 @@ def _carriage_frames(design: Design, d: np.ndarray, eta: np.ndarray) -> tuple[np
 class MechanismScene:
     """The mechanism of one client's scene (see the module docstring).
 
+    Nodes are created once; a design change only assigns new geometry to them (no node is
+    removed and re-added), a pose change only moves them.
+
     Args:
         scene: the client's :class:`viser.SceneApi` (``client.scene``).
         design, pose: what to draw first.
@@ -103,81 +106,77 @@ class MechanismScene:
                  leg_status: list[list[str]]) -> None:
         self.scene = scene
         self.design = design
-        self._static: list[Any] = []
-        self._build_static(design)
-        self._build_moving(design, pose, d, eta, leg_status)
-
-    # ----- static parts (design) --------------------------------------------------------------
-    def _build_static(self, design: Design) -> None:
-        for node in self._static:
-            try:
-                node.remove()
-            except Exception:  # noqa: BLE001 - already gone
-                pass
-        sc = self.scene
-        t = np.linspace(0.0, 2.0 * np.pi, 121)
-        circle = np.stack([design.r * np.cos(t), design.r * np.sin(t), np.zeros_like(t)], axis=1)
-        rails = carriage_rails(design, samples=49)
-        arcs = np.concatenate([_polyline_segments(a) for a in rails["arcs"]])
-        thick = max(0.6, 0.012 * design.r)
-        self._static = [
-            sc.add_grid("/mechanism/grid", width=4.0 * design.r, height=4.0 * design.r,
-                        cell_size=design.r / 5.0, section_size=design.r, plane="xy",
-                        cell_color=(215, 215, 215), section_color=(170, 170, 170),
-                        fade_distance=40.0 * design.r),
-            sc.add_line_segments("/mechanism/base_circle", _polyline_segments(circle), RAIL_COLOR,
-                                 thickness=0.4 * thick),
-            sc.add_line_segments("/mechanism/arc_rails", arcs, ARC_COLOR, thickness=2.0 * thick),
-        ]
-        for i in range(3):
-            p = 1.12 * design.r * np.array([np.cos(GAMMA[i]), np.sin(GAMMA[i]), 0.0])
-            self._static.append(sc.add_label(f"/mechanism/chain_label_{i + 1}", f"chain {i + 1}", position=p,
-                                             font_size_mode="screen", font_screen_scale=0.8))
-        # platform polygon in the platform frame (fan from the centre through the six joints)
-        u = platform_points_local(design).reshape(6, 3)
-        order = np.argsort(np.arctan2(u[:, 1], u[:, 0]))
-        ring = u[order]
-        verts = np.vstack([np.zeros((1, 3)), ring])
-        faces = np.array([[0, 1 + k, 1 + (k + 1) % 6] for k in range(6)])
-        self._platform_geom = (verts, faces)
-        self.design = design
-
-    def _build_moving(self, design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray,
-                      leg_status: list[list[str]]) -> None:
-        sc = self.scene
-        B, D, legs = self._joint_points(design, pose, d, eta)
+        sc = scene
+        g = self._geometry(design)
+        self.grid = sc.add_grid("/mechanism/grid", width=g["grid"], height=g["grid"], cell_size=g["cell"],
+                                section_size=design.r, plane="xy", cell_color=(215, 215, 215),
+                                section_color=(170, 170, 170), fade_distance=40.0 * design.r, shadow_opacity=0.0)
+        self.base_circle = sc.add_line_segments("/mechanism/base_circle", g["circle"], RAIL_COLOR,
+                                                thickness=0.4 * g["thick"])
+        self.arc_rails = sc.add_line_segments("/mechanism/arc_rails", g["arcs"], ARC_COLOR, thickness=2.0 * g["thick"])
+        self.labels = [sc.add_label(f"/mechanism/chain_label_{i + 1}", f"chain {i + 1}", position=g["labels"][i],
+                                    font_size_mode="screen", font_screen_scale=0.8) for i in range(3)]
+        B, D = self._joint_points(design, pose, d, eta)
         wxyz, ctr, length = segment_transforms(D, B)
-        lr = max(0.8, 0.02 * design.a)
+        lr, jr = g["leg_radius"], g["joint_radius"]
         self.legs = sc.add_batched_meshes_simple(
             "/mechanism/legs", _UNIT_CYLINDER.vertices, _UNIT_CYLINDER.faces, wxyz, ctr,
             batched_scales=np.c_[np.full(6, lr), np.full(6, lr), length],
-            batched_colors=self._leg_colors(leg_status), lod="off")
-        jr = 1.8 * lr
+            batched_colors=self._leg_colors(leg_status), lod="off", cast_shadow=False, receive_shadow=False)
         self.joints = sc.add_batched_meshes_simple(
             "/mechanism/joints", _UNIT_SPHERE.vertices, _UNIT_SPHERE.faces,
             np.tile([1.0, 0.0, 0.0, 0.0], (12, 1)), np.vstack([D, B]),
             batched_scales=np.full(12, jr), batched_colors=np.array([(60, 60, 70)] * 6 + [(200, 80, 40)] * 6),
-            lod="off")
+            lod="off", cast_shadow=False, receive_shadow=False)
         centers, cw = _carriage_frames(design, d, eta)
         self.carriages = sc.add_batched_meshes_simple(
             "/mechanism/carriages", _UNIT_BOX.vertices, _UNIT_BOX.faces, cw, centers,
-            batched_scales=np.tile([0.12 * design.r, design.b + 4.0 * jr, 2.0 * jr], (3, 1)),
-            batched_colors=CARRIAGE_COLOR, lod="off")
+            batched_scales=g["carriage_scale"], batched_colors=CARRIAGE_COLOR, lod="off",
+            cast_shadow=False, receive_shadow=False)
         self.radials = sc.add_line_segments("/mechanism/radial_rails", self._radial_segments(design, eta),
-                                            RAIL_COLOR, thickness=max(0.8, 0.02 * design.r))
+                                            RAIL_COLOR, thickness=g["radial_thick"])
         self.platform = sc.add_frame("/platform", show_axes=True, axes_length=0.6 * design.a,
                                      axes_radius=0.03 * design.a, origin_radius=0.05 * design.a,
                                      position=pose.position, wxyz=rotation_wxyz(pose.rotation))
-        verts, faces = self._platform_geom
+        verts, faces = g["plate"]
         self.platform_mesh = sc.add_mesh_simple("/platform/plate", verts, faces, color=PLATFORM_COLOR,
-                                                opacity=0.85, side="double")
+                                                opacity=0.85, side="double", cast_shadow=False,
+                                                receive_shadow=False)
 
     @staticmethod
-    def _joint_points(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray):
+    def _geometry(design: Design) -> dict[str, Any]:
+        """Everything the design fixes: base circle, arc rails, grid, sizes, the platform plate."""
+        t = np.linspace(0.0, 2.0 * np.pi, 121)
+        circle = np.stack([design.r * np.cos(t), design.r * np.sin(t), np.zeros_like(t)], axis=1)
+        rails = carriage_rails(design, samples=49)
+        lr = max(1.0, 0.03 * design.a)
+        jr = 1.8 * lr
+        # platform polygon in the platform frame (fan from the centre through the six joints)
+        u = platform_points_local(design).reshape(6, 3)
+        ring = u[np.argsort(np.arctan2(u[:, 1], u[:, 0]))]
+        verts = np.vstack([np.zeros((1, 3)), ring])
+        faces = np.array([[0, 1 + k, 1 + (k + 1) % 6] for k in range(6)])
+        return {
+            "circle": _polyline_segments(circle),
+            "arcs": np.concatenate([_polyline_segments(a) for a in rails["arcs"]]),
+            "thick": max(0.6, 0.012 * design.r),
+            "radial_thick": max(0.8, 0.02 * design.r),
+            "grid": 4.0 * design.r,
+            "cell": design.r / 5.0,
+            "labels": [1.12 * design.r * np.array([np.cos(GAMMA[i]), np.sin(GAMMA[i]), 0.0]) for i in range(3)],
+            "leg_radius": lr,
+            "joint_radius": jr,
+            "carriage_scale": np.tile([0.12 * design.r, design.b + 4.0 * jr, 2.0 * jr], (3, 1)),
+            "plate": (verts, faces),
+        }
+
+    @staticmethod
+    def _joint_points(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Platform joints ``B`` and base joints ``D``, each (6, 3) in chain-major order."""
         u = platform_points_local(design)
         B = (pose.position + u @ pose.rotation.T).reshape(6, 3)
         D = base_points(design, d, eta).reshape(6, 3)
-        return B, D, (D, B)
+        return B, D
 
     @staticmethod
     def _leg_colors(leg_status: list[list[str]]) -> np.ndarray:
@@ -197,21 +196,34 @@ class MechanismScene:
     # ----- updates ----------------------------------------------------------------------------
     def set_design(self, design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray,
                    leg_status: list[list[str]]) -> None:
-        """Rebuild everything that depends on the design, then draw the pose."""
-        self._build_static(design)
-        for node in (self.legs, self.joints, self.carriages, self.radials, self.platform_mesh, self.platform):
-            try:
-                node.remove()
-            except Exception:  # noqa: BLE001
-                pass
-        self._build_moving(design, pose, d, eta, leg_status)
+        """Give every node the geometry of ``design`` (in place), then draw the pose."""
+        g = self._geometry(design)
+        self.grid.width = self.grid.height = g["grid"]
+        self.grid.cell_size = g["cell"]
+        self.grid.section_size = design.r
+        self.grid.fade_distance = 40.0 * design.r
+        self.base_circle.points = g["circle"]
+        self.base_circle.thickness = 0.4 * g["thick"]
+        self.arc_rails.points = g["arcs"]
+        self.arc_rails.thickness = 2.0 * g["thick"]
+        for label, pos in zip(self.labels, g["labels"]):
+            label.position = pos
+        self.joints.batched_scales = np.full(12, g["joint_radius"])
+        self.carriages.batched_scales = g["carriage_scale"]
+        self.radials.thickness = g["radial_thick"]
+        self.platform.axes_length = 0.6 * design.a
+        self.platform.axes_radius = 0.03 * design.a
+        self.platform.origin_radius = 0.05 * design.a
+        self.platform_mesh.vertices = g["plate"][0]
+        self.design = design
+        self.update_pose(pose, d, eta, leg_status)
 
     def update_pose(self, pose: Pose, d: np.ndarray, eta: np.ndarray, leg_status: list[list[str]]) -> None:
         """Move legs, joints, carriages, radial rails and the platform (no re-creation)."""
         design = self.design
-        B, D, _ = self._joint_points(design, pose, d, eta)
+        B, D = self._joint_points(design, pose, d, eta)
         wxyz, ctr, length = segment_transforms(D, B)
-        lr = float(self.legs.batched_scales[0, 0]) if np.ndim(self.legs.batched_scales) == 2 else 1.0
+        lr = max(1.0, 0.03 * design.a)
         self.legs.batched_wxyzs = wxyz
         self.legs.batched_positions = ctr
         self.legs.batched_scales = np.c_[np.full(6, lr), np.full(6, lr), length]
@@ -246,7 +258,7 @@ def glb_with_material(glb: bytes, opacity: float) -> bytes:
         "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, float(opacity)],
                                  "metallicFactor": 0.0, "roughnessFactor": 0.85},
         "alphaMode": "BLEND" if opacity < 0.999 else "OPAQUE",
-        "doubleSided": True,
+        "doubleSided": False,
     }]
     for mesh in doc.get("meshes", []):
         for prim in mesh.get("primitives", []):
@@ -297,7 +309,7 @@ class ShellScene:
         self.source: Optional[trimesh.Trimesh] = None
         self.last_payload_bytes = 0
         self.last_faces = 0
-        self.marker = scene.add_icosphere("/workspace/pose_marker", radius=3.0, color=REACHABLE_COLOR,
+        self.marker = scene.add_icosphere("/workspace/pose_marker", radius=5.0, color=REACHABLE_COLOR,
                                           subdivisions=2)
 
     def show(self, mesh: Optional[trimesh.Trimesh], opacity: float, cut: bool, cut_z: float, keep: str) -> int:
@@ -322,7 +334,7 @@ class ShellScene:
         if len(shown.faces) == 0:
             glb = b""
         else:
-            glb = glb_with_material(shown.export(file_type="glb"), opacity)
+            glb = glb_with_material(shown.export(file_type="glb", include_normals=True), opacity)
         if not glb:
             if self.handle is not None:
                 self.handle.visible = False

@@ -10,7 +10,7 @@ URL format (keys are the CLI's names)::
     ?a=60&b=14&d_s=40&r=100&l_min=114.5&l_s=50&eta_s=30&eta_range=centered
      &x=0&y=0&z=130&psi=0&theta=0&phi=0
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
-     [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.45]
+     [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -126,7 +126,7 @@ class ExplorerState:
     cut: bool = False
     cut_z: float = 80.0
     cut_keep: CutKeep = "below"
-    opacity: float = 0.45
+    opacity: float = 0.6
 
     def replace(self, **changes: Any) -> "ExplorerState":
         """A copy with some fields changed (no validation beyond the dataclasses')."""

@@ -147,6 +147,8 @@ def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> N
         b = session.bundle
         s = session.state
         return (b is not None and b.measures is not None and b.result.design == s.design
+                and b.result.settings.orientation == (s.pose.psi, s.pose.theta, s.pose.phi)
+                and b.result.settings.voxel == s.voxel
                 and session._ws_info.get("preview") is False and session._ws_info.get("measures") is not None)
     wait_for(idle, timeout, "the session to become idle")
 
@@ -364,3 +366,22 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     b.click(s.panels.sweep_csv)
     table = list(csv.reader(io.StringIO(b.download("paraspace_sweep_eta_s.csv").decode())))
     assert table[0][0] == "eta_s" and len(table) == 4
+
+
+def test_gizmo_drag_sets_the_pose_sliders(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    half = np.radians(12.0) / 2.0  # psi = 12 degrees: rotation about z
+    b._send({"type": "TransformControlsUpdateMessage", "name": "/gizmo", "owner": str(s.client.client_id),
+             "wxyz": (float(np.cos(half)), 0.0, 0.0, float(np.sin(half))), "position": (20.04, -10.0, 140.0)})
+    wait_for(lambda: s.state.pose == Pose(x=20.0, y=-10.0, z=140.0, psi=12.0), 10.0, "pose from the gizmo")
+    assert s.panels.pose["x"].value == 20.0 and s.panels.pose["psi"].value == 12.0
+    wait_idle(explorer, s)
+    assert s.bundle.result.settings.orientation == (12.0, 0.0, 0.0)  # orientation change -> new workspace
+    # a drag outside the slider ranges is refused and the gizmo snaps back
+    b._send({"type": "TransformControlsUpdateMessage", "name": "/gizmo", "owner": str(s.client.client_id),
+             "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (20.0, -10.0, 380.0)})
+    time.sleep(0.5)
+    assert s.state.pose.z == 140.0
+    wait_for(lambda: np.allclose(s.gizmo.position, (20.0, -10.0, 140.0)), 5.0, "gizmo snapped back")

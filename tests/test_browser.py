@@ -1,0 +1,220 @@
+"""The explorer in a real browser (Playwright + Debian Chromium, SwiftShader WebGL).
+
+One Explorer runs in-process on a free port. The tests drive the page the way a user does (mouse
+on a Mantine slider track, keyboard on its thumb), and check what the user sees: the shell node
+is replaced, the numbers change, the address bar changes, a second browser opened on that link
+shows the same state, and two browsers keep separate states. Screenshots for the README are
+written to ``docs/screenshots/`` and checked for not being blank.
+
+Skipped only when ``/usr/bin/chromium`` is missing (the project's test command installs it).
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+import time
+import urllib.parse
+from typing import Any, Callable, Iterator
+
+import numpy as np
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+if not os.path.exists(CHROMIUM):
+    pytest.skip(f"{CHROMIUM} is missing (install Debian's chromium package to run the browser tests)",
+                allow_module_level=True)
+
+from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
+
+from app.explorer import ClientSession, Explorer  # noqa: E402
+from app.urlstate import parse_query  # noqa: E402
+
+SHOTS = pathlib.Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
+        "--no-first-run", "--disable-sync"]
+
+
+def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        v = fn()
+        if v:
+            return v
+        time.sleep(0.05)
+    raise AssertionError(f"timed out after {timeout} s waiting for: {what}")
+
+
+@pytest.fixture(scope="module")
+def explorer() -> Iterator[Explorer]:
+    exp = Explorer("127.0.0.1", 0).start()
+    exp.warm.wait(120)
+    yield exp
+    exp.stop()
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Browser]:
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+        yield b
+        b.close()
+
+
+def open_page(browser: Browser, explorer: Explorer, query: str = "") -> tuple[Page, ClientSession]:
+    """A fresh browser context (own localStorage) on the explorer; returns the page and its session."""
+    before = set(explorer.sessions)
+    ctx = browser.new_context(viewport={"width": 1400, "height": 900})
+    page = ctx.new_page()
+    page.goto(explorer.url + (("?" + query) if query else ""))
+    page.wait_for_function("() => !document.body.innerText.includes('Connecting...')", timeout=30000)
+    session = wait_for(lambda: next((s for cid, s in explorer.sessions.items()
+                                     if cid not in before and s.ready.is_set()), None), 30, "session")
+    page.wait_for_function("n => !!window.__viserMutable?.nodeRefFromName[n]", arg="/workspace/shell",
+                           timeout=30000)
+    close_webgl_toast(page)
+    return page, session
+
+
+def close_webgl_toast(page: Page) -> None:
+    """Close viser's "Software WebGL rendering detected" notification (it covers the scene)."""
+    toast = page.locator(".mantine-Notification-root", has_text="Software WebGL")
+    try:
+        toast.first.wait_for(timeout=3000)
+        toast.first.locator(".mantine-Notification-closeButton").click()
+        toast.first.wait_for(state="detached", timeout=5000)
+    except Exception:  # noqa: BLE001 - not shown (e.g. a GPU) or already gone
+        pass
+
+
+def shell_uuid(page: Page) -> str:
+    return page.evaluate("() => window.__viserMutable.nodeRefFromName['/workspace/shell']?.uuid ?? ''")
+
+
+def numbers_text(page: Page) -> str:
+    return page.locator("p, li, div").filter(has_text=re.compile(r"^Volume")).last.inner_text()
+
+
+def full_volume_text(page: Page) -> str:
+    """The numbers panel's volume line once it shows a full (not preview) result."""
+    def get() -> str:
+        text = page.locator("body").inner_text()
+        m = re.search(r"Volume ([0-9.e+]+) \(full, h = ([0-9.]+)\)", text)
+        return m.group(0) if m else ""
+    return wait_for(get, 60, "a full-result volume in the numbers panel")
+
+
+def slider_value(page: Page, session: ClientSession, key: str) -> float:
+    uuid = session.panels.design[key]._impl.uuid
+    return float(page.locator(f'[id="{uuid}"] [role=slider]').get_attribute("aria-valuenow"))
+
+
+def screenshot_not_blank(page: Page, path: pathlib.Path, clip: dict | None = None) -> np.ndarray:
+    """Take a screenshot (after the render settles) and check it has content; returns its pixels."""
+    from PIL import Image
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    prev = None
+    for _ in range(8):  # SwiftShader: wait until two consecutive shots agree
+        page.screenshot(path=str(path), clip=clip)
+        img = np.asarray(Image.open(path).convert("RGB")).astype(np.int16)
+        if prev is not None and prev.shape == img.shape and np.abs(prev - img).mean() < 0.5:
+            break
+        prev = img
+        time.sleep(1.0)
+    gray = img.mean(axis=2)
+    assert gray.std() > 10.0, f"{path.name} looks blank (std {gray.std():.1f})"
+    non_bg = (np.abs(img - img[0, 0]).sum(axis=2) > 30).mean()
+    assert non_bg > 0.05, f"{path.name}: only {100 * non_bg:.1f} % of the pixels differ from the background"
+    return img
+
+
+def element_screenshot_not_blank(locator: Any, path: pathlib.Path) -> np.ndarray:
+    """Screenshot one element (e.g. a plot image) and check it has content."""
+    from PIL import Image
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    locator.screenshot(path=str(path))
+    img = np.asarray(Image.open(path).convert("RGB")).astype(np.int16)
+    non_white = (img.sum(axis=2) < 3 * 235).mean()
+    assert non_white > 0.05, f"{path.name}: only {100 * non_white:.1f} % non-white pixels"
+    return img
+
+
+def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> None:
+    page, session = open_page(browser, explorer)
+    before_volume = full_volume_text(page)
+    assert session.state.design.a == 50.0
+
+    # README screenshot 1: iso view with the shell and the panel
+    img = screenshot_not_blank(page, SHOTS / "explorer_iso.png")
+    scene = img[:, : int(img.shape[1] * 0.6)]
+    colored = (np.abs(scene[:, :, 0] - scene[:, :, 2]) > 40).mean()  # the z-colored shell
+    assert colored > 0.02, "the workspace shell is not visible in the 3-D view"
+
+    # move the design slider 'a' with the mouse: click its track at 80 %  (a = 10 + 0.8 * 90 = 82)
+    uuid = session.panels.design["a"]._impl.uuid
+    old_shell = shell_uuid(page)
+    track = page.locator(f'[id="{uuid}"] .mantine-Slider-track')
+    box = track.bounding_box()
+    assert box is not None
+    page.mouse.click(box["x"] + 0.8 * box["width"], box["y"] + box["height"] / 2)
+    # and fine-tune with the keyboard on the thumb: two steps left (0.5 each)
+    thumb = page.locator(f'[id="{uuid}"] [role=slider]')
+    thumb.press("ArrowLeft")
+    thumb.press("ArrowLeft")
+    wait_for(lambda: abs(slider_value(page, session, "a") - session.state.design.a) < 1e-9
+             and session.state.design.a != 50.0, 20, "the design to follow the slider")
+    a_new = session.state.design.a
+    assert 70.0 <= a_new <= 90.0
+    # the shell is replaced, the numbers change, the address bar follows
+    wait_for(lambda: shell_uuid(page) != old_shell, 30, "a new shell node")
+    after_volume = wait_for(lambda: (lambda t: t if t != before_volume else "")(full_volume_text(page)), 60,
+                            "new numbers")
+    assert after_volume != before_volume
+    wait_for(lambda: f"a={a_new:g}" in page.url, 10, "the address bar")
+    state, msgs = parse_query(urllib.parse.urlsplit(page.url).query)
+    assert msgs == [] and state == session.state
+
+    # the link in a fresh browser restores the same state and shows the same numbers
+    page2, session2 = open_page(browser, explorer, urllib.parse.urlsplit(page.url).query)
+    assert session2.state == session.state
+    assert slider_value(page2, session2, "a") == a_new
+    assert full_volume_text(page2) == after_volume
+
+    # README screenshot 2: the orientation maps
+    page.get_by_role("tab", name="Plots").click()
+    wait_for(lambda: "TI₁ =" in page.locator("body").inner_text(), 60, "orientation maps")
+    image = page.locator('img[src^="blob:"]').first
+    image.scroll_into_view_if_needed()
+    box = image.bounding_box()
+    assert box is not None and box["height"] > 300  # three stacked maps
+    shot = element_screenshot_not_blank(image, SHOTS / "orientation_maps.png")
+    assert shot.shape[0] > 200
+    page.context.close()
+    page2.context.close()
+
+
+def test_two_browsers_keep_separate_states(browser: Browser, explorer: Explorer) -> None:
+    p1, s1 = open_page(browser, explorer, "voxel=4&z=140")
+    p2, s2 = open_page(browser, explorer, "voxel=4&z=120")
+    assert s1 is not s2 and s1.state.pose.z == 140.0 and s2.state.pose.z == 120.0
+    # keyboard on p1's 'eta_s' slider thumb: End jumps to the maximum (100)
+    p1.bring_to_front()  # the user switches to the first window (a hidden page does not render)
+    uuid = s1.panels.design["eta_s"]._impl.uuid
+    p1.locator(f'[id="{uuid}"] [role=slider]').press("End")
+    wait_for(lambda: s1.state.design.eta_s == 100.0, 20, "client 1's eta_s")
+    try:
+        wait_for(lambda: "eta_s=100" in p1.evaluate("() => location.search"), 10, "client 1's address bar")
+    except AssertionError:
+        print("DEBUG", p1.url, p1.evaluate("() => [location.search, document.visibilityState, document.hasFocus()]"),
+              s1.last_query, s1.events[-8:])
+        raise
+    time.sleep(0.5)
+    p2.bring_to_front()
+    assert s2.state.design.eta_s == 30.0
+    assert slider_value(p2, s2, "eta_s") == 30.0
+    assert "eta_s=30" in p2.url and "z=120" in p2.url
+    p1.context.close()
+    p2.context.close()
