@@ -339,7 +339,10 @@ class ClientSession:
             m = info.get("measures")
             kind = "preview" if info.get("preview") else "full"
             lines.append(f"**Volume** {_fmt(info['volume'], 5)}  ({kind}, h = {info['h']:g})")
-            if m is not None:
+            if info["volume"] == 0:
+                lines.append("**Empty workspace:** no platform position is reachable at this orientation "
+                             "(psi, theta, phi) with this design.")
+            elif m is not None:
                 lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
                 lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
                 closed = "closed" if m.boundary_closed else "open (cut or in pieces)"
@@ -844,12 +847,12 @@ class ClientSession:
             p.sweep_stop.visible = False
             p.sweep_run.disabled = False
             if job.status == "done":
-                self._sweep = job.result
                 p.sweep_image.image = job.result["img"]
                 p.sweep_image.visible = True
                 p.sweep_progress.visible = False
                 p.sweep_csv.disabled = False
                 p.sweep_png.disabled = False
+                self._sweep = job.result
             else:
                 p.sweep_progress.visible = False
                 if job.status == "failed":
@@ -884,11 +887,11 @@ class ClientSession:
             p.surface_run.disabled = False
             p.surface_progress.visible = False
             if job.status == "done":
-                self._surface = job.result
                 p.surface_image.image = job.result["img"]
                 p.surface_image.visible = True
                 p.surface_csv.disabled = False
                 p.surface_png.disabled = False
+                self._surface = job.result
             elif job.status == "failed":
                 self._notify("Study failed", str(job.error))
 
@@ -954,7 +957,11 @@ class ClientSession:
         if b is None:
             self._notify("Not ready", "the full workspace is still being computed", color="orange")
             return
-        data = export_shell(b.mesh, fmt)
+        try:
+            data = export_shell(b.mesh, fmt)
+        except ValueError as exc:  # e.g. an empty workspace has no shell
+            self._notify("No shell to download", str(exc), color="orange")
+            return
         self.client.send_file_download(f"paraspace_workspace.{fmt}", data, save_immediately=True)
 
     def measures_document(self) -> dict:

@@ -385,3 +385,60 @@ def test_gizmo_drag_sets_the_pose_sliders(explorer, browsers):
     time.sleep(0.5)
     assert s.state.pose.z == 140.0
     wait_for(lambda: np.allclose(s.gizmo.position, (20.0, -10.0, 140.0)), 5.0, "gizmo snapped back")
+
+
+def test_camera_presets_reset_and_stop(explorer, browsers):
+    b = browsers("voxel=6&a=30")
+    s = b.session
+    wait_idle(explorer, s)
+    b.set(s.panels.view_buttons, "top")
+    wait_for(lambda: s.state.view == "top", 5.0, "view preset")
+    cam = s.client.camera
+    wait_for(lambda: abs(cam.position[2] - cam.look_at[2]) > 10 * np.hypot(*(cam.position[:2] - cam.look_at[:2])),
+             5.0, "camera above the workspace")
+    wait_for(lambda: "view=top" in b.search, 5.0, "view in the URL")
+    b.click(s.panels.reset)
+    wait_for(lambda: s.state.design == Design() and s.panels.design["a"].value == 50.0, 10.0, "reset")
+    wait_idle(explorer, s)
+    # Stop: a slow job (h = 1) ends cancelled and the status says so
+    b.set(s.panels.voxel, 1.0)
+    job = wait_for(lambda: s._ws_job if s.state.voxel == 1.0 and s._ws_job is not None
+                   and s._ws_job.status == "running" else None, 10.0, "h=1 job running")
+    b.click(s.panels.stop)
+    wait_for(lambda: job.is_final, 10.0, "stopped job")
+    assert job.status == "cancelled"
+    wait_for(lambda: "stopped" in s.panels.status.content, 5.0, "stopped status")
+    assert s.bundle.result.settings.voxel == 6.0  # the last finished result stays on screen
+
+
+def test_empty_workspace_is_handled(explorer, browsers):
+    b = browsers("voxel=6&a=10&r=200&l_min=50&l_s=10&d_s=10&eta_s=10")
+    s = b.session
+    wait_idle(explorer, s)
+    assert s.bundle.result.volume == 0.0
+    assert s.shell.last_faces == 0 and "Empty workspace" in s.panels.numbers.content
+    b.click(s.panels.download_stl)  # refused with a message, no crash
+    time.sleep(0.5)
+    b.click(s.panels.download_json)
+    doc = json.loads(b.download("paraspace_measures.json"))
+    assert doc["measures"]["volume"] == 0.0
+
+
+def test_surface_study(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    b.set(s.panels.study_voxel, 10.0)
+    b.set(s.panels.surface_points, 3)
+    wait_for(lambda: s.panels.surface_points.value == 3 and s.panels.study_voxel.value == 10.0, 5.0, "inputs")
+    b.click(s.panels.surface_run)
+    wait_for(lambda: s._surface is not None, 120.0, "(a, d_s) study")
+    out = s._surface
+    assert out["values_x"] == [10.0, 55.0, 100.0] and out["values_y"] == [10.0, 55.0, 100.0]
+    vol = np.array(out["volume"], dtype=float)
+    assert vol.shape == (3, 3)
+    ref = compute_workspace(Design(a=55.0, d_s=10.0), WorkspaceSettings(voxel=10.0)).volume
+    assert vol[0, 1] == ref  # [iy][ix]: d_s = 10, a = 55
+    assert s.panels.surface_image.visible and not s.panels.surface_csv.disabled
+    b.click(s.panels.surface_csv)
+    rows = list(csv.reader(io.StringIO(b.download("paraspace_volume_a_d_s.csv").decode())))
+    assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
