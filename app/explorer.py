@@ -91,6 +91,7 @@ class LRU:
         self._lock = threading.Lock()
 
     def get(self, key: Hashable) -> Any:
+        """The value of ``key`` (``None`` if absent); marks it most recently used."""
         with self._lock:
             if key not in self._data:
                 return None
@@ -98,6 +99,7 @@ class LRU:
             return self._data[key]
 
     def put(self, key: Hashable, value: Any) -> None:
+        """Store ``value``; drops the least recently used entry beyond ``size``."""
         with self._lock:
             self._data[key] = value
             self._data.move_to_end(key)
@@ -253,7 +255,7 @@ class ClientSession:
         p.carriages.on_update(self._callback(self.on_carriage_mode))
         for h in p.d + p.eta:
             h.on_update(self._callback(self.on_manual_carriage))
-        p.view_buttons.on_click(lambda ev: None if self.closed else self.on_view(str(ev.target.value)))
+        p.view_buttons.on_click(self._callback(lambda: self.on_view(str(self.panels.view_buttons.value))))
         for h in (p.cut, p.cut_z, p.cut_keep, p.opacity):
             h.on_update(self._callback(self.on_view_settings))
         p.stop.on_click(self._callback(self.stop_workspace))
@@ -435,6 +437,7 @@ class ClientSession:
         self.apply_design(default)
 
     def on_voxel(self) -> None:
+        """The voxel slider moved: recompute the workspace at the new resolution."""
         with self.lock:
             self.state = self.state.replace(voxel=float(self.panels.voxel.value))
         self.submit_workspace()
@@ -493,6 +496,7 @@ class ClientSession:
         self.schedule_url()
 
     def on_gizmo_toggle(self) -> None:
+        """Show or hide the drag gizmo on the platform."""
         self.gizmo.visible = bool(self.panels.gizmo.value)
 
     def on_carriage_mode(self) -> None:
@@ -519,6 +523,7 @@ class ClientSession:
         self.schedule_url()
 
     def on_manual_carriage(self) -> None:
+        """A hand-set carriage slider moved (manual mode): IK with those carriage values."""
         p = self.panels
         with self.lock:
             if self.state.carriages != "manual":
@@ -549,12 +554,14 @@ class ClientSession:
             cam.look_at = (0.0, 0.0, zc)
 
     def on_view(self, preset: str) -> None:
+        """A camera preset button was clicked."""
         with self.lock:
             self.state = self.state.replace(view=preset)  # type: ignore[arg-type]
         self.set_camera(preset)
         self.schedule_url()
 
     def on_view_settings(self) -> None:
+        """Cut plane or opacity changed: re-send the shell on screen (no recomputation)."""
         p = self.panels
         with self.lock:
             self.state = self.state.replace(cut=bool(p.cut.value), cut_z=float(p.cut_z.value),
@@ -748,6 +755,7 @@ class ClientSession:
 
     # ----- orientation maps ------------------------------------------------------------------------
     def on_z0(self) -> None:
+        """The height of the orientation-map lines changed: recompute the maps."""
         with self.lock:
             self.state = self.state.replace(z0=float(self.panels.z0.value))
         self.submit_orientation()
@@ -811,6 +819,7 @@ class ClientSession:
         self._event("orientation-shown")
 
     def download_orientation_png(self) -> None:
+        """Send the orientation maps as a PNG."""
         if self._orientation_png is None:
             self._notify("Not ready", "the orientation maps are still being computed", color="orange")
             return
@@ -924,6 +933,7 @@ class ClientSession:
         self.client.send_file_download(name, data["png"], save_immediately=True)
 
     def download_sweep_csv(self) -> None:
+        """Send the last volume-vs-parameter sweep as CSV (one row per value)."""
         data = self._sweep
         if data is None:
             return
@@ -938,6 +948,7 @@ class ClientSession:
                                        save_immediately=True)
 
     def download_surface_csv(self) -> None:
+        """Send the last (a, d_s) study as CSV (one row per grid point)."""
         data = self._surface
         if data is None:
             return
@@ -985,6 +996,7 @@ class ClientSession:
         return doc
 
     def download_measures(self) -> None:
+        """Send :meth:`measures_document` as JSON."""
         doc = self.measures_document()
         data = json.dumps(doc, indent=2, default=_json_default).encode()
         self.client.send_file_download("paraspace_measures.json", data, save_immediately=True)
@@ -1021,6 +1033,7 @@ class ClientSession:
         self._event("url")
 
     def copy_link(self) -> None:
+        """Bring the address bar up to date and try to copy the link to the clipboard."""
         self._sync_url_now()
         jsbridge.copy_to_clipboard(self.client, self.link())
         self._notify("Link", "copied to the clipboard (if the browser allowed it); it is also in the text "
