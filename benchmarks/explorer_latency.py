@@ -90,7 +90,7 @@ def main() -> None:
             page.goto(exp.url + f"?voxel={args.voxel:g}")
             page.wait_for_function("() => !!window.__viserMutable?.nodeRefFromName['/workspace/shell']"
                                    "?.children?.length", timeout=60000)
-            session = next(s for cid, s in exp.sessions.items() if cid not in before)
+            session = next(s for cid, s in list(exp.sessions.items()) if cid not in before)
             while session.bundle is None:
                 time.sleep(0.01)
             page.wait_for_function("() => window.__viserMutable.nodeRefFromName['/workspace/shell']?.children?.length"

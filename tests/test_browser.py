@@ -71,7 +71,7 @@ def open_page(browser: Browser, explorer: Explorer, query: str = "") -> tuple[Pa
     page = ctx.new_page()
     page.goto(explorer.url + (("?" + query) if query else ""))
     page.wait_for_function("() => !document.body.innerText.includes('Connecting...')", timeout=30000)
-    session = wait_for(lambda: next((s for cid, s in explorer.sessions.items()
+    session = wait_for(lambda: next((s for cid, s in list(explorer.sessions.items())
                                      if cid not in before and s.ready.is_set()), None), 30, "session")
     page.wait_for_function("n => !!window.__viserMutable?.nodeRefFromName[n]", arg="/workspace/shell",
                            timeout=30000)

@@ -54,7 +54,7 @@ class FakeBrowser:
         self.thread = threading.Thread(target=self._recv_loop, daemon=True)
         self.thread.start()
         self.session: ClientSession = wait_for(
-            lambda: next((s for cid, s in explorer.sessions.items() if cid not in before and s.ready.is_set()),
+            lambda: next((s for cid, s in list(explorer.sessions.items()) if cid not in before and s.ready.is_set()),
                          None), 20.0, "the session was not built")
 
     # ----- wire ---------------------------------------------------------------------------------
