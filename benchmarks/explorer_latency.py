@@ -52,6 +52,19 @@ PROBE = """
 """
 
 
+#: Time of one forced redraw (requestRender, then the frame after the next one has started).
+REDRAW = """
+async () => {
+  const M = window.__viserMutable;
+  await new Promise(r => requestAnimationFrame(r));
+  const t0 = performance.now();
+  M.requestRender();
+  await new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)));
+  return performance.now() - t0;
+}
+"""
+
+
 def _idle(exp: Explorer, session, quiet: float = 1.5, timeout: float = 60.0) -> None:
     """Wait until the session has no unfinished job, then ``quiet`` more seconds (the page redraws)."""
     deadline = time.monotonic() + timeout
@@ -79,7 +92,7 @@ def main() -> None:
     rows: dict[str, list[float]] = {k: [] for k in (
         "connect -> first full shell drawn (s)", "mechanism: key -> moved (s)", "mechanism: key -> drawn (s)",
         "preview shell: key -> drawn (s)", "full shell: key -> drawn (s)", "server: preview compute+mesh (s)",
-        "server: full compute (s)", "server: full mesh (s)")}
+        "server: full compute (s)", "server: full mesh (s)", "browser: forced redraw -> 2nd frame (s)")}
     sizes: dict[str, list[int]] = {"preview GLB (MB)": [], "full GLB (MB)": [], "full faces": []}
     try:
         with sync_playwright() as p:
@@ -98,6 +111,8 @@ def main() -> None:
             page.evaluate("() => new Promise(r => requestAnimationFrame(() => r()))")
             rows["connect -> first full shell drawn (s)"].append(time.perf_counter() - t0)
             _idle(exp, session)  # first frames (shader compilation), measures and orientation maps done
+            for _ in range(8):  # cost of one frame: software WebGL redraws are the floor of every latency
+                rows["browser: forced redraw -> 2nd frame (s)"].append(page.evaluate(REDRAW) / 1e3)
             page.evaluate(PROBE)
             uuid_x = session.panels.pose["x"]._impl.uuid
             uuid_a = session.panels.design["a"]._impl.uuid
