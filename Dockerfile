@@ -25,9 +25,9 @@ RUN mkdir -p /opt/paraspace && printf '%s\n' \
         fonttools==4.68.0 fsspec==2026.9.0 h11==0.16.0 idna==3.20 imageio==2.38.1 \
         importlib-metadata==10.2.0 jinja2==3.1.6 kiwisolver==1.5.1 lazy-importer==0.1.0 \
         lazy-loader==0.6 llvmlite==0.50.0 locket==1.0.0 markdown-it-py==4.3.0 markupsafe==3.0.4 \
-        matplotlib==3.11.2 mdurl==0.1.2 msgpack==1.2.4 msgspec==0.22.0 narwhals==2.29.0 \
+        matplotlib==3.11.2 mdurl==0.1.2 msgpack==1.2.4 msgspec==0.22.0 \
         networkx==3.6.1 numba==0.68.1 numpy==2.4.6 opentelemetry-api==1.45.2 packaging==26.3 \
-        partd==1.4.2 pillow==13.0.0 plotly==7.1.0 psutil==7.2.2 pydantic==2.14.3 \
+        partd==1.4.2 pillow==13.0.0 psutil==7.2.2 pydantic==2.14.3 \
         pydantic-core==2.50.4 pygments==2.21.0 pyparsing==3.3.3 python-dateutil==4.0.0 \
         pyyaml==6.0.3 requests==2.34.2 rich==14.3.4 scikit-image==0.26.0 scipy==1.17.1 \
         sortedcontainers==2.4.0 starlette==1.10.0 tblib==3.2.2 tifffile==2026.3.3 toolz==1.2.0 \
@@ -35,6 +35,11 @@ RUN mkdir -p /opt/paraspace && printf '%s\n' \
         typing-inspection==0.4.5 tzdata==2026.6 urllib3==2.8.0 uvicorn==0.54.0 viser==1.1.1 \
         websockets==16.1.1 zict==3.0.0 zipp==4.1.2 zstandard==0.25.0 \
         | tr ' ' '\n' | sed '/^$/d' > /opt/paraspace/constraints.txt
+
+# libgomp1 (Debian's package) gives numba its OpenMP threading layer; without it numba falls
+# back to "workqueue" (still safe: kinematics.parallel serialises kernel launches, but slower).
+RUN apt-get update && apt-get install -y --no-install-recommends libgomp1 \
+    && rm -rf /var/lib/apt/lists/*
 
 RUN useradd --create-home --uid 10001 --shell /usr/sbin/nologin paraspace \
     && mkdir -p /home/paraspace/.cache/numba /home/paraspace/.cache/matplotlib \

@@ -142,6 +142,7 @@ from scipy import ndimage as ndi
 from scipy.spatial import ConvexHull, QhullError
 from skimage.measure import euler_number
 
+from .parallel import KERNEL_LOCK
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -318,7 +319,8 @@ def hull_mask(occupancy: np.ndarray) -> np.ndarray:
     zhi = np.empty((i1 - i0, j1 - j0))
     sub = eq.copy()
     sub[:, 3] += sub[:, 0] * i0 + sub[:, 1] * j0  # shift to sub-rectangle indices
-    _hull_columns_kernel(i1 - i0, j1 - j0, sub, 1e-7, zlo, zhi)
+    with KERNEL_LOCK:
+        _hull_columns_kernel(i1 - i0, j1 - j0, sub, 1e-7, zlo, zhi)
     k = np.arange(nz, dtype=np.float64)
     out = np.zeros_like(occ)
     out[i0:i1, j0:j1] = (k >= zlo[:, :, None]) & (k <= zhi[:, :, None])

@@ -34,6 +34,7 @@ from .design import Design, ParameterError
 from .feasibility import ChainTables, _chain_excluded, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .grid import GridSpec
+from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Cancelled, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
 
@@ -202,7 +203,8 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     out = np.zeros(pts.shape[0], np.uint8)
     args = _kernel_args(design, orientation, default_n_eta(design, eta_step))
-    _points_kernel(pts, *args, out)
+    with KERNEL_LOCK:
+        _points_kernel(pts, *args, out)
     return out
 
 
@@ -291,7 +293,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
     step = max(64, int(65536 // max(nz, 1)))
     for s in range(0, n, step):
         check(cancel)
-        _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
+        with KERNEL_LOCK:
+            _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
         if progress is not None:
             progress(min(1.0, (s + step) / n), "position workspace")
     if mirror:
