@@ -108,10 +108,11 @@ class LRU:
 
 
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
-    """Marching-cubes shell of ``result`` colored by z, decimated to ``max_faces``."""
+    """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
+    (block re-mesh: fast, smooth and volume-preserving, which is what a display needs)."""
     from kinematics.shell import workspace_shell
 
-    return workspace_shell(result, max_faces=max_faces, color_by_z=True)
+    return workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh")
 
 
 def _fmt(v: Optional[float], digits: int = 4) -> str:

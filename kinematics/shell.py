@@ -260,10 +260,29 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
     return out, dropped
 
 
+def _remesh_blocks(field: np.ndarray, pad: int, origin, h: float, max_faces: int, target: float,
+                   meta: dict) -> Optional[trimesh.Trimesh]:
+    """Coarsest-first-fitting block re-mesh: marching cubes on the ``k^3`` block means of the field
+    (``k = 2, 3, ...``) at the volume-preserving level, for the smallest ``k`` whose closed mesh
+    fits ``max_faces``. The block means keep sub-voxel information, so the surface is smooth and its
+    volume matches the voxel volume; no decimation is needed. ``None`` if no block size fits."""
+    for k in range(2, min(max(field.shape), _MAX_BLOCK) + 1):
+        m, _level = _volume_preserving(_block_mean(field, k), k * h, target)
+        if len(m.faces) <= max_faces and _closed(m):
+            m.vertices = m.vertices + (np.asarray(origin, dtype=float) - h * (pad + 0.5 * (k + 1)))
+            meta["reduction"] = f"block re-mesh ({k}^3 voxels)"
+            return m
+    return None
+
+
 def _reduce(mesh: trimesh.Trimesh, field: np.ndarray, pad: int, origin, h: float, max_faces: int,
-            target: float, meta: dict) -> trimesh.Trimesh:
+            target: float, meta: dict, method: str = "quadric") -> trimesh.Trimesh:
     """Bring ``mesh`` to at most ``max_faces`` faces, closed when at all possible (module docstring,
-    step 4); records the method in ``meta``."""
+    step 4); records the method in ``meta``. ``method="remesh"`` tries :func:`_remesh_blocks` first."""
+    if method == "remesh":
+        out = _remesh_blocks(field, pad, origin, h, max_faces, target, meta)
+        if out is not None:
+            return out
     out, meta["dropped_components"] = _decimate(mesh, max_faces, h)
     meta["reduction"] = "quadric"
     if _closed(out):
@@ -286,12 +305,17 @@ def _reduce(mesh: trimesh.Trimesh, field: np.ndarray, pad: int, origin, h: float
 
 def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None, smooth_sigma: float = 0.0,
                     color_by_z: bool = True, preserve_volume: bool = True,
-                    color_range: Optional[tuple[float, float]] = None) -> trimesh.Trimesh:
+                    color_range: Optional[tuple[float, float]] = None,
+                    reduction: str = "quadric") -> trimesh.Trimesh:
     """The closed, outward-oriented boundary mesh of the workspace (module docstring, steps 1-5).
 
     Args:
         result: a computed workspace.
-        max_faces: decimate to at most this many faces (``None``: no decimation); at least 4.
+        max_faces: reduce to at most this many faces (``None``: no reduction); at least 4.
+        reduction: how to meet ``max_faces``: ``"quadric"`` decimates the full-resolution mesh
+            (keeps sharp detail); ``"remesh"`` re-meshes block means of the field (about 4x faster
+            at h = 2 for the default design, smoother, volume preserved; for display). Both fall
+            back to the closed coarse re-mesh of step 4.
         smooth_sigma: Gaussian smoothing of the occupancy field, in voxels (0: binary field).
         color_by_z: viridis vertex colours by height.
         preserve_volume: with ``smooth_sigma > 0``, choose the iso-level so that the mesh volume
@@ -307,6 +331,8 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None,
     """
     if max_faces is not None and (int(max_faces) != max_faces or max_faces < 4):
         raise ValueError(f"max_faces = {max_faces!r} is invalid: valid range integers >= 4 (or None)")
+    if reduction not in ("quadric", "remesh"):
+        raise ValueError(f"reduction = {reduction!r} is invalid: expected quadric or remesh")
     if not (math.isfinite(smooth_sigma) and smooth_sigma >= 0):
         raise ValueError(f"smooth_sigma = {smooth_sigma!r} is invalid: valid range [0, inf) voxels")
     grid = result.grid
@@ -336,7 +362,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None,
     meta["faces_marching"] = int(len(mesh.faces))
 
     if max_faces is not None and len(mesh.faces) > max_faces:
-        mesh = _reduce(mesh, field, pad, grid.origin, h, int(max_faces), target, meta)
+        mesh = _reduce(mesh, field, pad, grid.origin, h, int(max_faces), target, meta, reduction)
 
     if color_by_z and len(mesh.vertices):
         z = mesh.vertices[:, 2]

@@ -241,3 +241,28 @@ def test_default_design_shell(default_h6):
     small = workspace_shell(res, max_faces=5000)
     assert len(small.faces) <= 5000 and small.is_watertight
     assert shell_volume_error(res, small) < 0.01
+
+
+def test_block_remesh_reduction_is_closed_within_budget_and_keeps_volume():
+    """reduction="remesh" (the explorer's display shell) on the real default workspace at h = 4."""
+    from kinematics.design import Design
+    from kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
+    full = workspace_shell(res)
+    for budget in (len(full.faces) // 3, len(full.faces) // 10):
+        mesh = workspace_shell(res, max_faces=budget, reduction="remesh")
+        assert len(mesh.faces) <= budget
+        assert mesh.is_watertight and mesh.volume > 0
+        assert "block re-mesh" in mesh.metadata["paraspace"]["reduction"]
+        assert shell_volume_error(res, mesh) < 1e-3
+        # same surface: every vertex lies within two voxels of the voxel boundary of the workspace
+        from scipy import ndimage as ndi
+
+        occ = np.pad(res.occupancy, 1)
+        boundary = occ ^ ndi.binary_erosion(occ)
+        dist = ndi.distance_transform_edt(~boundary) * res.grid.h
+        idx = np.rint((mesh.vertices - np.asarray(res.grid.origin)) / res.grid.h).astype(int) + 1
+        assert dist[idx[:, 0], idx[:, 1], idx[:, 2]].max() <= 2 * res.grid.h
+    with pytest.raises(ValueError, match="reduction"):
+        workspace_shell(res, max_faces=100, reduction="fast")
