@@ -52,8 +52,8 @@ from starlette.concurrency import run_in_threadpool
 from pydantic import BaseModel, ConfigDict, Field
 
 from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
-from kinematics.grid import GridSpec
 from kinematics.pose import POSE_LIMITS, Pose
+from kinematics.serialize import jsonable
 
 from .jobs import Job, JobManager, LimitExceeded
 
@@ -405,30 +405,6 @@ def _error_json(status: int, detail: Any, headers: Optional[dict[str, str]] = No
 # helpers
 
 
-def _jsonable(x: Any) -> Any:
-    """Plain JSON: numpy -> Python, non-finite floats -> None, tuples -> lists."""
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    if x is None or isinstance(x, str):
-        return x
-    if dataclasses.is_dataclass(x) and not isinstance(x, type):
-        return _jsonable(dataclasses.asdict(x))
-    if hasattr(x, "to_dict"):
-        return _jsonable(x.to_dict())
-    return str(x)
-
-
 class _LRU:
     """A small thread-safe LRU mapping."""
 
@@ -712,8 +688,8 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                                 "job": job.to_dict(), "links": job_links(job)}
         if job.status == "done" and isinstance(job.result, ApiResult):
             body["result"] = job.result.payload
-            return JSONResponse(status_code=200, content=_jsonable(body))
-        return JSONResponse(status_code=202, content=_jsonable(body),
+            return JSONResponse(status_code=200, content=jsonable(body))
+        return JSONResponse(status_code=202, content=jsonable(body),
                             headers={"Location": f"{API_PREFIX}/jobs/{job.id}"})
 
     def api_job(job_id: str, request: Request, kind: Optional[str] = None) -> Job:
@@ -776,7 +752,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             res = resolve_redundancy(design, pose)
         else:
             res = _core("carriage", lambda: inverse_kinematics(design, pose, req.d, req.eta))
-        return _jsonable({"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()})
+        return jsonable({"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()})
 
     # ----- workspace ------------------------------------------------------------------------
     @router.post("/workspace", status_code=202, summary="Start a position-workspace job",
@@ -811,7 +787,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     def workspace_result(job_id: str, request: Request) -> dict[str, Any]:
         """409 while the job runs or when it failed or was cancelled."""
         job = api_job(job_id, request, "workspace")
-        return _jsonable({"job": job.to_dict(), **finished_result(job).payload})
+        return jsonable({"job": job.to_dict(), **finished_result(job).payload})
 
     @router.get("/workspace/{job_id}/shell.{fmt}", summary="Boundary surface of a finished workspace",
                 response_class=Response,
@@ -875,7 +851,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
         def compute(progress: Any, cancel: Any) -> ApiResult:
             res = orientation_workspace(design, settings, progress, cancel)
-            return ApiResult(raw=None, payload=_jsonable(res.to_dict(include_grids=False)))
+            return ApiResult(raw=None, payload=jsonable(res.to_dict(include_grids=False)))
 
         return submit(request, "orientation", key, compute), cached
 
@@ -947,7 +923,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                                   settings, orientation=ori, progress=progress, cancel=cancel, cache=sweep_cache)
                 payload = {"mode": "2d", "param_x": req.x.param, "values_x": vals[0],
                            "param_y": req.y.param, "values_y": vals[1], **dict(out)}  # type: ignore[union-attr]
-            return ApiResult(raw=None, payload=_jsonable(payload))
+            return ApiResult(raw=None, payload=jsonable(payload))
 
         return submit(request, "sweep", key, compute), cached
 
@@ -961,7 +937,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     async def job_status(job_id: str, request: Request) -> dict[str, Any]:
         """``status`` is queued, running, done, failed or cancelled; ``progress`` in [0, 1]."""
         job = api_job(job_id, request)
-        return _jsonable({**job.to_dict(), "links": job_links(job)})
+        return jsonable({**job.to_dict(), "links": job_links(job)})
 
     @router.delete("/jobs/{job_id}", summary="Cancel a job")
     def job_cancel(job_id: str, request: Request) -> dict[str, Any]:
@@ -971,13 +947,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         if job.client != client_of(request):
             raise ApiError(403, f"job {job_id} belongs to another client; only its submitter may cancel it")
         ok = jobs.cancel(job_id)
-        return _jsonable({"cancelled": ok, **job.to_dict()})
+        return jsonable({"cancelled": ok, **job.to_dict()})
 
     @router.get("/jobs/{job_id}/result", summary="Result of a finished job")
     def job_result(job_id: str, request: Request) -> dict[str, Any]:
         """The JSON result (409 while running, or when the job failed or was cancelled)."""
         job = api_job(job_id, request)
-        return _jsonable({"job": job.to_dict(), "result": finished_result(job).payload})
+        return jsonable({"job": job.to_dict(), "result": finished_result(job).payload})
 
     # ----- short links ----------------------------------------------------------------------
     def explorer_base(request: Request) -> Optional[str]:
@@ -1085,7 +1061,7 @@ def _workspace_payload(res: Any) -> dict[str, Any]:
     g = res.grid
     payload: dict[str, Any] = {
         "design": res.design.to_dict(),
-        "settings": _jsonable(dataclasses.asdict(res.settings)),
+        "settings": jsonable(dataclasses.asdict(res.settings)),
         "voxels": res.voxels,
         "volume": res.volume,
         "compute_seconds": res.compute_seconds,
@@ -1100,8 +1076,8 @@ def _workspace_payload(res: Any) -> dict[str, Any]:
         payload["measures_error"] = f"measures unavailable: {e}"
     else:
         payload["measures"] = measure_workspace(res).to_dict()
-    return _jsonable(payload)
+    return jsonable(payload)
 
 
 def _json_dumps(x: Any) -> str:  # pragma: no cover - debugging aid
-    return json.dumps(_jsonable(x))
+    return json.dumps(jsonable(x))

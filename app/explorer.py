@@ -39,7 +39,7 @@ from typing import Any, Callable, Hashable, Iterator, Optional
 import numpy as np
 import viser
 
-from kinematics.design import PARAMS, Design, ParameterError
+from kinematics.design import Design, ParameterError
 from kinematics.orientation import OrientationSettings, orientation_workspace
 from kinematics.pose import Pose
 from kinematics.progress import Cancelled

@@ -134,7 +134,7 @@ chain_binding (only when ``chain_mask`` is present)
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Optional
+from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -143,6 +143,7 @@ from scipy.spatial import ConvexHull, QhullError
 from skimage.measure import euler_number
 
 from .parallel import KERNEL_LOCK
+from .serialize import jsonable
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -190,23 +191,7 @@ class WorkspaceMeasures:
 
     def to_dict(self) -> dict:
         """Plain JSON-serializable dict (Python floats/ints/bools/strings/lists/None only)."""
-        return _plain(dataclasses.asdict(self))
-
-
-def _plain(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x)
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    return x
+        return jsonable(dataclasses.asdict(self))
 
 
 def _structure(connectivity: int) -> np.ndarray:

@@ -21,7 +21,6 @@ import dataclasses
 import functools
 import hashlib
 import json
-import math
 import os
 import pathlib
 import tempfile
@@ -31,6 +30,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from .serialize import jsonable
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -42,25 +42,6 @@ CACHE_SCHEMA = "sweep-1"
 
 # --------------------------------------------------------------------------------------------
 # the unit of work
-
-
-def _jsonable(obj: Any) -> Any:
-    """Plain JSON types: numpy scalars/arrays to Python, tuples to lists, non-finite floats to None."""
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, np.generic):
-        return _jsonable(obj.item())
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if obj is None or isinstance(obj, (bool, int, str)):
-        return obj
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return _jsonable(dataclasses.asdict(obj))
-    return str(obj)
 
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
@@ -90,7 +71,7 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         out["orientation_deltas"] = dict(ori.deltas)
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
-    return _jsonable(out)
+    return jsonable(out)
 
 
 # --------------------------------------------------------------------------------------------

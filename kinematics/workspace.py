@@ -35,7 +35,7 @@ from .feasibility import ChainTables, _chain_excluded, chain_search, default_n_e
 from .geometry import platform_points_local
 from .grid import GridSpec
 from .parallel import KERNEL_LOCK
-from .progress import CancelToken, Cancelled, ProgressFn, Reporter, check
+from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
 
 ALL_CHAINS = 7  # bitmask with the three chain bits set

@@ -26,7 +26,7 @@ import zstandard
 from websockets.sync.client import connect
 
 from app.explorer import ClientSession, Explorer
-from app.urlstate import encode_query, parse_query
+from app.urlstate import parse_query
 from kinematics.design import Design
 from kinematics.pose import Pose
 from kinematics.redundancy import inverse_kinematics, resolve_redundancy

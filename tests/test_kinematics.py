@@ -65,7 +65,7 @@ def test_paper_t_vector_typo_fails_finite_differences():
     J = jacobians(DESIGN, pose, d, eta)
     varpi = np.radians(eta) + GAMMA
     i, j = 0, 0
-    rho, lat = DESIGN.r - d[i], LEG_SIGN[j] * DESIGN.b / 2
+    lat = LEG_SIGN[j] * DESIGN.b / 2
     t_paper = np.array([(d[i] - DESIGN.r) * np.sin(varpi[i]) - lat * np.cos(varpi[i]),
                         (DESIGN.r - d[i]) * np.sin(varpi[i]) - lat * np.sin(varpi[i]), 0.0])
     # s from the J_x row: its first three entries are s^T
