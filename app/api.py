@@ -1024,11 +1024,27 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         return explorer_redirect(query, request)
 
     @app.get("/", include_in_schema=False)
-    def root() -> dict[str, Any]:
-        return {"name": "paraspace API", "docs": "/docs", "openapi": "/openapi.json", "api": API_PREFIX,
-                "health": f"{API_PREFIX}/health", "explorer_url": explorer_url}
+    def root(request: Request) -> Response:
+        """A browser gets the landing page (static/index.html); a script gets the JSON index."""
+        if "text/html" in request.headers.get("accept", ""):
+            page = landing_page().replace("{{explorer_url}}", explorer_url or "/s").replace("{{api_prefix}}", API_PREFIX)
+            return Response(page, media_type="text/html")
+        return JSONResponse({"name": "paraspace API", "docs": "/docs", "openapi": "/openapi.json", "api": API_PREFIX,
+                             "health": f"{API_PREFIX}/health", "explorer_url": explorer_url})
 
     return app
+
+
+def landing_page() -> str:
+    """``static/index.html``: from the installed ``paraspace_static`` package, or the source tree."""
+    try:
+        import importlib.resources
+
+        return importlib.resources.files("paraspace_static").joinpath("index.html").read_text("utf-8")
+    except (ModuleNotFoundError, FileNotFoundError):
+        import pathlib
+
+        return (pathlib.Path(__file__).resolve().parent.parent / "static" / "index.html").read_text("utf-8")
 
 
 def _drop_raw(result: Any) -> None:

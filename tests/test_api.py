@@ -353,3 +353,12 @@ def test_serve_busy_api_port_is_a_clear_error():
         with pytest.raises(ParameterError) as e:
             serve("127.0.0.1", 0, busy, block=False, explorer=False, quiet=True)
         assert e.value.field == "api-port" and "free TCP port" in str(e.value)
+
+
+def test_root_serves_landing_page_to_browsers_and_json_to_scripts(http):
+    page = http.get("/", headers={"accept": "text/html"})
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    assert "Open the explorer" in page.text and "{{" not in page.text and 'href="/docs"' in page.text
+    assert 'href="http://127.0.0.1:9999"' in page.text
+    index = http.get("/", headers={"accept": "application/json"}).json()
+    assert index["docs"] == "/docs"

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import pathlib
 import re
+import tempfile
 import time
 import urllib.parse
 from typing import Any, Callable, Iterator
@@ -33,7 +34,11 @@ from app.urlstate import parse_query  # noqa: E402
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-SHOTS = pathlib.Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+# README screenshots: refreshed in docs/screenshots/ with PARASPACE_UPDATE_SCREENSHOTS=1, otherwise
+# written to a scratch folder (a test run leaves the checkout unchanged).
+SHOTS = (pathlib.Path(__file__).resolve().parent.parent / "docs" / "screenshots"
+         if os.environ.get("PARASPACE_UPDATE_SCREENSHOTS") == "1"
+         else pathlib.Path(tempfile.gettempdir()) / "paraspace-screenshots")
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
         "--no-first-run", "--disable-sync"]
 
