@@ -1036,15 +1036,15 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
 
 def landing_page() -> str:
-    """``static/index.html``: from the installed ``paraspace_static`` package, or the source tree."""
-    try:
-        import importlib.resources
+    """``static/index.html``: from the source tree when running from a checkout, else from the
+    installed data package ``paraspace_static``."""
+    import importlib.resources
+    import pathlib
 
-        return importlib.resources.files("paraspace_static").joinpath("index.html").read_text("utf-8")
-    except (ModuleNotFoundError, FileNotFoundError):
-        import pathlib
-
-        return (pathlib.Path(__file__).resolve().parent.parent / "static" / "index.html").read_text("utf-8")
+    source = pathlib.Path(__file__).resolve().parent.parent / "static" / "index.html"
+    if source.is_file():
+        return source.read_text("utf-8")
+    return importlib.resources.files("paraspace_static").joinpath("index.html").read_text("utf-8")
 
 
 def _drop_raw(result: Any) -> None:
