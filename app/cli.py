@@ -92,6 +92,10 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     out = {"design": design.to_dict(), **measures.to_dict(), "voxel_size": result.grid.h, "voxels": result.voxels,
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "eta_samples": result.n_eta}
+    if ns.diagnostics:
+        from kinematics.diagnostics import limit_binding
+
+        out["limit_binding"] = limit_binding(result).to_dict()
     if fmt:
         from kinematics.shell import export_shell, workspace_shell
 
@@ -107,6 +111,9 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
             if key in out:
                 print(f"{key:<15} {out[key]}")
         print(f"bounds          {out.get('bounds')}")
+        if ns.diagnostics:
+            print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
+            print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
@@ -273,7 +280,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--voxel", default=2.0, help="voxel edge h (default 2)")
     w.add_argument("--json", action="store_true", help="one JSON object on stdout")
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
-    w.add_argument("--diagnostics", action="store_true", help="evaluate every chain everywhere (which chain binds)")
+    w.add_argument("--diagnostics", action="store_true",
+                   help="which chain and which leg limit bind (evaluates every chain everywhere; slower)")
     w.set_defaults(func=cmd_workspace)
 
     o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")

@@ -79,3 +79,12 @@ def test_bad_input_one_line_naming_field(args, field):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and field in lines[0] and "Traceback" not in proc.stderr
+
+
+def test_workspace_diagnostics_names_chains_and_limits():
+    data = json.loads(run("workspace", "--voxel", "8", "--diagnostics", "--json").stdout)
+    assert [c["chain"] for c in data["limit_binding"]["per_chain"]] == [1, 2, 3]
+    assert sum(data["limit_binding"]["fractions"].values()) == pytest.approx(1.0)
+    assert "summary" in data["chain_binding"]
+    text = run("workspace", "--voxel", "8", "--diagnostics").stdout
+    assert "l_max" in text and "chain" in text
