@@ -1,0 +1,148 @@
+"""A protocol-level viser client for tests: :class:`FakeBrowser` and polling helpers.
+
+:class:`FakeBrowser` is a websocket client that speaks viser 1.1.1's wire format (notes §5),
+answers localStorage requests as a browser that has run the JS bridge (app/jsbridge.py) would,
+plays ``history.replaceState`` on a fake ``location.search``, and records what the server sends
+(scripts, file downloads). Inputs are sent as ``GuiUpdateMessage`` exactly like the web client
+does, so they go through viser's callback thread pool.
+
+Shared by tests/test_explorer.py and tests/test_load_explorer.py (pytest's default "prepend"
+import mode puts tests/ on ``sys.path``, so ``from explorer_client import ...`` works).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import threading
+import time
+from typing import Any, Callable, Optional
+
+import msgspec
+import viser
+import zstandard
+from websockets.sync.client import connect
+
+from app.explorer import ClientSession, Explorer
+
+__all__ = ["FakeBrowser", "wait_for", "wait_idle"]
+
+
+class FakeBrowser:
+    """A viser client over the websocket protocol, with a fake ``location`` and localStorage."""
+
+    def __init__(self, explorer: Explorer, search: str = "") -> None:
+        self.explorer = explorer
+        self.search = search if not search or search.startswith("?") else "?" + search
+        self.base = explorer.url
+        self.storage: dict[str, str] = {}
+        self.scripts: list[str] = []
+        self.downloads: dict[str, dict[str, Any]] = {}
+        self.lock = threading.Lock()
+        self.closed = False
+        before = set(explorer.sessions)
+        self.ws = connect(explorer.url.replace("http", "ws").rstrip("/"),
+                          subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
+        self._send({"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (0.0, 0.0, 500.0),
+                    "fov": 1.0, "near": 0.01, "far": 1000.0, "image_height": 720, "image_width": 1280,
+                    "look_at": (0.0, 0.0, 0.0), "up_direction": (0.0, 0.0, 1.0)})
+        self.thread = threading.Thread(target=self._recv_loop, daemon=True)
+        self.thread.start()
+        self.session: ClientSession = wait_for(
+            lambda: next((s for cid, s in list(explorer.sessions.items()) if cid not in before and s.ready.is_set()),
+                         None), 20.0, "the session was not built")
+
+    # ----- wire ---------------------------------------------------------------------------------
+    def _send(self, msg: dict) -> None:
+        self.ws.send(msgspec.msgpack.encode(msg))
+
+    def _recv_loop(self) -> None:
+        dctx = zstandard.ZstdDecompressor()
+        while not self.closed:
+            try:
+                raw = self.ws.recv()
+            except Exception:  # noqa: BLE001 - closed
+                return
+            if not isinstance(raw, bytes):
+                continue
+            inner = int.from_bytes(raw[0:8], "little")
+            comp = int.from_bytes(raw[8:16], "little")
+            payload = msgspec.msgpack.decode(dctx.decompress(raw[16:16 + comp], max_output_size=inner))
+            for m in payload["messages"]:
+                self._handle(m)
+
+    def _handle(self, m: dict) -> None:
+        kind = m.get("type")
+        if kind == "RunJavascriptMessage":
+            src = m["source"]
+            with self.lock:
+                self.scripts.append(src)
+            # Play the browser: the two scripts of app/jsbridge.py that matter here.
+            set_loc = re.search(r"localStorage\.setItem\((\"[^\"]+\"),", src)
+            if set_loc and "location.search" in src:
+                key = json.loads(set_loc.group(1))
+                self.storage[key] = json.dumps({"search": self.search, "base": self.base})
+            q = re.search(r"var q = (\"(?:[^\"\\]|\\.)*\");", src)
+            if q and "replaceState" in src:
+                self.search = json.loads(q.group(1))
+        elif kind == "LocalStorageGetItemRequestMessage":
+            value = self.storage.get("viser-user:" + m["key"])
+            self._send({"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,
+                        "request_uuid": m["request_uuid"]})
+        elif kind == "LocalStorageRemoveItemMessage":
+            self.storage.pop("viser-user:" + m["key"], None)
+        elif kind == "FileTransferStartDownload":
+            with self.lock:
+                self.downloads[m["transfer_uuid"]] = {"filename": m["filename"], "parts": {},
+                                                      "count": m["part_count"]}
+        elif kind == "FileTransferPart":
+            with self.lock:
+                d = self.downloads.get(m["transfer_uuid"])
+                if d is not None:
+                    d["parts"][m["part_index"]] = bytes(m["content"])
+
+    # ----- actions -------------------------------------------------------------------------------
+    def set(self, handle: Any, value: Any) -> None:
+        """Change a GUI input the way the web client does."""
+        self._send({"type": "GuiUpdateMessage", "uuid": handle._impl.uuid, "updates": {"value": value}})
+
+    def click(self, handle: Any) -> None:
+        self.set(handle, True)
+
+    def download(self, filename: str, timeout: float = 20.0) -> bytes:
+        def done() -> Optional[bytes]:
+            with self.lock:
+                for d in self.downloads.values():
+                    if d["filename"] == filename and len(d["parts"]) == d["count"]:
+                        return b"".join(d["parts"][i] for i in range(d["count"]))
+            return None
+        return wait_for(done, timeout, f"download {filename}")
+
+    def close(self) -> None:
+        self.closed = True
+        self.ws.close()
+
+
+def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
+    """Poll ``fn`` until it returns a truthy value (returned) or fail after ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        v = fn()
+        if v:
+            return v
+        time.sleep(0.02)
+    raise AssertionError(f"timed out after {timeout} s waiting for: {what}")
+
+
+def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> None:
+    """Wait until the session has no unfinished jobs and a full result for its current state."""
+    def idle() -> bool:
+        if exp.jobs.active(session.job_client):
+            return False
+        b = session.bundle
+        s = session.state
+        return (b is not None and b.measures is not None and b.result.design == s.design
+                and b.result.settings.orientation == (s.pose.psi, s.pose.theta, s.pose.phi)
+                and b.result.settings.voxel == s.voxel
+                and session._ws_info.get("preview") is False and session._ws_info.get("measures") is not None)
+    wait_for(idle, timeout, "the session to become idle")
