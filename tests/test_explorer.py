@@ -178,7 +178,9 @@ def test_manual_carriages(explorer, browsers):
     b.set(s.panels.carriages, "manual")
     wait_for(lambda: s.state.carriages == "manual", 10.0, "manual mode")
     assert np.allclose(s.state.d, np.round(resolved.d, 2))
-    assert s.panels.d[0].visible
+    # the carriage sliders are set and shown right after the state changes (not atomically with it):
+    # wait for the last of them, or a value sent below could be overwritten by that programmatic set
+    wait_for(lambda: all(h.visible for h in s.panels.d + s.panels.eta), 5.0, "the carriage sliders shown")
     b.set(s.panels.d[0], 5.0)
     b.set(s.panels.eta[1], -10.0)
     wait_for(lambda: s.resolution is not None and s.resolution.mode == "manual" and s.resolution.d[0] == 5.0
