@@ -3,8 +3,9 @@
 Each test connects one or more *protocol-level* fake browsers (tests/explorer_client.py) to a real
 :class:`app.explorer.Explorer`: a websocket client that speaks viser 1.1.1's wire format (notes §5),
 answers localStorage requests as a browser that has run the JS bridge would, and records what the
-server sends (scripts, file downloads). Inputs are sent as ``GuiUpdateMessage`` exactly like the web client does, so they go
-through viser's callback thread pool; assertions look at the server-side session.
+server sends (scripts, file downloads). Inputs are sent as ``GuiUpdateMessage`` exactly like the
+web client does, so they go through viser's callback thread pool; assertions look at the
+server-side session.
 """
 
 from __future__ import annotations
