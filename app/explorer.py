@@ -149,6 +149,7 @@ class ClientSession:
         self.job_client = f"viser-{client.client_id}"
         self.lock = threading.RLock()
         self.view_lock = threading.Lock()
+        self.input_lock = threading.RLock()  # serialises design input (see on_design_input)
         self.mech_lock = threading.Lock()
         self.state = state
         self.base_url = base_url
@@ -166,6 +167,7 @@ class ClientSession:
         self.in_workspace: Optional[bool] = None
         self._or_gen = 0
         self._or_job: Optional[Job] = None
+        self._or_key: Optional[tuple] = None  # (design key, z0) of the maps being computed/shown
         self.orientation: Any = None
         self._orientation_png: Optional[bytes] = None
         self._sweep_job: Optional[Job] = None
@@ -373,7 +375,14 @@ class ClientSession:
 
     # ----- input handlers -----------------------------------------------------------------------
     def on_design_input(self) -> None:
-        """A design slider or the arc-range convention changed."""
+        """A design slider or the arc-range convention changed. Reading the sliders and applying the
+        design happen under ``input_lock`` (viser runs one session's callbacks concurrently; the newest
+        slider values must win). Worker threads never take ``input_lock``, so it cannot invert the
+        ``view_lock`` -> ``lock`` order of :meth:`_publish`."""
+        with self.input_lock:
+            self._on_design_input_locked()
+
+    def _on_design_input_locked(self) -> None:
         p = self.panels
         fields: dict[str, Any] = {k: float(p.design[k].value) for k in DESIGN_KEYS}
         fields["eta_range"] = str(p.eta_range.value)
@@ -429,13 +438,14 @@ class ClientSession:
     def reset_design(self) -> None:
         """Reset the design sliders to the paper's defaults (Fig. 3 design)."""
         default = Design()
-        with self.programmatic():
-            for key in DESIGN_KEYS:
-                self.panels.design[key].value = float(getattr(default, key))
-            self.panels.eta_range.value = default.eta_range
-        self.design_error = None
-        self.panels.design_message.visible = False
-        self.apply_design(default)
+        with self.input_lock:
+            with self.programmatic():
+                for key in DESIGN_KEYS:
+                    self.panels.design[key].value = float(getattr(default, key))
+                self.panels.eta_range.value = default.eta_range
+            self.design_error = None
+            self.panels.design_message.visible = False
+            self.apply_design(default)
 
     def on_voxel(self) -> None:
         """The voxel slider moved: recompute the workspace at the new resolution."""
@@ -447,8 +457,8 @@ class ClientSession:
     def on_pose_input(self, orientation_changed: bool) -> None:
         """A pose slider moved: IK only for x, y, z; the orientation also recomputes the workspace."""
         p = self.panels
-        vals = {k: float(p.pose[k].value) for k in POSE_KEYS}
-        with self.lock:
+        with self.lock:  # read the sliders under the lock: a concurrent older callback cannot write last
+            vals = {k: float(p.pose[k].value) for k in POSE_KEYS}
             old = self.state.pose
             pose = Pose(**vals)
             self.state = self.state.replace(pose=pose)
@@ -592,6 +602,17 @@ class ClientSession:
             self._ws_gen += 1
             gen = self._ws_gen
             s = self.state
+            # maps of another design are stale: never show them, and free the worker at once
+            stale_maps = self._or_key is not None and self._or_key != (s.design.key(), s.z0)
+            if stale_maps:
+                self._or_gen += 1
+                self._or_key = None
+                stale_job, self._or_job = self._or_job, None
+        if stale_maps:
+            self._cancel_job(stale_job)
+            with self.lock:
+                if not self.closed:
+                    self.panels.orientation_status.content = "waiting for the new design's workspace..."
         cache = self.explorer.shell_cache
         key = self._ws_key(s, s.voxel)
         hit = cache.get(key)
@@ -768,7 +789,8 @@ class ClientSession:
             self._or_gen += 1
             gen = self._or_gen
             s = self.state
-        key = (s.design.key(), s.z0)
+            key = (s.design.key(), s.z0)
+            self._or_key = key
         hit = self.explorer.orientation_cache.get(key)
         if hit is not None:
             self._cancel_job(self._or_job)
@@ -797,7 +819,9 @@ class ClientSession:
         except (LimitExceeded, RuntimeError) as exc:
             self._set_orientation_status(gen, f"not started: {exc}")
             return
-        self._or_job = job
+        with self.lock:
+            if gen == self._or_gen:
+                self._or_job = job
         self._set_orientation_status(gen, "computing...")
 
     def _set_orientation_status(self, gen: int, text: str) -> None:
