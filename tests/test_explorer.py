@@ -326,7 +326,7 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers):
     """Maps of a design that is no longer current are cancelled at once and never shown, so the
     worker is free for the new design (regression: with both workers busy drawing maps, the stale
     job ran to the end, held the new design's workspace in the queue, and its maps were shown)."""
-    b1, b2 = browsers("voxel=6&a=30"), browsers("voxel=6&a=40")
+    b1, b2 = browsers("voxel=6&a=31"), browsers("voxel=6&a=41")  # values no other test uses (no cache hits)
     s1, s2 = b1.session, b2.session
     wait_idle(explorer, s1)
     wait_idle(explorer, s2)
@@ -334,19 +334,19 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers):
     def running(client=None):
         return [j for j in explorer.jobs.jobs() if j.kind == "orientation" and j.status == "running"
                 and (client is None or j.client == client)]
-    b1.set(s1.panels.design["a"], 60.0)
-    wait_for(lambda: running(s1.job_client), 20.0, "session 1's a = 60 maps running")
-    b2.set(s2.panels.design["a"], 70.0)
+    b1.set(s1.panels.design["a"], 57.0)
+    wait_for(lambda: running(s1.job_client), 20.0, "session 1's a = 57 maps running")
+    b2.set(s2.panels.design["a"], 73.0)
     wait_for(lambda: len(running()) == 2, 20.0, "both workers drawing maps")
     stale = running(s1.job_client)
     shown = []
-    b1.set(s1.panels.design["a"], 61.0)
+    b1.set(s1.panels.design["a"], 58.0)
     wait_for(lambda: all(j.is_final for j in stale), 2.0, "the stale map job cancelled at once")
     assert [j.status for j in stale] == ["cancelled"]
     deadline = time.time() + 60
-    while time.time() < deadline and not (s1.orientation is not None and s1.orientation.design.a == 61.0):
+    while time.time() < deadline and not (s1.orientation is not None and s1.orientation.design.a == 58.0):
         if s1.orientation is not None:
             shown.append(s1.orientation.design.a)
         time.sleep(0.02)
-    assert s1.orientation is not None and s1.orientation.design.a == 61.0
-    assert 60.0 not in shown, "maps of the superseded design were shown"
+    assert s1.orientation is not None and s1.orientation.design.a == 58.0
+    assert 57.0 not in shown, "maps of the superseded design were shown"
