@@ -147,6 +147,19 @@ def format_number(value: float) -> str:
     return text
 
 
+def _parse_fields(keys, values: dict[str, str], ranges: dict[str, "Range"], messages: list[str]) -> dict[str, float]:
+    """:func:`_parse_number` for every ``key`` present in ``values``; bad ones add a message."""
+    out: dict[str, float] = {}
+    for key in keys:
+        if key in values:
+            v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""))
+            if msg:
+                messages.append(msg)
+            else:
+                out[key] = v  # type: ignore[assignment]
+    return out
+
+
 def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
                   range_text: Optional[str] = None) -> tuple[Optional[float], Optional[str]]:
     """Parse one number and check it lies in ``rng``; returns (value, None) or (None, message)."""
@@ -205,14 +218,7 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         values[key] = raw.strip()
 
     # ----- design: per-field ranges, then the model's cross-checks (d_s <= r) ------------------
-    design_fields: dict[str, Any] = {}
-    for key in DESIGN_KEYS:
-        if key in values:
-            v, msg = _parse_number(key, values[key], DESIGN_RANGES[key], UNITS.get(key, ""))
-            if msg:
-                messages.append(msg)
-            else:
-                design_fields[key] = v
+    design_fields: dict[str, Any] = _parse_fields(DESIGN_KEYS, values, DESIGN_RANGES, messages)
     if "eta_range" in values:
         v, msg = _parse_choice("eta_range", values["eta_range"], ETA_RANGES)
         if msg:
@@ -234,14 +240,7 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
             design_fields.pop(field, None)
 
     # ----- pose ----------------------------------------------------------------------------------
-    pose_fields: dict[str, float] = {}
-    for key in POSE_KEYS:
-        if key in values:
-            v, msg = _parse_number(key, values[key], POSE_RANGES[key], UNITS.get(key, ""))
-            if msg:
-                messages.append(msg)
-            else:
-                pose_fields[key] = v  # type: ignore[assignment]
+    pose_fields = _parse_fields(POSE_KEYS, values, POSE_RANGES, messages)
     pose = Pose(**pose_fields)
 
     # ----- carriages -----------------------------------------------------------------------------
@@ -275,14 +274,7 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
     # Defaults of d/eta (0) are always inside the strokes.
 
     # ----- settings and view ------------------------------------------------------------------------
-    numbers: dict[str, float] = {}
-    for key in ("voxel", "z0", "cut_z", "opacity"):
-        if key in values:
-            v, msg = _parse_number(key, values[key], SETTING_RANGES[key])
-            if msg:
-                messages.append(msg)
-            else:
-                numbers[key] = v  # type: ignore[assignment]
+    numbers = _parse_fields(("voxel", "z0", "cut_z", "opacity"), values, SETTING_RANGES, messages)
     view = DEFAULT_STATE.view
     if "view" in values:
         v, msg = _parse_choice("view", values["view"], CAMERA_PRESETS)

@@ -17,7 +17,7 @@ import re
 import tempfile
 import time
 import urllib.parse
-from typing import Any, Callable, Iterator
+from typing import Any, Iterator
 
 import numpy as np
 import pytest
@@ -31,6 +31,7 @@ from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 
 from app.explorer import ClientSession, Explorer  # noqa: E402
 from app.urlstate import parse_query  # noqa: E402
+from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -41,16 +42,6 @@ SHOTS = (pathlib.Path(__file__).resolve().parent.parent / "docs" / "screenshots"
          else pathlib.Path(tempfile.gettempdir()) / "paraspace-screenshots")
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
         "--no-first-run", "--disable-sync"]
-
-
-def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        v = fn()
-        if v:
-            return v
-        time.sleep(0.05)
-    raise AssertionError(f"timed out after {timeout} s waiting for: {what}")
 
 
 @pytest.fixture(scope="module")
