@@ -53,7 +53,7 @@ RUN pip install . \
 USER paraspace
 WORKDIR /home/paraspace
 # Compile the numba kernels once into the (writable) cache, so the first request is fast.
-RUN python -c "from kinematics.workspace import warm_up; print('numba warm-up', round(warm_up(), 1), 's')"
+RUN python -c "from paraspace.kinematics.workspace import warm_up; print('numba warm-up', round(warm_up(), 1), 's')"
 
 EXPOSE 8080 8081
 HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \

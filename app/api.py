@@ -51,9 +51,10 @@ from fastapi.responses import JSONResponse, RedirectResponse, Response
 from starlette.concurrency import run_in_threadpool
 from pydantic import BaseModel, ConfigDict, Field
 
-from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
-from kinematics.pose import POSE_LIMITS, Pose
-from kinematics.serialize import jsonable
+import paraspace
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from paraspace.kinematics.pose import POSE_LIMITS, Pose
+from paraspace.kinematics.serialize import jsonable
 
 from .jobs import Job, JobManager, LimitExceeded
 
@@ -62,7 +63,7 @@ __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode
 log = logging.getLogger(__name__)
 
 API_PREFIX = "/api/v1"
-API_VERSION = "1.0.0"
+API_VERSION = paraspace.__version__  # the package metadata, stated once (pyproject.toml)
 CLIENT_PREFIX = "api:"
 
 
@@ -210,7 +211,7 @@ class WorkspaceSettingsIn(BaseModel):
 
     def build(self) -> Any:
         """The core ``WorkspaceSettings``."""
-        from kinematics.workspace import WorkspaceSettings
+        from paraspace.kinematics.workspace import WorkspaceSettings
 
         o = self.orientation
         bounds = None
@@ -247,7 +248,7 @@ class OrientationSettingsIn(BaseModel):
 
     def build(self) -> Any:
         """The core ``OrientationSettings``."""
-        from kinematics.orientation import OrientationSettings
+        from paraspace.kinematics.orientation import OrientationSettings
 
         return _core("orientation", lambda: OrientationSettings(**self.model_dump()))
 
@@ -484,7 +485,7 @@ def workspace_voxels(design: Design, settings: Any, *, analytic: bool = False) -
     ``kinematics.workspace.default_bounds`` (``analytic=False``; runs a coarse scout of about
     50^3 voxels) or the analytical reach box (``analytic=True``: no computation, an upper bound).
     """
-    from kinematics import workspace as ws
+    from paraspace.kinematics import workspace as ws
 
     h = settings.voxel
     if settings.bounds is not None:
@@ -498,7 +499,7 @@ def workspace_voxels(design: Design, settings: Any, *, analytic: bool = False) -
 
 def orientation_samples(design: Design, settings: Any) -> int:
     """Position x angle samples of an orientation workspace (3 lines x 3 rotations)."""
-    from kinematics import orientation as ori
+    from paraspace.kinematics import orientation as ori
 
     n_ang = int(ori.angle_samples(settings).size)
     n_pos = sum(int(ori.position_samples(design, ln, settings).size) for ln in ori.LINES)
@@ -591,7 +592,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     app.state.caches = caches
     sweep_cache = None
     try:
-        from kinematics.sweep import ResultCache
+        from paraspace.kinematics.sweep import ResultCache
 
         sweep_cache = ResultCache()
     except Exception:  # noqa: BLE001 - optional: the sweep module may be absent or differ
@@ -741,7 +742,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     @router.post("/ik", summary="Inverse kinematics of one pose")
     def ik(req: IkRequest) -> dict[str, Any]:
         """Redundancy resolved automatically (no ``d``/``eta``) or with hand-set carriages."""
-        from kinematics.redundancy import inverse_kinematics, resolve_redundancy
+        from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
         design, pose = req.design.build(), req.pose.build()
         if (req.d is None) != (req.eta is None):
@@ -765,7 +766,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         return await job_response(job, wait, cached)
 
     def _start_workspace(req: WorkspaceRequest, request: Request) -> tuple[Job, bool]:
-        from kinematics.workspace import compute_workspace
+        from paraspace.kinematics.workspace import compute_workspace
 
         design, settings = req.design.build(), req.settings.build()
         key = (design.key(), settings.key())
@@ -806,8 +807,8 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         skey = (job_id, fmt, max_faces)
         data = shells.get(skey)
         if data is None:
-            from kinematics.shell import export_shell
-            from kinematics.shell import workspace_shell as make_shell
+            from paraspace.kinematics.shell import export_shell
+            from paraspace.kinematics.shell import workspace_shell as make_shell
 
             raw = res.raw
             if raw is None:
@@ -837,7 +838,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         return await job_response(job, wait, cached)
 
     def _start_orientation(req: OrientationRequest, request: Request) -> tuple[Job, bool]:
-        from kinematics.orientation import orientation_workspace
+        from paraspace.kinematics.orientation import orientation_workspace
 
         design, settings = req.design.build(), req.settings.build()
         key = (design.key(), settings.key())
@@ -867,7 +868,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         return await job_response(job, wait, cached)
 
     def _start_sweep(req: SweepRequest, request: Request) -> tuple[Job, bool]:
-        from kinematics import sweep as sw
+        from paraspace.kinematics import sweep as sw
 
         design, settings = req.design.build(), req.settings.build()
         ori = req.orientation.build() if req.orientation is not None else None
@@ -975,7 +976,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             raise ApiError(404, "no explorer is attached to this API server, so short links are disabled")
         query = query.lstrip("?")
         try:
-            from app.urlstate import parse_query
+            from paraspace.app.urlstate import parse_query
         except ImportError:  # pragma: no cover - urlstate is part of the app
             parse_query = None
         if parse_query is not None:
@@ -990,7 +991,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         """Validates the query like the explorer does; returns ``/s/{token}`` (stateless)."""
         query = req.query.lstrip("?")
         try:
-            from app.urlstate import parse_query
+            from paraspace.app.urlstate import parse_query
         except ImportError:  # pragma: no cover
             parse_query = None
         if parse_query is not None:
@@ -1037,14 +1038,14 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
 def landing_page() -> str:
     """``static/index.html``: from the source tree when running from a checkout, else from the
-    installed data package ``paraspace_static``."""
+    installed package data ``paraspace.static``."""
     import importlib.resources
     import pathlib
 
     source = pathlib.Path(__file__).resolve().parent.parent / "static" / "index.html"
     if source.is_file():
         return source.read_text("utf-8")
-    return importlib.resources.files("paraspace_static").joinpath("index.html").read_text("utf-8")
+    return importlib.resources.files("paraspace.static").joinpath("index.html").read_text("utf-8")
 
 
 def _drop_raw(result: Any) -> None:
@@ -1086,7 +1087,7 @@ def _workspace_payload(res: Any) -> dict[str, Any]:
                  "size": g.size},
     }
     try:
-        from kinematics.measures import measure_workspace
+        from paraspace.kinematics.measures import measure_workspace
     except ImportError as e:  # pragma: no cover - measures is part of the core
         payload["measures"] = None
         payload["measures_error"] = f"measures unavailable: {e}"

@@ -22,7 +22,8 @@ import math
 import sys
 from typing import Any, Optional, Sequence
 
-from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+import paraspace
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -76,8 +77,8 @@ def _emit(obj: Any) -> None:
 
 
 def cmd_workspace(ns: argparse.Namespace) -> int:
-    from kinematics.measures import measure_workspace
-    from kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
+    from paraspace.kinematics.measures import measure_workspace
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     design = _design(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics)
@@ -93,11 +94,11 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "eta_samples": result.n_eta}
     if ns.diagnostics:
-        from kinematics.diagnostics import limit_binding
+        from paraspace.kinematics.diagnostics import limit_binding
 
         out["limit_binding"] = limit_binding(result).to_dict()
     if fmt:
-        from kinematics.shell import export_shell, workspace_shell
+        from paraspace.kinematics.shell import export_shell, workspace_shell
 
         mesh = workspace_shell(result)
         with open(ns.export, "wb") as fh:
@@ -121,8 +122,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
 
 
 def cmd_orientation(ns: argparse.Namespace) -> int:
-    from kinematics.orientation import OrientationSettings, orientation_workspace
-    from kinematics.workspace import warm_up
+    from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+    from paraspace.kinematics.workspace import warm_up
 
     design = _design(ns)
     try:
@@ -143,8 +144,8 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
 
 
 def cmd_sweep(ns: argparse.Namespace) -> int:
-    from kinematics.sweep import sweep_1d, sweep_2d
-    from kinematics.workspace import WorkspaceSettings, warm_up
+    from paraspace.kinematics.sweep import sweep_1d, sweep_2d
+    from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
     design = _design(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns))
@@ -160,14 +161,14 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     if ns.param2 is not None:
         values2 = _floats("values2", ns.values2)
         if distributed:
-            from kinematics.distributed import sweep_grid
+            from paraspace.kinematics.distributed import sweep_grid
 
             rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings,
                               scheduler=ns.scheduler, n_workers=ns.workers)
         else:
             rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings)["points"]
     elif distributed:
-        from kinematics.distributed import sweep_grid
+        from paraspace.kinematics.distributed import sweep_grid
 
         rows = sweep_grid(design, {ns.param: values}, settings, scheduler=ns.scheduler, n_workers=ns.workers)
     else:
@@ -238,8 +239,8 @@ def plot_sweep(rows: Sequence[dict], param: str, param2: Optional[str], path: st
 
 
 def cmd_ik(ns: argparse.Namespace) -> int:
-    from kinematics.pose import Pose
-    from kinematics.redundancy import inverse_kinematics, resolve_redundancy
+    from paraspace.kinematics.pose import Pose
+    from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
     design = _design(ns)
     pose = Pose.from_array(_floats("pose", ns.pose, 6))
@@ -261,7 +262,7 @@ def cmd_ik(ns: argparse.Namespace) -> int:
 
 
 def cmd_serve(ns: argparse.Namespace) -> int:
-    from app.serve import serve
+    from paraspace.app.serve import serve
 
     for field in ("port", "api_port"):
         v = getattr(ns, field)
@@ -273,6 +274,7 @@ def cmd_serve(ns: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="paraspace", description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
+    p.add_argument("--version", action="version", version=f"paraspace {paraspace.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     w = sub.add_parser("workspace", help="constant-orientation position workspace and its measures")

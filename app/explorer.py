@@ -39,12 +39,12 @@ from typing import Any, Callable, Hashable, Iterator, Optional
 import numpy as np
 import viser
 
-from kinematics.design import Design, ParameterError
-from kinematics.orientation import OrientationSettings, orientation_workspace
-from kinematics.pose import Pose
-from kinematics.progress import Cancelled
-from kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
-from kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.progress import Cancelled
+from paraspace.kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
+from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
 
 from . import jsbridge, plots
 from .jobs import Job, JobManager, LimitExceeded
@@ -110,7 +110,7 @@ class LRU:
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
     """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
     (block re-mesh: fast, smooth and volume-preserving, which is what a display needs)."""
-    from kinematics.shell import workspace_shell
+    from paraspace.kinematics.shell import workspace_shell
 
     return workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh")
 
@@ -479,7 +479,7 @@ class ClientSession:
         """The platform was dragged: set the pose sliders from the gizmo (0.1 resolution)."""
         import viser.transforms as vtf
 
-        from kinematics.rotation import euler_zyx_from_matrix
+        from paraspace.kinematics.rotation import euler_zyx_from_matrix
 
         pos = np.asarray(self.gizmo.position, float)
         rot = vtf.SO3(np.asarray(self.gizmo.wxyz, float)).as_matrix()
@@ -853,7 +853,7 @@ class ClientSession:
     # ----- parameter studies --------------------------------------------------------------------------
     def run_sweep(self) -> None:
         """Volume against one design parameter (Fig. 4) on request, with progress and Stop."""
-        from kinematics.sweep import study_values, sweep_1d
+        from paraspace.kinematics.sweep import study_values, sweep_1d
 
         p = self.panels
         param = str(p.sweep_param.value)
@@ -896,7 +896,7 @@ class ClientSession:
 
     def run_surface(self) -> None:
         """Volume over the (a, d_s) grid (Fig. 5) on request, with progress and Stop."""
-        from kinematics.sweep import study_values, sweep_2d
+        from paraspace.kinematics.sweep import study_values, sweep_2d
 
         p = self.panels
         n = int(p.surface_points.value)
@@ -987,7 +987,7 @@ class ClientSession:
 
     def download_shell(self, fmt: str) -> None:
         """Send the full (uncut) shell as STL, PLY or GLB."""
-        from kinematics.shell import export_shell
+        from paraspace.kinematics.shell import export_shell
 
         b = self.bundle
         if b is None:
@@ -1083,7 +1083,7 @@ def _state_badge(status: str) -> str:
 
 
 def _measure(result: WorkspaceResult) -> Any:
-    from kinematics.measures import measure_workspace
+    from paraspace.kinematics.measures import measure_workspace
 
     return measure_workspace(result)
 
@@ -1121,7 +1121,7 @@ class Explorer:
         self._sessions_lock = threading.Lock()
         self.shell_cache = LRU(8)
         self.orientation_cache = LRU(8)
-        from kinematics.sweep import ResultCache
+        from paraspace.kinematics.sweep import ResultCache
 
         self.study_cache = ResultCache(max_entries=1024)
         self.warm = threading.Event()
@@ -1160,7 +1160,7 @@ class Explorer:
     def _warm_up(self) -> None:
         try:
             warm_up()
-            from kinematics.shell import workspace_shell  # noqa: F401 - import cost off the first request
+            from paraspace.kinematics.shell import workspace_shell  # noqa: F401 - import cost off the first request
         except Exception:  # noqa: BLE001
             log.exception("warm-up failed")
         finally:

@@ -45,7 +45,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable, Hashable, Literal, Optional
 
-from kinematics.progress import Cancelled
+from paraspace.kinematics.progress import Cancelled
 
 __all__ = ["Job", "JobManager", "LimitExceeded", "JobStatus", "ProgressFn", "FINAL_STATUSES"]
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import viser
 
-from kinematics.design import ETA_RANGES, PARAMS
+from paraspace.kinematics.design import ETA_RANGES, PARAMS
 
 from .urlstate import (
     CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, ETA_KEYS, POSE_KEYS, POSE_RANGES,

@@ -23,9 +23,9 @@ import trimesh
 import viser
 import viser.transforms as vtf
 
-from kinematics.design import Design
-from kinematics.geometry import GAMMA, base_points, carriage_rails, platform_points_local
-from kinematics.pose import Pose
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.geometry import GAMMA, base_points, carriage_rails, platform_points_local
+from paraspace.kinematics.pose import Pose
 
 #: Leg colors by state (:func:`kinematics.inverse.leg_states`).
 LEG_COLORS: dict[str, tuple[int, int, int]] = {

@@ -23,7 +23,7 @@ from typing import Any, Optional
 
 import uvicorn
 
-from kinematics.design import ParameterError
+from paraspace.kinematics.design import ParameterError
 
 from .api import ApiLimits, create_api
 from .jobs import JobManager

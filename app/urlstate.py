@@ -34,8 +34,8 @@ import math
 import urllib.parse
 from typing import Any, Literal, Optional
 
-from kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
-from kinematics.pose import Pose
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from paraspace.kinematics.pose import Pose
 
 CarriageMode = Literal["auto", "manual"]
 CameraPreset = Literal["iso", "top", "bottom", "side"]

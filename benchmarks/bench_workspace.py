@@ -15,10 +15,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from kinematics.design import Design
-from kinematics.grid import GridSpec
-from kinematics.reference import reference_reachable
-from kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.grid import GridSpec
+from paraspace.kinematics.reference import reference_reachable
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
 BOX = ((-180.0, -180.0, 0.0), (180.0, 180.0, 165.0))
 

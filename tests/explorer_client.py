@@ -23,7 +23,7 @@ import viser
 import zstandard
 from websockets.sync.client import connect
 
-from app.explorer import ClientSession, Explorer
+from paraspace.app.explorer import ClientSession, Explorer
 
 __all__ = ["FakeBrowser", "wait_for", "wait_idle"]
 

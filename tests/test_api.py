@@ -8,9 +8,9 @@ import time
 import httpx
 import pytest
 
-from app.api import API_PREFIX, ApiLimits, create_api, decode_link_token, encode_link_token
-from app.jobs import JobManager
-from app.serve import start_api
+from paraspace.app.api import API_PREFIX, ApiLimits, create_api, decode_link_token, encode_link_token
+from paraspace.app.jobs import JobManager
+from paraspace.app.serve import start_api
 
 V1 = API_PREFIX
 
@@ -60,7 +60,7 @@ def test_health_and_docs(http):
 
 
 def test_design_defaults(http):
-    from kinematics.design import PARAMS, Design
+    from paraspace.kinematics.design import PARAMS, Design
 
     body = http.get(f"{V1}/design/defaults").json()
     assert body["defaults"] == Design().to_dict()
@@ -192,7 +192,7 @@ def test_orientation_job(http):
 
 
 def test_sweep_1d_and_2d(http):
-    pytest.importorskip("kinematics.sweep")
+    pytest.importorskip("paraspace.kinematics.sweep")
     r = http.post(f"{V1}/sweep", params={"wait": 60},
                   json={"settings": {"voxel": 10}, "x": {"param": "a", "values": [40, 50, 60]}})
     assert r.status_code in (200, 202), r.text
@@ -281,7 +281,7 @@ def test_body_too_large_413(http):
 def test_serve_starts_explorer_and_api_and_stops():
     """serve(block=False): both servers answer on loopback, short links point at the explorer's real
     port, stop() closes both ports."""
-    from app.serve import serve
+    from paraspace.app.serve import serve
 
     running = serve("127.0.0.1", 0, 0, block=False, quiet=True)
     try:
@@ -343,8 +343,8 @@ def test_limits_hold_under_concurrent_submissions(server):
 def test_serve_busy_api_port_is_a_clear_error():
     import socket
 
-    from app.serve import serve
-    from kinematics.design import ParameterError
+    from paraspace.app.serve import serve
+    from paraspace.kinematics.design import ParameterError
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -13,9 +13,10 @@ WEB = ("viser", "fastapi", "uvicorn", "starlette", "pydantic", "app", "websocket
 
 def test_core_imports_no_web_package_at_run_time():
     code = (
-        "import sys, pkgutil, importlib, kinematics\n"
-        "for m in pkgutil.iter_modules(kinematics.__path__): importlib.import_module('kinematics.' + m.name)\n"
+        "import sys, pkgutil, importlib, paraspace.kinematics as k\n"
+        "for m in pkgutil.iter_modules(k.__path__): importlib.import_module('paraspace.kinematics.' + m.name)\n"
         f"bad = sorted({{m.split('.')[0] for m in sys.modules}} & set({WEB!r}))\n"
+        "bad += sorted(m for m in sys.modules if m.startswith('paraspace.app'))\n"
         "print(','.join(bad))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
@@ -33,3 +34,4 @@ def test_core_source_never_names_a_web_package():
                 names = [node.module]
             for name in names:
                 assert name.split(".")[0] not in WEB, f"{path.name} imports {name}"
+                assert not name.startswith("paraspace.app"), f"{path.name} imports {name}"

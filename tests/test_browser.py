@@ -29,8 +29,8 @@ if not os.path.exists(CHROMIUM):
 
 from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 
-from app.explorer import ClientSession, Explorer  # noqa: E402
-from app.urlstate import parse_query  # noqa: E402
+from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
+from paraspace.app.urlstate import parse_query  # noqa: E402
 from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]

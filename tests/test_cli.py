@@ -9,14 +9,14 @@ import sys
 import numpy as np
 import pytest
 
-from kinematics.design import Design
-from kinematics.inverse import leg_lengths
-from kinematics.pose import Pose
-from kinematics.workspace import WorkspaceSettings, compute_workspace
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.inverse import leg_lengths
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
 def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
-    proc = subprocess.run([sys.executable, "-m", "app.cli", *args], capture_output=True, text=True, timeout=300)
+    proc = subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True, timeout=300)
     if check:
         assert proc.returncode == 0, proc.stderr
     return proc

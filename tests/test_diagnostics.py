@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinematics.design import Design
-from kinematics.diagnostics import limit_binding, surface_layer
-from kinematics.workspace import WorkspaceSettings, compute_workspace
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.diagnostics import limit_binding, surface_layer
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
 @pytest.fixture(scope="module")

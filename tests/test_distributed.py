@@ -10,11 +10,11 @@ import time
 
 import pytest
 
-from kinematics.design import Design, ParameterError
-from kinematics.distributed import grid_designs, sweep_grid
-from kinematics.progress import Cancelled
-from kinematics.sweep import evaluate_design
-from kinematics.workspace import WorkspaceSettings
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.distributed import grid_designs, sweep_grid
+from paraspace.kinematics.progress import Cancelled
+from paraspace.kinematics.sweep import evaluate_design
+from paraspace.kinematics.workspace import WorkspaceSettings
 
 BOOKKEEPING = ("params", "index", "ok", "compute_seconds")
 COARSE = WorkspaceSettings(voxel=10.0)

@@ -77,11 +77,11 @@ def test_base_user_ports_entrypoint():
     assert entry == ["paraspace", "serve", "--host", "0.0.0.0", "--port", "8080", "--api-port", "8081"]
     # the console script exists
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts.get("paraspace") == "app.cli:main"
+    assert scripts.get("paraspace") == "paraspace.app.cli:main"
 
 
 def test_healthcheck_targets_the_api_health_endpoint():
-    from app.api import API_PREFIX
+    from paraspace.app.api import API_PREFIX
 
     hc = _one(_instructions(), "HEALTHCHECK")
     assert "CMD" in hc
@@ -154,13 +154,13 @@ def test_numba_cache_writable_and_context_small():
     ignore = (ROOT / ".dockerignore").read_text().split()
     for pat in (".git", ".venv"):
         assert pat in ignore
-    for needed in ("pyproject.toml", "README.md", "app", "kinematics"):
+    for needed in ("pyproject.toml", "README.md", "paraspace", "app", "kinematics", "static"):
         assert needed not in ignore
 
 
 @pytest.mark.slow
 def test_entrypoint_runs_and_both_ports_answer(tmp_path):
-    from app.serve import free_port
+    from paraspace.app.serve import free_port
 
     entry = _exec_form(_one(_instructions(), "ENTRYPOINT"))
     port, api_port = free_port(), free_port()

@@ -19,12 +19,12 @@ import urllib.parse
 import numpy as np
 import pytest
 
-from app.explorer import Explorer
-from app.urlstate import parse_query
-from kinematics.design import Design
-from kinematics.pose import Pose
-from kinematics.redundancy import inverse_kinematics, resolve_redundancy
-from kinematics.workspace import WorkspaceSettings, compute_workspace
+from paraspace.app.explorer import Explorer
+from paraspace.app.urlstate import parse_query
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 

@@ -15,9 +15,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.errors import Unsatisfiable
 
-from app.api import API_PREFIX, ApiLimits, create_api
-from app.jobs import JobManager
-from app.serve import start_api
+from paraspace.app.api import API_PREFIX, ApiLimits, create_api
+from paraspace.app.jobs import JobManager
+from paraspace.app.serve import start_api
 
 V1 = API_PREFIX
 LIMITS = ApiLimits(max_voxels=150_000, max_sweep_points=3, max_sweep_voxels=600_000,
@@ -85,7 +85,7 @@ def test_schemathesis_no_server_errors(server):
 # ------------------------------------------------------------------------------------------------
 # link parser fuzz
 
-urlstate = pytest.importorskip("app.urlstate")
+urlstate = pytest.importorskip("paraspace.app.urlstate")
 
 _KEYS = list(urlstate.known_keys()) + ["websocket", "darkMode", "bogus", "a", "", "%", "&"]
 _values = st.one_of(
@@ -186,7 +186,7 @@ def test_load_concurrent_clients(server):
 
 
 def test_crashing_job_reported_failed_server_healthy(server, monkeypatch):
-    import kinematics.workspace as ws
+    import paraspace.kinematics.workspace as ws
 
     def broken(*args, **kwargs):
         raise FloatingPointError("kernel exploded\nwith detail")
@@ -210,7 +210,7 @@ def test_crashing_job_reported_failed_server_healthy(server, monkeypatch):
 
 def _slow_compute(design, settings, progress=None, cancel=None):
     """Stands in for compute_workspace: cooperative, reports progress, would take 60 s."""
-    from kinematics.progress import Cancelled
+    from paraspace.kinematics.progress import Cancelled
 
     for i in range(6000):
         if cancel is not None and cancel.is_set():
@@ -222,7 +222,7 @@ def _slow_compute(design, settings, progress=None, cancel=None):
 
 
 def test_cancelled_and_timed_out_jobs(server, monkeypatch):
-    import kinematics.workspace as ws
+    import paraspace.kinematics.workspace as ws
 
     monkeypatch.setattr(ws, "compute_workspace", _slow_compute)
     with httpx.Client(base_url=server.url, timeout=30, headers={"X-Client-Id": "cancel"}) as c:

@@ -7,8 +7,8 @@ import time
 
 import pytest
 
-from app.jobs import FINAL_STATUSES, Job, JobManager, LimitExceeded
-from kinematics.progress import Cancelled
+from paraspace.app.jobs import FINAL_STATUSES, Job, JobManager, LimitExceeded
+from paraspace.kinematics.progress import Cancelled
 
 
 def _sleeper(seconds: float, result="ok"):
@@ -265,8 +265,8 @@ def test_on_done_exception_does_not_break(jm):
 
 def test_real_workspace_job_cancel_and_progress(jm):
     """The core's compute_workspace runs as a job; progress moves and cancel stops it."""
-    from kinematics.design import Design
-    from kinematics.workspace import WorkspaceSettings, compute_workspace
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
     s = WorkspaceSettings(voxel=10.0)
     ok = jm.submit(lambda p, c: compute_workspace(Design(), s, p, c), kind="ws")

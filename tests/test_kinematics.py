@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kinematics.design import Design, ParameterError
-from kinematics.forward import forward_kinematics
-from kinematics.geometry import GAMMA, LEG_SIGN
-from kinematics.inverse import leg_lengths
-from kinematics.jacobian import jacobians
-from kinematics.pose import Pose
-from kinematics.redundancy import inverse_kinematics, resolve_redundancy
-from kinematics.workspace import reachable
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.forward import forward_kinematics
+from paraspace.kinematics.geometry import GAMMA, LEG_SIGN
+from paraspace.kinematics.inverse import leg_lengths
+from paraspace.kinematics.jacobian import jacobians
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
+from paraspace.kinematics.workspace import reachable
 
 DESIGN = Design()
 

@@ -32,14 +32,14 @@ from typing import Any, Iterator
 import httpx
 import pytest
 
-from app.api import API_PREFIX, create_api
-from app.explorer import ClientSession, Explorer
-from app.jobs import JobManager
-from app.serve import start_api
-from app.urlstate import parse_query
-from kinematics.design import Design
-from kinematics.pose import Pose
-from kinematics.workspace import WorkspaceSettings, compute_workspace
+from paraspace.app.api import API_PREFIX, create_api
+from paraspace.app.explorer import ClientSession, Explorer
+from paraspace.app.jobs import JobManager
+from paraspace.app.serve import start_api
+from paraspace.app.urlstate import parse_query
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from skimage.measure import marching_cubes
 
-from kinematics.design import Design
-from kinematics.grid import GridSpec
-from kinematics.measures import measure_workspace
-from kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.grid import GridSpec
+from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 H = 1.0
 N = 44  # grid edge in voxels
@@ -233,7 +233,7 @@ def test_voxel_euler_matches_marching_cubes_surface(name):
     occ = shapes[name]
     m = measure_workspace(make_result(occ))
     assert mesh_euler(occ) == 2 * m.euler_characteristic
-    from kinematics.measures import void_mask
+    from paraspace.kinematics.measures import void_mask
 
     filled = occ | void_mask(occ)
     assert mesh_euler(filled) == 2 * (m.filled_components - m.genus)

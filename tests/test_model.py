@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from kinematics.design import PARAMS, Design, ParameterError
-from kinematics.geometry import base_points, platform_points, platform_points_local
-from kinematics.jacobian import jacobians, skew
-from kinematics.mobility import mobility, topology
-from kinematics.pose import Pose
-from kinematics.rotation import Y_PRIME_AXIS, axis_angle, euler_rate_matrix, euler_zyx, euler_zyx_from_matrix
+from paraspace.kinematics.design import PARAMS, Design, ParameterError
+from paraspace.kinematics.geometry import base_points, platform_points, platform_points_local
+from paraspace.kinematics.jacobian import jacobians, skew
+from paraspace.kinematics.mobility import mobility, topology
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.rotation import Y_PRIME_AXIS, axis_angle, euler_rate_matrix, euler_zyx, euler_zyx_from_matrix
 
 
 def test_defaults_are_table_one():

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from kinematics import Cancelled, Design, ParameterError, reachable
-from kinematics.geometry import base_points, platform_points
-from kinematics.orientation import (
+from paraspace.kinematics import Cancelled, Design, ParameterError, reachable
+from paraspace.kinematics.geometry import base_points, platform_points
+from paraspace.kinematics.orientation import (
     LINES, ROTATIONS, OrientationRegion, OrientationResult, OrientationSettings, line_points, make_region,
     orientation_workspace, rotation_matrix, select_region, tilt_indices,
 )
-from kinematics.rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
+from paraspace.kinematics.rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
 
 # Coarse sampling keeps the tests fast; the structure is the same as the default.
 COARSE = OrientationSettings(angle_range=70.0, angle_step=2.0, position_step=3.0)

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from kinematics.design import Design
-from kinematics.grid import GridSpec
-from kinematics.measures import measure_workspace
-from kinematics.shell import SHELL_FORMATS, export_shell, shell_volume_error, viridis, workspace_shell
-from kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.grid import GridSpec
+from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.shell import SHELL_FORMATS, export_shell, shell_volume_error, viridis, workspace_shell
+from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 H = 2.5
 LO = (-40.0, 10.0, 5.0)  # an off-centre box, so the world mapping is exercised
@@ -245,8 +245,8 @@ def test_default_design_shell(default_h6):
 
 def test_block_remesh_reduction_is_closed_within_budget_and_keeps_volume():
     """reduction="remesh" (the explorer's display shell) on the real default workspace at h = 4."""
-    from kinematics.design import Design
-    from kinematics.workspace import WorkspaceSettings, compute_workspace
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
     res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
     full = workspace_shell(res)

@@ -8,10 +8,10 @@ import threading
 
 import pytest
 
-from kinematics import Cancelled, Design, ParameterError, WorkspaceSettings, compute_workspace
-from kinematics import sweep
-from kinematics.orientation import OrientationSettings
-from kinematics.sweep import (
+from paraspace.kinematics import Cancelled, Design, ParameterError, WorkspaceSettings, compute_workspace
+from paraspace.kinematics import sweep
+from paraspace.kinematics.orientation import OrientationSettings
+from paraspace.kinematics.sweep import (
     ResultCache, cache_key, evaluate_design, study_values, sweep_1d, sweep_2d,
 )
 

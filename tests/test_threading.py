@@ -13,9 +13,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 SCRIPT = """
 import threading
 import numba
-from kinematics.design import Design
-from kinematics.measures import measure_workspace
-from kinematics.workspace import WorkspaceSettings, compute_workspace, reachable
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, reachable
 import numpy as np
 
 errors = []

@@ -8,12 +8,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from app.urlstate import (
+from paraspace.app.urlstate import (
     CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES,
     ExplorerState, encode_query, full_query, parse_query, viser_passthrough,
 )
-from kinematics.design import ETA_RANGES, PARAMS, Design
-from kinematics.pose import Pose
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design
+from paraspace.kinematics.pose import Pose
 
 
 def _num(lo: float, hi: float) -> st.SearchStrategy[float]:

@@ -7,12 +7,12 @@ import threading
 import numpy as np
 import pytest
 
-from kinematics.design import Design, ParameterError
-from kinematics.grid import GridSpec
-from kinematics.progress import Cancelled
-from kinematics.reference import gough_stewart_reachable, reference_reachable
-from kinematics.rotation import rot_z
-from kinematics.workspace import WorkspaceSettings, compute_workspace, reachable
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.grid import GridSpec
+from paraspace.kinematics.progress import Cancelled
+from paraspace.kinematics.reference import gough_stewart_reachable, reference_reachable
+from paraspace.kinematics.rotation import rot_z
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, reachable
 
 DESIGN = Design()
 BOX = ((-180.0, -180.0, 0.0), (180.0, 180.0, 165.0))

@@ -1,0 +1,63 @@
+"""Packaging: one installed namespace (`paraspace`), one version everywhere."""
+
+from __future__ import annotations
+
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+import paraspace
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.slow
+def test_fresh_install_exposes_only_the_paraspace_namespace(tmp_path):
+    """`pip install .` (here into a bare --target, no dependencies) puts exactly one top-level
+    package into site-packages: paraspace, with kinematics, app and the static assets inside it."""
+    # from a clean copy of the source: a stale build/ folder in the checkout would leak into the wheel
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info",
+                                                               "__pycache__", "test-artifacts", ".paraspace-cache"))
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps",
+                    "--target", str(target), str(src)], check=True, timeout=300)
+    top = sorted(p.name for p in target.iterdir() if not p.name.endswith(".dist-info") and p.name != "bin")
+    assert top == ["paraspace"], top
+    pkg = target / "paraspace"
+    for sub in ("kinematics", "app"):
+        assert (pkg / sub / "__init__.py").is_file(), sub
+    assert (pkg / "static" / "index.html").is_file()
+    # the installed copy imports as itself (not from this checkout) and finds its own assets
+    code = ("import paraspace, paraspace.kinematics as k, importlib.resources as r;"
+            "print(paraspace.__file__); print(k.__file__);"
+            "print(len(r.files('paraspace.static').joinpath('index.html').read_text()))")
+    out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True,
+                         cwd=tmp_path, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin"}, timeout=120)
+    lines = out.stdout.split()
+    assert lines[0].startswith(str(pkg)) and lines[1].startswith(str(pkg / "kinematics")), lines
+    assert int(lines[2]) > 100
+
+
+def test_public_api_reexports_the_core():
+    from paraspace.kinematics import Design, compute_workspace
+
+    assert paraspace.Design is Design
+    assert paraspace.compute_workspace is compute_workspace
+    assert callable(paraspace.sweep_1d) and callable(paraspace.orientation_workspace)
+    with pytest.raises(AttributeError):
+        paraspace.no_such_name  # noqa: B018
+
+
+def test_version_is_stated_once_and_reported_by_the_cli():
+    import importlib.metadata
+    import tomllib
+
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    assert importlib.metadata.version("paraspace") == declared == paraspace.__version__
+    out = subprocess.run([sys.executable, "-m", "paraspace.app.cli", "--version"], capture_output=True,
+                         text=True, check=True, cwd=ROOT, timeout=120)
+    assert out.stdout.strip() == f"paraspace {declared}"
