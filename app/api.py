@@ -57,6 +57,7 @@ from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.serialize import jsonable
 
 from .jobs import Job, JobManager, LimitExceeded
+from .limits import MAX_VOXELS, orientation_samples, workspace_voxels
 
 __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode_link_token"]
 
@@ -93,7 +94,7 @@ class ApiLimits:
         cache_entries: finished results kept per kind (workspace, orientation, sweep).
     """
 
-    max_voxels: int = 8_000_000
+    max_voxels: int = MAX_VOXELS
     max_sweep_points: int = 64
     max_sweep_voxels: int = 200_000_000
     max_orientation_samples: int = 20_000_000
@@ -472,38 +473,6 @@ def decode_link_token(token: str) -> str:
         if d.unconsumed_tail:
             raise ValueError("link token too long")
     return data.decode("utf-8")
-
-
-def _grid_voxels(lo: tuple[float, ...], hi: tuple[float, ...], h: float) -> int:
-    return int(np.prod([max(1, math.ceil((b - a) / h - 1e-9)) for a, b in zip(lo, hi)], dtype=object))
-
-
-def workspace_voxels(design: Design, settings: Any, *, analytic: bool = False) -> int:
-    """Voxels of the grid a workspace request runs on, computed before running.
-
-    Explicit bounds: exactly the grid of the box. Derived bounds: the box of
-    ``kinematics.workspace.default_bounds`` (``analytic=False``; runs a coarse scout of about
-    50^3 voxels) or the analytical reach box (``analytic=True``: no computation, an upper bound).
-    """
-    from paraspace.kinematics import workspace as ws
-
-    h = settings.voxel
-    if settings.bounds is not None:
-        lo, hi = settings.bounds
-    elif analytic:
-        lo, hi = ws._symmetric_box(*ws.reach_box(design, settings.orientation, settings.z_floor), h)
-    else:
-        lo, hi = ws.default_bounds(design, settings)
-    return _grid_voxels(lo, hi, h)
-
-
-def orientation_samples(design: Design, settings: Any) -> int:
-    """Position x angle samples of an orientation workspace (3 lines x 3 rotations)."""
-    from paraspace.kinematics import orientation as ori
-
-    n_ang = int(ori.angle_samples(settings).size)
-    n_pos = sum(int(ori.position_samples(design, ln, settings).size) for ln in ori.LINES)
-    return n_pos * n_ang * len(ori.ROTATIONS)
 
 
 # ================================================================================================

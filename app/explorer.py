@@ -46,13 +46,14 @@ from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
 
-from . import jsbridge, plots
+from . import jsbridge, pagehook, plots
 from .jobs import Job, JobManager, LimitExceeded
+from .limits import MAX_VOXELS, check_workspace_grid
+from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
-    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, full_query, parse_query,
-    viser_passthrough,
+    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, encode_query, parse_query,
 )
 
 log = logging.getLogger(__name__)
@@ -138,12 +139,11 @@ class ClientSession:
         client: the viser client.
         state: initial state (from the link).
         base_url: the page's URL without query (for the Share tab's link).
-        passthrough: viser's own query keys to keep in the address bar.
         messages: problems found in the link (shown on screen).
     """
 
     def __init__(self, explorer: "Explorer", client: viser.ClientHandle, state: ExplorerState,
-                 base_url: str, passthrough: list[tuple[str, str]], messages: list[str]) -> None:
+                 base_url: str, messages: list[str]) -> None:
         self.explorer = explorer
         self.client = client
         self.job_client = f"viser-{client.client_id}"
@@ -153,7 +153,6 @@ class ClientSession:
         self.mech_lock = threading.Lock()
         self.state = state
         self.base_url = base_url
-        self.passthrough = passthrough
         self.url_messages = list(messages)
         self.closed = False
         self._tls = threading.local()
@@ -216,7 +215,8 @@ class ClientSession:
 
     def _notify(self, title: str, body: str, color: str = "red") -> None:
         try:
-            self.client.add_notification(title, body, auto_close_seconds=8.0, color=color)  # type: ignore[arg-type]
+            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,
+                                         color=color)  # type: ignore[arg-type]
         except Exception:  # noqa: BLE001
             log.debug("notification failed", exc_info=True)
 
@@ -283,11 +283,11 @@ class ClientSession:
         if not msgs:
             self.panels.url_messages.visible = False
             return
-        body = "\n".join(f"- {m}" for m in msgs)
+        body = "\n".join(f"- {md_text(m)}" for m in msgs)
         self.panels.url_messages.content = (
             "**The link had problems; these fields keep their defaults, everything else applies:**\n\n" + body)
         self.panels.url_messages.visible = True
-        self._notify("Link problems", "; ".join(msgs)[:600], color="orange")
+        self._notify("Link problems", "; ".join(msgs), color="orange")
 
     # ----- kinematics ---------------------------------------------------------------------------
     @staticmethod
@@ -368,9 +368,9 @@ class ClientSession:
             if res.feasible:
                 lines.append(f"**Pose** reachable{where}")
             else:
-                lines.append(f"**Pose** {res.message}{where}")
+                lines.append(f"**Pose** {md_text(res.message)}{where}")
         if self.design_error:
-            lines.append(f"**Design not applied:** {self.design_error}")
+            lines.append(f"**Design not applied:** {md_text(self.design_error)}")
         self.panels.numbers.content = "\n\n".join(lines)
 
     # ----- input handlers -----------------------------------------------------------------------
@@ -391,7 +391,7 @@ class ClientSession:
         except ParameterError as exc:
             self.design_error = f"{exc.field} = {exc.value:g} is invalid; valid range {exc.valid}" \
                 if isinstance(exc.value, float) else str(exc)
-            p.design_message.content = f"**Not applied:** {self.design_error}. The last valid design stays."
+            p.design_message.content = f"**Not applied:** {md_text(self.design_error)}. The last valid design stays."
             p.design_message.visible = True
             self._render_numbers()
             return
@@ -613,6 +613,14 @@ class ClientSession:
             with self.lock:
                 if not self.closed:
                     self.panels.orientation_status.content = "waiting for the new design's workspace..."
+        try:  # the same grid limit as the API, before any work is queued
+            check_workspace_grid(s.design, WorkspaceSettings(voxel=s.voxel, orientation=(
+                s.pose.psi, s.pose.theta, s.pose.phi)), self.explorer.max_voxels)
+        except ParameterError as exc:
+            self._cancel_job(self._ws_job)
+            self._set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
+            self._notify("Grid too large", str(exc), color="orange")
+            return
         cache = self.explorer.shell_cache
         key = self._ws_key(s, s.voxel)
         hit = cache.get(key)
@@ -630,10 +638,10 @@ class ClientSession:
                                             on_progress=lambda j, g=gen: self._on_ws_progress(g, j),
                                             on_done=lambda j, g=gen: self._on_ws_done(g, j))
         except LimitExceeded as exc:
-            self._set_status(gen, f"not started: {exc}", 0.0, running=False)
+            self._set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
             return
         except RuntimeError as exc:  # shut down
-            self._set_status(gen, f"not started: {exc}", 0.0, running=False)
+            self._set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
             return
         with self.lock:
             if gen == self._ws_gen:
@@ -701,7 +709,7 @@ class ClientSession:
     def _on_ws_progress(self, gen: int, job: Job) -> None:
         if self._throttled("ws-progress", PROGRESS_INTERVAL):
             return
-        self._set_status(gen, job.message, 100.0 * job.progress, running=True)
+        self._set_status(gen, md_text(job.message), 100.0 * job.progress, running=True)
 
     def _on_ws_done(self, gen: int, job: Job) -> None:
         if self.closed:
@@ -715,7 +723,7 @@ class ClientSession:
             if latest:
                 self.submit_orientation()
         elif job.status == "failed":
-            self._set_status(gen, f"**failed:** {job.error}", 0.0, running=False)
+            self._set_status(gen, f"**failed:** {md_text(job.error)}", 0.0, running=False)
         else:
             with self.lock:
                 latest = gen == self._ws_gen
@@ -809,7 +817,7 @@ class ClientSession:
             if job.status == "done":
                 self._publish_orientation(gen, *job.result)
             elif job.status == "failed":
-                self._set_orientation_status(gen, f"**failed:** {job.error}")
+                self._set_orientation_status(gen, f"**failed:** {md_text(job.error)}")
 
         try:
             job = self.explorer.jobs.submit(
@@ -817,7 +825,7 @@ class ClientSession:
                 on_progress=lambda j: None if self._throttled("or-progress", 4 * PROGRESS_INTERVAL) else
                 self._set_orientation_status(gen, f"computing... {100 * j.progress:.0f} %"))
         except (LimitExceeded, RuntimeError) as exc:
-            self._set_orientation_status(gen, f"not started: {exc}")
+            self._set_orientation_status(gen, f"not started: {md_text(exc)}")
             return
         with self.lock:
             if gen == self._or_gen:
@@ -1028,9 +1036,9 @@ class ClientSession:
 
     # ----- URL --------------------------------------------------------------------------------------
     def query(self) -> str:
-        """The query string of the current state (plus viser's own keys from the opened link)."""
+        """The query string of the current state (only the explorer's own keys)."""
         with self.lock:
-            return full_query(self.state, self.passthrough)
+            return encode_query(self.state)
 
     def link(self) -> str:
         """The shareable link of the current state."""
@@ -1111,8 +1119,10 @@ class Explorer:
         jobs: the shared :class:`~app.jobs.JobManager` (a private one with 2 workers if ``None``).
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: Optional[JobManager] = None) -> None:
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: Optional[JobManager] = None,
+                 max_voxels: int = MAX_VOXELS) -> None:
         self.host = host
+        self.max_voxels = max_voxels  # the API's grid limit (app/limits.py), whatever a link asks for
         self._requested_port = port
         self.jobs = jobs if jobs is not None else JobManager(max_workers=2)
         self._own_jobs = jobs is None
@@ -1145,6 +1155,7 @@ class Explorer:
         if self.server is not None:
             return self
         threading.Thread(target=self._warm_up, name="paraspace-warmup", daemon=True).start()
+        pagehook.install()  # links carry only explorer keys; the page connects only to this server
         server = viser.ViserServer(host=self.host, port=self._requested_port, verbose=False)
         server.gui.configure_theme(show_share_button=False, control_width="large",
                                    brand_color=(40, 110, 180))
@@ -1184,7 +1195,7 @@ class Explorer:
         loc = jsbridge.read_location(client, timeout=5.0)
         search, base = loc if loc is not None else ("", self.url.rstrip("/") + "/")
         state, messages = parse_query(search)
-        session = ClientSession(self, client, state, base or self.url, viser_passthrough(search), messages)
+        session = ClientSession(self, client, state, base or self.url, messages)
         with self._sessions_lock:
             self.sessions[client.client_id] = session
         try:

@@ -12,7 +12,8 @@ up), and the public ``client.local_storage`` reads a value back. Together they f
 
 The message is queued on the **client's** connection only, never on the server-wide buffer (that
 one is persistent and would replay the script to every future browser). Pinned to viser 1.1.1;
-``tests/test_explorer.py`` and ``tests/test_browser.py`` cover these functions.
+``tests/test_explorer.py`` and ``tests/test_browser.py`` cover these functions. (The other use of
+viser internals is :mod:`paraspace.app.pagehook`, the gate on the page request.)
 """
 
 from __future__ import annotations

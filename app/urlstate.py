@@ -22,9 +22,12 @@ so ``parse_query(encode_query(s)) == (s, [])`` exactly.
 Parsing policy (:func:`parse_query`): never raises. Each bad field (not a number, not one of the
 choices, outside the slider range of the explorer, or inconsistent such as ``d_s > r``) produces one
 message naming the field, the value and the valid range; that field keeps its default and every
-other field still applies. Nothing is silently clamped. Query keys that viser's own web client reads
-(``websocket``, ``darkMode``, ...) are accepted without a message and returned by
-:func:`viser_passthrough` so the address bar can keep them.
+other field still applies. Nothing is silently clamped. Only the explorer's own keys
+(:func:`known_keys`) are accepted: any other key, including those viser's web client would act on
+(``websocket`` would connect the page to another server, ``playbackPath`` load a foreign recording),
+is reported once and dropped, and never written back to the address bar. Values quoted in messages
+are cut to :data:`QUOTE_CHARS` characters; messages are data (the explorer shows them escaped, see
+:mod:`paraspace.app.textsafe`).
 """
 
 from __future__ import annotations
@@ -88,12 +91,20 @@ SETTING_RANGES: dict[str, Range] = {
 }
 UNITS: dict[str, str] = {"eta_s": "deg", "psi": "deg", "theta": "deg", "phi": "deg"}
 
-#: Query keys read by viser's own web client; kept in the address bar, never reported.
-VISER_KEYS: frozenset[str] = frozenset({
-    "websocket", "darkMode", "hideViserLogo", "initialCameraPosition", "initialCameraLookAt",
-    "initialCameraUp", "initialCameraFov", "initialCameraNear", "initialCameraFar", "showStats",
-    "fixedDpr", "logCamera", "playbackPath", "dummyWindowDimensions",
-})
+#: Longest quote of a user's value (or key) in a message.
+QUOTE_CHARS = 40
+#: Most unknown keys named in the one message that reports them.
+MAX_NAMED_UNKNOWN = 8
+
+
+def _cut(raw: str) -> str:
+    """``raw`` cut to :data:`QUOTE_CHARS` characters (an ellipsis marks the cut)."""
+    return raw if len(raw) <= QUOTE_CHARS else raw[: QUOTE_CHARS - 1] + "…"
+
+
+def _quote(raw: str) -> str:
+    """``repr`` of ``raw`` cut to :data:`QUOTE_CHARS` characters (data, never markup)."""
+    return repr(_cut(raw))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,18 +178,18 @@ def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
     try:
         v = float(raw)
     except ValueError:
-        return None, f"{key} = {raw!r} is not a number; valid range {valid}"
+        return None, f"{key} = {_quote(raw)} is not a number; valid range {valid}"
     if not math.isfinite(v):
-        return None, f"{key} = {raw!r} is not a finite number; valid range {valid}"
+        return None, f"{key} = {_quote(raw)} is not a finite number; valid range {valid}"
     if not (rng.lo <= v <= rng.hi):
-        return None, f"{key} = {raw} is out of range; valid range {valid}"
+        return None, f"{key} = {_cut(raw)} is out of range; valid range {valid}"
     return (0.0 if v == 0.0 else v), None
 
 
 def _parse_choice(key: str, raw: str, options: tuple[str, ...]) -> tuple[Optional[str], Optional[str]]:
     if raw in options:
         return raw, None
-    return None, f"{key} = {raw!r} is invalid; valid values: {', '.join(options)}"
+    return None, f"{key} = {_quote(raw)} is invalid; valid values: {', '.join(options)}"
 
 
 _BOOL_TRUE = ("1", "true", "on", "yes")
@@ -207,15 +218,20 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         return DEFAULT_STATE, [f"the link's query could not be read ({exc}); using the defaults"]
     values: dict[str, str] = {}
     known = set(known_keys())
+    unknown: list[str] = []
     for key, raw in pairs:
-        if key in VISER_KEYS:
-            continue
         if key not in known:
-            messages.append(f"unknown parameter {key!r} ignored; known parameters: {', '.join(known_keys())}")
+            if key not in unknown:
+                unknown.append(key)
             continue
         if key in values:
-            messages.append(f"{key} is given more than once; the last value ({raw!r}) is used")
+            messages.append(f"{key} is given more than once; the last value ({_quote(raw)}) is used")
         values[key] = raw.strip()
+    if unknown:
+        named = ", ".join(_quote(k) for k in unknown[:MAX_NAMED_UNKNOWN])
+        more = f" and {len(unknown) - MAX_NAMED_UNKNOWN} more" if len(unknown) > MAX_NAMED_UNKNOWN else ""
+        messages.append(f"unknown parameter{'s' if len(unknown) > 1 else ''} {named}{more} ignored; "
+                        f"known parameters: {', '.join(known_keys())}")
 
     # ----- design: per-field ranges, then the model's cross-checks (d_s <= r) ------------------
     design_fields: dict[str, Any] = _parse_fields(DESIGN_KEYS, values, DESIGN_RANGES, messages)
@@ -290,7 +306,7 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         elif raw in _BOOL_FALSE:
             cut = False
         else:
-            messages.append(f"cut = {values['cut']!r} is invalid; valid values: 1 (on) or 0 (off)")
+            messages.append(f"cut = {_quote(values['cut'])} is invalid; valid values: 1 (on) or 0 (off)")
     cut_keep = DEFAULT_STATE.cut_keep
     if "cut_keep" in values:
         v, msg = _parse_choice("cut_keep", values["cut_keep"], CUT_KEEPS)
@@ -346,20 +362,3 @@ def encode_query(state: ExplorerState) -> str:
     (the carriage values whenever ``carriages=manual`` or one is not 0). See the module docstring.
     """
     return urllib.parse.urlencode(encode_pairs(state), safe=",")
-
-
-def viser_passthrough(query: str) -> list[tuple[str, str]]:
-    """The ``(key, value)`` pairs of ``query`` that viser's web client itself reads (kept as is)."""
-    try:
-        pairs = urllib.parse.parse_qsl((query or "").lstrip("?"), keep_blank_values=True)
-    except Exception:  # noqa: BLE001
-        return []
-    return [(k, v) for k, v in pairs if k in VISER_KEYS]
-
-
-def full_query(state: ExplorerState, passthrough: Optional[list[tuple[str, str]]] = None) -> str:
-    """:func:`encode_query` followed by the viser keys to keep (e.g. ``websocket=...``)."""
-    q = encode_query(state)
-    if passthrough:
-        q += "&" + urllib.parse.urlencode(passthrough)
-    return q

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from paraspace.app.urlstate import (
     CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES,
-    ExplorerState, encode_query, full_query, parse_query, viser_passthrough,
+    ExplorerState, encode_query, known_keys, parse_query,
 )
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design
 from paraspace.kinematics.pose import Pose
@@ -105,17 +105,26 @@ def test_manual_carriages_are_checked_against_the_parsed_design() -> None:
     assert "d_s=30" in messages[0] and "[-10, 10]" in messages[1]
 
 
-def test_unknown_and_duplicate_keys_and_viser_keys() -> None:
-    state, messages = parse_query("a=20&a=30&color=red&websocket=ws://127.0.0.1:9/&darkMode=1")
+def test_unknown_duplicate_and_viser_keys_are_reported_and_never_kept() -> None:
+    state, messages = parse_query("a=20&a=30&color=red&websocket=ws://127.0.0.1:9/&darkMode=1&playbackPath=/x")
     assert state.design.a == 30.0
     assert len(messages) == 2
     assert any("a is given more than once" in m for m in messages)
-    assert any("'color'" in m for m in messages)
-    keep = viser_passthrough("a=20&websocket=ws://127.0.0.1:9/&darkMode=1")
-    assert keep == [("websocket", "ws://127.0.0.1:9/"), ("darkMode", "1")]
-    q = full_query(state, keep)
+    unknown = next(m for m in messages if m.startswith("unknown parameters"))
+    for key in ("'color'", "'websocket'", "'darkMode'", "'playbackPath'"):
+        assert key in unknown
+    q = encode_query(state)
+    keys = {k for k, _ in urllib.parse.parse_qsl(q)}
+    assert keys <= set(known_keys()) and "websocket" not in keys
     assert parse_query(q) == (state, [])
-    assert dict(urllib.parse.parse_qsl(q))["websocket"] == "ws://127.0.0.1:9/"
+
+
+def test_messages_quote_at_most_a_bounded_piece_of_the_value() -> None:
+    payload = "<script>" + "x" * 5000 + "</script>"
+    _, messages = parse_query(urllib.parse.urlencode({"view": payload, "a": payload, payload: "1"}))
+    assert len(messages) == 3
+    assert all(len(m) < 400 for m in messages), [len(m) for m in messages]
+    assert all("</script>" not in m for m in messages)
 
 
 @pytest.mark.parametrize("query", ["%zz=1", "&&&", "a", "a=", "=5", "a=1e999", "cut=maybe", "x=0x10"])

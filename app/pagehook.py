@@ -1,0 +1,187 @@
+"""The explorer page's HTTP gate: what a link may carry, and what the page may connect to.
+
+viser's web client acts on some query keys of its own page URL before our server sees anything:
+``?websocket=ws://elsewhere`` connects the page to another server (which can then draw any GUI and
+run script in the explorer's origin), ``?playbackPath=`` loads a foreign recording. viser 1.1.1
+serves its page from a ``process_request`` hook of its websocket server and offers no public way to
+filter requests, so this module wraps that hook (the second and last place, with
+:mod:`paraspace.app.jsbridge`, that touches viser's private API; viser is pinned to 1.1.1 and
+``tests/test_security.py`` covers the wrapper). For every plain HTTP request (the websocket upgrade
+passes untouched):
+
+1. a query longer than :data:`MAX_QUERY_CHARS` is refused with 414 (the websockets server's own
+   limit on a request line is raised from 8 KiB to :data:`MAX_REQUEST_LINE` so that such a link
+   gets this answer instead of a dropped connection);
+2. a query carrying any key that is not one of the explorer's own keys
+   (:func:`paraspace.app.urlstate.known_keys`) is refused with 400: the page is never served with
+   a key that viser's client could act on. The answer is plain text (never HTML), names the
+   refused keys (cut and quoted) and gives the same link without them;
+3. the page itself is served with a ``Content-Security-Policy`` whose ``connect-src 'self'`` keeps
+   the page from opening a websocket (or fetch) to any other server, even if a future client
+   learned another way to be pointed elsewhere; its ``<title>`` says paraspace.
+
+The refusal is decided by :func:`page_refusal`, a pure function of the request's path and query.
+"""
+
+from __future__ import annotations
+
+import gzip
+import threading
+import urllib.parse
+from typing import Any, Callable, Optional
+
+import websockets
+from websockets.datastructures import Headers
+from websockets.http11 import Response
+
+from .urlstate import known_keys
+
+__all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install"]
+
+#: Longest query string of a page request (a full explorer link is about 300 characters).
+MAX_QUERY_CHARS = 4096
+#: Longest request line the explorer's server reads (websockets' default is 8 KiB).
+MAX_REQUEST_LINE = 65536
+#: Sent with the page: the page may connect (websocket, fetch) only to the server it came from.
+CONTENT_SECURITY_POLICY = ("connect-src 'self' blob: data:; object-src 'none'; base-uri 'none'; "
+                           "frame-ancestors 'self'; form-action 'none'")
+#: Replacements applied to viser's page (its HTML is otherwise served as is).
+PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = ((b"<title>Viser</title>", b"<title>paraspace</title>"),)
+
+_KNOWN = frozenset(known_keys())
+
+
+def _quote(key: str) -> str:
+    return repr(key if len(key) <= 40 else key[:39] + "…")
+
+
+def page_refusal(path: str, query: str) -> Optional[tuple[int, str]]:
+    """``None`` if a page request for ``path?query`` may be served, else ``(status, text)``.
+
+    The rule: the query is at most :data:`MAX_QUERY_CHARS` characters and every key (decoded the
+    way the browser's ``URLSearchParams`` decodes it) is one of the explorer's own keys.
+    """
+    if len(query) > MAX_QUERY_CHARS:
+        return 414, (f"paraspace explorer: this link's query has {len(query):,} characters; links are "
+                     f"limited to {MAX_QUERY_CHARS:,}. An explorer link holds about 300: check the link.")
+    try:
+        pairs = urllib.parse.parse_qsl(query, keep_blank_values=True)
+    except ValueError:
+        return 400, "paraspace explorer: this link's query could not be read."
+    bad: list[str] = []
+    for key, _ in pairs:
+        if key not in _KNOWN and key not in bad:
+            bad.append(key)
+    if not bad:
+        return None
+    kept = urllib.parse.urlencode([(k, v) for k, v in pairs if k in _KNOWN], safe=",")
+    clean = (path or "/") + (f"?{kept}" if kept else "")
+    named = ", ".join(_quote(k) for k in bad[:8]) + (f" and {len(bad) - 8} more" if len(bad) > 8 else "")
+    return 400, (f"paraspace explorer: this link carries parameters the explorer does not accept: {named}. "
+                 "Only the explorer's own parameters are allowed (" + ", ".join(known_keys()) + ").\n"
+                 f"The same link without them (on this server): {clean}\n")
+
+
+def _text_response(status: int, text: str) -> Response:
+    reason = {400: "Bad Request", 414: "URI Too Long"}.get(status, "Error")
+    body = text.encode("utf-8")
+    return Response(status, reason, Headers({
+        "Content-Type": "text/plain; charset=utf-8", "Content-Length": str(len(body)),
+        "X-Content-Type-Options": "nosniff", "Content-Security-Policy": "default-src 'none'",
+        "Cache-Control": "no-store"}), body)
+
+
+class _PageEditor:
+    """Applies :data:`PAGE_EDITS` to viser's (cached, possibly gzipped) page bytes, once each."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._done: dict[int, tuple[bytes, bytes]] = {}  # id(original) -> (original, edited)
+
+    def edited(self, body: bytes, gzipped: bool) -> bytes:
+        with self._lock:
+            hit = self._done.get(id(body))
+            if hit is not None and hit[0] is body:
+                return hit[1]
+        html = gzip.decompress(body) if gzipped else bytes(body)
+        for old, new in PAGE_EDITS:
+            html = html.replace(old, new, 1)
+        out = gzip.compress(html) if gzipped else html
+        with self._lock:
+            if len(self._done) > 8:
+                self._done.clear()
+            self._done[id(body)] = (body, out)
+        return out
+
+
+_EDITOR = _PageEditor()
+
+
+def _guarded(inner: Callable[[Any, Any], Optional[Response]]) -> Callable[[Any, Any], Optional[Response]]:
+    def process_request(connection: Any, request: Any) -> Optional[Response]:
+        if str(request.headers.get("Upgrade", "")).lower() == "websocket":
+            return inner(connection, request)
+        path, _, query = request.path.partition("?")
+        refusal = page_refusal(path, query)
+        if refusal is not None:
+            return _text_response(*refusal)
+        resp = inner(connection, request)
+        if resp is None or resp.status_code != 200:
+            return resp
+        if str(resp.headers.get("Content-Type", "")).startswith("text/html"):
+            gz = resp.headers.get("Content-Encoding") == "gzip"
+            body = _EDITOR.edited(resp.body, gz)
+            headers = Headers(resp.headers)  # a multidict: assignment appends, so delete first
+            for name, value in (("Content-Length", str(len(body))), ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
+                                ("X-Content-Type-Options", "nosniff"), ("Referrer-Policy", "no-referrer")):
+                if name in headers:
+                    del headers[name]
+                headers[name] = value
+            resp = Response(resp.status_code, resp.reason_phrase, headers, body)
+        return resp
+
+    process_request.__wrapped__ = inner  # type: ignore[attr-defined]
+    return process_request
+
+
+class _Delegate:
+    """Attribute access to ``target`` with some attributes replaced."""
+
+    def __init__(self, target: Any, **overrides: Any) -> None:
+        self._target = target
+        self._overrides = overrides
+
+    def __getattr__(self, name: str) -> Any:
+        if name in self._overrides:
+            return self._overrides[name]
+        return getattr(self._target, name)
+
+
+_install_lock = threading.Lock()
+
+
+def install() -> None:
+    """Wrap the ``process_request`` hook of every viser server started from now on (idempotent).
+
+    viser's server module calls ``websockets.asyncio.server.serve(..., process_request=...)``
+    through its own module-global name ``websockets``; that name (only in viser's module) is
+    replaced by a delegate whose ``serve`` wraps the hook with the gate above.
+    """
+    from viser.infra import _infra  # private: viser is pinned to 1.1.1
+
+    import websockets.http11
+
+    with _install_lock:
+        if isinstance(_infra.websockets, _Delegate):
+            return
+        websockets.http11.MAX_LINE_LENGTH = max(websockets.http11.MAX_LINE_LENGTH, MAX_REQUEST_LINE)
+        real = websockets
+        import websockets.asyncio.server as real_server
+
+        def serve(*args: Any, **kwargs: Any) -> Any:
+            inner = kwargs.get("process_request")
+            if inner is not None:
+                kwargs["process_request"] = _guarded(inner)
+            return real_server.serve(*args, **kwargs)
+
+        _infra.websockets = _Delegate(real, asyncio=_Delegate(real.asyncio, server=_Delegate(real_server, serve=serve)))
