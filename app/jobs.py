@@ -27,7 +27,15 @@ Semantics:
 * **Dedupe by key.** When ``key`` is given and the same client already has an unfinished,
   non-cancelled job of the same ``kind`` and ``key``, that job is returned instead of starting a
   second identical computation (``on_done`` is attached to it).
-* **History.** Finished jobs are kept for polling, the most recent ``history`` of them.
+* **History.** Finished jobs are kept for polling, the most recent ``history`` of them; their
+  results together are bounded by ``history_bytes`` (estimated with
+  :func:`paraspace.app.bytecache.nbytes`): the oldest finished jobs lose their result first (the job
+  stays, with ``result_dropped = True``), so a page that closed leaves no grid behind.
+* **Fair queueing.** Workers take the queued job of the client with the fewest running jobs (then
+  the oldest), and one client never runs more than ``max_running_per_client`` jobs at once
+  (default ``max_workers - 1``, at least 1): another client's small job finds a free worker instead
+  of waiting behind one client's heavy jobs. (The numba kernels are serialised by
+  ``kinematics.parallel.KERNEL_LOCK`` and use every core, so a client loses little by this cap.)
 
 ``on_done(job)`` is called exactly once per submission when the job reaches a final status
 (``done``, ``failed`` or ``cancelled``); check ``job.status``. It runs in the worker thread (or, for
@@ -38,14 +46,16 @@ exceptions it raises are logged and ignored.
 from __future__ import annotations
 
 import collections
+import errno
 import logging
 import secrets
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable, Hashable, Literal, Optional
 
 from paraspace.kinematics.progress import Cancelled
+
+from .bytecache import nbytes
 
 __all__ = ["Job", "JobManager", "LimitExceeded", "JobStatus", "ProgressFn", "FINAL_STATUSES"]
 
@@ -72,6 +82,8 @@ class LimitExceeded(Exception):
 
 
 def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        return "the server's disk is full (No space left on device); free some space and retry"
     text = " ".join(str(exc).split())
     name = type(exc).__name__
     text = f"{name}: {text}" if text else name
@@ -107,6 +119,8 @@ class Job:
         self.progress = 0.0
         self.message = "queued"
         self.result: Any = None
+        self.result_dropped = False  # the history's byte budget dropped the result (see JobManager)
+        self._summarize: Any = None  # callable, None (drop), or False (already summarised)
         self.error: Optional[str] = None
         self.created = time.time()
         self.started: Optional[float] = None
@@ -172,10 +186,14 @@ class JobManager:
         max_jobs_per_client: unfinished jobs allowed per client.
         max_seconds: default run-time limit of a job, in seconds.
         history: finished jobs kept for polling (oldest dropped first).
+        history_bytes: budget of the results held by finished jobs (oldest results dropped first).
+        max_running_per_client: jobs of one client running at once (default ``max_workers - 1``,
+            at least 1).
     """
 
     def __init__(self, max_workers: int = 2, max_jobs_total: int = 16, max_jobs_per_client: int = 4,
-                 max_seconds: float = 300.0, history: int = 256) -> None:
+                 max_seconds: float = 300.0, history: int = 256, history_bytes: int = 64 << 20,
+                 max_running_per_client: Optional[int] = None) -> None:
         for name, val in (("max_workers", max_workers), ("max_jobs_total", max_jobs_total),
                           ("max_jobs_per_client", max_jobs_per_client), ("history", history)):
             if not isinstance(val, int) or val < 1:
@@ -187,12 +205,25 @@ class JobManager:
         self.max_jobs_per_client = max_jobs_per_client
         self.max_seconds = float(max_seconds)
         self.history = history
+        self.history_bytes = int(history_bytes)
+        self.max_running_per_client = (max(1, max_workers - 1) if max_running_per_client is None
+                                       else int(max_running_per_client))
+        if self.max_running_per_client < 1:
+            raise ValueError(f"max_running_per_client = {max_running_per_client!r} is invalid: valid range >= 1")
         self._lock = threading.RLock()
         self._jobs: "collections.OrderedDict[str, Job]" = collections.OrderedDict()
         self._unfinished: dict[str, Job] = {}
-        self._pool = ThreadPoolExecutor(max_workers=max_workers, thread_name_prefix="paraspace-job")
+        self._queue: list[tuple[Job, JobFn]] = []
+        self._running: "collections.Counter[str]" = collections.Counter()  # worker occupancy per client
+        self._kept: "collections.OrderedDict[str, int]" = collections.OrderedDict()  # job id -> result bytes
+        self._kept_total = 0
         self._closed = False
         self._wake = threading.Condition(self._lock)
+        self._work = threading.Condition(self._lock)
+        self._workers = [threading.Thread(target=self._worker, name=f"paraspace-job-{i}", daemon=True)
+                         for i in range(max_workers)]
+        for w in self._workers:
+            w.start()
         self._watchdog = threading.Thread(target=self._watch, name="paraspace-job-watchdog", daemon=True)
         self._watchdog.start()
 
@@ -200,7 +231,8 @@ class JobManager:
     def submit(self, fn: JobFn, *, kind: str, client: str = "local", key: Optional[Hashable] = None,
                supersede: bool = False, on_done: Optional[Callable[[Job], None]] = None,
                on_progress: Optional[Callable[[Job], None]] = None,
-               max_seconds: Optional[float] = None) -> Job:
+               max_seconds: Optional[float] = None,
+               summarize: Optional[Callable[[Any], Any]] = None) -> Job:
         """Queue ``fn(progress, cancel)`` and return its :class:`Job` at once.
 
         Args:
@@ -213,6 +245,8 @@ class JobManager:
             on_done: called once with the job when it reaches a final status.
             on_progress: called with the job after each progress update (in the worker thread).
             max_seconds: run-time limit of this job (default: the manager's; never above it).
+            summarize: what the history keeps of the result once the results of finished jobs
+                exceed ``history_bytes`` (default: nothing).
 
         Raises:
             LimitExceeded: the client or the manager is at its limit of unfinished jobs.
@@ -264,6 +298,7 @@ class JobManager:
                 while job_id in self._jobs:
                     job_id = secrets.token_hex(8)
                 job = Job(self, job_id, kind, client, key, limit)
+                job._summarize = summarize
                 if on_done is not None:
                     job._callbacks.append(on_done)
                 if on_progress is not None:
@@ -274,7 +309,10 @@ class JobManager:
         self._finish_all(to_finish)
         if exc is not None:
             raise exc
-        self._pool.submit(self._run, job, fn)
+        with self._lock:
+            if not job.is_final:
+                self._queue.append((job, fn))
+                self._work.notify()
         return job
 
     # ----- queries ---------------------------------------------------------------------------
@@ -305,6 +343,8 @@ class JobManager:
             counts = collections.Counter(j.status for j in self._jobs.values())
         return {"workers": self.max_workers, "max_jobs_total": self.max_jobs_total,
                 "max_jobs_per_client": self.max_jobs_per_client, "max_seconds": self.max_seconds,
+                "max_running_per_client": self.max_running_per_client,
+                "history_result_bytes": self._kept_total, "history_bytes": self.history_bytes,
                 "counts": {s: counts.get(s, 0) for s in ("queued", "running", "done", "failed", "cancelled")}}
 
     # ----- cancellation ----------------------------------------------------------------------
@@ -332,9 +372,14 @@ class JobManager:
             finish: list[Job] = []
             for job in list(self._unfinished.values()):
                 finish += self._request_cancel_locked(job, "cancelled: server shutting down")
+            self._queue.clear()
             self._wake.notify_all()
+            self._work.notify_all()
         self._finish_all(finish)
-        self._pool.shutdown(wait=wait, cancel_futures=True)
+        if wait:
+            for w in self._workers:
+                if w is not threading.current_thread():
+                    w.join()
 
     # ----- internals -------------------------------------------------------------------------
     def _supersede_locked(self, kind: str, client: str, keep: Optional[Job]) -> list[Job]:
@@ -369,6 +414,51 @@ class JobManager:
         self._prune_locked()
         return True
 
+    def _keep_result_locked(self, job: Job) -> None:
+        """Account a finished job's result (after its callbacks ran). Over ``history_bytes``, the
+        oldest full results are first replaced by their summary (``summarize``; none: dropped),
+        then, if still over, the oldest summaries are dropped too."""
+        if job.result is None or job.id not in self._jobs:
+            return
+        self._kept[job.id] = self._measure(job.result)
+        self._kept_total += self._kept[job.id]
+        for old_id in list(self._kept):
+            if self._kept_total <= self.history_bytes:
+                return
+            old = self._jobs.get(old_id)
+            if old is None or old._summarize is False:  # already a summary
+                continue
+            summary = None
+            if old._summarize is not None:
+                try:
+                    summary = old._summarize(old.result)
+                except Exception:  # noqa: BLE001
+                    log.exception("summarize of job %s raised", old.id)
+            old._summarize = False
+            self._kept_total -= self._kept.pop(old_id)
+            old.result, old.result_dropped = summary, summary is None
+            if summary is not None:
+                self._kept[old_id] = self._measure(summary)
+                self._kept_total += self._kept[old_id]
+                self._kept.move_to_end(old_id, last=False)
+        while self._kept_total > self.history_bytes and self._kept:
+            old_id, m = self._kept.popitem(last=False)
+            self._kept_total -= m
+            old = self._jobs.get(old_id)
+            if old is not None:
+                old.result, old.result_dropped = None, True
+
+    def _measure(self, obj: Any) -> int:
+        try:
+            return nbytes(obj)
+        except Exception:  # noqa: BLE001 - an unmeasurable result counts as large
+            return self.history_bytes + 1
+
+    def _forget_result_locked(self, job_id: str) -> None:
+        m = self._kept.pop(job_id, None)
+        if m is not None:
+            self._kept_total -= m
+
     def _finish_all(self, jobs: list[Job]) -> None:
         """Outside the lock: wake waiters and run on_done callbacks of finalized jobs."""
         for job in jobs:
@@ -379,6 +469,9 @@ class JobManager:
                     cb(job)
                 except Exception:  # noqa: BLE001 - a callback must not kill the worker
                     log.exception("on_done callback of job %s raised", job.id)
+            if job.status == "done":
+                with self._lock:
+                    self._keep_result_locked(job)
 
     def _prune_locked(self) -> None:
         excess = len(self._jobs) - len(self._unfinished) - self.history
@@ -389,6 +482,7 @@ class JobManager:
                 break
             if self._jobs[job_id].is_final:
                 del self._jobs[job_id]
+                self._forget_result_locked(job_id)
                 excess -= 1
 
     def _make_progress(self, job: Job) -> ProgressFn:
@@ -410,6 +504,46 @@ class JobManager:
                 except Exception:  # noqa: BLE001
                     log.exception("on_progress hook of job %s raised", job.id)
         return progress
+
+    def _pick_locked(self) -> Optional[tuple[Job, JobFn]]:
+        """The next queued job to run: among clients under ``max_running_per_client``, the one with
+        the fewest running jobs, then the oldest submission. Drops finalized entries."""
+        self._queue = [(j, f) for j, f in self._queue if not j.is_final]
+        best = None
+        for i, (job, _fn) in enumerate(self._queue):
+            running = self._running[job.client]
+            if running >= self.max_running_per_client:
+                continue
+            rank = (running, i)
+            if best is None or rank < best[0]:
+                best = (rank, i)
+        if best is None:
+            return None
+        return self._queue.pop(best[1])
+
+    def _worker(self) -> None:
+        while True:
+            with self._lock:
+                pick = None
+                while not self._closed:
+                    pick = self._pick_locked()
+                    if pick is not None:
+                        break
+                    self._work.wait()
+                if pick is None:
+                    return
+                job, fn = pick
+                self._running[job.client] += 1
+            try:
+                self._run(job, fn)
+            except BaseException:  # noqa: BLE001 - _run reports every failure; keep the worker alive
+                log.exception("worker failed on job %s", job.id)
+            finally:
+                with self._lock:
+                    self._running[job.client] -= 1
+                    if self._running[job.client] <= 0:
+                        del self._running[job.client]
+                    self._work.notify_all()
 
     def _run(self, job: Job, fn: JobFn) -> None:
         with self._lock:
