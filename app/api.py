@@ -34,7 +34,9 @@ from __future__ import annotations
 import asyncio
 import base64
 import collections
+import contextlib
 import dataclasses
+import errno
 import json
 import logging
 import math
@@ -42,22 +44,24 @@ import threading
 import time
 import urllib.parse
 import zlib
-from typing import Any, Callable, Hashable, Literal, Optional
+from typing import Annotated, Any, Callable, Hashable, Literal, Optional
 
 import numpy as np
 from fastapi import APIRouter, FastAPI, Path, Query, Request
 from fastapi.exceptions import RequestValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
 from fastapi.responses import JSONResponse, RedirectResponse, Response
 from starlette.concurrency import run_in_threadpool
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, Strict
 
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.serialize import jsonable
 
+from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
-from .limits import MAX_VOXELS, orientation_samples, workspace_voxels
+from .limits import MAX_VOXELS, check_workspace_grid, orientation_samples, workspace_voxels
 
 __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode_link_token"]
 
@@ -89,9 +93,12 @@ class ApiLimits:
         max_job_seconds: run time of one job; after it the job is stopped and reported failed.
         max_body_bytes: size of a request body. Over it: 413.
         max_shell_faces: largest ``max_faces`` accepted for shell downloads.
-        client_header: take the client identity from this request header (e.g. behind a trusted
-            proxy); ``None``: the peer IP address.
-        cache_entries: finished results kept per kind (workspace, orientation, sweep).
+        client_header: take the client identity from this request header (set it only behind a
+            proxy you control that overwrites the header); ``None``: the connection's peer address
+            (which uvicorn takes from X-Forwarded-For only for ``paraspace serve --trusted-proxy``).
+        cache_bytes: finished results kept per kind (workspace, orientation, sweep), in bytes
+            (estimated, voxel grids included).
+        shell_cache_bytes: exported shell files kept for repeated downloads, in bytes.
     """
 
     max_voxels: int = MAX_VOXELS
@@ -101,10 +108,11 @@ class ApiLimits:
     max_jobs_per_client: int = 4
     max_jobs_total: int = 16
     max_job_seconds: float = 300.0
-    max_body_bytes: int = 1_000_000
+    max_body_bytes: int = 262_144
     max_shell_faces: int = 2_000_000
     client_header: Optional[str] = None
-    cache_entries: int = 16
+    cache_bytes: int = 256 << 20
+    shell_cache_bytes: int = 128 << 20
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (reported by ``/health``)."""
@@ -129,11 +137,13 @@ def _num(section: str, name: str, default: Any, lo: float, hi: float, descriptio
     text = _rng_text(lo, hi, unit, lo_open)
     _RANGES[(section, name)] = text
     bound = {"gt": lo} if lo_open else {"ge": lo}
-    return Field(default, le=hi, allow_inf_nan=False, description=f"{description}; valid range {text}",
-                 **bound)
+    return Field(default, le=hi, allow_inf_nan=False, strict=True,
+                 description=f"{description}; valid range {text}", **bound)
 
 
 _MODEL = ConfigDict(extra="forbid")
+#: A number field: a JSON number only (``true`` or ``"3"`` is not a length; an integer is).
+Num = Annotated[float, Strict()]
 
 
 class DesignIn(BaseModel):
@@ -191,8 +201,8 @@ class BoundsIn(BaseModel):
     """An explicit box ``lo < hi`` on each of x, y, z."""
 
     model_config = _MODEL
-    lo: tuple[float, float, float] = Field(description="lower corner (x, y, z); each in [-10000, 10000]")
-    hi: tuple[float, float, float] = Field(description="upper corner (x, y, z); each in [-10000, 10000]")
+    lo: tuple[Num, Num, Num] = Field(description="lower corner (x, y, z); each in [-10000, 10000]")
+    hi: tuple[Num, Num, Num] = Field(description="upper corner (x, y, z); each in [-10000, 10000]")
 
 
 _RANGES[("bounds", "lo")] = _RANGES[("bounds", "hi")] = "[-10000, 10000] on each of x, y, z, lo < hi"
@@ -265,9 +275,9 @@ class IkRequest(BaseModel):
     model_config = _MODEL
     design: DesignIn = Field(default_factory=DesignIn)
     pose: PoseIn = Field(default_factory=PoseIn)
-    d: Optional[list[float]] = Field(None, min_length=3, max_length=3,
+    d: Optional[list[Num]] = Field(None, min_length=3, max_length=3,
                                      description="carriage strokes d_1..d_3, each in [0, d_s]")
-    eta: Optional[list[float]] = Field(None, min_length=3, max_length=3,
+    eta: Optional[list[Num]] = Field(None, min_length=3, max_length=3,
                                        description="arc positions eta_1..eta_3 in degrees, within the arc stroke")
 
 
@@ -295,7 +305,7 @@ class SweepAxis(BaseModel):
 
     model_config = _MODEL
     param: ParamName = Field(description="design parameter to vary")
-    values: Optional[list[float]] = Field(None, min_length=1, max_length=10_000,
+    values: Optional[list[Num]] = Field(None, min_length=1, max_length=10_000,
                                           description="values (each within the parameter's model range)")
     n: Optional[int] = Field(None, ge=1, le=10_000, description="number of values over the slider range")
 
@@ -407,45 +417,6 @@ def _error_json(status: int, detail: Any, headers: Optional[dict[str, str]] = No
 # helpers
 
 
-class _LRU:
-    """A small thread-safe LRU mapping."""
-
-    def __init__(self, size: int, on_evict: Optional[Callable[[Any], None]] = None) -> None:
-        self.size = max(1, int(size))
-        self.on_evict = on_evict
-        self._d: "collections.OrderedDict[Hashable, Any]" = collections.OrderedDict()
-        self._lock = threading.Lock()
-        self.hits = 0
-        self.misses = 0
-
-    def get(self, key: Hashable) -> Any:
-        with self._lock:
-            if key in self._d:
-                self._d.move_to_end(key)
-                self.hits += 1
-                return self._d[key]
-            self.misses += 1
-            return None
-
-    def put(self, key: Hashable, value: Any) -> None:
-        with self._lock:
-            evicted = []
-            old = self._d.get(key)
-            if old is not None and old is not value:
-                evicted.append(old)
-            self._d[key] = value
-            self._d.move_to_end(key)
-            while len(self._d) > self.size:
-                evicted.append(self._d.popitem(last=False)[1])
-        if self.on_evict is not None:
-            for v in evicted:
-                if v is not value:
-                    self.on_evict(v)
-
-    def __len__(self) -> int:
-        return len(self._d)
-
-
 @dataclasses.dataclass
 class ApiResult:
     """What an API job returns: the raw core object (for shells) and the JSON payload."""
@@ -462,16 +433,29 @@ def encode_link_token(query: str) -> str:
     return tag + base64.urlsafe_b64encode(body).decode().rstrip("=")
 
 
+_TOKEN_BODY = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_")
+
+
 def decode_link_token(token: str) -> str:
-    """Inverse of :func:`encode_link_token`; raises ValueError on a malformed token."""
+    """Inverse of :func:`encode_link_token`; raises ValueError on a malformed token (a character
+    outside the URL-safe base64 alphabet, a length no encoder produces, a broken or trailing zlib
+    stream, or text that is not UTF-8)."""
     if not token or token[0] not in "zq" or len(token) > 8192:
         raise ValueError("not a link token")
-    data = base64.urlsafe_b64decode(token[1:] + "=" * (-len(token[1:]) % 4))
+    body = token[1:]
+    if not set(body) <= _TOKEN_BODY or len(body) % 4 == 1:
+        raise ValueError("not a link token")
+    data = base64.urlsafe_b64decode(body + "=" * (-len(body) % 4))
     if token[0] == "z":
         d = zlib.decompressobj()
-        data = d.decompress(data, 16384)
+        try:
+            data = d.decompress(data, 16384)
+        except zlib.error as exc:
+            raise ValueError("not a link token") from exc
         if d.unconsumed_tail:
             raise ValueError("link token too long")
+        if not d.eof or d.unused_data:
+            raise ValueError("not a link token")
     return data.decode("utf-8")
 
 
@@ -480,10 +464,11 @@ def decode_link_token(token: str) -> str:
 
 
 class _BodyLimit:
-    """ASGI middleware: refuse request bodies over ``max_bytes`` with 413 (before parsing)."""
+    """ASGI middleware: refuse request bodies over ``max_bytes`` with 413 (before parsing), and
+    bodies not complete within ``seconds`` (dripped slowly) with 408."""
 
-    def __init__(self, app: Any, max_bytes: int) -> None:
-        self.app, self.max_bytes = app, max_bytes
+    def __init__(self, app: Any, max_bytes: int, seconds: float = 10.0) -> None:
+        self.app, self.max_bytes, self.seconds = app, max_bytes, seconds
 
     async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
         if scope["type"] != "http" or scope.get("method") in ("GET", "HEAD", "OPTIONS", "DELETE"):
@@ -499,8 +484,14 @@ class _BodyLimit:
         chunks: list[bytes] = []
         size = 0
         more = not too_big
+        deadline = time.monotonic() + self.seconds
         while more:
-            msg = await receive()
+            try:
+                msg = await asyncio.wait_for(receive(), timeout=max(0.01, deadline - time.monotonic()))
+            except asyncio.TimeoutError:
+                resp = _error_json(408, f"request body not received within {self.seconds:g} s")
+                await resp(scope, receive, send)
+                return
             if msg["type"] == "http.disconnect":
                 return
             body = msg.get("body", b"")
@@ -552,10 +543,11 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     app.state.limits = limits
     app.state.explorer_url = explorer_url
     # The workspace cache owns the voxel grids: an evicted result drops its grid (its measures stay),
-    # so memory is bounded by cache_entries grids however many jobs the history remembers.
-    caches = {"workspace": _LRU(limits.cache_entries, on_evict=_drop_raw),
-              "orientation": _LRU(limits.cache_entries), "sweep": _LRU(limits.cache_entries)}
-    shells = _LRU(8)
+    # so memory is bounded by cache_bytes however many jobs the history remembers (the job history
+    # keeps only the JSON payload of results it cannot afford: JobManager(history_bytes=...)).
+    caches = {"workspace": ByteLRU(limits.cache_bytes, on_evict=_drop_raw),
+              "orientation": ByteLRU(limits.cache_bytes), "sweep": ByteLRU(limits.cache_bytes)}
+    shells = ByteLRU(limits.shell_cache_bytes)
     shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
     submit_lock = threading.Lock()
     app.state.caches = caches
@@ -571,6 +563,24 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     @app.exception_handler(RequestValidationError)
     async def _on_validation(request: Request, exc: RequestValidationError) -> JSONResponse:
         return _error_json(422, _validation_items(list(exc.errors())))
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _on_http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        # FastAPI answers a body it cannot parse (invalid UTF-8, nesting too deep for the JSON
+        # parser, truncated JSON) with a bare 400: name the field instead.
+        if exc.status_code == 400 and "parsing the body" in str(exc.detail):
+            return _error_json(422, [{"field": "body", "message": "body = <unreadable> is invalid: expected a "
+                                      "UTF-8 JSON object (at most a few levels deep) as documented for this endpoint"}])
+        return _error_json(exc.status_code, exc.detail, dict(exc.headers or {}))
+
+    @app.exception_handler(OSError)
+    async def _on_os(request: Request, exc: OSError) -> JSONResponse:
+        if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):
+            log.error("disk full on %s %s: %s", request.method, request.url.path, exc)
+            return _error_json(507, "the server's disk is full, so this request cannot be stored; "
+                                    "requests that need no disk (health, ik, cached results) still work")
+        log.exception("unhandled OS error on %s %s", request.method, request.url.path)
+        return _error_json(500, f"internal error: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}")
 
     @app.exception_handler(FieldError)
     async def _on_field(request: Request, exc: FieldError) -> JSONResponse:
@@ -614,6 +624,37 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         with submit_lock:  # check and submit atomically: the limits hold under concurrent requests
             return _submit_locked(client, kind, ckey, fn, on_done, hit=cached is not None)
 
+    precheck_slots = threading.BoundedSemaphore(2)  # grid estimates (a coarse scout each) at once
+
+    @contextlib.contextmanager
+    def prechecks() -> Any:
+        if not precheck_slots.acquire(timeout=10.0):
+            raise ApiError(429, "server busy estimating other requests; retry later", {"Retry-After": "2"})
+        try:
+            yield
+        finally:
+            precheck_slots.release()
+
+    def quota_check(request: Request) -> None:
+        """429 at once when the caller or the server is at its job limit (nothing computed yet)."""
+        client = client_of(request)
+        live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
+        if sum(1 for j in live if j.client == client) >= limits.max_jobs_per_client:
+            raise ApiError(429, f"too many unfinished jobs for this client: limit max_jobs_per_client = "
+                                f"{limits.max_jobs_per_client}; wait for one to finish or cancel it "
+                                f"(DELETE {API_PREFIX}/jobs/{{id}})", {"Retry-After": "1"})
+        if len(live) >= limits.max_jobs_total:
+            raise ApiError(429, f"server busy: limit max_jobs_total = {limits.max_jobs_total} unfinished "
+                                f"jobs reached; retry later", {"Retry-After": "2"})
+
+    def grid_check(design: Design, settings: Any, *, analytic: bool = False, point: Optional[int] = None) -> None:
+        """413 with the grid rule's message (app/limits.py) when the grid is over max_voxels."""
+        try:
+            check_workspace_grid(design, settings, limits.max_voxels, analytic=analytic)
+        except ParameterError as exc:
+            where = "" if point is None else f"sweep point {point}: "
+            raise ApiError(413, f"{where}{exc} (limit max_voxels = {limits.max_voxels})") from None
+
     def _submit_locked(client: str, kind: str, ckey: Hashable, fn: Callable[[Any, Any], Any],
                        on_done: Callable[[Job], None], *, hit: bool) -> Job:
         live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
@@ -630,7 +671,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                                     f"jobs reached; retry later", {"Retry-After": "2"})
         try:
             return jobs.submit(fn, kind=kind, client=client, key=ckey, on_done=on_done,
-                               max_seconds=limits.max_job_seconds)
+                               max_seconds=limits.max_job_seconds, summarize=_payload_only)
         except LimitExceeded as e:
             raise ApiError(429, str(e), {"Retry-After": "2"}) from None
         except RuntimeError as e:
@@ -674,7 +715,15 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     def finished_result(job: Job) -> ApiResult:
         if job.status == "done" and isinstance(job.result, ApiResult):
+            if job.result.raw is None and job.kind in caches:  # the history kept only the payload
+                key = job.key[1] if isinstance(job.key, tuple) and job.key[:1] == ("cached",) else job.key
+                full = caches[job.kind].get(key)
+                if isinstance(full, ApiResult):
+                    return full
             return job.result
+        if job.status == "done" and job.result_dropped:
+            raise ApiError(410, f"job {job.id} finished, but its result was dropped from memory (the "
+                                f"history's byte budget); submit the same request again to recompute it")
         if job.status in ("queued", "running"):
             raise ApiError(409, f"job {job.id} is {job.status} ({100 * job.progress:.0f}%): "
                                 f"the result is available when its status is done",
@@ -709,7 +758,8 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                 "constraints": ["d_s <= r"]}
 
     @router.post("/ik", summary="Inverse kinematics of one pose")
-    def ik(req: IkRequest) -> dict[str, Any]:
+    async def ik(req: IkRequest) -> dict[str, Any]:  # ~1 ms of numpy: on the event loop, never queued
+        # behind the thread pool that heavy requests may fill
         """Redundancy resolved automatically (no ``d``/``eta``) or with hand-set carriages."""
         from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
@@ -741,11 +791,9 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         key = (design.key(), settings.key())
         cached = caches["workspace"].get(key) is not None
         if not cached:
-            n = _core("settings", lambda: workspace_voxels(design, settings))
-            if n > limits.max_voxels:
-                raise ApiError(413, f"workspace grid of {n} voxels exceeds the limit max_voxels = "
-                                    f"{limits.max_voxels}: use a larger voxel (now {settings.voxel:g}) "
-                                    f"or smaller bounds")
+            quota_check(request)  # refuse at once, before any pre-computation
+            with prechecks():
+                grid_check(design, settings)
 
         def compute(progress: Any, cancel: Any) -> ApiResult:
             res = compute_workspace(design, settings, progress, cancel)
@@ -782,7 +830,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             raw = res.raw
             if raw is None:
                 raise ApiError(409, f"the voxel grid of job {job_id} was evicted from the result cache "
-                                    f"(limit cache_entries = {limits.cache_entries}); submit the workspace "
+                                    f"(limit cache_bytes = {limits.cache_bytes}); submit the workspace "
                                     f"request again to export its shell")
             if not raw.occupancy.any():
                 raise ApiError(409, "the workspace is empty: there is no shell to export")
@@ -813,6 +861,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         key = (design.key(), settings.key())
         cached = caches["orientation"].get(key) is not None
         if not cached:
+            quota_check(request)
             n = _core("orientation", lambda: orientation_samples(design, settings))
             if n > limits.max_orientation_samples:
                 raise ApiError(413, f"orientation request of {n} samples exceeds the limit "
@@ -868,9 +917,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
                tuple((ax.param, tuple(v)) for (_, ax), v in zip(axes, vals)))
         cached = caches["sweep"].get(key) is not None
         if not cached:
+            quota_check(request)
             total = 0
             n_ori = 0
             points = _grid_points(design, [ax.param for _, ax in axes], vals, [n for n, _ in axes])
+            with prechecks():
+                for i, d in enumerate(points):
+                    grid_check(d, settings, point=i)  # each point obeys the workspace limit
             for d in points:
                 total += workspace_voxels(d, settings, analytic=True)
                 if ori is not None:
@@ -927,17 +980,9 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     # ----- short links ----------------------------------------------------------------------
     def explorer_base(request: Request) -> Optional[str]:
-        """The explorer URL as the caller can reach it (a wildcard bind host is replaced by the
-        host name the caller used to reach this API)."""
-        if not explorer_url:
-            return None
-        parts = urllib.parse.urlsplit(explorer_url)
-        if parts.hostname in ("0.0.0.0", "::", "") and request.url.hostname:
-            host = request.url.hostname
-            host = f"[{host}]" if ":" in host else host
-            netloc = f"{host}:{parts.port}" if parts.port else host
-            parts = parts._replace(netloc=netloc)
-        return urllib.parse.urlunsplit(parts).rstrip("/")
+        """The explorer URL from the configuration (``serve --public-url``); never from the request's
+        Host header, which a client controls."""
+        return explorer_url.rstrip("/") if explorer_url else None
 
     def explorer_redirect(query: str, request: Request) -> RedirectResponse:
         base = explorer_base(request)
@@ -1015,6 +1060,11 @@ def landing_page() -> str:
     if source.is_file():
         return source.read_text("utf-8")
     return importlib.resources.files("paraspace.static").joinpath("index.html").read_text("utf-8")
+
+
+def _payload_only(result: Any) -> Any:
+    """What the job history keeps of an API result it cannot afford: the JSON payload."""
+    return ApiResult(raw=None, payload=result.payload) if isinstance(result, ApiResult) else None
 
 
 def _drop_raw(result: Any) -> None:

@@ -301,10 +301,10 @@ def test_serve_starts_explorer_and_api_and_stops():
 
 
 def test_result_cache_bounds_memory():
-    """With cache_entries=1 the older workspace loses its voxel grid (shell: 409 with the reason) but
-    keeps its measures."""
+    """With a result cache of ~one coarse grid the older workspace loses its voxel grid (shell: 409
+    with the reason) but keeps its measures."""
     jobs = JobManager(max_workers=1)
-    srv = start_api(create_api(jobs, limits=ApiLimits(cache_entries=1)), "127.0.0.1", 0)
+    srv = start_api(create_api(jobs, limits=ApiLimits(cache_bytes=30_000)), "127.0.0.1", 0)
     try:
         with httpx.Client(base_url=srv.url, timeout=60) as c:
             a = c.post(f"{V1}/workspace", params={"wait": 30}, json={"settings": {"voxel": 13}}).json()
