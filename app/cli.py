@@ -25,6 +25,8 @@ from typing import Any, Optional, Sequence
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 
+from .progressline import progress_line
+
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2
@@ -88,7 +90,11 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         if fmt not in ("stl", "ply", "obj", "glb"):
             raise ParameterError("export", ns.export, "a file name ending in .stl, .ply, .obj or .glb")
     warm_up()
-    result = compute_workspace(design, settings)
+    progress, done = progress_line("workspace")
+    try:
+        result = compute_workspace(design, settings, progress)
+    finally:
+        done()
     measures = measure_workspace(result)
     out = {"design": design.to_dict(), **measures.to_dict(), "voxel_size": result.grid.h, "voxels": result.voxels,
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
@@ -132,7 +138,11 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
         raise ParameterError("z0", ns.z0, "a number") from None
     settings = OrientationSettings(z0=z0)
     warm_up()
-    result = orientation_workspace(design, settings)
+    progress, done = progress_line("orientation")
+    try:
+        result = orientation_workspace(design, settings, progress)
+    finally:
+        done()
     out = {"design": design.to_dict(), **result.to_dict()}
     if ns.json:
         _emit(out)
@@ -158,22 +168,28 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         raise ParameterError("param2", ns.param2, "given together with --values2")
     distributed = ns.scheduler is not None or ns.workers is not None
     warm_up()
-    if ns.param2 is not None:
-        values2 = _floats("values2", ns.values2)
-        if distributed:
+    progress, done = progress_line("sweep")
+    try:
+        if ns.param2 is not None:
+            values2 = _floats("values2", ns.values2)
+            if distributed:
+                from paraspace.kinematics.distributed import sweep_grid
+
+                rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings,
+                                  scheduler=ns.scheduler, n_workers=ns.workers, progress=progress)
+            else:
+                rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, progress=progress)["points"]
+        elif distributed:
             from paraspace.kinematics.distributed import sweep_grid
 
-            rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings,
-                              scheduler=ns.scheduler, n_workers=ns.workers)
+            rows = sweep_grid(design, {ns.param: values}, settings, scheduler=ns.scheduler, n_workers=ns.workers,
+                              progress=progress)
         else:
-            rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings)["points"]
-    elif distributed:
-        from paraspace.kinematics.distributed import sweep_grid
-
-        rows = sweep_grid(design, {ns.param: values}, settings, scheduler=ns.scheduler, n_workers=ns.workers)
-    else:
-        rows = sweep_1d(design, ns.param, values, settings)
+            rows = sweep_1d(design, ns.param, values, settings, progress=progress)
+    finally:
+        done()
     rows = [_with_value(r, ns.param, ns.param2) for r in rows]
+    failed = [r for r in rows if r.get("ok") is False]
     if ns.csv:
         with open(ns.csv, "w", newline="") as fh:
             fh.write(rows_to_csv(rows))
@@ -183,6 +199,10 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         _emit(rows)
     else:
         sys.stdout.write(rows_to_csv(rows))
+    if failed:  # the rows above say which; the exit status says that the study is incomplete
+        sys.stderr.write(f"paraspace: error: {len(failed)} of {len(rows)} points failed "
+                         f"(first: {failed[0].get('error', '?')})\n")
+        return 1
     return 0
 
 
@@ -268,7 +288,13 @@ def cmd_serve(ns: argparse.Namespace) -> int:
         v = getattr(ns, field)
         if not 0 <= v <= 65535:
             raise ParameterError(field.replace("_", "-"), v, "[0, 65535]")
-    serve(host=ns.host, port=ns.port, api_port=ns.api_port, block=True)
+    public_url = None
+    if ns.public_url:
+        from paraspace.app.serve import check_public_url
+
+        public_url = check_public_url(ns.public_url)
+    serve(host=ns.host, port=ns.port, api_port=ns.api_port, block=True, public_url=public_url,
+          trusted_proxy=ns.trusted_proxy)
     return 0
 
 
@@ -318,6 +344,11 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--host", default="127.0.0.1")
     v.add_argument("--port", type=int, default=8080, help="explorer port (default 8080)")
     v.add_argument("--api-port", dest="api_port", type=int, default=8081, help="REST API port (default 8081)")
+    v.add_argument("--public-url", dest="public_url", metavar="URL",
+                   help="the explorer's URL as users reach it (behind a proxy); links are built from it, "
+                        "never from a request's Host header")
+    v.add_argument("--trusted-proxy", dest="trusted_proxy", metavar="IP[,IP]",
+                   help="believe X-Forwarded-For only from these proxy addresses (default: never)")
     v.set_defaults(func=cmd_serve)
     return p
 
@@ -329,6 +360,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return int(ns.func(ns))
     except ParameterError as err:
         sys.stderr.write(f"paraspace: error: {err}\n")
+        return 2
+    except OSError as err:  # a file we were asked to write or read (--export, --csv, --plot, ...)
+        where = f" {err.filename!r}" if getattr(err, "filename", None) else ""
+        sys.stderr.write(f"paraspace: error: cannot use the file{where}: {err.strerror or err}\n")
         return 2
     except KeyboardInterrupt:
         return 130

@@ -29,6 +29,7 @@ import collections
 import contextlib
 import csv
 import dataclasses
+import errno
 import io
 import json
 import logging
@@ -1200,9 +1201,18 @@ class Explorer:
             self.sessions[client.client_id] = session
         try:
             session.build()
-        except Exception:  # noqa: BLE001
+        except Exception as exc:  # noqa: BLE001 - say so on the page instead of leaving it at "starting..."
             log.exception("building the explorer for client %s failed", client.client_id)
-            raise
+            why = ("the server's disk is full (No space left on device)"
+                   if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT)
+                   else f"{type(exc).__name__}: {exc}")
+            try:
+                client.gui.add_markdown(f"**The explorer could not start this page:** {md_text(why)}. "
+                                        "Reload to try again; the REST API may still answer.")
+                client.add_notification("The explorer could not start", plain_text(why, 300), color="red")
+            except Exception:  # noqa: BLE001 - the client may be gone
+                pass
+            return
         self.connect_seconds.append(time.perf_counter() - t0)
 
     def _on_disconnect(self, client: viser.ClientHandle) -> None:

@@ -11,7 +11,9 @@ passes untouched):
 
 1. a query longer than :data:`MAX_QUERY_CHARS` is refused with 414 (the websockets server's own
    limit on a request line is raised from 8 KiB to :data:`MAX_REQUEST_LINE` so that such a link
-   gets this answer instead of a dropped connection);
+   gets this answer instead of a dropped connection; a request beyond even that is dropped by
+   websockets, and its "opening handshake failed" traceback is kept out of the log by
+   :class:`_QuietHandshakeFailures`);
 2. a query carrying any key that is not one of the explorer's own keys
    (:func:`paraspace.app.urlstate.known_keys`) is refused with 400: the page is never served with
    a key that viser's client could act on. The answer is plain text (never HTML), names the
@@ -26,6 +28,7 @@ The refusal is decided by :func:`page_refusal`, a pure function of the request's
 from __future__ import annotations
 
 import gzip
+import logging
 import threading
 import urllib.parse
 from typing import Any, Callable, Optional
@@ -41,7 +44,7 @@ __all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "pa
 #: Longest query string of a page request (a full explorer link is about 300 characters).
 MAX_QUERY_CHARS = 4096
 #: Longest request line the explorer's server reads (websockets' default is 8 KiB).
-MAX_REQUEST_LINE = 65536
+MAX_REQUEST_LINE = 262144
 #: Sent with the page: the page may connect (websocket, fetch) only to the server it came from.
 CONTENT_SECURITY_POLICY = ("connect-src 'self' blob: data:; object-src 'none'; base-uri 'none'; "
                            "frame-ancestors 'self'; form-action 'none'")
@@ -157,6 +160,14 @@ class _Delegate:
         return getattr(self._target, name)
 
 
+class _QuietHandshakeFailures(logging.Filter):
+    """Drops websockets' "opening handshake failed" records (a malformed or oversized HTTP request
+    from a client: not a server error, and its traceback floods the log)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.getMessage() not in ("opening handshake failed", "connection rejected (200 OK)")
+
+
 _install_lock = threading.Lock()
 
 
@@ -175,6 +186,8 @@ def install() -> None:
         if isinstance(_infra.websockets, _Delegate):
             return
         websockets.http11.MAX_LINE_LENGTH = max(websockets.http11.MAX_LINE_LENGTH, MAX_REQUEST_LINE)
+        for name in ("websockets.server", "websockets"):
+            logging.getLogger(name).addFilter(_QuietHandshakeFailures())
         real = websockets
         import websockets.asyncio.server as real_server
 

@@ -21,7 +21,10 @@ import threading
 import time
 from typing import Any, Optional
 
+import urllib.parse
+
 import uvicorn
+from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from paraspace.kinematics.design import ParameterError
 
@@ -65,18 +68,64 @@ class ApiServer:
         self.thread.join(timeout)
 
 
+#: Connections (and requests) the API serves at once; more get 503 at once.
+MAX_CONNECTIONS = 200
+#: Seconds a new connection may take to send its request line and headers.
+HEADER_TIMEOUT = 10.0
+#: Seconds an idle keep-alive connection is kept.
+KEEP_ALIVE = 5
+
+
+class _TimedH11(H11Protocol):
+    """uvicorn's h11 protocol with a deadline for the request head: a connection that has not sent
+    a complete request line and headers within :data:`HEADER_TIMEOUT` seconds is closed (slowloris).
+    (Idle keep-alive connections are closed after :data:`KEEP_ALIVE` s by uvicorn itself; bodies
+    are read against a deadline by the API's body-limit middleware.)"""
+
+    header_timeout = HEADER_TIMEOUT
+
+    def connection_made(self, transport: Any) -> None:  # type: ignore[override]
+        super().connection_made(transport)
+        self._head_timer = self.loop.call_later(self.header_timeout, self._head_deadline)
+
+    def _head_deadline(self) -> None:
+        if self.cycle is None and not self.transport.is_closing():
+            self.transport.close()
+
+    def handle_events(self) -> None:
+        super().handle_events()
+        if self.cycle is not None and getattr(self, "_head_timer", None) is not None:
+            self._head_timer.cancel()
+            self._head_timer = None
+
+    def connection_lost(self, exc: Optional[Exception]) -> None:
+        if getattr(self, "_head_timer", None) is not None:
+            self._head_timer.cancel()
+            self._head_timer = None
+        super().connection_lost(exc)
+
+
 def start_api(app: Any, host: str = "127.0.0.1", port: int = 8081, *, log_level: str = "warning",
-              timeout: float = 20.0) -> ApiServer:
+              timeout: float = 20.0, trusted_proxy: Optional[str] = None,
+              header_timeout: float = HEADER_TIMEOUT) -> ApiServer:
     """Start uvicorn for ``app`` in a daemon thread and wait until it accepts connections.
 
     Args:
         port: TCP port; 0 picks a free one (read it from the returned ``port``).
+        trusted_proxy: address(es) of reverse proxies whose ``X-Forwarded-For`` is believed (comma
+            separated, uvicorn's ``forwarded_allow_ips``); ``None``: forwarded headers are ignored
+            and a client is its connection's peer address (they cannot pretend to be many).
+        header_timeout: seconds a connection may take to send its request head.
 
     Raises:
         RuntimeError: the server did not start (e.g. the port is in use).
     """
     config = uvicorn.Config(app, host=host, port=port, log_level=log_level, access_log=False,
-                            lifespan="off", timeout_graceful_shutdown=3)
+                            lifespan="off", timeout_graceful_shutdown=3,
+                            http=type("TimedH11", (_TimedH11,), {"header_timeout": float(header_timeout)}),
+                            proxy_headers=bool(trusted_proxy), forwarded_allow_ips=trusted_proxy or "",
+                            limit_concurrency=MAX_CONNECTIONS, timeout_keep_alive=KEEP_ALIVE,
+                            h11_max_incomplete_event_size=16384)
     server = uvicorn.Server(config)
     errors: list[BaseException] = []
 
@@ -157,9 +206,25 @@ class Running:
             self.stop()
 
 
+NO_AUTH_NOTICE = ("paraspace has no authentication: anyone who can reach these ports can use them. "
+                  "Bind to 127.0.0.1 (the default), or put the server behind a reverse proxy that adds "
+                  "authentication (and pass --public-url and --trusted-proxy).")
+
+
+def check_public_url(url: str) -> str:
+    """``url`` as the explorer's public base URL (``http(s)://host[:port][/path]``), or
+    :class:`ParameterError` naming ``public-url``."""
+    parts = urllib.parse.urlsplit(url.strip())
+    if parts.scheme not in ("http", "https") or not parts.hostname or parts.query or parts.fragment:
+        raise ParameterError("public-url", url, "an http:// or https:// URL with a host and no query, "
+                                                "e.g. https://robots.example.org/paraspace")
+    return urllib.parse.urlunsplit(parts).rstrip("/") + "/"
+
+
 def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, block: bool = True,
           explorer: bool = True, limits: ApiLimits = ApiLimits(), max_workers: int = 2,
-          quiet: bool = False) -> Running:
+          quiet: bool = False, public_url: Optional[str] = None,
+          trusted_proxy: Optional[str] = None) -> Running:
     """Start the explorer on ``port`` and the API on ``api_port`` (both on ``host``).
 
     Args:
@@ -172,6 +237,10 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
         limits: API resource limits; ``limits.max_jobs_*`` also bound the shared JobManager.
         max_workers: computation threads shared by the explorer and the API.
         quiet: do not print the URLs.
+        public_url: the explorer's URL as users reach it (behind a proxy); short links and the
+            landing page point there. Default: ``http://{host}:{port}/`` (loopback for a wildcard
+            bind). The request's Host header is never used to build a link.
+        trusted_proxy: see :func:`start_api`.
 
     Returns:
         The :class:`Running` servers (already stopped when ``block`` is true).
@@ -189,11 +258,16 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
 
             exp = Explorer(host, port, jobs)
             exp.start()
-        # For a wildcard bind the API substitutes the host name each caller used (short links).
-        explorer_url = None if exp is None else f"http://{_bracket(host)}:{int(exp.port)}/"
+        # Links are built from configuration only, never from a request's Host header.
+        if exp is None:
+            explorer_url = None
+        elif public_url:
+            explorer_url = check_public_url(public_url)
+        else:
+            explorer_url = f"http://{_bracket(_url_host(host))}:{int(exp.port)}/"
         app = create_api(jobs, explorer_url=explorer_url, limits=limits)
         try:
-            api = start_api(app, host, api_port)
+            api = start_api(app, host, api_port, trusted_proxy=trusted_proxy)
         except RuntimeError as e:
             raise ParameterError("api-port", api_port, f"a free TCP port on {host} ({e})") from None
     except BaseException:
@@ -208,6 +282,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
         print(f"paraspace API:      {api.url}{'/api/v1'}  (docs: {api.url}/docs)", flush=True)
         if host in ("0.0.0.0", "::"):
             print(f"  (bound to {host}: reachable from other machines on these ports)", flush=True)
+        print(NO_AUTH_NOTICE, flush=True)
     if block:
         running.wait()
     return running

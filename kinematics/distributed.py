@@ -11,6 +11,9 @@ point of ``product(params[p1], params[p2], ...)``, e.g. a 4-D study over ``a, d_
 * robust: every point has ``retries=1``; a point that still fails, or whose worker keeps dying
   (the scheduler's ``allowed-failures``), is returned with ``"ok": False`` and a one-line
   ``"error"`` while every other point is returned normally;
+* a lost cluster ends the call, never hangs it: when the scheduler stops answering or has had no
+  worker for ``lost_after`` seconds (default 10), the points not finished are returned with
+  ``"ok": False`` and ``"error": "cluster lost: ..."``, within ``lost_after`` plus a few seconds;
 * the rows are in grid order (first parameter outermost) and, apart from the bookkeeping keys
   ``params``, ``index``, ``ok`` and the wall-clock ``compute_seconds``, identical to calling
   ``evaluate_design`` serially.
@@ -113,10 +116,50 @@ def _open_client(scheduler: Optional[str], n_workers: Optional[int], connect_tim
     return client, cluster
 
 
+def _cluster_trouble(client: Any, timeout: float = 3.0) -> Optional[str]:
+    """``None`` while the scheduler answers and has at least one worker, else why not."""
+    import concurrent.futures
+
+    ex = concurrent.futures.ThreadPoolExecutor(1)
+    try:
+        workers = ex.submit(client.nthreads).result(timeout=timeout)
+    except concurrent.futures.TimeoutError:
+        return "the scheduler does not answer"
+    except Exception as e:  # noqa: BLE001
+        return f"the scheduler does not answer ({_one_line(e)})"
+    finally:
+        ex.shutdown(wait=False)
+    return None if workers else "no worker"
+
+
+def _close_quietly(client: Any, cluster: Any) -> None:
+    """Close the client (and a local cluster) without waiting long or logging tracebacks when
+    the scheduler is already gone."""
+    quiet = [logging.getLogger(n) for n in ("distributed", "distributed.client", "distributed.comm",
+                                             "distributed.batched", "asyncio", "tornado")]
+    levels = [lg.level for lg in quiet]
+    for lg in quiet:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        try:
+            client.close(timeout=5)
+        except Exception:  # noqa: BLE001
+            pass
+        if cluster is not None:
+            try:
+                cluster.close(timeout=10)
+            except Exception:  # noqa: BLE001
+                pass
+    finally:
+        for lg, lv in zip(quiet, levels):
+            lg.setLevel(lv)
+
+
 def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
                orientation: Any = None, scheduler: Optional[str] = None, n_workers: Optional[int] = None,
                progress: Optional[ProgressFn] = None, cancel: CancelToken = None, retries: int = 1,
-               evaluate: Optional[Callable[..., dict]] = None, connect_timeout: float = 10.0) -> list[dict]:
+               evaluate: Optional[Callable[..., dict]] = None, connect_timeout: float = 10.0,
+               lost_after: float = 10.0) -> list[dict]:
     """Evaluate every design of the Cartesian product of ``params`` on a Dask cluster.
 
     Args:
@@ -135,6 +178,8 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
         evaluate: the unit of work (default :func:`kinematics.sweep.evaluate_design`); any
             picklable ``f(design, settings, *, orientation) -> dict``.
         connect_timeout: seconds to reach ``scheduler``.
+        lost_after: seconds without a worker, or without an answer from the scheduler, after
+            which the cluster counts as lost (unfinished points are returned failed).
 
     Returns:
         One dict per point in grid order: ``{**evaluate(...), "params": {name: value},
@@ -178,12 +223,27 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
         ac = as_completed(futures)
         done = failed = 0
         pending = set(f.key for f in futures)
+        alive_at = last_check = time.monotonic()
+        lost: Optional[str] = None
         while pending:
             if is_cancelled(cancel):
                 client.cancel([f for f in futures if f.key in pending])
                 raise Cancelled()
-            batch = ac.next_batch(block=False) if ac.has_ready() else []
+            try:
+                batch = ac.next_batch(block=False) if ac.has_ready() else []
+            except Exception as e:  # noqa: BLE001 - the connection to the scheduler broke
+                lost = f"cluster lost: {_one_line(e)}"
+                break
             if not batch:
+                now = time.monotonic()
+                if now - last_check >= 1.0:
+                    last_check = now
+                    why = _cluster_trouble(client)
+                    if why is None:
+                        alive_at = now
+                    elif now - alive_at >= lost_after:
+                        lost = f"cluster lost: {why} for {now - alive_at:.0f} s"
+                        break
                 time.sleep(0.02)
                 continue
             for fut in batch:
@@ -212,11 +272,15 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
                 if progress is not None:
                     msg = f"{done}/{n} points" + (f" ({failed} failed)" if failed else "")
                     progress(done / n, msg)
+        if lost is not None:
+            for f in futures:
+                if f.key in pending:
+                    i = where[f.key]
+                    rows[i] = {"params": values[i], "index": list(indices[i]), "ok": False, "error": lost,
+                               "design": designs[i].to_dict()}
+                    failed += 1
+            log.warning("sweep_grid: %s; %d of %d points not finished", lost, len(pending), n)
         log.info("sweep_grid: %d points (%d failed) in %.2f s", n, failed, time.perf_counter() - t0)
     finally:
-        try:
-            client.close()
-        finally:
-            if cluster is not None:
-                cluster.close()
+        _close_quietly(client, cluster)
     return [r for r in rows if r is not None]
