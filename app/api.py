@@ -44,7 +44,7 @@ import threading
 import time
 import urllib.parse
 import zlib
-from typing import Annotated, Any, Callable, Hashable, Literal, Optional
+from typing import Annotated, Any, Callable, Hashable, Literal, Optional, Union
 
 import numpy as np
 from fastapi import APIRouter, FastAPI, Path, Query, Request
@@ -409,6 +409,33 @@ def _validation_items(errors: list[dict[str, Any]]) -> list[dict[str, str]]:
     return items
 
 
+class FieldProblem(BaseModel):
+    """One bad field: its dotted name and a sentence with the value and the valid range."""
+
+    field: str
+    message: str
+
+
+class ErrorOut(BaseModel):
+    """Every error answer: ``detail`` is a sentence, or (422) one entry per bad field."""
+
+    detail: Union[str, list[FieldProblem]]
+
+
+#: What any endpoint may answer besides its success codes (declared in the OpenAPI document).
+ERROR_RESPONSES: dict[Union[int, str], dict[str, Any]] = {
+    code: {"model": ErrorOut, "description": text} for code, text in (
+        (404, "unknown job, or short links disabled"),
+        (408, "request body not received in time"),
+        (409, "the job has no result (yet)"),
+        (410, "the result was dropped from memory; submit again"),
+        (413, "over a size limit (grid, sweep, body)"),
+        (422, "bad input: the field and its valid range"),
+        (429, "too many unfinished jobs; retry later"),
+        (507, "the server's disk is full"),
+    )}
+
+
 def _error_json(status: int, detail: Any, headers: Optional[dict[str, str]] = None) -> JSONResponse:
     return JSONResponse(status_code=status, content={"detail": detail}, headers=headers)
 
@@ -519,7 +546,7 @@ class _BodyLimit:
 
 
 def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
-               limits: ApiLimits = ApiLimits()) -> FastAPI:
+               limits: ApiLimits = ApiLimits(), api_url: Optional[str] = None) -> FastAPI:
     """Build the FastAPI application.
 
     Args:
@@ -527,6 +554,8 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         explorer_url: base URL of the viser explorer, used by the short links; ``None`` disables
             them (404 with a message).
         limits: resource limits (see :class:`ApiLimits`).
+        api_url: this API's base URL as clients reach it, for the absolute short links
+            (``None``: ``short_url`` is the path alone). Links never use the request's Host header.
     """
     app = FastAPI(
         title="paraspace API",
@@ -736,7 +765,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     _RANGES[("query", "wait")] = "[0, 60] seconds"
     _RANGES[("query", "max_faces")] = "[100, 2000000]"
 
-    router = APIRouter(prefix=API_PREFIX)
+    router = APIRouter(prefix=API_PREFIX, responses=ERROR_RESPONSES)
 
     # ----- small synchronous endpoints ------------------------------------------------------
     @router.get("/health", summary="Liveness, job counts and limits")
@@ -1013,23 +1042,21 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             if errors:
                 raise ApiError(422, [{"field": _error_field(m), "message": m} for m in errors])  # type: ignore[arg-type]
         token = encode_link_token(query)
-        base = str(request.base_url).rstrip("/")
+        # the API's own address from the configuration (serve), never from the request's Host header
+        base = (api_url or "").rstrip("/")  # type: ignore[union-attr]
         return {"token": token, "path": f"/s/{token}", "short_url": f"{base}/s/{token}",
                 "explorer_url": (explorer_base(request) + "/?" + query) if explorer_url else None}
 
     app.include_router(router)
 
     @app.get("/s", summary="Short link: redirect to the explorer with this query", status_code=307,
-             response_class=RedirectResponse, responses={307: {"description": "redirect"},
-                                                         404: {"description": "no explorer"},
-                                                         422: {"description": "bad link"}})
+             response_class=RedirectResponse, responses={307: {"description": "redirect"}, **ERROR_RESPONSES})
     def short_query(request: Request) -> RedirectResponse:
         """``/s?a=60&z=120`` -> ``{explorer}/?a=60&z=120`` after validating the state."""
         return explorer_redirect(request.url.query, request)
 
     @app.get("/s/{token}", summary="Short link by token", status_code=307, response_class=RedirectResponse,
-             responses={307: {"description": "redirect"}, 404: {"description": "no explorer / bad token"},
-                        422: {"description": "bad link"}})
+             responses={307: {"description": "redirect"}, **ERROR_RESPONSES})
     def short_token(request: Request, token: str = Path(max_length=8192)) -> RedirectResponse:
         """Token from ``POST /api/v1/links``."""
         try:

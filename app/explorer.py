@@ -48,6 +48,7 @@ from paraspace.kinematics.redundancy import Resolution, inverse_kinematics, reso
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
 
 from . import jsbridge, pagehook, plots
+from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
 from .limits import MAX_VOXELS, check_workspace_grid
 from .textsafe import md_text, plain_text
@@ -82,31 +83,6 @@ class ShellBundle:
     mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
     measures: Any = None  # kinematics.measures.WorkspaceMeasures
     shell_seconds: float = 0.0
-
-
-class LRU:
-    """A small thread-safe LRU dictionary."""
-
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self._data: "collections.OrderedDict[Hashable, Any]" = collections.OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key: Hashable) -> Any:
-        """The value of ``key`` (``None`` if absent); marks it most recently used."""
-        with self._lock:
-            if key not in self._data:
-                return None
-            self._data.move_to_end(key)
-            return self._data[key]
-
-    def put(self, key: Hashable, value: Any) -> None:
-        """Store ``value``; drops the least recently used entry beyond ``size``."""
-        with self._lock:
-            self._data[key] = value
-            self._data.move_to_end(key)
-            while len(self._data) > self.size:
-                self._data.popitem(last=False)
 
 
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
@@ -1130,8 +1106,9 @@ class Explorer:
         self.server: Optional[viser.ViserServer] = None
         self.sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
-        self.shell_cache = LRU(8)
-        self.orientation_cache = LRU(8)
+        # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see app/bytecache.py
+        self.shell_cache = ByteLRU(256 << 20)
+        self.orientation_cache = ByteLRU(64 << 20)
         from paraspace.kinematics.sweep import ResultCache
 
         self.study_cache = ResultCache(max_entries=1024)

@@ -32,9 +32,10 @@ Semantics:
   :func:`paraspace.app.bytecache.nbytes`): the oldest finished jobs lose their result first (the job
   stays, with ``result_dropped = True``), so a page that closed leaves no grid behind.
 * **Fair queueing.** Workers take the queued job of the client with the fewest running jobs (then
-  the oldest), and one client never runs more than ``max_running_per_client`` jobs at once
-  (default ``max_workers - 1``, at least 1): another client's small job finds a free worker instead
-  of waiting behind one client's heavy jobs. (The numba kernels are serialised by
+  the oldest), and one client never runs more than ``max_running_per_client`` jobs *of one kind*
+  at once (default ``max_workers - 1``, at least 1): another client's small job finds a free worker
+  instead of waiting behind one client's batch of heavy jobs, while one explorer page may still
+  compute its shell and its orientation maps side by side. (The numba kernels are serialised by
   ``kinematics.parallel.KERNEL_LOCK`` and use every core, so a client loses little by this cap.)
 
 ``on_done(job)`` is called exactly once per submission when the job reaches a final status
@@ -187,8 +188,8 @@ class JobManager:
         max_seconds: default run-time limit of a job, in seconds.
         history: finished jobs kept for polling (oldest dropped first).
         history_bytes: budget of the results held by finished jobs (oldest results dropped first).
-        max_running_per_client: jobs of one client running at once (default ``max_workers - 1``,
-            at least 1).
+        max_running_per_client: jobs of one client and one kind running at once (default
+            ``max_workers - 1``, at least 1).
     """
 
     def __init__(self, max_workers: int = 2, max_jobs_total: int = 16, max_jobs_per_client: int = 4,
@@ -215,6 +216,7 @@ class JobManager:
         self._unfinished: dict[str, Job] = {}
         self._queue: list[tuple[Job, JobFn]] = []
         self._running: "collections.Counter[str]" = collections.Counter()  # worker occupancy per client
+        self._running_kind: "collections.Counter[tuple[str, str]]" = collections.Counter()  # per (client, kind)
         self._kept: "collections.OrderedDict[str, int]" = collections.OrderedDict()  # job id -> result bytes
         self._kept_total = 0
         self._closed = False
@@ -506,14 +508,15 @@ class JobManager:
         return progress
 
     def _pick_locked(self) -> Optional[tuple[Job, JobFn]]:
-        """The next queued job to run: among clients under ``max_running_per_client``, the one with
-        the fewest running jobs, then the oldest submission. Drops finalized entries."""
+        """The next queued job to run: among jobs whose (client, kind) is under
+        ``max_running_per_client``, the one whose client has the fewest running jobs, then the
+        oldest submission. Drops finalized entries."""
         self._queue = [(j, f) for j, f in self._queue if not j.is_final]
         best = None
         for i, (job, _fn) in enumerate(self._queue):
-            running = self._running[job.client]
-            if running >= self.max_running_per_client:
+            if self._running_kind[(job.client, job.kind)] >= self.max_running_per_client:
                 continue
+            running = self._running[job.client]
             rank = (running, i)
             if best is None or rank < best[0]:
                 best = (rank, i)
@@ -534,6 +537,7 @@ class JobManager:
                     return
                 job, fn = pick
                 self._running[job.client] += 1
+                self._running_kind[(job.client, job.kind)] += 1
             try:
                 self._run(job, fn)
             except BaseException:  # noqa: BLE001 - _run reports every failure; keep the worker alive
@@ -543,6 +547,9 @@ class JobManager:
                     self._running[job.client] -= 1
                     if self._running[job.client] <= 0:
                         del self._running[job.client]
+                    self._running_kind[(job.client, job.kind)] -= 1
+                    if self._running_kind[(job.client, job.kind)] <= 0:
+                        del self._running_kind[(job.client, job.kind)]
                     self._work.notify_all()
 
     def _run(self, job: Job, fn: JobFn) -> None:

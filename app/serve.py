@@ -265,7 +265,12 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
             explorer_url = check_public_url(public_url)
         else:
             explorer_url = f"http://{_bracket(_url_host(host))}:{int(exp.port)}/"
-        app = create_api(jobs, explorer_url=explorer_url, limits=limits)
+        if api_port == 0:
+            api_port = free_port(_url_host(host))
+        api_url = f"http://{_bracket(_url_host(host))}:{api_port}"
+        if public_url:  # behind a proxy the API's public address is the proxy's business: relative links
+            api_url = None
+        app = create_api(jobs, explorer_url=explorer_url, limits=limits, api_url=api_url)
         try:
             api = start_api(app, host, api_port, trusted_proxy=trusted_proxy)
         except RuntimeError as e:
