@@ -91,7 +91,7 @@ def _text_response(status: int, text: str) -> Response:
     return Response(status, reason, Headers({
         "Content-Type": "text/plain; charset=utf-8", "Content-Length": str(len(body)),
         "X-Content-Type-Options": "nosniff", "Content-Security-Policy": "default-src 'none'",
-        "Cache-Control": "no-store"}), body)
+        "Cache-Control": "no-store", "Connection": "close"}), body)
 
 
 class _PageEditor:
@@ -135,8 +135,10 @@ def _guarded(inner: Callable[[Any, Any], Optional[Response]]) -> Callable[[Any, 
             gz = resp.headers.get("Content-Encoding") == "gzip"
             body = _EDITOR.edited(resp.body, gz)
             headers = Headers(resp.headers)  # a multidict: assignment appends, so delete first
+            # websockets closes the connection after any plain HTTP answer: say so (keep-alive clients)
             for name, value in (("Content-Length", str(len(body))), ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
-                                ("X-Content-Type-Options", "nosniff"), ("Referrer-Policy", "no-referrer")):
+                                ("X-Content-Type-Options", "nosniff"), ("Referrer-Policy", "no-referrer"),
+                                ("Connection", "close")):
                 if name in headers:
                     del headers[name]
                 headers[name] = value

@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 import viser
 
+import paraspace
+
 from paraspace.kinematics.design import ETA_RANGES, PARAMS
 
 from .urlstate import (
@@ -92,6 +94,7 @@ class Panels:
     download_ply: Any
     download_glb: Any
     download_json: Any
+    version: Any
 
 
 def _blank(h: int = 40, w: int = 320) -> np.ndarray:
@@ -194,6 +197,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         download_ply = gui.add_button("Shell PLY", icon=viser.Icon.DOWNLOAD)
         download_glb = gui.add_button("Shell GLB", icon=viser.Icon.DOWNLOAD)
         download_json = gui.add_button("Measures JSON", icon=viser.Icon.DOWNLOAD)
+        version = gui.add_markdown(f"paraspace {paraspace.__version__} (the same version as "
+                                   "`paraspace --version` and `/api/v1/health`)")
 
     return Panels(
         url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
@@ -207,5 +212,5 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
         surface_image=surface_image, surface_csv=surface_csv, surface_png=surface_png,
         link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
-        download_glb=download_glb, download_json=download_json,
+        download_glb=download_glb, download_json=download_json, version=version,
     )

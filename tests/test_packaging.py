@@ -61,3 +61,29 @@ def test_version_is_stated_once_and_reported_by_the_cli():
     out = subprocess.run([sys.executable, "-m", "paraspace.app.cli", "--version"], capture_output=True,
                          text=True, check=True, cwd=ROOT, timeout=120)
     assert out.stdout.strip() == f"paraspace {declared}"
+
+
+def test_api_and_explorer_report_the_same_version():
+    import httpx
+
+    from paraspace.app.api import create_api
+    from paraspace.app.explorer import Explorer
+    from paraspace.app.jobs import JobManager
+    from paraspace.app.serve import start_api
+
+    jobs = JobManager(max_workers=1)
+    srv = start_api(create_api(jobs), "127.0.0.1", 0)
+    try:
+        assert httpx.get(f"{srv.url}/api/v1/health", timeout=10).json()["version"] == paraspace.__version__
+    finally:
+        jobs.shutdown()
+        srv.stop()
+    from explorer_client import FakeBrowser  # tests/ (pytest's prepend import mode)
+
+    exp = Explorer("127.0.0.1", 0).start()
+    try:
+        b = FakeBrowser(exp)
+        assert f"paraspace {paraspace.__version__} " in b.session.panels.version.content
+        b.close()
+    finally:
+        exp.stop()
