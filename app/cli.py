@@ -83,7 +83,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     design = _design(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics)
+    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method)
     fmt = None
     if ns.export:
         fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
@@ -308,6 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--voxel", default=2.0, help="voxel edge h (default 2)")
     w.add_argument("--json", action="store_true", help="one JSON object on stdout")
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
+    w.add_argument("--method", default="blocks", metavar="blocks|dense",
+                   help="engine: coarse-to-fine blocks (default) or every voxel (dense, the oracle); same voxels")
     w.add_argument("--diagnostics", action="store_true",
                    help="which chain and which leg limit bind (evaluates every chain everywhere; slower)")
     w.set_defaults(func=cmd_workspace)

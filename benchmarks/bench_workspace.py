@@ -7,12 +7,20 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      at --voxel (default 4; h = 2 takes about 6 minutes), with the time ratio and both volumes;
   3. the volume error of the default settings against a converged reference (h = 1, eta step 0.125).
 
-Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged]
+  4. engine v2: the coarse-to-fine engine (method="blocks", the default) against the dense engine
+     (method="dense") in the same run, at h = 2 and h = 1 with derived bounds: medians of several
+     runs, the ratio, and whether the voxels are identical; idle, then with a second process busy
+     on one core (``--no-load`` skips the loaded rows).
+
+Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing
+import os
+import statistics
 import time
 
 from paraspace.kinematics.design import Design
@@ -31,13 +39,54 @@ def best_of(n: int, fn):
     return best, out
 
 
+def _spin(stop) -> None:  # a second process busy on one core
+    x = 0
+    while not stop.is_set():
+        x += 1
+
+
+def engine_v2_rows(design: Design, runs: int = 5) -> None:
+    """Median compute time of dense vs blocks at h = 2 and h = 1 (derived bounds) and their ratio."""
+    import numpy as np
+
+    for h in (2.0, 1.0):
+        dense_t, blocks_t = [], []
+        same = True
+        for _ in range(runs if h > 1 else max(3, runs - 2)):  # alternate A/B so drift hits both
+            d = compute_workspace(design, WorkspaceSettings(voxel=h, method="dense"))
+            b = compute_workspace(design, WorkspaceSettings(voxel=h, method="blocks"))
+            dense_t.append(d.compute_seconds)
+            blocks_t.append(b.compute_seconds)
+            same = same and bool(np.array_equal(d.occupancy, b.occupancy))
+        md, mb = statistics.median(dense_t), statistics.median(blocks_t)
+        print(f"  h={h:g} {d.grid.size:>10,} voxels: dense {md * 1e3:8.1f} ms  blocks {mb * 1e3:7.1f} ms  "
+              f"ratio {md / mb:5.1f}x  identical voxels: {same}   (min-max blocks {min(blocks_t) * 1e3:.0f}-"
+              f"{max(blocks_t) * 1e3:.0f} ms)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--voxel", type=float, default=4.0, help="grid of the engine-vs-numpy comparison")
     ap.add_argument("--skip-converged", action="store_true")
+    ap.add_argument("--no-load", action="store_true", help="skip the rows under a second busy process")
+    ap.add_argument("--only-v2", action="store_true", help="only the engine-v2 rows")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
+    print(f"\nengine v2 vs dense, paper default design, derived bounds (load average {os.getloadavg()[0]:.2f}):")
+    engine_v2_rows(design)
+    if not ns.no_load:
+        stop = multiprocessing.Event()
+        spinner = multiprocessing.Process(target=_spin, args=(stop,), daemon=True)
+        spinner.start()
+        try:
+            print("  ... with a second process busy on one core:")
+            engine_v2_rows(design)
+        finally:
+            stop.set()
+            spinner.join(5)
+    if ns.only_v2:
+        return
 
     for h, target in ((2.0, 0.5), (6.0, 0.05)):
         t, res = best_of(5, lambda: compute_workspace(design, WorkspaceSettings(voxel=h, bounds=BOX)))

@@ -5,7 +5,9 @@ existence test of :mod:`kinematics.feasibility` at the fixed platform orientatio
 ``(d_i, eta_i)`` inside the strokes puts both legs of chain ``i`` inside ``[l_min, l_max]``.
 The chains are independent, so the workspace is the intersection of three per-chain sets.
 
-Engine: a compiled kernel walks each vertical column of voxels (columns in parallel over the
+Engines (``WorkspaceSettings.method``): ``"blocks"`` (default) decides blocks of voxels coarse
+to fine and is voxel-identical to ``"dense"`` (see :mod:`kinematics.blocks` for the proof), which
+is kept as the tests' oracle. Dense engine: a compiled kernel walks each vertical column of voxels (columns in parallel over the
 cores) and, per chain, (1) rejects with the conservative whole-stroke bound, then (2) searches the
 arc samples outward from the sample that worked for the previous voxel of the column (a warm
 start that makes reachable voxels cost about one sample per chain). The chain that failed last
@@ -30,6 +32,7 @@ from typing import Optional
 import numpy as np
 from numba import njit, prange
 
+from .blocks import run_blocks
 from .design import Design, ParameterError
 from .feasibility import ChainTables, _chain_excluded, chain_search, default_n_eta
 from .geometry import platform_points_local
@@ -39,6 +42,7 @@ from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
 
 ALL_CHAINS = 7  # bitmask with the three chain bits set
+METHODS: tuple[str, ...] = ("blocks", "dense")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,6 +58,8 @@ class WorkspaceSettings:
             above the base plane; the mirror branch ``z < 0`` is excluded).
         symmetry: use the ``y -> -y`` mirror symmetry when it holds exactly.
         diagnostics: also evaluate every chain at every voxel (slower) to report which chain binds.
+        method: ``"blocks"`` (coarse-to-fine, default) or ``"dense"`` (every voxel; the oracle);
+            both give the same voxels.
     """
 
     voxel: float = 2.0
@@ -63,8 +69,11 @@ class WorkspaceSettings:
     z_floor: float = 0.0
     symmetry: bool = True
     diagnostics: bool = False
+    method: str = "blocks"
 
     def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ParameterError("method", self.method, " or ".join(METHODS))
         v = self.voxel
         if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.25 <= v <= 100.0):
             raise ParameterError("voxel", v, "[0.25, 100]")
@@ -289,14 +298,17 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
     ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
     ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
     n = ix.size
-    # chunks of about 64k voxels: progress/cancel granularity of a few ms
-    step = max(64, int(65536 // max(nz, 1)))
-    for s in range(0, n, step):
-        check(cancel)
-        with KERNEL_LOCK:
-            _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
-        if progress is not None:
-            progress(min(1.0, (s + step) / n), "position workspace")
+    if settings.method == "blocks":
+        out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
+    else:
+        # chunks of about 64k voxels: progress/cancel granularity of a few ms
+        step = max(64, int(65536 // max(nz, 1)))
+        for s in range(0, n, step):
+            check(cancel)
+            with KERNEL_LOCK:
+                _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
+            if progress is not None:
+                progress(min(1.0, (s + step) / n), "position workspace")
     if mirror:
         half = out[:, : ny - ny_eval]  # rows that have mirror images
         b0 = half & 1
