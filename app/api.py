@@ -219,6 +219,9 @@ class WorkspaceSettingsIn(BaseModel):
     z_floor: float = _num("settings", "z_floor", 0.0, -1e4, 1e4, "lowest platform height of derived bounds")
     symmetry: bool = Field(True, description="use the y -> -y mirror symmetry when it holds exactly")
     diagnostics: bool = Field(False, description="evaluate every chain at every voxel (slower)")
+    method: Literal["blocks", "dense"] = Field("blocks", description="engine: coarse-to-fine blocks (default) "
+                                               "or every voxel (dense); the same voxels")
+    bracket: bool = Field(False, description="also certify volume_inner <= V <= volume_outer (continuous workspace)")
 
     def build(self) -> Any:
         """The core ``WorkspaceSettings``."""
@@ -235,7 +238,8 @@ class WorkspaceSettingsIn(BaseModel):
             bounds = (tuple(self.bounds.lo), tuple(self.bounds.hi))
         return _core("settings", lambda: WorkspaceSettings(
             voxel=self.voxel, orientation=(o.psi, o.theta, o.phi), eta_step=self.eta_step, bounds=bounds,
-            z_floor=self.z_floor, symmetry=self.symmetry, diagnostics=self.diagnostics))
+            z_floor=self.z_floor, symmetry=self.symmetry, diagnostics=self.diagnostics, method=self.method,
+            bracket=self.bracket))
 
 
 class OrientationSettingsIn(BaseModel):
@@ -1129,6 +1133,8 @@ def _workspace_payload(res: Any) -> dict[str, Any]:
         "volume": res.volume,
         "compute_seconds": res.compute_seconds,
         "n_eta": res.n_eta,
+        "volume_inner": res.volume_inner,
+        "volume_outer": res.volume_outer,
         "grid": {"origin": list(g.origin), "h": g.h, "shape": list(g.shape), "lo": list(g.lo), "hi": list(g.hi),
                  "size": g.size},
     }

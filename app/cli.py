@@ -83,7 +83,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     design = _design(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method)
+    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket)
     fmt = None
     if ns.export:
         fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
@@ -99,6 +99,9 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     out = {"design": design.to_dict(), **measures.to_dict(), "voxel_size": result.grid.h, "voxels": result.voxels,
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "eta_samples": result.n_eta}
+    if ns.bracket:
+        out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
+        out["bracket_seconds"] = result.bracket_seconds
     if ns.diagnostics:
         from paraspace.kinematics.diagnostics import limit_binding
 
@@ -114,6 +117,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         _emit(out)
     else:
         print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
+        if ns.bracket:
+            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}  (continuous workspace)")
         for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
             if key in out:
                 print(f"{key:<15} {out[key]}")
@@ -310,6 +315,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
     w.add_argument("--method", default="blocks", metavar="blocks|dense",
                    help="engine: coarse-to-fine blocks (default) or every voxel (dense, the oracle); same voxels")
+    w.add_argument("--bracket", action="store_true",
+                   help="also certify volume_inner <= V <= volume_outer for the continuous workspace")
     w.add_argument("--diagnostics", action="store_true",
                    help="which chain and which leg limit bind (evaluates every chain everywhere; slower)")
     w.set_defaults(func=cmd_workspace)

@@ -60,6 +60,8 @@ class WorkspaceSettings:
         diagnostics: also evaluate every chain at every voxel (slower) to report which chain binds.
         method: ``"blocks"`` (coarse-to-fine, default) or ``"dense"`` (every voxel; the oracle);
             both give the same voxels.
+        bracket: also compute the certified bracket ``volume_inner <= V <= volume_outer`` of the
+            continuous workspace volume (:mod:`kinematics.bracket`).
     """
 
     voxel: float = 2.0
@@ -70,6 +72,7 @@ class WorkspaceSettings:
     symmetry: bool = True
     diagnostics: bool = False
     method: str = "blocks"
+    bracket: bool = False
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -107,6 +110,9 @@ class WorkspaceResult:
     chain_mask: Optional[np.ndarray]  # uint8 bitmask per voxel (bit i: chain i feasible) if diagnostics
     compute_seconds: float
     n_eta: int
+    volume_inner: Optional[float] = None  # certified bracket (settings.bracket), units^3
+    volume_outer: Optional[float] = None
+    bracket_seconds: float = 0.0
 
     @property
     def voxels(self) -> int:
@@ -359,10 +365,19 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
             break
         lo, hi = _symmetric_box(lo2, hi2, settings.voxel)
     seconds = time.perf_counter() - t0
+    result = WorkspaceResult(design=design, settings=settings, grid=grid, occupancy=occ,
+                             chain_mask=mask if settings.diagnostics else None,
+                             compute_seconds=seconds, n_eta=n_eta)
+    if settings.bracket:
+        from .bracket import volume_bracket
+
+        t1 = time.perf_counter()
+        br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta), n_eta,
+                            settings.z_floor, cancel=cancel)
+        result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
+        result.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "done")
-    return WorkspaceResult(design=design, settings=settings, grid=grid, occupancy=occ,
-                           chain_mask=mask if settings.diagnostics else None,
-                           compute_seconds=seconds, n_eta=n_eta)
+    return result
 
 
 def _touching_faces(occ: np.ndarray) -> list[tuple[bool, bool]]:
