@@ -345,3 +345,19 @@ def test_cli_bad_input_is_one_line_exit_2(args, field, capsys):
     rc = main(["optimize", "--population", "4", "--generations", "1", "--voxel", "10", *args])
     err = capsys.readouterr().err
     assert rc == 2 and err.count("\n") == 1 and f"error: {field} = " in err
+
+
+def test_orientation_objective_uses_the_tilt_indices():
+    """TI_1 as an objective: the front's TI_1 is orientation_workspace's for that design and the
+    run's orientation settings."""
+    from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+    ori = OrientationSettings(angle_step=6.0, position_step=10.0)
+    s = OptimizeSettings(params=("a", "eta_s"), objectives="volume,TI_1", workspace=COARSE, orientation=ori,
+                         population=4, generations=2, seed=6)
+    assert s.orientation_used == ori
+    res = optimize(s)
+    e = res.front[0]
+    ref = orientation_workspace(Design.from_dict(e["design"]), ori)
+    assert e["measures"]["TI_1"] == ref.ti1 and e["measures"]["TI_2"] == ref.ti2
+    assert res.settings.to_dict()["orientation"]["angle_step"] == 6.0

@@ -100,6 +100,10 @@ def test_query_round_trip_and_settings_change(host):
     assert set(q) == set(URL_KEYS) and q["opt_pop"] == "6" and q["opt_voxel"] == "10"
     panel.seed.value = 9
     assert links and links[-1]["opt_seed"] == "9"
+    panel.objectives.value = "volume,TI_1"
+    assert panel.settings().orientation_used.angle_step == 2.0  # bounded sampling, stated in the panel
+    panel.objectives.value = "volume,-footprint"
+    assert panel.settings().orientation_used is None
     errors = panel.apply_query({"opt_pop": "999", "opt_voxel": "abc"})
     assert len(errors) == 2 and "opt_pop" in errors[0] and "[4, 32]" in errors[0]
     assert panel.population.value == 6
