@@ -361,3 +361,21 @@ def test_orientation_objective_uses_the_tilt_indices():
     ref = orientation_workspace(Design.from_dict(e["design"]), ori)
     assert e["measures"]["TI_1"] == ref.ti1 and e["measures"]["TI_2"] == ref.ti2
     assert res.settings.to_dict()["orientation"]["angle_step"] == 6.0
+
+
+@pytest.mark.parametrize("objectives, trace", [("volume", "scatter"), ("volume,-footprint", "scatter"),
+                                               ("volume,-footprint,-hollowness", "parcoords")])
+def test_front_pictures(tmp_path, objectives, trace):
+    from paraspace.app.optimize_plots import front_csv, front_figure, front_png
+
+    res = optimize(OptimizeSettings(params=("a", "l_s"), objectives=objectives, workspace=COARSE,
+                                    population=4, generations=2, seed=1)).to_dict()
+    png = tmp_path / "f.png"
+    front_png(res, str(png))
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    fig = front_figure(res)
+    assert fig.data[0].type == trace
+    if trace == "parcoords":  # one axis per objective plus the design index
+        assert len(fig.data[0].dimensions) == 4
+        assert list(fig.data[0].dimensions[1].values) == [e["measures"]["volume"] for e in res["front"]]
+    assert front_csv(res).count("\n") == 1 + len(res["front"])
