@@ -340,8 +340,8 @@ class OptimizeRequest(BaseModel):
                                   description="measures; a leading - minimises (kinematics.optimize.MEASURES)")
     constraints: list[str] = Field(default_factory=list, max_length=8,
                                    description="flags (boundary_complete) or MEASURE>=V / MEASURE<=V")
-    population: int = Field(24, ge=4, le=1000, description="designs per generation; valid range [4, 1000]")
-    generations: int = Field(20, ge=1, le=1000, description="generations; valid range [1, 1000]")
+    population: int = Field(16, ge=4, le=1000, description="designs per generation; valid range [4, 1000]")
+    generations: int = Field(12, ge=1, le=1000, description="generations; valid range [1, 1000]")
     seed: int = Field(1, ge=0, le=2**32 - 1, description="random seed; valid range [0, 4294967295]")
     step: float = Field(0.01, ge=1e-6, le=10.0, allow_inf_nan=False,
                         description="parameter resolution; valid range [1e-06, 10]")

@@ -317,8 +317,8 @@ class OptimizeSettings:
     design: Design = dataclasses.field(default_factory=Design)
     workspace: WorkspaceSettings = dataclasses.field(default_factory=lambda: WorkspaceSettings(voxel=4.0))
     orientation: Optional[OrientationSettings] = None
-    population: int = 24
-    generations: int = 20
+    population: int = 16
+    generations: int = 12
     seed: int = 1
     step: float = 0.01
     algorithm: str = "auto"
