@@ -11,6 +11,7 @@ Everything lives under ``/api/v1`` (OpenAPI docs at ``/docs``, schema at ``/open
 ``GET  /api/v1/workspace/{id}/shell.{fmt}`` its boundary surface as stl, ply, obj or glb
 ``POST /api/v1/orientation``                orientation workspace / tilt indices -> job
 ``POST /api/v1/sweep``                      1-D or 2-D parameter study -> job
+``POST /api/v1/optimize``                   multi-objective optimisation (Pareto front) -> job
 ``GET  /api/v1/jobs``                       the caller's unfinished jobs
 ``GET  /api/v1/jobs/{id}``                  status and progress of a job
 ``DELETE /api/v1/jobs/{id}``                cancel a job
@@ -96,9 +97,12 @@ class ApiLimits:
         client_header: take the client identity from this request header (set it only behind a
             proxy you control that overwrites the header); ``None``: the connection's peer address
             (which uvicorn takes from X-Forwarded-For only for ``paraspace serve --trusted-proxy``).
-        cache_bytes: finished results kept per kind (workspace, orientation, sweep), in bytes
-            (estimated, voxel grids included).
+        cache_bytes: finished results kept per kind (workspace, orientation, sweep, optimize), in
+            bytes (estimated, voxel grids included).
         shell_cache_bytes: exported shell files kept for repeated downloads, in bytes.
+        max_optimize_evaluations: population x generations of one optimisation. Over it: 413.
+        max_optimize_voxels: evaluations x the voxels of the largest design in the bounds (the
+            analytical reach box at every corner of the parameter box, an upper bound). Over: 413.
     """
 
     max_voxels: int = MAX_VOXELS
@@ -113,6 +117,9 @@ class ApiLimits:
     client_header: Optional[str] = None
     cache_bytes: int = 256 << 20
     shell_cache_bytes: int = 128 << 20
+    # --- optimisation (issue 11) ---
+    max_optimize_evaluations: int = 2000
+    max_optimize_voxels: int = 4_000_000_000
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (reported by ``/health``)."""
@@ -327,6 +334,93 @@ class SweepRequest(BaseModel):
     x: SweepAxis
     y: Optional[SweepAxis] = None
     orientation: Optional[OrientationSettingsIn] = None
+
+
+# ----- optimisation (issue 11): request model, limits check, compute --------------------------
+
+
+class OptimizeRequest(BaseModel):
+    """A multi-objective optimisation (``kinematics.optimize``): the Pareto front of ``objectives``
+    over the free ``params``; each evaluation is a workspace (plus the orientation indices when an
+    objective or constraint needs TI_1/TI_2)."""
+
+    model_config = _MODEL
+    design: DesignIn = Field(default_factory=DesignIn, description="base design; non-free fields stay fixed")
+    settings: WorkspaceSettingsIn = Field(default_factory=lambda: WorkspaceSettingsIn(voxel=4.0))
+    params: list[ParamName] = Field(default_factory=lambda: ["a", "d_s", "eta_s", "l_s"], min_length=1,
+                                    max_length=7, description="free design parameters")
+    bounds: dict[ParamName, tuple[float, float]] = Field(
+        default_factory=dict, description="{param: [lo, hi]} for some free parameters; others: Table I's range")
+    objectives: list[str] = Field(default_factory=lambda: ["volume", "-footprint"], min_length=1, max_length=8,
+                                  description="measures; a leading - minimises (kinematics.optimize.MEASURES)")
+    constraints: list[str] = Field(default_factory=list, max_length=8,
+                                   description="flags (boundary_complete) or MEASURE>=V / MEASURE<=V")
+    population: int = Field(16, ge=4, le=1000, description="designs per generation; valid range [4, 1000]")
+    generations: int = Field(12, ge=1, le=1000, description="generations; valid range [1, 1000]")
+    seed: int = Field(1, ge=0, le=2**32 - 1, description="random seed; valid range [0, 4294967295]")
+    step: float = Field(0.01, ge=1e-6, le=10.0, allow_inf_nan=False,
+                        description="parameter resolution; valid range [1e-06, 10]")
+    algorithm: Literal["auto", "nsga2", "nsga3", "agemoea"] = Field("auto")
+    orientation: Optional[OrientationSettingsIn] = Field(
+        None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed)")
+
+    def build(self) -> Any:
+        """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
+        from paraspace.kinematics.optimize import OptimizeSettings
+
+        for text in self.objectives + self.constraints:
+            if len(text) > 100:
+                raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
+        return OptimizeSettings(
+            params=tuple(self.params), bounds=dict(self.bounds), objectives=list(self.objectives),
+            constraints=list(self.constraints), design=self.design.build(), workspace=self.settings.build(),
+            orientation=None if self.orientation is None else self.orientation.build(),
+            population=self.population, generations=self.generations, seed=self.seed, step=self.step,
+            algorithm=self.algorithm)
+
+
+_RANGES[("body", "population")] = "[4, 1000]"
+_RANGES[("body", "generations")] = "[1, 1000]"
+
+
+def optimize_limits_check(settings: Any, limits: "ApiLimits") -> None:
+    """413 when the run is over ``max_optimize_evaluations`` or ``max_optimize_voxels`` (see
+    :class:`ApiLimits`), or when one orientation evaluation is over ``max_orientation_samples``."""
+    import itertools
+
+    n_eval = settings.population * settings.generations
+    if n_eval > limits.max_optimize_evaluations:
+        raise ApiError(413, f"optimisation of {n_eval} evaluations (population x generations) exceeds the limit "
+                            f"max_optimize_evaluations = {limits.max_optimize_evaluations}")
+    per_design = 0
+    n_ori = 0
+    ori = settings.orientation_used
+    for corner in itertools.product(*[settings.bounds_of(p) for p in settings.params]):
+        try:
+            d = settings.design.replace(**dict(zip(settings.params, corner)))
+        except ParameterError:
+            continue  # an invalid corner (d_s > r) is never evaluated
+        per_design = max(per_design, workspace_voxels(d, settings.workspace, analytic=True))
+        if ori is not None:
+            n_ori = max(n_ori, orientation_samples(d, ori))
+    total = per_design * n_eval
+    if total > limits.max_optimize_voxels:
+        raise ApiError(413, f"optimisation of up to {total} voxels in all ({n_eval} evaluations x {per_design} "
+                            f"voxels of the largest design) exceeds the limit max_optimize_voxels = "
+                            f"{limits.max_optimize_voxels}: use a larger voxel (now {settings.workspace.voxel:g}), "
+                            f"a smaller population or fewer generations")
+    if n_ori > limits.max_orientation_samples:
+        raise ApiError(413, f"orientation part of {n_ori} samples per design exceeds the limit "
+                            f"max_orientation_samples = {limits.max_orientation_samples}")
+
+
+def optimize_compute(settings: Any, progress: Any, cancel: Any, cache: Any = None) -> "ApiResult":
+    """Run the optimisation in this process (the job's thread); the payload is
+    ``OptimizeResult.to_dict()`` (``front``, ``hypervolume`` per generation, ``settings``...)."""
+    from paraspace.kinematics.optimize import optimize
+
+    res = optimize(settings, cache=cache, progress=progress, cancel=cancel)
+    return ApiResult(raw=None, payload=jsonable(res.to_dict()))
 
 
 class LinkRequest(BaseModel):
@@ -810,8 +904,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
     # ----- workspace ------------------------------------------------------------------------
     @router.post("/workspace", status_code=202, summary="Start a position-workspace job",
                  responses={200: {"description": "finished within `wait`: the result is included"},
-                            202: {"description": "job accepted"}, 413: {"description": "over max_voxels"},
-                            422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
+                            202: {"description": "job accepted"}})
     async def workspace(req: WorkspaceRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Constant-orientation position workspace; the result has the workspace measures."""
         job, cached = await run_in_threadpool(_start_workspace, req, request)
@@ -878,9 +971,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     # ----- orientation ----------------------------------------------------------------------
     @router.post("/orientation", status_code=202, summary="Start an orientation-workspace job",
-                 responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"},
-                            413: {"description": "over max_orientation_samples"},
-                            422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
+                 responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"}})
     async def orientation(req: OrientationRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Orientation capability along the z, y' and x lines; the result has TI_1, TI_2, the Δ's
         and the nine regions."""
@@ -909,9 +1000,7 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     # ----- sweeps ---------------------------------------------------------------------------
     @router.post("/sweep", status_code=202, summary="Start a 1-D or 2-D parameter study job",
-                 responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"},
-                            413: {"description": "over max_sweep_points / max_sweep_voxels"},
-                            422: {"description": "bad input"}, 429: {"description": "too many jobs"}})
+                 responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"}})
     async def sweep(req: SweepRequest, request: Request, wait: float = wait_q) -> JSONResponse:
         """Each point is ``kinematics.sweep.evaluate_design`` of the design with the swept
         parameter(s) replaced; 2-D when ``y`` is given."""
@@ -982,6 +1071,28 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             return ApiResult(raw=None, payload=jsonable(payload))
 
         return submit(request, "sweep", key, compute), cached
+
+    # ----- optimisation (issue 11) ------------------------------------------------------------
+    caches["optimize"] = ByteLRU(limits.cache_bytes)
+
+    @router.post("/optimize", status_code=202, summary="Start a multi-objective optimisation job",
+                 responses={200: {"description": "finished within `wait`"}, 202: {"description": "job accepted"}})
+    async def optimize_job(req: OptimizeRequest, request: Request, wait: float = wait_q) -> JSONResponse:
+        """Pareto front of the objectives over the free parameters (``kinematics.optimize``);
+        evaluations share the sweeps' result cache. The result: ``front`` (``{"design",
+        "measures"}`` each), ``hypervolume`` per generation, ``settings``, ``failed``..."""
+        job, cached = await run_in_threadpool(_start_optimize, req, request)
+        return await job_response(job, wait, cached)
+
+    def _start_optimize(req: OptimizeRequest, request: Request) -> tuple[Job, bool]:
+        settings = req.build()
+        key = settings.key()
+        cached = caches["optimize"].get(key) is not None
+        if not cached:
+            quota_check(request)
+            optimize_limits_check(settings, limits)
+        return submit(request, "optimize", key,
+                      lambda progress, cancel: optimize_compute(settings, progress, cancel, sweep_cache)), cached
 
     # ----- generic jobs ---------------------------------------------------------------------
     @router.get("/jobs", summary="The caller's unfinished jobs")

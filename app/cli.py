@@ -4,6 +4,9 @@
     paraspace orientation [design flags] [--z0 Z] [--json]
     paraspace sweep       [design flags] --param NAME --values V1,V2,... [--param2 NAME --values2 ...]
                           [--voxel H] [--json] [--csv FILE] [--plot FILE.png] [--scheduler ADDR] [--workers N]
+    paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
+                          [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
+                          [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
@@ -303,6 +306,137 @@ def cmd_serve(ns: argparse.Namespace) -> int:
     return 0
 
 
+# ----- optimize (issue 11) -------------------------------------------------------------------
+
+
+def _bounds_arg(text: Optional[str]) -> dict[str, tuple[float, float]]:
+    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}``."""
+    out: dict[str, tuple[float, float]] = {}
+    if not text:
+        return out
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        name, sep, rng = part.partition("=")
+        lo, sep2, hi = rng.partition(":")
+        if not sep or not sep2:
+            raise ParameterError("bounds", part, "NAME=LO:HI, comma-separated, e.g. l_s=20:100,a=10:90")
+        name = name.strip()
+        if name not in PARAMS:
+            raise ParameterError("bounds", name, "design parameters " + ", ".join(PARAMS))
+        try:
+            out[name] = (float(lo), float(hi))
+        except ValueError:
+            raise ParameterError(name, rng, "LO:HI, two numbers") from None
+    return out
+
+
+def _int_arg(field: str, raw: Any) -> int:
+    try:
+        return int(str(raw).strip())
+    except ValueError:
+        raise ParameterError(field, raw, "an integer") from None
+
+
+def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
+    """The core ``OptimizeSettings`` of the ``optimize`` flags (validated by the core)."""
+    from paraspace.kinematics.optimize import OptimizeSettings
+    from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.workspace import WorkspaceSettings
+
+    constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
+    try:
+        angle_step, position_step = float(ns.angle_step), float(ns.position_step)
+    except (TypeError, ValueError):
+        raise ParameterError("angle-step", f"{ns.angle_step}/{ns.position_step}", "numbers") from None
+    return OptimizeSettings(
+        params=[p.strip() for p in ns.params.split(",")], bounds=_bounds_arg(ns.bounds),
+        objectives=ns.objectives, constraints=constraints, design=_design(ns),
+        workspace=WorkspaceSettings(voxel=_voxel(ns)),
+        orientation=OrientationSettings(angle_step=angle_step, position_step=position_step),
+        population=_int_arg("population", ns.population), generations=_int_arg("generations", ns.generations),
+        seed=_int_arg("seed", ns.seed), step=ns.step, algorithm=ns.algorithm)
+
+
+def cmd_optimize(ns: argparse.Namespace) -> int:
+    """``paraspace optimize``: the Pareto front of the objectives over the free parameters."""
+    from paraspace.kinematics.optimize import optimize
+    from paraspace.kinematics.workspace import warm_up
+
+    settings = optimize_settings_from_args(ns)
+    if ns.plot and not ns.plot.lower().endswith(".png"):
+        raise ParameterError("plot", ns.plot, "a file name ending in .png")
+    if ns.scheduler is not None and ns.workers is not None:
+        raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
+    warm_up()
+
+    def progress(fraction: float, message: str) -> None:
+        if ns.progress and message.startswith("generation") and "evaluations" in message:
+            sys.stderr.write(f"[{100 * fraction:5.1f}%] {message}\n")
+
+    result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+    from paraspace.app.optimize_plots import front_csv, front_png
+
+    if ns.csv:
+        with open(ns.csv, "w", newline="") as fh:
+            fh.write(front_csv(result))
+    if ns.plot:
+        front_png(result, ns.plot)
+    if ns.json:
+        _emit(result)
+    else:
+        labels = result["settings"]["objectives"]
+        params = result["settings"]["params"]
+        print(f"{len(result['front'])} Pareto-optimal designs ({result['evaluations']} evaluations, "
+              f"{result['computed']} computed, {len(result['failed'])} failed, {result['seconds']:.1f} s, "
+              f"{result['settings']['algorithm']}, {result['backend']})")
+        head = params + [lb.lstrip("-") for lb in labels]
+        print("  ".join(f"{h:>12}" for h in head))
+        for e in result["front"]:
+            vals = [e["design"][p] for p in params] + [e["measures"].get(lb.lstrip("-")) for lb in labels]
+            print("  ".join(f"{v:>12.6g}" if isinstance(v, (int, float)) else f"{v!s:>12}" for v in vals))
+        hv = result["hypervolume"]
+        if hv:
+            print("hypervolume per generation: " + " ".join(f"{v:.4g}" for v in hv))
+    return 0
+
+
+def _add_optimize_parser(sub: Any) -> None:
+    from paraspace.kinematics.optimize import ALGORITHMS, DEFAULT_PARAMS, MEASURES
+
+    z = sub.add_parser("optimize", help="multi-objective optimal design: the Pareto front over design parameters")
+    _add_design_flags(z)
+    z.add_argument("--params", default=",".join(DEFAULT_PARAMS),
+                   help=f"free parameters, comma-separated (default {','.join(DEFAULT_PARAMS)}; any of "
+                        f"{', '.join(PARAMS)}); the others keep the design flags' values")
+    z.add_argument("--objectives", default="volume,-footprint",
+                   help="measures, comma-separated; a leading - minimises (default volume,-footprint). "
+                        "Measures: " + ", ".join(k for k, m in MEASURES.items() if not m.flag))
+    z.add_argument("--constraint", action="append", metavar="C",
+                   help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
+                        + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
+    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges)")
+    z.add_argument("--population", default=16, help="designs per generation (default 16)")
+    z.add_argument("--generations", default=12, help="generations (default 12; 16 x 12 at h = 4 takes about 50 s here)")
+    z.add_argument("--seed", default=1, help="random seed (default 1)")
+    z.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
+    z.add_argument("--step", default=0.01, help="parameter resolution (default 0.01)")
+    z.add_argument("--algorithm", default="auto", choices=ALGORITHMS,
+                   help="auto: NSGA-II up to 2 objectives, NSGA-III from 3")
+    z.add_argument("--angle-step", dest="angle_step", default=0.5,
+                   help="orientation angle step in degrees, for TI_1/TI_2 (default 0.5)")
+    z.add_argument("--position-step", dest="position_step", default=1.0,
+                   help="orientation position step, for TI_1/TI_2 (default 1)")
+    z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")
+    z.add_argument("--csv", metavar="FILE", help="the front, one design per row")
+    z.add_argument("--plot", metavar="FILE.png", help="a picture of the front")
+    z.add_argument("--progress", action="store_true", help="one line per generation on stderr")
+    z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
+    z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
+    z.set_defaults(func=cmd_optimize)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="paraspace", description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
     p.add_argument("--version", action="version", version=f"paraspace {paraspace.__version__}")
@@ -340,6 +474,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
     s.set_defaults(func=cmd_sweep)
+
+    _add_optimize_parser(sub)
 
     k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")
     _add_design_flags(k)

@@ -1,0 +1,861 @@
+r"""Multi-objective optimal design: the Pareto front of workspace measures over design parameters.
+
+The paper's title promises "geometric parameter optimization" but it stops at one-at-a-time sweeps.
+:func:`optimize` searches the free design parameters (default ``a, d_s, eta_s, l_s`` over paper
+Table I's ranges) for the designs that trade several measures off optimally, with pymoo's
+evolutionary algorithms:
+
+* 1 or 2 objectives: NSGA-II (Deb et al. 2002: non-dominated sorting + crowding distance);
+* 3 or more objectives: NSGA-III (Deb & Jain 2014) with as many reference directions as the
+  population (Riesz s-energy directions, seeded), since crowding distance loses selection pressure
+  from 3 objectives on. ``algorithm="nsga2" | "nsga3" | "agemoea"`` overrides the choice.
+
+Definitions (our own, documented here)
+--------------------------------------
+measure
+    A number of one evaluated design, taken from the row of the sweep unit of work
+    :func:`kinematics.sweep.evaluate_design` (so every design is computed once and cached in a
+    :class:`~kinematics.sweep.ResultCache`) or derived from the design; the registry
+    :data:`MEASURES` lists them. A new measure (e.g. the GCI when the engine reports it) is one
+    :func:`register_measure` call.
+objective
+    ``"name"`` maximises the measure, ``"-name"`` minimises it. Internally every objective is
+    minimised: ``f = -value`` for a maximised one, ``f = value`` otherwise.
+constraint
+    ``"flag"`` (a boolean measure such as ``boundary_complete`` must be true) or
+    ``"name>=bound"`` / ``"name<=bound"``. The violation passed to pymoo (feasible when ``<= 0``)
+    is ``0/1`` for a flag and ``(bound - value) / max(|bound|, 1)`` (resp. ``(value - bound) /
+    max(|bound|, 1)``) otherwise. Every run has one more constraint, ``evaluated``: a design the
+    model rejects (e.g. ``d_s > r``) or whose evaluation failed (an exception, a dead Dask worker)
+    gets violation 1, so it is infeasible -- a lost point costs that point, never the run -- and
+    is listed in ``failed``.
+parameter resolution
+    Every decision variable is rounded to a multiple of ``step`` (default 0.01, far below any
+    voxel edge) and clipped to its bounds before evaluation, so designs print cleanly and a
+    design revisited by the search is a cache hit.
+front
+    The feasible non-dominated set of **every design evaluated so far** (an archive, not only the
+    last population), with duplicates in objective space kept once (the first evaluated).
+hypervolume per generation
+    The hypervolume dominated by the front after each generation, in objective space
+    normalised per objective to ``[0, 1]`` by the ideal and nadir points over all generations'
+    fronts, with reference point ``1.1`` on every axis (so 1.1^M bounds it). Because the front
+    is an archive the series never decreases.
+
+Determinism: pymoo >= 0.6.2 draws from a per-algorithm ``numpy.random.Generator`` seeded by
+``seed``; every measure except the wall-clock ``compute_seconds`` is deterministic; so the same
+settings and seed give the same front serially and on Dask (whatever order points complete in).
+
+This module is part of the numerical core: no web packages (pymoo and Dask are numerical
+libraries, imported lazily).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import time
+from typing import Any, Callable, Mapping, Optional, Sequence
+
+import numpy as np
+
+from .design import PARAMS, Design, ParameterError
+from .orientation import OrientationSettings
+from .progress import CancelToken, Cancelled, ProgressFn, check, is_cancelled
+from .serialize import jsonable
+from .workspace import WorkspaceSettings
+
+__all__ = ["Measure", "MEASURES", "register_measure", "Objective", "Constraint", "OptimizeSettings",
+           "OptimizeResult", "optimize", "parse_objectives", "parse_constraint", "non_dominated",
+           "normalised_hypervolume", "evaluate_population", "DEFAULT_PARAMS", "ALGORITHMS"]
+
+#: Free parameters by default (paper Sec. III's four studied parameters).
+DEFAULT_PARAMS: tuple[str, ...] = ("a", "d_s", "eta_s", "l_s")
+ALGORITHMS: tuple[str, ...] = ("auto", "nsga2", "nsga3", "agemoea")
+#: Objective value given to pymoo for a point without a value (it is infeasible anyway).
+_PENALTY = 1e30
+
+
+# ================================================================================================
+# the measure registry
+
+
+@dataclasses.dataclass(frozen=True)
+class Measure:
+    """One measure an objective or a constraint can name.
+
+    Attributes:
+        name: the name users write (``volume``, ``TI_1``, ``footprint``...).
+        description: one line, with the definition or the module that defines it.
+        key: the entry of :func:`kinematics.sweep.evaluate_design`'s row holding the value.
+        derive: instead of ``key``: ``f(row) -> value`` (the row holds ``"design"``).
+        flag: a boolean measure (usable as a constraint only).
+        needs_orientation: the row must be evaluated with orientation settings (TI_1, TI_2).
+    """
+
+    name: str
+    description: str
+    key: Optional[str] = None
+    derive: Optional[Callable[[dict], Any]] = None
+    flag: bool = False
+    needs_orientation: bool = False
+
+    def value(self, row: Mapping[str, Any]) -> Optional[float]:
+        """The measure of an evaluated row (``None`` when the row lacks it or it is not finite)."""
+        raw = self.derive(dict(row)) if self.derive is not None else row.get(self.key or self.name)
+        if raw is None:
+            return None
+        if self.flag:
+            return 1.0 if bool(raw) else 0.0
+        try:
+            v = float(raw)
+        except (TypeError, ValueError):
+            return None
+        return v if math.isfinite(v) else None
+
+
+MEASURES: dict[str, Measure] = {}
+
+
+def register_measure(measure: Measure) -> Measure:
+    """Add (or replace) a measure of the registry; returns it."""
+    MEASURES[measure.name] = measure
+    return measure
+
+
+def _footprint(row: dict) -> float:
+    d = row["design"]
+    return float(d["r"]) + float(d["l_min"]) + float(d["l_s"])
+
+
+def _l_max(row: dict) -> float:
+    d = row["design"]
+    return float(d["l_min"]) + float(d["l_s"])
+
+
+def _extent(axis: int) -> Callable[[dict], Optional[float]]:
+    def f(row: dict) -> Optional[float]:
+        ext = row.get("extents")
+        return None if not ext else float(ext[axis])
+    return f
+
+
+for _m in (
+    Measure("volume", "workspace volume V = N h^3 (kinematics.measures)"),
+    Measure("hollowness", "underside cavity ratio H / (H + V) (kinematics.measures, 'hull')"),
+    Measure("void_ratio", "enclosed void volume / (V + void volume) (kinematics.measures)"),
+    Measure("void_volume", "volume of the enclosed voids (kinematics.measures)"),
+    Measure("solidity", "V / convex hull volume (kinematics.measures)"),
+    Measure("hull_volume", "volume of the convex hull of the reachable voxels (kinematics.measures)"),
+    Measure("components", "number of connected components of the workspace"),
+    Measure("voids", "number of enclosed voids"),
+    Measure("genus", "total genus of the outer boundary (kinematics.measures)"),
+    Measure("largest_component_fraction", "volume fraction of the largest connected component"),
+    Measure("box_contact_fraction", "fraction of the grid box's face voxels that are reachable"),
+    Measure("height", "z extent of the workspace's bounding box", derive=_extent(2)),
+    Measure("width", "x extent of the workspace's bounding box", derive=_extent(0)),
+    Measure("TI_1", "tilt index TI_1 of eq. (28) (kinematics.orientation)", needs_orientation=True),
+    Measure("TI_2", "tilt index TI_2 of eq. (28) (kinematics.orientation)", needs_orientation=True),
+    Measure("footprint", "r + l_min + l_s: base radius plus the longest leg (our size proxy)",
+            derive=_footprint),
+    Measure("l_max", "longest leg l_min + l_s", derive=_l_max),
+    Measure("boundary_complete", "the workspace boundary is complete (kinematics.measures)", flag=True),
+    Measure("boundary_closed", "the workspace boundary is closed (kinematics.measures)", flag=True),
+):
+    register_measure(_m)
+# Measures other work adds (GCI, total-orientation volume, joint cones) become available with one
+# line each once evaluate_design reports them, e.g.
+#     register_measure(Measure("GCI", "global conditioning index (kinematics.conditioning)"))
+
+
+def _measure(name: str, field: str) -> Measure:
+    if name not in MEASURES:
+        raise ParameterError(field, name, "one of " + ", ".join(MEASURES))
+    return MEASURES[name]
+
+
+# ================================================================================================
+# objectives and constraints
+
+
+@dataclasses.dataclass(frozen=True)
+class Objective:
+    """A measure to maximise (default) or minimise (written with a leading ``-``)."""
+
+    measure: str
+    minimize: bool = False
+
+    @property
+    def label(self) -> str:
+        """The user's spelling: ``"volume"`` or ``"-footprint"``."""
+        return ("-" if self.minimize else "") + self.measure
+
+    def to_minimise(self, value: float) -> float:
+        """The value pymoo minimises: ``value`` or ``-value``."""
+        return value if self.minimize else -value
+
+
+def parse_objectives(spec: str | Sequence[str], field: str = "objectives") -> tuple[Objective, ...]:
+    """``"volume,TI_1,-footprint"`` (or a list of such words) -> objectives; a leading ``-``
+    minimises.
+
+    Raises:
+        ParameterError: empty, unknown, a flag measure, or a measure named twice.
+    """
+    words = [w.strip() for w in (spec.split(",") if isinstance(spec, str) else list(spec))]
+    words = [w for w in words if w]
+    if not words:
+        raise ParameterError(field, spec, "one or more measures, comma-separated, e.g. volume,-footprint")
+    out: list[Objective] = []
+    for w in words:
+        if not isinstance(w, str):
+            raise ParameterError(field, w, "measure names")
+        name, minimize = (w[1:].strip(), True) if w.startswith("-") else (w.lstrip("+").strip(), False)
+        m = _measure(name, field)
+        if m.flag:
+            raise ParameterError(field, w, "a numeric measure (flags such as boundary_complete are constraints)")
+        if any(o.measure == name for o in out):
+            raise ParameterError(field, w, "each measure at most once")
+        out.append(Objective(name, minimize))
+    return tuple(out)
+
+
+_CONSTRAINT_RE = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(>=|<=)\s*(\S+)\s*$")
+
+
+@dataclasses.dataclass(frozen=True)
+class Constraint:
+    """``flag`` true, or ``measure >= bound`` / ``measure <= bound``."""
+
+    measure: str
+    op: str = "true"
+    bound: Optional[float] = None
+
+    @property
+    def label(self) -> str:
+        return self.measure if self.op == "true" else f"{self.measure}{self.op}{self.bound:g}"
+
+    def violation(self, value: Optional[float]) -> float:
+        """pymoo's inequality value (feasible when ``<= 0``); 1 for a missing value."""
+        if value is None:
+            return 1.0
+        if self.op == "true":
+            return 0.0 if value >= 0.5 else 1.0
+        scale = max(abs(float(self.bound)), 1.0)  # type: ignore[arg-type]
+        if self.op == ">=":
+            return (float(self.bound) - value) / scale  # type: ignore[arg-type]
+        return (value - float(self.bound)) / scale  # type: ignore[arg-type]
+
+
+def parse_constraint(text: str, field: str = "constraint") -> Constraint:
+    """``"boundary_complete"``, ``"volume>=2e6"``, ``"hollowness<=0.3"`` -> a :class:`Constraint`.
+
+    Raises:
+        ParameterError: unknown measure, a flag compared with a number, or a numeric measure
+            without a bound.
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise ParameterError(field, text, "a flag such as boundary_complete, or MEASURE>=NUMBER / MEASURE<=NUMBER")
+    m = _CONSTRAINT_RE.match(text)
+    if m is None:
+        m_ = _measure(text.strip(), field)
+        if not m_.flag:
+            raise ParameterError(field, text, f"a bound, e.g. {m_.name}>=NUMBER or {m_.name}<=NUMBER "
+                                              f"(only flags stand alone: "
+                                              f"{', '.join(k for k, v in MEASURES.items() if v.flag)})")
+        return Constraint(m_.name)
+    name, op, num = m.groups()
+    m_ = _measure(name, field)
+    if m_.flag:
+        raise ParameterError(field, text, f"{name} alone (it is a flag)")
+    try:
+        bound = float(num)
+    except ValueError:
+        raise ParameterError(field, text, f"{name}{op}NUMBER") from None
+    if not math.isfinite(bound):
+        raise ParameterError(field, text, "a finite bound")
+    return Constraint(name, op, bound)
+
+
+# ================================================================================================
+# settings
+
+
+def _int(field: str, value: Any, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= int(value) <= hi:
+        raise ParameterError(field, value, f"[{lo}, {hi}] (an integer)")
+    return int(value)
+
+
+@dataclasses.dataclass(frozen=True)
+class OptimizeSettings:
+    """What to optimise and how (all validated on construction, naming the field).
+
+    Attributes:
+        params: free design parameters (default ``a, d_s, eta_s, l_s``).
+        bounds: ``{param: (lo, hi)}`` for some of ``params``; the others use paper Table I's range
+            (``PARAMS[p].slider_min/max``). ``lo < hi`` within the parameter's model range.
+        objectives: tuple of :class:`Objective` (or a string for :func:`parse_objectives`).
+        constraints: tuple of :class:`Constraint` (or strings for :func:`parse_constraint`).
+        design: the base design; its fields that are not free stay fixed.
+        workspace: sampling of each design's workspace (voxel edge ``h``...).
+        orientation: sampling of the orientation workspace, used only when a measure needs it
+            (TI_1, TI_2); ``None``: ``OrientationSettings()`` then.
+        population: individuals per generation, [4, 1000].
+        generations: generations, [1, 1000]; evaluations <= population x generations.
+        seed: random seed, [0, 2^32 - 1].
+        step: parameter resolution (see module docstring), [1e-6, 10].
+        algorithm: ``"auto"`` (NSGA-II up to 2 objectives, NSGA-III from 3), ``"nsga2"``,
+            ``"nsga3"`` or ``"agemoea"``.
+    """
+
+    params: tuple[str, ...] = DEFAULT_PARAMS
+    bounds: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
+    objectives: Any = ("volume", "-footprint")
+    constraints: Any = ()
+    design: Design = dataclasses.field(default_factory=Design)
+    workspace: WorkspaceSettings = dataclasses.field(default_factory=lambda: WorkspaceSettings(voxel=4.0))
+    orientation: Optional[OrientationSettings] = None
+    population: int = 16
+    generations: int = 12
+    seed: int = 1
+    step: float = 0.01
+    algorithm: str = "auto"
+
+    def __post_init__(self) -> None:
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        params = self.params.split(",") if isinstance(self.params, str) else list(self.params)
+        params = [p.strip() for p in params if isinstance(p, str) and p.strip()] if all(
+            isinstance(p, str) for p in params) else params
+        if not params:
+            raise ParameterError("params", self.params, "one or more of " + ", ".join(PARAMS))
+        for p in params:
+            if p not in PARAMS:
+                raise ParameterError("params", p, "design parameters " + ", ".join(PARAMS))
+        if len(set(params)) != len(params):
+            raise ParameterError("params", self.params, "each parameter at most once")
+        set_("params", tuple(params))
+        if not isinstance(self.bounds, Mapping):
+            raise ParameterError("bounds", self.bounds, "a mapping param -> (lo, hi)")
+        bounds: dict[str, tuple[float, float]] = {}
+        for name, lohi in self.bounds.items():
+            if name not in params:
+                raise ParameterError("bounds", name, "bounds of free parameters only (params: "
+                                                     + ", ".join(params) + ")")
+            spec = PARAMS[name]
+            try:
+                lo, hi = (float(lohi[0]), float(lohi[1]))
+            except (TypeError, ValueError, IndexError, KeyError):
+                raise ParameterError(name, lohi, "a pair lo:hi of numbers") from None
+            rng = f"[{spec.model_min:g}, {spec.model_max:g}]"
+            for v in (lo, hi):
+                if not (math.isfinite(v) and spec.model_min <= v <= spec.model_max):
+                    raise ParameterError(name, v, f"bounds within {rng}")
+            if not lo < hi:
+                raise ParameterError(name, f"{lo:g}:{hi:g}", "lo < hi (to fix a parameter leave it out of params)")
+            bounds[name] = (lo, hi)
+        set_("bounds", bounds)
+        objectives = (parse_objectives(self.objectives) if isinstance(self.objectives, str) or not all(
+            isinstance(o, Objective) for o in self.objectives) else tuple(self.objectives))
+        if not objectives:
+            raise ParameterError("objectives", self.objectives, "one or more measures")
+        set_("objectives", objectives)
+        cons = self.constraints
+        if isinstance(cons, (str, Constraint)):
+            cons = [cons]
+        cons = tuple(c if isinstance(c, Constraint) else parse_constraint(c) for c in cons)
+        set_("constraints", cons)
+        if not isinstance(self.design, Design):
+            raise ParameterError("design", self.design, "a Design")
+        if not isinstance(self.workspace, WorkspaceSettings):
+            raise ParameterError("workspace", self.workspace, "WorkspaceSettings")
+        if self.orientation is not None and not isinstance(self.orientation, OrientationSettings):
+            raise ParameterError("orientation", self.orientation, "OrientationSettings or None")
+        set_("population", _int("population", self.population, 4, 1000))
+        set_("generations", _int("generations", self.generations, 1, 1000))
+        set_("seed", _int("seed", self.seed, 0, 2**32 - 1))
+        try:
+            step = float(self.step)
+        except (TypeError, ValueError):
+            raise ParameterError("step", self.step, "[1e-06, 10] (a number)") from None
+        if not (math.isfinite(step) and 1e-6 <= step <= 10.0):
+            raise ParameterError("step", self.step, "[1e-06, 10]")
+        set_("step", step)
+        if self.algorithm not in ALGORITHMS:
+            raise ParameterError("algorithm", self.algorithm, " or ".join(ALGORITHMS))
+
+    # ----- derived ---------------------------------------------------------------------------
+    def bounds_of(self, param: str) -> tuple[float, float]:
+        """``(lo, hi)`` of a free parameter (given, else Table I's range)."""
+        if param in self.bounds:
+            return self.bounds[param]
+        spec = PARAMS[param]
+        return (spec.slider_min, spec.slider_max)
+
+    @property
+    def needs_orientation(self) -> bool:
+        """Whether some objective or constraint needs the orientation workspace."""
+        names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
+        return any(MEASURES[n].needs_orientation for n in names)
+
+    @property
+    def orientation_used(self) -> Optional[OrientationSettings]:
+        """The orientation settings evaluations run with (``None`` when no measure needs them)."""
+        if not self.needs_orientation:
+            return None
+        return self.orientation if self.orientation is not None else OrientationSettings()
+
+    @property
+    def algorithm_used(self) -> str:
+        """The algorithm ``"auto"`` resolves to."""
+        if self.algorithm != "auto":
+            return self.algorithm
+        return "nsga2" if len(self.objectives) <= 2 else "nsga3"
+
+    def design_at(self, x: Sequence[float]) -> Design:
+        """The design of a decision vector: rounded to ``step``, clipped to the bounds.
+
+        Raises:
+            ParameterError: the combination is invalid for the model (e.g. ``d_s > r``).
+        """
+        return self.design.replace(**self.values_at(x))
+
+    def values_at(self, x: Sequence[float]) -> dict[str, float]:
+        """``{param: value}`` of a decision vector after rounding to ``step`` and clipping."""
+        out: dict[str, float] = {}
+        for p, v in zip(self.params, x):
+            lo, hi = self.bounds_of(p)
+            q = round(round(float(v) / self.step) * self.step, 10)
+            out[p] = float(min(hi, max(lo, q)))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (also what :meth:`key` hashes)."""
+        return jsonable({
+            "params": list(self.params),
+            "bounds": {p: list(self.bounds_of(p)) for p in self.params},
+            "objectives": [o.label for o in self.objectives],
+            "constraints": [c.label for c in self.constraints],
+            "design": self.design.to_dict(),
+            "workspace": dataclasses.asdict(self.workspace),
+            "orientation": None if self.orientation_used is None else dataclasses.asdict(self.orientation_used),
+            "population": self.population, "generations": self.generations, "seed": self.seed,
+            "step": self.step, "algorithm": self.algorithm_used,
+        })
+
+    def key(self) -> tuple:
+        """Hashable identity of the run (equal settings give the same front)."""
+        import json
+
+        return ("optimize", json.dumps(self.to_dict(), sort_keys=True))
+
+
+# ================================================================================================
+# evaluation of a population
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return text if len(text) <= 500 else text[:497] + "..."
+
+
+def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, *,
+                        orientation: Optional[OrientationSettings] = None, cache: Any = None,
+                        client: Any = None, evaluate: Optional[Callable[..., dict]] = None, retries: int = 1,
+                        cancel: CancelToken = None,
+                        on_point: Optional[Callable[[int, int], None]] = None) -> tuple[list[dict], int]:
+    """Evaluate a batch of designs with the sweep unit of work, each distinct design at most once.
+
+    Cached designs (``cache``: a :class:`~kinematics.sweep.ResultCache`) are taken from the cache;
+    the rest run serially in this process (``client=None``; numba's kernels use every core) or on
+    the Dask ``client`` (one task per design, ``retries`` retries). Results are put in the cache.
+
+    Returns:
+        ``(rows, computed)``: one row per design in input order -- the ``evaluate_design`` dict
+        with ``"ok": True``, or ``{"ok": False, "error": "one line", "design": {...}}`` for a
+        design whose evaluation raised or whose worker died -- and the number of designs computed
+        (not from the cache, not duplicates).
+    Raises:
+        Cancelled: when ``cancel`` is set (unfinished Dask tasks are cancelled).
+    """
+    from .sweep import evaluate_design
+
+    keys = [cache.key(d, settings, orientation) if cache is not None else None for d in designs]
+    results: dict[int, dict] = {}
+    todo: dict[Any, int] = {}  # distinct key -> first index
+    dup: dict[int, int] = {}
+    for i, d in enumerate(designs):
+        k = keys[i] if keys[i] is not None else d.key()
+        if k in todo:
+            dup[i] = todo[k]
+            continue
+        hit = cache.get(keys[i]) if cache is not None else None
+        if hit is not None:
+            results[i] = {**hit, "ok": True}
+            todo[k] = i
+            continue
+        todo[k] = i
+    run = [i for i in todo.values() if i not in results]
+    n_done = 0
+
+    def finished(i: int, row: dict) -> None:
+        nonlocal n_done
+        results[i] = row
+        if row.get("ok") and cache is not None:
+            cache.put(keys[i], {k: v for k, v in row.items() if k != "ok"})
+        n_done += 1
+        if on_point is not None:
+            on_point(n_done, len(run))
+
+    if client is None:
+        for i in run:
+            check(cancel)
+            try:
+                if evaluate is None:
+                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel)
+                else:
+                    row = evaluate(designs[i], settings, orientation=orientation)
+            except Cancelled:
+                raise
+            except Exception as e:  # noqa: BLE001 - a failed point is reported, not fatal
+                finished(i, {"ok": False, "error": _one_line(e), "design": designs[i].to_dict()})
+            else:
+                finished(i, {**row, "ok": True})
+    elif run:
+        from distributed import as_completed
+
+        fn = evaluate if evaluate is not None else evaluate_design
+        futures = client.map(fn, [designs[i] for i in run], settings=settings, orientation=orientation,
+                             retries=retries, pure=False)
+        where = {f.key: i for f, i in zip(futures, run)}
+        pending = set(where)
+        ac = as_completed(futures)
+        try:
+            while pending:
+                if is_cancelled(cancel):
+                    raise Cancelled()
+                batch = ac.next_batch(block=False) if ac.has_ready() else []
+                if not batch:
+                    time.sleep(0.01)
+                    continue
+                for fut in batch:
+                    i = where[fut.key]
+                    pending.discard(fut.key)
+                    row: dict
+                    if fut.status == "finished":
+                        try:
+                            row = {**fut.result(), "ok": True}
+                        except Exception as e:  # noqa: BLE001 - e.g. data lost with its worker
+                            row = {"ok": False, "error": _one_line(e), "design": designs[i].to_dict()}
+                    else:
+                        try:
+                            exc = fut.exception()
+                        except Exception as e:  # noqa: BLE001 - cancelled futures raise here
+                            exc = e
+                        row = {"ok": False, "error": _one_line(exc) if exc else f"point {fut.status}",
+                               "design": designs[i].to_dict()}
+                    fut.release()
+                    finished(i, row)
+        finally:
+            if pending:
+                client.cancel([f for f in futures if f.key in pending])
+    for i, j in dup.items():
+        results[i] = results[j]
+    return [results[i] for i in range(len(designs))], len(run)
+
+
+# ================================================================================================
+# fronts and hypervolume
+
+
+def non_dominated(F: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated rows of ``F`` (all objectives minimised; a row is dominated
+    when another is ``<=`` everywhere and ``<`` somewhere). Rows equal to an earlier row are
+    dropped (the first one is kept). Brute force, ``O(n^2 M)``."""
+    F = np.asarray(F, dtype=float)
+    n = len(F)
+    keep = []
+    for i in range(n):
+        le = np.all(F <= F[i], axis=1)
+        lt = np.any(F < F[i], axis=1)
+        if np.any(le & lt):
+            continue
+        if np.any(np.all(F[:i] == F[i], axis=1)):
+            continue
+        keep.append(i)
+    return np.asarray(keep, dtype=int)
+
+
+def normalised_hypervolume(fronts: Sequence[np.ndarray], reference: float = 1.1) -> tuple[list[float], dict]:
+    """Hypervolume of each front (minimised objectives) after normalising every objective to
+    ``[0, 1]`` by the ideal and nadir points over all fronts, reference point ``reference`` on
+    every axis (see module docstring). Uses pymoo's exact ``HV`` indicator.
+
+    Returns:
+        ``(values, {"ideal": [...], "nadir": [...], "reference": reference})``; the ideal and
+        nadir are in the minimised objective space.
+    """
+    from pymoo.indicators.hv import HV
+
+    nonempty = [np.asarray(f, dtype=float) for f in fronts if len(f)]
+    if not nonempty:
+        return [0.0 for _ in fronts], {"ideal": None, "nadir": None, "reference": reference}
+    allf = np.vstack(nonempty)
+    ideal, nadir = allf.min(axis=0), allf.max(axis=0)
+    scale = np.where(nadir > ideal, nadir - ideal, 1.0)
+    ind = HV(ref_point=np.full(allf.shape[1], reference))
+    out = []
+    for f in fronts:
+        if not len(f):
+            out.append(0.0)
+            continue
+        out.append(float(ind((np.asarray(f, dtype=float) - ideal) / scale)))
+    return out, {"ideal": ideal.tolist(), "nadir": nadir.tolist(), "reference": reference}
+
+
+# ================================================================================================
+# the optimisation
+
+
+@dataclasses.dataclass
+class OptimizeResult:
+    """The outcome of :func:`optimize` (see :meth:`to_dict` for the JSON form)."""
+
+    settings: OptimizeSettings
+    front: list[dict]
+    hypervolume: list[float]
+    hypervolume_normalisation: dict
+    generations: list[dict]
+    evaluations: int
+    computed: int
+    failed: list[dict]
+    seconds: float
+    backend: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"front": [{"design", "measures"}...], "hypervolume": [per generation], "settings",
+        "generations", "evaluations", "computed", "failed", "seconds", "backend", ...}``."""
+        return jsonable({
+            "front": self.front, "hypervolume": self.hypervolume,
+            "hypervolume_normalisation": self.hypervolume_normalisation,
+            "settings": self.settings.to_dict(), "generations": self.generations,
+            "evaluations": self.evaluations, "computed": self.computed, "failed": self.failed,
+            "seconds": self.seconds, "backend": self.backend,
+        })
+
+
+def measures_of(row: Mapping[str, Any]) -> dict[str, Any]:
+    """Every scalar measure of an evaluated row plus every registered derived measure (the
+    ``"measures"`` of a front entry); the wall-clock ``compute_seconds`` is left out."""
+    out: dict[str, Any] = {}
+    for k, v in row.items():
+        if k in ("compute_seconds", "ok", "design"):
+            continue
+        if isinstance(v, (bool, int, float, str)) or v is None:
+            out[k] = v
+    for name, m in MEASURES.items():
+        if name not in out and (m.derive is not None or (m.key or name) in row):
+            try:
+                val = m.value(row)
+            except (KeyError, TypeError, ValueError):
+                val = None
+            if val is not None:
+                out[name] = bool(val) if m.flag else val
+    return out
+
+
+def _algorithm(settings: OptimizeSettings) -> Any:
+    n_obj = len(settings.objectives)
+    name = settings.algorithm_used
+    pop = settings.population
+    if name == "nsga2":
+        from pymoo.algorithms.moo.nsga2 import NSGA2
+
+        return NSGA2(pop_size=pop, eliminate_duplicates=True)
+    if name == "agemoea":
+        from pymoo.algorithms.moo.age import AGEMOEA
+
+        return AGEMOEA(pop_size=pop, eliminate_duplicates=True)
+    from pymoo.algorithms.moo.nsga3 import NSGA3
+    from pymoo.util.ref_dirs import get_reference_directions
+
+    if n_obj == 1:
+        ref_dirs = np.ones((1, 1))
+    else:
+        ref_dirs = get_reference_directions("energy", n_obj, pop, seed=settings.seed)
+    return NSGA3(ref_dirs=ref_dirs, pop_size=pop, eliminate_duplicates=True)
+
+
+def optimize(settings: OptimizeSettings, *, scheduler: Optional[str] = None, workers: Optional[int] = None,
+             client: Any = None, cache: Any = None, progress: Optional[ProgressFn] = None,
+             cancel: CancelToken = None, on_generation: Optional[Callable[[dict], None]] = None,
+             evaluate: Optional[Callable[..., dict]] = None, retries: int = 1,
+             connect_timeout: float = 10.0) -> OptimizeResult:
+    """Pareto front of ``settings.objectives`` over ``settings.params`` (see module docstring).
+
+    Args:
+        settings: what to optimise.
+        scheduler: address of a running Dask scheduler (``tcp://host:8786``); each generation's
+            population runs there, one task per design.
+        workers: start a local Dask cluster of this many single-threaded process workers for
+            the run (``None`` and no scheduler: evaluate in this process, whose compiled kernels
+            already use every core).
+        client: an existing ``distributed.Client`` to use (instead of ``scheduler``/``workers``).
+        cache: a :class:`~kinematics.sweep.ResultCache` shared with sweeps (default: a fresh
+            in-memory one for this run).
+        progress: ``progress(fraction, message)`` after each evaluated point and generation; the
+            message names the generation, the evaluations and the best value of each objective.
+        cancel: stop (raises :class:`~kinematics.progress.Cancelled`).
+        on_generation: called after each generation with ``{"generation", "evaluations",
+            "computed", "front_size", "best", "front"}`` (``front`` as in the result).
+        evaluate: the unit of work (default :func:`kinematics.sweep.evaluate_design`).
+        retries: Dask retries of a failing point.
+        connect_timeout: seconds to reach ``scheduler``.
+
+    Raises:
+        ParameterError: bad settings, ``workers`` together with ``scheduler``, or an unreachable
+            scheduler.
+        Cancelled: when ``cancel`` is set.
+    """
+    from pymoo.core.evaluator import Evaluator
+    from pymoo.core.problem import Problem
+    from pymoo.problems.static import StaticProblem
+    from pymoo.termination import get_termination
+
+    from .sweep import ResultCache
+
+    if not isinstance(settings, OptimizeSettings):
+        raise ParameterError("settings", settings, "OptimizeSettings")
+    if scheduler is not None and workers is not None:
+        raise ParameterError("workers", workers, "omit it with a scheduler address (the scheduler's workers are used)")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 256):
+        raise ParameterError("workers", workers, "an integer in [1, 256]")
+    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
+        raise ParameterError("scheduler", scheduler, "an address such as tcp://host:8786")
+    if not isinstance(retries, int) or isinstance(retries, bool) or retries < 0:
+        raise ParameterError("retries", retries, "an integer >= 0")
+    if cache is None:
+        cache = ResultCache(max_entries=max(256, settings.population * settings.generations))
+    check(cancel)
+    t0 = time.perf_counter()
+    ori = settings.orientation_used
+    objs, cons = settings.objectives, settings.constraints
+    lows = np.array([settings.bounds_of(p)[0] for p in settings.params])
+    highs = np.array([settings.bounds_of(p)[1] for p in settings.params])
+    problem = Problem(n_var=len(settings.params), n_obj=len(objs), n_ieq_constr=1 + len(cons), xl=lows, xu=highs)
+    algorithm = _algorithm(settings)
+    algorithm.setup(problem, termination=get_termination("n_gen", settings.generations), seed=settings.seed,
+                    verbose=False)
+
+    own_client = cluster = None
+    backend = "serial"
+    if client is None and (scheduler is not None or workers is not None):
+        from .distributed import _open_client
+
+        own_client, cluster = _open_client(scheduler, workers, connect_timeout)
+        client = own_client
+    if client is not None:
+        backend = "dask " + (scheduler if scheduler is not None else f"local cluster ({workers or 'default'} workers)"
+                             if own_client is not None else "client")
+
+    archive_F: list[np.ndarray] = []
+    archive_rows: list[dict] = []
+    fronts: list[np.ndarray] = []
+    history: list[dict] = []
+    failed: list[dict] = []
+    evaluations = computed = 0
+    G = settings.generations
+    front_idx = np.zeros(0, dtype=int)
+
+    def report(fraction: float, message: str) -> None:
+        if progress is not None:
+            progress(min(1.0, max(0.0, fraction)), message)
+
+    def best_text(best: dict) -> str:
+        return ", ".join(f"{k.lstrip('-')} {v:.4g} ({'min' if k.startswith('-') else 'max'})"
+                         for k, v in best.items() if v is not None)
+
+    try:
+        report(0.0, f"generation 1/{G}: evaluating {settings.population} designs ({backend})")
+        gen = 0
+        while algorithm.has_next():
+            check(cancel)
+            gen += 1
+            pop = algorithm.ask()
+            X = pop.get("X")
+            designs: list[Optional[Design]] = []
+            rows: list[Optional[dict]] = []
+            for x in X:
+                try:
+                    designs.append(settings.design_at(x))
+                    rows.append(None)
+                except ParameterError as e:
+                    designs.append(None)
+                    rows.append({"ok": False, "error": _one_line(e), "design": settings.values_at(x)})
+            valid = [i for i, d in enumerate(designs) if d is not None]
+
+            def on_point(done: int, total: int, gen: int = gen) -> None:
+                report((gen - 1 + done / max(total, 1)) / G, f"generation {gen}/{G}: {done}/{total} designs")
+
+            got, n_run = evaluate_population([designs[i] for i in valid], settings.workspace, orientation=ori,
+                                             cache=cache, client=client, evaluate=evaluate, retries=retries,
+                                             cancel=cancel, on_point=on_point)
+            for i, row in zip(valid, got):
+                rows[i] = row
+            computed += n_run
+            evaluations += len(rows)
+            F = np.full((len(rows), len(objs)), _PENALTY)
+            Gv = np.zeros((len(rows), 1 + len(cons)))
+            for i, row in enumerate(rows):
+                assert row is not None
+                if not row.get("ok"):
+                    Gv[i, :] = 1.0
+                    failed.append({"generation": gen, "design": row.get("design"), "error": row.get("error")})
+                    continue
+                vals = [MEASURES[o.measure].value(row) for o in objs]
+                if any(v is None for v in vals):
+                    Gv[i, 0] = 1.0
+                    failed.append({"generation": gen, "design": row.get("design"),
+                                   "error": "missing measure: " + ", ".join(o.measure for o, v in zip(objs, vals)
+                                                                          if v is None)})
+                else:
+                    F[i] = [o.to_minimise(float(v)) for o, v in zip(objs, vals)]  # type: ignore[arg-type]
+                Gv[i, 1:] = [c.violation(MEASURES[c.measure].value(row)) for c in cons]
+                if np.all(Gv[i] <= 0.0):
+                    archive_F.append(F[i].copy())
+                    archive_rows.append(row)
+            Evaluator().eval(StaticProblem(problem, F=F, G=Gv), pop)
+            algorithm.tell(infills=pop)
+            AF = np.array(archive_F) if archive_F else np.zeros((0, len(objs)))
+            front_idx = non_dominated(AF) if len(AF) else np.zeros(0, dtype=int)
+            fronts.append(AF[front_idx] if len(front_idx) else np.zeros((0, len(objs))))
+            best = {o.label: (None if not len(AF) else float(o.to_minimise(AF[:, k].min())))
+                    for k, o in enumerate(objs)}
+            info = {"generation": gen, "evaluations": evaluations, "computed": computed,
+                    "front_size": int(len(front_idx)), "best": best}
+            history.append(info)
+            report(gen / G, f"generation {gen}/{G}, {evaluations} evaluations, best: {best_text(best) or 'none feasible'}")
+            if on_generation is not None:
+                on_generation({**info, "front": _front_entries(archive_rows, AF, front_idx)})
+    finally:
+        if own_client is not None:
+            try:
+                own_client.close()
+            finally:
+                if cluster is not None:
+                    cluster.close()
+    AF = np.array(archive_F) if archive_F else np.zeros((0, len(objs)))
+    hv, norm = normalised_hypervolume(fronts)
+    norm = {**norm, "objectives": [o.label for o in objs],
+            "note": "objectives minimised (maximised ones negated), normalised by ideal/nadir over all fronts"}
+    return OptimizeResult(settings=settings, front=_front_entries(archive_rows, AF, front_idx), hypervolume=hv,
+                          hypervolume_normalisation=norm, generations=history, evaluations=evaluations,
+                          computed=computed, failed=failed, seconds=time.perf_counter() - t0, backend=backend)
+
+
+def _front_entries(rows: list[dict], F: np.ndarray, idx: np.ndarray) -> list[dict]:
+    """Front entries ``{"design", "measures"}`` sorted by the first objective (best first)."""
+    order = sorted((int(i) for i in idx), key=lambda i: tuple(F[i]))
+    return [{"design": dict(rows[i]["design"]), "measures": measures_of(rows[i])} for i in order]
