@@ -35,6 +35,7 @@ import json
 import logging
 import threading
 import time
+import urllib.parse
 from typing import Any, Callable, Hashable, Iterator, Optional
 
 import numpy as np
@@ -51,11 +52,14 @@ from . import jsbridge, pagehook, plots
 from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
 from .limits import MAX_VOXELS, check_workspace_grid
+from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
+from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
+from .optimize_panel import OptimizePanel, ResultStore
 from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
-    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, encode_query, parse_query,
+    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, encode_query, panel_pairs, parse_query,
 )
 
 log = logging.getLogger(__name__)
@@ -83,6 +87,11 @@ class ShellBundle:
     mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
     measures: Any = None  # kinematics.measures.WorkspaceMeasures
     shell_seconds: float = 0.0
+
+
+#: The Optimize panel's settings as the link writes them, at their defaults (left out of links).
+_OPT_DEFAULT_QUERY = {k: (f"{_OPT_DEFAULTS[v]:g}" if isinstance(_OPT_DEFAULTS[v], float) else str(_OPT_DEFAULTS[v]))
+                      for k, v in _OPT_URL_KEYS.items()}
 
 
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
@@ -120,9 +129,11 @@ class ClientSession:
     """
 
     def __init__(self, explorer: "Explorer", client: viser.ClientHandle, state: ExplorerState,
-                 base_url: str, messages: list[str]) -> None:
+                 base_url: str, messages: list[str], optimize_query: Optional[dict[str, str]] = None) -> None:
         self.explorer = explorer
         self.client = client
+        self.optimize_query = dict(optimize_query or {})  # the link's opt_* entries (Optimize panel)
+        self.optimize: Optional[OptimizePanel] = None
         self.job_client = f"viser-{client.client_id}"
         self.lock = threading.RLock()
         self.view_lock = threading.Lock()
@@ -202,6 +213,7 @@ class ClientSession:
         """Create this client's GUI and scene and start the first computations."""
         s = self.state
         self.panels = build_panels(self.client.gui, s)
+        self._build_optimize_tab()
         res = self._resolve(s)
         self.resolution = res
         with self.client.atomic():
@@ -218,6 +230,29 @@ class ClientSession:
         self._sync_url_now()
         self.submit_workspace()
         self.ready.set()
+
+    def _build_optimize_tab(self) -> None:
+        """The Optimize tab (app/optimize_panel.py): a bounded multi-objective run of this session's
+        design, its front, "Load this design"; its settings travel in the link (opt_* keys)."""
+        with self.panels.tabs.add_tab("Optimize", viser.Icon.CHART_DOTS):
+            self.optimize = OptimizePanel(
+                self.client.gui, self.explorer.jobs, client=self.job_client,
+                get_design=lambda: self.state.design, load_design=self.load_design,
+                cache=self.explorer.study_cache, results=self.explorer.optimize_results,
+                on_settings_change=lambda _q: self.schedule_url())
+        if self.optimize_query:
+            self.url_messages += self.optimize.apply_query(self.optimize_query)
+
+    def load_design(self, design: Design) -> None:
+        """Put ``design`` into the design sliders and apply it (as if typed)."""
+        with self.input_lock:
+            with self.programmatic():
+                for key in DESIGN_KEYS:
+                    self.panels.design[key].value = float(getattr(design, key))
+                self.panels.eta_range.value = design.eta_range
+            self.design_error = None
+            self.panels.design_message.visible = False
+            self.apply_design(design)
 
     def _wire(self) -> None:
         p = self.panels
@@ -1013,9 +1048,15 @@ class ClientSession:
 
     # ----- URL --------------------------------------------------------------------------------------
     def query(self) -> str:
-        """The query string of the current state (only the explorer's own keys)."""
+        """The query string of the current state (only the explorer's own keys), plus the Optimize
+        panel's settings that differ from its defaults."""
         with self.lock:
-            return encode_query(self.state)
+            q = encode_query(self.state)
+        if self.optimize is not None:
+            extra = [(k, v) for k, v in self.optimize.query().items() if v != _OPT_DEFAULT_QUERY.get(k)]
+            if extra:
+                q += "&" + urllib.parse.urlencode(extra, safe=",")
+        return q
 
     def link(self) -> str:
         """The shareable link of the current state."""
@@ -1112,6 +1153,7 @@ class Explorer:
         from paraspace.kinematics.sweep import ResultCache
 
         self.study_cache = ResultCache(max_entries=1024)
+        self.optimize_results = ResultStore(16)  # finished Optimize runs by settings (a shared link reopens them)
         self.warm = threading.Event()
         self.connect_seconds: list[float] = []
 
@@ -1173,7 +1215,7 @@ class Explorer:
         loc = jsbridge.read_location(client, timeout=5.0)
         search, base = loc if loc is not None else ("", self.url.rstrip("/") + "/")
         state, messages = parse_query(search)
-        session = ClientSession(self, client, state, base or self.url, messages)
+        session = ClientSession(self, client, state, base or self.url, messages, panel_pairs(search))
         with self._sessions_lock:
             self.sessions[client.client_id] = session
         try:

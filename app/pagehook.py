@@ -15,7 +15,7 @@ passes untouched):
    websockets, and its "opening handshake failed" traceback is kept out of the log by
    :class:`_QuietHandshakeFailures`);
 2. a query carrying any key that is not one of the explorer's own keys
-   (:func:`paraspace.app.urlstate.known_keys`) is refused with 400: the page is never served with
+   (:func:`paraspace.app.urlstate.link_keys`) is refused with 400: the page is never served with
    a key that viser's client could act on. The answer is plain text (never HTML), names the
    refused keys (cut and quoted) and gives the same link without them;
 3. the page itself is served with a ``Content-Security-Policy`` whose ``connect-src 'self'`` keeps
@@ -37,7 +37,7 @@ import websockets
 from websockets.datastructures import Headers
 from websockets.http11 import Response
 
-from .urlstate import known_keys
+from .urlstate import link_keys
 
 __all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install"]
 
@@ -51,7 +51,7 @@ CONTENT_SECURITY_POLICY = ("connect-src 'self' blob: data:; object-src 'none'; b
 #: Replacements applied to viser's page (its HTML is otherwise served as is).
 PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = ((b"<title>Viser</title>", b"<title>paraspace</title>"),)
 
-_KNOWN = frozenset(known_keys())
+_KNOWN = frozenset(link_keys())
 
 
 def _quote(key: str) -> str:
@@ -81,7 +81,7 @@ def page_refusal(path: str, query: str) -> Optional[tuple[int, str]]:
     clean = (path or "/") + (f"?{kept}" if kept else "")
     named = ", ".join(_quote(k) for k in bad[:8]) + (f" and {len(bad) - 8} more" if len(bad) > 8 else "")
     return 400, (f"paraspace explorer: this link carries parameters the explorer does not accept: {named}. "
-                 "Only the explorer's own parameters are allowed (" + ", ".join(known_keys()) + ").\n"
+                 "Only the explorer's own parameters are allowed (" + ", ".join(link_keys()) + ").\n"
                  f"The same link without them (on this server): {clean}\n")
 
 

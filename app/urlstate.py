@@ -196,6 +196,26 @@ _BOOL_TRUE = ("1", "true", "on", "yes")
 _BOOL_FALSE = ("0", "false", "off", "no")
 
 
+#: Keys of the explorer's Optimize panel (its run settings; app/optimize_panel.URL_KEYS maps them).
+OPT_KEYS: tuple[str, ...] = ("opt_params", "opt_objectives", "opt_constraints", "opt_pop", "opt_gen",
+                             "opt_voxel", "opt_seed")
+
+
+def link_keys() -> tuple[str, ...]:
+    """Every key an explorer link may carry: :func:`known_keys` plus the Optimize panel's."""
+    return known_keys() + OPT_KEYS
+
+
+def panel_pairs(query: str) -> dict[str, str]:
+    """The Optimize panel's entries of a link (the last of a repeated key; values cut to 200
+    characters; the panel validates them and reports bad ones)."""
+    try:
+        pairs = urllib.parse.parse_qsl((query or "").lstrip("?"), keep_blank_values=True)
+    except ValueError:
+        return {}
+    return {k: v[:200] for k, v in pairs if k in OPT_KEYS}
+
+
 def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
@@ -220,6 +240,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
     known = set(known_keys())
     unknown: list[str] = []
     for key, raw in pairs:
+        if key in OPT_KEYS:  # the Optimize panel's (panel_pairs)
+            continue
         if key not in known:
             if key not in unknown:
                 unknown.append(key)
