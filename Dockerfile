@@ -34,6 +34,7 @@ RUN mkdir -p /opt/paraspace && printf '%s\n' \
         tornado==6.6.1 tqdm==4.70.1 trimesh==5.2.0 typing-extensions==4.16.0 \
         typing-inspection==0.4.5 tzdata==2026.6 urllib3==2.8.0 uvicorn==0.54.0 viser==1.1.1 \
         websockets==16.1.1 zict==3.0.0 zipp==4.1.2 zstandard==0.25.0 \
+        pymoo==0.6.2 plotly==7.1.0 narwhals==2.29.0 moocore==0.3.2 cffi==2.1.1 pycparser==3.12 platformdirs==4.14.7 cma==4.5.0 autograd==1.9.1 alive-progress==3.3.0 about-time==4.2.1 graphemeu==0.7.2 deprecated==1.3.1 wrapt==2.5.2 \
         | tr ' ' '\n' | sed '/^$/d' > /opt/paraspace/constraints.txt
 
 # libgomp1 (Debian's package) gives numba its OpenMP threading layer; without it numba falls

@@ -762,10 +762,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
         finally:
             precheck_slots.release()
 
-    def quota_check(request: Request) -> None:
+    def live_api_jobs() -> list[Job]:
+        return [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
+
+    def quota_check(request: Request, client: Optional[str] = None, live: Optional[list[Job]] = None) -> None:
         """429 at once when the caller or the server is at its job limit (nothing computed yet)."""
-        client = client_of(request)
-        live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
+        client = client or client_of(request)
+        live = live_api_jobs() if live is None else live
         if sum(1 for j in live if j.client == client) >= limits.max_jobs_per_client:
             raise ApiError(429, f"too many unfinished jobs for this client: limit max_jobs_per_client = "
                                 f"{limits.max_jobs_per_client}; wait for one to finish or cancel it "
@@ -784,18 +787,11 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
 
     def _submit_locked(client: str, kind: str, ckey: Hashable, fn: Callable[[Any, Any], Any],
                        on_done: Callable[[Job], None], *, hit: bool) -> Job:
-        live = [j for j in jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
+        live = live_api_jobs()
         same = [j for j in live if j.client == client and j.kind == kind and j.key == ckey]
         # a cache hit computes nothing: only the job manager's own limits apply to it
         if not same and not hit:
-            mine = sum(1 for j in live if j.client == client)
-            if mine >= limits.max_jobs_per_client:
-                raise ApiError(429, f"too many unfinished jobs for this client: limit max_jobs_per_client = "
-                                    f"{limits.max_jobs_per_client}; wait for one to finish or cancel it "
-                                    f"(DELETE {API_PREFIX}/jobs/{{id}})", {"Retry-After": "1"})
-            if len(live) >= limits.max_jobs_total:
-                raise ApiError(429, f"server busy: limit max_jobs_total = {limits.max_jobs_total} unfinished "
-                                    f"jobs reached; retry later", {"Retry-After": "2"})
+            quota_check(None, client, live)  # type: ignore[arg-type]
         try:
             return jobs.submit(fn, kind=kind, client=client, key=ckey, on_done=on_done,
                                max_seconds=limits.max_job_seconds, summarize=_payload_only)

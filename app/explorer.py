@@ -449,15 +449,7 @@ class ClientSession:
 
     def reset_design(self) -> None:
         """Reset the design sliders to the paper's defaults (Fig. 3 design)."""
-        default = Design()
-        with self.input_lock:
-            with self.programmatic():
-                for key in DESIGN_KEYS:
-                    self.panels.design[key].value = float(getattr(default, key))
-                self.panels.eta_range.value = default.eta_range
-            self.design_error = None
-            self.panels.design_message.visible = False
-            self.apply_design(default)
+        self.load_design(Design())
 
     def on_voxel(self) -> None:
         """The voxel slider moved: recompute the workspace at the new resolution."""

@@ -42,7 +42,7 @@ from typing import Optional
 import numpy as np
 from numba import njit, prange
 
-from .feasibility import _chain_excluded, _feasible_at, chain_search
+from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_search
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
@@ -58,12 +58,7 @@ UNKNOWN, OK, FAIL = 0, 1, 2
 def _chain_state(px, py, pz, u, i, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax, e):
     """OK / FAIL / UNKNOWN for chain ``i`` over the ball of radius ``e`` around P (see module doc);
     ``e = 0`` is the dense test at P itself."""
-    b1x = px + u[i, 0, 0]
-    b1y = py + u[i, 0, 1]
-    b1z = pz + u[i, 0, 2]
-    b2x = px + u[i, 1, 0]
-    b2y = py + u[i, 1, 1]
-    b2z = pz + u[i, 1, 2]
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e

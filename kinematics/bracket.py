@@ -45,7 +45,7 @@ from numba import njit, prange
 
 from .blocks import OK, FAIL, UNKNOWN, TOP_BLOCK, _fill_kernel, _split, _top_blocks
 from .design import Design
-from .feasibility import _chain_excluded, _feasible_at
+from .feasibility import _chain_excluded, _feasible_at, chain_points
 from .grid import GridSpec
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
@@ -89,12 +89,7 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            b1x = px + u[i, 0, 0]
-            b1y = py + u[i, 0, 1]
-            b1z = pz + u[i, 0, 2]
-            b2x = px + u[i, 1, 0]
-            b2y = py + u[i, 1, 1]
-            b2z = pz + u[i, 1, 2]
+            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
             e0 = delta + eps
             lo0 = max(lmin - e0, 0.0)
             hi0 = lmax + e0

@@ -42,6 +42,14 @@ NOT_FOUND = -1
 
 
 @njit(cache=True, inline="always")
+def chain_points(px, py, pz, u, i):
+    """The two S joints ``B_1, B_2`` of chain ``i`` for the platform centre ``P``: ``P + (R u)_ij``
+    (``u`` holds the rotated platform points, shape (3, 2, 3))."""
+    return (px + u[i, 0, 0], py + u[i, 0, 1], pz + u[i, 0, 2],
+            px + u[i, 1, 0], py + u[i, 1, 1], pz + u[i, 1, 2])
+
+
+@njit(cache=True, inline="always")
 def _leg_intervals(p, q, lmin2, lmax2):
     """(F2): the <= 2 intervals of rho for one leg as (n, lo0, hi0, lo1, hi1)."""
     if q > lmax2:

@@ -34,7 +34,7 @@ from numba import njit, prange
 
 from .blocks import run_blocks
 from .design import Design, ParameterError
-from .feasibility import ChainTables, _chain_excluded, chain_search, default_n_eta
+from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .grid import GridSpec
 from .parallel import KERNEL_LOCK
@@ -149,12 +149,7 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
             mask = 0
             for kk in range(3):
                 i = (first + kk) % 3
-                b1x = px + u[i, 0, 0]
-                b1y = py + u[i, 0, 1]
-                b1z = pz + u[i, 0, 2]
-                b2x = px + u[i, 1, 0]
-                b2y = py + u[i, 1, 1]
-                b2z = pz + u[i, 1, 2]
+                b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
                 ok = False
                 if not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i],
                                        rho_lo, rho_hi, lmin2, lmax2):
@@ -178,12 +173,7 @@ def _points_kernel(points, u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, l
     for p in prange(points.shape[0]):
         mask = 0
         for i in range(3):
-            b1x = points[p, 0] + u[i, 0, 0]
-            b1y = points[p, 1] + u[i, 0, 1]
-            b1z = points[p, 2] + u[i, 0, 2]
-            b2x = points[p, 0] + u[i, 1, 0]
-            b2y = points[p, 1] + u[i, 1, 1]
-            b2z = points[p, 2] + u[i, 1, 2]
+            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(points[p, 0], points[p, 1], points[p, 2], u, i)
             if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lmin2, lmax2):
                 continue
             if chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,

@@ -219,7 +219,7 @@ def test_sweep_1d_and_2d(http):
 
 def test_jobs_cancel_and_unknown(http):
     # about 2.6M voxels with a fine arc sampling: several seconds, well below the limits
-    r = http.post(f"{V1}/workspace", json={"settings": {"voxel": 2.0, "eta_step": 0.02}})
+    r = http.post(f"{V1}/workspace", json={"settings": {"voxel": 2.0, "eta_step": 0.02, "method": "dense"}})
     assert r.status_code == 202, r.text
     job_id = r.json()["job_id"]
     d = http.delete(f"{V1}/jobs/{job_id}")
@@ -240,7 +240,7 @@ def test_per_client_job_limit_429(server):
         ids = []
         codes = []
         for i in range(5):
-            r = c.post(f"{V1}/workspace", json={"settings": {"voxel": 2.01 + 0.01 * i, "eta_step": 0.02}})
+            r = c.post(f"{V1}/workspace", json={"settings": {"voxel": 2.01 + 0.01 * i, "eta_step": 0.02, "method": "dense"}})
             codes.append(r.status_code)
             if r.status_code == 202:
                 ids.append(r.json()["job_id"])
@@ -325,7 +325,7 @@ def test_limits_hold_under_concurrent_submissions(server):
 
     def post(i: int) -> httpx.Response:
         with httpx.Client(base_url=server.url, timeout=30) as c:
-            return c.post(f"{V1}/workspace", json={"settings": {"voxel": 2.2 + 0.01 * i, "eta_step": 0.02}})
+            return c.post(f"{V1}/workspace", json={"settings": {"voxel": 2.2 + 0.01 * i, "eta_step": 0.02, "method": "dense"}})
 
     with concurrent.futures.ThreadPoolExecutor(10) as ex:
         responses = list(ex.map(post, range(10)))

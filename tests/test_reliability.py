@@ -45,7 +45,7 @@ def test_forwarded_for_does_not_make_new_clients(api):
     codes = []
     with httpx.Client(base_url=url, timeout=30) as c:
         for i in range(4):
-            r = c.post(f"{V1}/workspace", json={"settings": {"voxel": 3.0 + 0.1 * i, "eta_step": 0.02}},
+            r = c.post(f"{V1}/workspace", json={"settings": {"voxel": 3.0 + 0.1 * i, "eta_step": 0.02, "method": "dense"}},
                        headers={"X-Forwarded-For": f"10.0.0.{i + 1}"})
             codes.append(r.status_code)
             if r.status_code == 202:
@@ -208,7 +208,7 @@ def test_quota_is_checked_before_any_estimate(api, monkeypatch):
     monkeypatch.setattr(limits_mod, "workspace_voxels", lambda *a, **k: (calls.append(1), real(*a, **k))[1])
     with httpx.Client(base_url=url, timeout=30) as c:
         for i in range(2):
-            assert c.post(f"{V1}/workspace", json={"settings": {"voxel": 3.0 + 0.1 * i, "eta_step": 0.02}}).status_code == 202
+            assert c.post(f"{V1}/workspace", json={"settings": {"voxel": 3.0 + 0.1 * i, "eta_step": 0.02, "method": "dense"}}).status_code == 202
         n = len(calls)
         for i in range(5):
             assert c.post(f"{V1}/workspace", json={"settings": {"voxel": 4.0 + 0.1 * i}}).status_code == 429
