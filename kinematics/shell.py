@@ -63,7 +63,8 @@ Construction (:func:`workspace_shell`)
    OBJ and GLB (``COLOR_0``) keep them.
 
 The mesh's ``metadata["paraspace"]`` records ``h``, ``level``, ``smooth_sigma``, ``faces_marching``
-(before reduction), ``reduction``, ``dropped_components``, ``voxel_volume`` and ``volume_error``.
+(before reduction; ``None`` when the block re-mesh skipped the full-resolution mesh because it has
+more mixed cells than ``max_faces``, so it could not fit anyway), ``reduction``, ``dropped_components``, ``voxel_volume`` and ``volume_error``.
 
 An empty workspace gives an empty ``Trimesh``; :func:`export_shell` refuses it with a
 ``ValueError``.
@@ -113,12 +114,27 @@ def viridis(u: np.ndarray) -> np.ndarray:
     return out
 
 
-def _mc(field: np.ndarray, level: float, h: float) -> trimesh.Trimesh:
+def _mc_with_volume(field: np.ndarray, level: float, h: float) -> tuple[trimesh.Trimesh, float]:
+    """Marching cubes, outward-oriented, and its enclosed volume (computed once)."""
     verts, faces, _, _ = marching_cubes(field, level=level, spacing=(h, h, h))
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
-    if _signed_volume(mesh) < 0:
+    vol = _signed_volume(mesh)
+    if vol < 0:
         mesh.faces = mesh.faces[:, ::-1]
-    return mesh
+    return mesh, abs(vol)
+
+
+def _mc(field: np.ndarray, level: float, h: float) -> trimesh.Trimesh:
+    return _mc_with_volume(field, level, h)[0]
+
+
+def _mixed_cells(field: np.ndarray, level: float) -> int:
+    """Marching-cubes cells whose 8 corners are not all on one side of ``level``. Each yields at
+    least one triangle, so more mixed cells than a face budget means the full mesh exceeds it."""
+    b = (field > level).astype(np.uint8)
+    s = sum(b[i:b.shape[0] - 1 + i, j:b.shape[1] - 1 + j, k:b.shape[2] - 1 + k]
+            for i in (0, 1) for j in (0, 1) for k in (0, 1))
+    return int(np.count_nonzero((s > 0) & (s < 8)))
 
 
 def _volume_slope(mesh: trimesh.Trimesh, field: np.ndarray, h: float) -> float:
@@ -134,8 +150,7 @@ def _volume_slope(mesh: trimesh.Trimesh, field: np.ndarray, h: float) -> float:
 def _volume_preserving(field: np.ndarray, h: float, target: float) -> tuple[trimesh.Trimesh, float]:
     """Marching cubes at the level whose mesh volume matches ``target`` (Newton, then secant)."""
     t0 = HALF_LEVEL
-    m0 = _mc(field, t0, h)
-    v0 = m0.volume
+    m0, v0 = _mc_with_volume(field, t0, h)
     best = (abs(v0 - target), m0, t0)
     if best[0] <= _VOLUME_RTOL * target:
         return m0, t0
@@ -145,8 +160,7 @@ def _volume_preserving(field: np.ndarray, h: float, target: float) -> tuple[trim
         t1 = float(min(0.95, max(0.05, t1)))
         if t1 == t0:
             break
-        m1 = _mc(field, t1, h)
-        v1 = m1.volume
+        m1, v1 = _mc_with_volume(field, t1, h)
         if abs(v1 - target) < best[0]:
             best = (abs(v1 - target), m1, t1)
         if best[0] <= _VOLUME_RTOL * target or v1 == v0:
@@ -356,13 +370,21 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None,
         else:
             mesh, level = _mc(field, HALF_LEVEL, h), HALF_LEVEL
     else:
-        mesh, level = _mc(field, HALF_LEVEL, h), HALF_LEVEL
-    mesh.vertices = mesh.vertices + (np.asarray(grid.origin, dtype=float) - pad * h)
-    meta["level"] = float(level)
-    meta["faces_marching"] = int(len(mesh.faces))
-
-    if max_faces is not None and len(mesh.faces) > max_faces:
-        mesh = _reduce(mesh, field, pad, grid.origin, h, int(max_faces), target, meta, reduction)
+        mesh, level = None, HALF_LEVEL
+        if reduction == "remesh" and max_faces is not None and _mixed_cells(field, HALF_LEVEL) > max_faces:
+            # the full-resolution mesh would exceed the budget anyway: re-mesh without building it
+            mesh = _remesh_blocks(field, pad, grid.origin, h, int(max_faces), target, meta)
+            if mesh is not None:
+                meta["level"] = float(level)
+                meta["faces_marching"] = None  # not built (more mixed cells than max_faces)
+        if mesh is None:
+            mesh = _mc(field, HALF_LEVEL, h)
+    if meta["reduction"] == "none":
+        mesh.vertices = mesh.vertices + (np.asarray(grid.origin, dtype=float) - pad * h)
+        meta["level"] = float(level)
+        meta["faces_marching"] = int(len(mesh.faces))
+        if max_faces is not None and len(mesh.faces) > max_faces:
+            mesh = _reduce(mesh, field, pad, grid.origin, h, int(max_faces), target, meta, reduction)
 
     if color_by_z and len(mesh.vertices):
         z = mesh.vertices[:, 2]

@@ -266,3 +266,21 @@ def test_block_remesh_reduction_is_closed_within_budget_and_keeps_volume():
         assert dist[idx[:, 0], idx[:, 1], idx[:, 2]].max() <= 2 * res.grid.h
     with pytest.raises(ValueError, match="reduction"):
         workspace_shell(res, max_faces=100, reduction="fast")
+
+
+def test_remesh_skips_the_full_mesh_with_the_identical_result(monkeypatch):
+    """With more mixed cells than the budget the block re-mesh no longer builds the full-resolution
+    mesh first; the mesh is exactly the one the full path gives."""
+    import paraspace.kinematics.shell as shell_mod
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
+    fast = workspace_shell(res, max_faces=20_000, reduction="remesh")
+    assert fast.metadata["paraspace"]["faces_marching"] is None
+    monkeypatch.setattr(shell_mod, "_mixed_cells", lambda field, level: 0)  # forces the full path
+    slow = workspace_shell(res, max_faces=20_000, reduction="remesh")
+    assert slow.metadata["paraspace"]["faces_marching"] > 20_000
+    assert np.array_equal(fast.faces, slow.faces) and np.allclose(fast.vertices, slow.vertices)
+    assert fast.metadata["paraspace"]["reduction"] == slow.metadata["paraspace"]["reduction"]
+    assert fast.is_watertight
