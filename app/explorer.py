@@ -87,6 +87,7 @@ class ShellBundle:
     mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
     measures: Any = None  # kinematics.measures.WorkspaceMeasures
     shell_seconds: float = 0.0
+    bracket: Any = None  # kinematics.bracket.VolumeBracket (certified volume_inner <= V <= volume_outer)
 
 
 #: The Optimize panel's settings as the link writes them, at their defaults (left out of links).
@@ -356,6 +357,10 @@ class ClientSession:
             m = info.get("measures")
             kind = "preview" if info.get("preview") else "full"
             lines.append(f"**Volume** {_fmt(info['volume'], 5)}  ({kind}, h = {info['h']:g})")
+            br = info.get("bracket")
+            if br is not None and info["volume"] > 0:
+                lines.append(f"certified: {_fmt(br.volume_inner, 4)} ≤ V ≤ {_fmt(br.volume_outer, 4)} "
+                             "(continuous workspace, units³)  ")
             if info["volume"] == 0:
                 lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                              "(psi, theta, phi) with this design.")
@@ -671,6 +676,7 @@ class ClientSession:
                     pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
                     pre.shell_seconds = time.perf_counter() - t1
                     pre.measures = _measure(res)
+                    pre.bracket = _bracket(res)
                     cache.put(pkey, pre)
                 if cancel.is_set():
                     raise Cancelled()
@@ -689,6 +695,7 @@ class ClientSession:
             self._publish(gen, bundle, preview=False, seconds=time.perf_counter() - t0)
             progress(0.9, "measuring (voids, genus, hollowness)...")
             bundle.measures = _measure(res)
+            bundle.bracket = _bracket(res)
             cache.put(full_key, bundle)
             if cancel.is_set():
                 raise Cancelled()
@@ -776,6 +783,7 @@ class ClientSession:
             if self._ws_info.get("preview", False) != preview:
                 return
             self._ws_info["measures"] = bundle.measures
+            self._ws_info["bracket"] = bundle.bracket
         self._render_numbers()
         self._event("measures-preview" if preview else "measures-full")
 
@@ -1104,6 +1112,12 @@ def _measure(result: WorkspaceResult) -> Any:
     from paraspace.kinematics.measures import measure_workspace
 
     return measure_workspace(result)
+
+
+def _bracket(result: WorkspaceResult) -> Any:
+    from paraspace.kinematics.bracket import bracket_of
+
+    return bracket_of(result)
 
 
 def _json_default(obj: Any) -> Any:

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numba import njit, prange
@@ -50,7 +50,7 @@ from .grid import GridSpec
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
-__all__ = ["VolumeBracket", "volume_bracket"]
+__all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
 
 INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
 
@@ -163,3 +163,13 @@ def volume_bracket(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_fl
     v = grid.voxel_volume
     return VolumeBracket(volume_inner=n_in * v, volume_outer=(n_in + n_b) * v, cubes_inside=n_in,
                          cubes_boundary=n_b, voxel=grid.h)
+
+
+def bracket_of(result: "object", progress: Optional[Reporter] = None, cancel: CancelToken = None) -> VolumeBracket:
+    """:func:`volume_bracket` on the grid, orientation and arc samples of a computed
+    ``kinematics.workspace.WorkspaceResult``."""
+    from .workspace import _kernel_args
+
+    r: Any = result
+    args = _kernel_args(r.design, r.settings.orientation, r.n_eta)
+    return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel)

@@ -385,7 +385,7 @@ def warm_up() -> float:
         d = Design()
         compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=((-100, -100, 0), (100, 100, 160))))
         compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=((-100, -100, 0), (100, 100, 160)),
-                                               diagnostics=True))
+                                               diagnostics=True, bracket=True))
         reachable(d, np.zeros((1, 3)))
         _WARM = True
     return time.perf_counter() - t0

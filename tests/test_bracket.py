@@ -66,3 +66,22 @@ def test_cli_and_api_report_the_bracket():
     r = compute_workspace(Design(), WorkspaceSettings(voxel=8.0, bracket=True))
     payload = _workspace_payload(r)
     assert payload["volume_inner"] == r.volume_inner and payload["volume_outer"] == r.volume_outer
+
+
+def test_explorer_shows_the_certified_bracket():
+    from explorer_client import FakeBrowser, wait_idle  # tests/ (pytest's prepend import mode)
+
+    from paraspace.app.explorer import Explorer
+
+    exp = Explorer("127.0.0.1", 0).start()
+    try:
+        b = FakeBrowser(exp, "voxel=6")
+        s = b.session
+        wait_idle(exp, s)
+        br = s.bundle.bracket
+        assert br is not None and br.volume_inner <= s.bundle.result.volume <= br.volume_outer
+        text = s.panels.numbers.content
+        assert "certified:" in text and "continuous workspace" in text
+        b.close()
+    finally:
+        exp.stop()
