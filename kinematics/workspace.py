@@ -182,6 +182,28 @@ def _points_kernel(points, u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, l
         out[p] = mask
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _pairs_kernel(points, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out):
+    """Reachability of every (point, orientation) pair in one launch: ``us`` holds the rotated
+    platform points of each orientation, shape (M, 3, 2, 3); ``out`` is (P, M)."""
+    n_eta = cos_t.shape[1]
+    n_m = us.shape[0]
+    for q in prange(points.shape[0] * n_m):
+        p = q // n_m
+        m = q - p * n_m
+        ok = True
+        for i in range(3):
+            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(points[p, 0], points[p, 1], points[p, 2], us[m], i)
+            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lmin2, lmax2):
+                ok = False
+                break
+            if chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
+                            rho_lo, rho_hi, lmin2, lmax2, n_eta // 2) < 0:
+                ok = False
+                break
+        out[p, m] = ok
+
+
 # --------------------------------------------------------------------------------------------
 # Python drivers
 
@@ -220,6 +242,24 @@ def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
     ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
     """
     return chain_masks_at(design, points, orientation, eta_step) == ALL_CHAINS
+
+
+def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
+                    eta_step: float = 0.5) -> np.ndarray:
+    """Whether each point is reachable at each orientation: bool array (N, M) for ``points`` (N, 3)
+    and rotation matrices ``rotations`` (M, 3, 3), in one parallel launch (the same test as
+    :func:`reachable`, column by column)."""
+    pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+    rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+    n_eta = default_n_eta(design, eta_step)
+    u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2 = _kernel_args(design, np.eye(3), n_eta)
+    local = platform_points_local(design)
+    us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", local, rots))  # (M, 3, 2, 3): R u for each R
+    out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
+    if out.size:
+        with KERNEL_LOCK:
+            _pairs_kernel(pts, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out)
+    return out
 
 
 def reach_box(design: Design, orientation: tuple[float, float, float] = (0.0, 0.0, 0.0),

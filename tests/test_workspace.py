@@ -124,3 +124,19 @@ def test_grid_spec_covers_box():
     g = GridSpec.from_bounds((-180, -180, 0), (180, 180, 165), 2.0)
     assert g.shape == (180, 180, 83) and g.is_mirror_symmetric_y()
     assert g.lo == (-180, -180, 0) and g.hi[2] >= 165
+
+
+def test_reachable_pairs_equals_one_call_per_orientation():
+    """The orientation scan's single launch over (position, angle) pairs gives exactly the
+    per-orientation reachable() calls it replaced."""
+    from paraspace.kinematics.orientation import rotation_matrix
+    from paraspace.kinematics.workspace import reachable_pairs
+
+    rng = np.random.default_rng(5)
+    for design in (Design(), Design(a=30, eta_range="from-zero")):
+        pts = np.column_stack([rng.uniform(-120, 120, 300), rng.uniform(-120, 120, 300), rng.uniform(60, 220, 300)])
+        rots = [rotation_matrix(rt, a) for rt in ("phi_z", "tau_yprime", "psi_x") for a in (-60.0, -12.5, 0.0, 33.0, 80.0)]
+        pairs = reachable_pairs(design, pts, np.stack(rots))
+        loop = np.stack([reachable(design, pts, R) for R in rots], axis=1)
+        assert np.array_equal(pairs, loop)
+        assert 0 < pairs.sum() < pairs.size
