@@ -22,6 +22,7 @@ import csv
 import io
 import json
 import math
+import os
 import sys
 from typing import Any, Optional, Sequence
 
@@ -175,6 +176,13 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     if (ns.param2 is None) != (ns.values2 is None):
         raise ParameterError("param2", ns.param2, "given together with --values2")
     distributed = ns.scheduler is not None or ns.workers is not None
+    cores = os.cpu_count() or 1
+    if ns.scheduler is None and ns.workers is not None and ns.workers > cores:
+        # a local cluster of more single-threaded workers than cores is slower than the serial path
+        # (which already uses every core): say so, and run serially
+        sys.stderr.write(f"paraspace: --workers {ns.workers} exceeds this machine's {cores} cores; running the "
+                         f"sweep serially instead (it uses all {cores} cores)\n")
+        distributed = False
     warm_up()
     progress, done = progress_line("sweep")
     try:

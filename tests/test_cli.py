@@ -88,3 +88,14 @@ def test_workspace_diagnostics_names_chains_and_limits():
     assert "summary" in data["chain_binding"]
     text = run("workspace", "--voxel", "8", "--diagnostics").stdout
     assert "l_max" in text and "chain" in text
+
+
+def test_more_workers_than_cores_says_so_and_runs_serially():
+    import os
+
+    n = (os.cpu_count() or 1) + 8
+    proc = run("sweep", "--param", "a", "--values", "40,60", "--voxel", "10", "--workers", str(n), "--json")
+    assert proc.returncode == 0
+    assert f"--workers {n} exceeds" in proc.stderr and "serially" in proc.stderr
+    rows = __import__("json").loads(proc.stdout)
+    assert [r["value"] for r in rows] == [40.0, 60.0] and all(r["volume"] > 0 for r in rows)
