@@ -86,15 +86,21 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmi
     return UNKNOWN if some else FAIL
 
 
+@njit(cache=True, inline="always")
+def block_centre(b0, bn, b, xs, ys, zs):
+    """Centre of block ``b``'s voxel centres (its first voxel ``b0[b]``, ``bn[b]`` voxels per axis)."""
+    return (0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + bn[b, 0] - 1]),
+            0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + bn[b, 1] - 1]),
+            0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + bn[b, 2] - 1]))
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _classify_kernel(b0, bn, state, xs, ys, zs, h, eps, all_chains,
                      u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax):
     """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3))."""
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
-        px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
-        py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
-        pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
+        px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
         single = nx == 1 and ny == 1 and nz == 1
         delta = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2)
         e = 0.0 if single else delta + eps

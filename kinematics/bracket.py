@@ -43,7 +43,7 @@ from typing import Any, Optional
 import numpy as np
 from numba import njit, prange
 
-from .blocks import OK, FAIL, UNKNOWN, TOP_BLOCK, _fill_kernel, _split, _top_blocks
+from .blocks import FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre
 from .design import Design
 from .feasibility import _chain_excluded, _feasible_at, chain_points
 from .grid import GridSpec
@@ -80,9 +80,7 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
                  u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax):
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
-        px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
-        py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
-        pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
+        px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
         delta = 0.5 * h * math.sqrt(nx * nx + ny * ny + nz * nz)
         below = zs[b0[b, 2]] - 0.5 * h < zfloor - eps
         n = cos_t.shape[1]
