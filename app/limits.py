@@ -45,7 +45,7 @@ def workspace_voxels(design: Design, settings: Any, *, analytic: bool = False) -
     if settings.bounds is not None:
         lo, hi = settings.bounds
     elif analytic:
-        lo, hi = ws._symmetric_box(*ws.reach_box(design, settings.orientation, settings.z_floor), h)
+        lo, hi = ws._symmetric_box(*ws.reach_box(design, settings.orientation, settings.z_floor), h, settings.z_floor)
     else:
         lo, hi = ws.default_bounds(design, settings)
     return grid_voxels(lo, hi, h)

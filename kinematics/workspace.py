@@ -282,11 +282,15 @@ def reach_box(design: Design, orientation: tuple[float, float, float] = (0.0, 0.
     return (-m, -m, zlo), (m, m, max(zhi, zlo + 1e-6))
 
 
-def _symmetric_box(lo, hi, h: float):
-    """Snap a box outward to multiples of h, symmetric in x and y about 0."""
+def _symmetric_box(lo, hi, h: float, z_floor: Optional[float] = None):
+    """Snap a box outward to multiples of h, symmetric in x and y about 0. The bottom never goes
+    below ``z_floor`` when the box itself starts at or above it (a floor off the grid's multiples,
+    e.g. 20 with h = 3, starts the grid at the floor instead of a layer of voxels below it)."""
     m = max(abs(lo[0]), abs(lo[1]), abs(hi[0]), abs(hi[1]))
     m = h * math.ceil(m / h - 1e-9)
     zlo = h * math.floor(lo[2] / h + 1e-9)
+    if z_floor is not None and zlo < z_floor <= lo[2] + 1e-9:
+        zlo = float(z_floor)
     zhi = h * math.ceil(hi[2] / h - 1e-9)
     return (-m, -m, zlo), (m, m, zhi)
 
@@ -300,13 +304,13 @@ def default_bounds(design: Design, settings: WorkspaceSettings, cancel: CancelTo
     check(cancel)
     occ = _run_grid(design, settings, scout, None, cancel)[0] == ALL_CHAINS
     if not occ.any():
-        return _symmetric_box(alo, ahi, settings.voxel)
+        return _symmetric_box(alo, ahi, settings.voxel, settings.z_floor)
     idx = np.argwhere(occ)
     axes = scout.axes()
     lo = [max(axes[a][idx[:, a].min()] - 2.5 * hs, alo[a]) for a in range(3)]
     hi = [min(axes[a][idx[:, a].max()] + 2.5 * hs, ahi[a]) for a in range(3)]
     lo[2] = max(lo[2], settings.z_floor)
-    return _symmetric_box(lo, hi, settings.voxel)
+    return _symmetric_box(lo, hi, settings.voxel, settings.z_floor)
 
 
 def _padded_reach_box(design: Design, settings: WorkspaceSettings):
@@ -393,7 +397,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                 changed = True
         if not changed:
             break
-        lo, hi = _symmetric_box(lo2, hi2, settings.voxel)
+        lo, hi = _symmetric_box(lo2, hi2, settings.voxel, settings.z_floor)
     seconds = time.perf_counter() - t0
     result = WorkspaceResult(design=design, settings=settings, grid=grid, occupancy=occ,
                              chain_mask=mask if settings.diagnostics else None,

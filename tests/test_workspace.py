@@ -140,3 +140,19 @@ def test_reachable_pairs_equals_one_call_per_orientation():
         loop = np.stack([reachable(design, pts, R) for R in rots], axis=1)
         assert np.array_equal(pairs, loop)
         assert 0 < pairs.sum() < pairs.size
+
+
+@pytest.mark.parametrize("z_floor,h", [(20.0, 3.0), (21.0, 4.0), (7.5, 2.0)])
+def test_a_floor_off_the_grid_starts_the_grid_at_the_floor(z_floor, h):
+    """A z_floor that is not a multiple of the voxel edge used to start the grid a layer below the
+    floor, so every design touched the box's bottom off the floor and was reported incomplete."""
+    from paraspace.kinematics.measures import measure_workspace
+
+    r = compute_workspace(Design(), WorkspaceSettings(voxel=h, z_floor=z_floor))
+    assert r.grid.lo[2] == pytest.approx(z_floor)
+    assert r.grid.axes()[2].min() >= z_floor
+    m = measure_workspace(r)
+    assert m.boundary_complete, m.completeness_reason
+    fine = compute_workspace(Design(), WorkspaceSettings(voxel=2.0, z_floor=z_floor,
+                                                         bounds=((-200.0, -200.0, z_floor), (200.0, 200.0, 260.0))))
+    assert r.volume == pytest.approx(fine.volume, rel=0.03)
