@@ -29,6 +29,7 @@ from typing import Any, Optional, Sequence
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 
+from .numfmt import fixed
 from .progressline import progress_line
 
 
@@ -291,8 +292,8 @@ def cmd_ik(ns: argparse.Namespace) -> int:
     else:
         print(res.message)
         for ch in res.chains:
-            print(f"chain {ch.chain + 1}: d = {ch.d:8.3f}  eta = {ch.eta:8.3f} deg  lengths = "
-                  f"{ch.lengths[0]:8.3f} {ch.lengths[1]:8.3f}  ({', '.join(ch.leg_status)})")
+            print(f"chain {ch.chain + 1}: d = {fixed(ch.d, 3, 8)}  eta = {fixed(ch.eta, 3, 8)} deg  lengths = "
+                  f"{fixed(ch.lengths[0], 3, 8)} {fixed(ch.lengths[1], 3, 8)}  ({', '.join(ch.leg_status)})")
         print(f"condition number of J: {out['condition_number']}")
     return 0 if res.feasible or not ns.strict else 1
 

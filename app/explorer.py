@@ -52,6 +52,7 @@ from . import jsbridge, pagehook, plots
 from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
 from .limits import MAX_VOXELS, check_workspace_grid
+from .numfmt import fixed
 from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
 from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .optimize_panel import OptimizePanel, ResultStore
@@ -335,8 +336,8 @@ class ClientSession:
         s = self.state
         rows = ["| chain | d | η (°) | leg 1 | leg 2 | margin |", "|---|---|---|---|---|---|"]
         for c in res.chains:
-            legs = [f"{c.lengths[j]:.2f} {_state_badge(c.leg_status[j])}" for j in range(2)]
-            rows.append(f"| {c.chain + 1} | {c.d:.2f} | {c.eta:.2f} | {legs[0]} | {legs[1]} | {c.margin:.2f} |")
+            legs = [f"{fixed(c.lengths[j])} {_state_badge(c.leg_status[j])}" for j in range(2)]
+            rows.append(f"| {c.chain + 1} | {fixed(c.d)} | {fixed(c.eta)} | {legs[0]} | {legs[1]} | {fixed(c.margin)} |")
         verdict = ("**reachable**" if res.feasible else f"**{res.message}**")
         cond = "-" if res.condition_number is None or not np.isfinite(res.condition_number) else \
             f"{res.condition_number:.3g}"

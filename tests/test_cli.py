@@ -99,3 +99,12 @@ def test_more_workers_than_cores_says_so_and_runs_serially():
     assert f"--workers {n} exceeds" in proc.stderr and "serially" in proc.stderr
     rows = __import__("json").loads(proc.stdout)
     assert [r["value"] for r in rows] == [40.0, 60.0] and all(r["volume"] > 0 for r in rows)
+
+
+def test_ik_and_the_pose_table_never_print_negative_zero():
+    from paraspace.app.numfmt import fixed
+
+    assert fixed(-1e-15, 3) == "0.000" and fixed(-0.0) == "0.00" and fixed(-0.004, 2) == "0.00"
+    assert fixed(-0.006, 2) == "-0.01" and fixed(2.5, 1, 6) == "   2.5"
+    out = run("ik", "--pose", "0,0,130,0,0,0").stdout
+    assert "eta =    0.000" in out and "-0.000" not in out

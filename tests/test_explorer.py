@@ -353,3 +353,11 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers):
         time.sleep(0.02)
     assert s1.orientation is not None and s1.orientation.design.a == 58.0
     assert 57.0 not in shown, "maps of the superseded design were shown"
+
+
+def test_pose_table_has_no_negative_zero(explorer, browsers):
+    b = browsers("")
+    s = b.session
+    wait_for(lambda: "| 1 |" in s.panels.pose_table.content, 10.0, "pose table")
+    text = s.panels.pose_table.content
+    assert "-0.00" not in text and "| 0.00 |" in text  # eta of every chain is 0 at the home pose
