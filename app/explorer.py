@@ -368,9 +368,11 @@ class ClientSession:
             elif m is not None:
                 lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
                 lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
+                verdict = "complete" if m.boundary_complete else "incomplete"
+                lines.append(f"**Boundary** {verdict}: {md_text(m.completeness_reason)}  ")
                 closed = "closed" if m.boundary_closed else "open (cut or in pieces)"
-                lines.append(f"**Boundary** {closed}, genus {m.genus}  ")
-                lines.append(f"**Components** {m.components}  ")
+                lines.append(f"**Topology** surface {closed}, genus {m.genus}, {m.components} "
+                             f"component{'s' if m.components != 1 else ''}  ")
             else:
                 lines.append("*measures: computing...*  ")
             lines.append(f"**Compute** {info['seconds']:.2f} s workspace"
@@ -1007,19 +1009,25 @@ class ClientSession:
         self.client.send_file_download("paraspace_volume_a_d_s.csv", buf.getvalue().encode(), save_immediately=True)
 
     def download_shell(self, fmt: str) -> None:
-        """Send the full (uncut) shell as STL, PLY or GLB."""
-        from paraspace.kinematics.shell import export_shell
+        """Send the full-resolution (uncut, not re-meshed) shell as STL, PLY or GLB: the marching-
+        cubes surface of the voxel grid, watertight, as ``paraspace workspace --export`` writes it
+        (the view shows a lighter re-mesh of it)."""
+        from paraspace.kinematics.shell import export_shell, workspace_shell
 
         b = self.bundle
         if b is None:
             self._notify("Not ready", "the full workspace is still being computed", color="orange")
             return
         try:
-            data = export_shell(b.mesh, fmt)
+            mesh = workspace_shell(b.result)
+            data = export_shell(mesh, fmt)
         except ValueError as exc:  # e.g. an empty workspace has no shell
             self._notify("No shell to download", str(exc), color="orange")
             return
         self.client.send_file_download(f"paraspace_workspace.{fmt}", data, save_immediately=True)
+        self._notify("Shell downloaded", f"full-resolution shell at h = {b.result.grid.h:g}: "
+                     f"{len(mesh.faces):,} faces, watertight, volume {mesh.volume:.4g} units³ "
+                     f"(the view shows a {len(b.mesh.faces):,}-face re-mesh of it)", color="blue")
 
     def measures_document(self) -> dict:
         """JSON document of the current design, pose, settings, measures and indices."""

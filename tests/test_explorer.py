@@ -215,7 +215,12 @@ def test_downloads(explorer, browsers):
     assert msgs == [] and parsed == s.state
     b.click(s.panels.download_stl)
     stl = b.download("paraspace_workspace.stl")
-    assert len(stl) == 84 + 50 * len(s.bundle.mesh.faces)  # binary STL of the full (uncut) shell
+    from paraspace.kinematics.shell import load_shell, workspace_shell
+
+    full = workspace_shell(s.bundle.result)  # the full-resolution shell, not the display re-mesh
+    assert len(stl) == 84 + 50 * len(full.faces) and len(full.faces) >= len(s.bundle.mesh.faces)
+    mesh = load_shell(stl, "stl")
+    assert mesh.is_watertight and abs(mesh.volume - s.bundle.result.volume) / s.bundle.result.volume < 0.01
 
 
 def test_view_settings_cut_the_shell(explorer, browsers):
