@@ -193,10 +193,16 @@ class ClientSession:
             if self.closed or self._is_programmatic():
                 return
             try:
+                self._dismiss_link_messages()
                 fn()
             except Exception:  # noqa: BLE001 - never kill viser's callback thread
                 log.exception("explorer callback failed")
         return handler
+
+    def _dismiss_link_messages(self) -> None:
+        """The link's problems were read: the user's first change closes the note about them."""
+        if self.url_messages and self.panels.url_messages.visible:
+            self.panels.url_messages.visible = False
 
     def _event(self, what: str) -> None:
         self.events.append((time.perf_counter(), what))
@@ -299,7 +305,8 @@ class ClientSession:
             return
         body = "\n".join(f"- {md_text(m)}" for m in msgs)
         self.panels.url_messages.content = (
-            "**The link had problems; these fields keep their defaults, everything else applies:**\n\n" + body)
+            "**The link had problems; these fields keep their defaults, everything else applies** "
+            "(this note closes at your first change):\n\n" + body)
         self.panels.url_messages.visible = True
         self._notify("Link problems", "; ".join(msgs), color="orange")
 

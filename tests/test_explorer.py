@@ -366,3 +366,12 @@ def test_pose_table_has_no_negative_zero(explorer, browsers):
     wait_for(lambda: "| 1 |" in s.panels.pose_table.content, 10.0, "pose table")
     text = s.panels.pose_table.content
     assert "-0.00" not in text and "| 0.00 |" in text  # eta of every chain is 0 at the home pose
+
+
+def test_link_problems_note_closes_at_the_first_change(explorer, browsers):
+    b = browsers("a=60&b=99")
+    s = b.session
+    assert s.panels.url_messages.visible and "b = 99" in s.panels.url_messages.content.replace("\\", "")
+    b.set(s.panels.design["a"], 61.0)
+    wait_for(lambda: not s.panels.url_messages.visible, 5.0, "the note to close")
+    wait_for(lambda: s.state.design.a == 61.0, 5.0, "the change applied")
