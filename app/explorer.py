@@ -364,7 +364,7 @@ class ClientSession:
         if info:
             m = info.get("measures")
             kind = "preview" if info.get("preview") else "full"
-            lines.append(f"**Volume** {_fmt(info['volume'], 5)}  ({kind}, h = {info['h']:g})")
+            lines.append(f"**Volume** {_fmt(info['volume'], 4)} units³  ({kind}, h = {info['h']:g})")
             br = info.get("bracket")
             if br is not None and info["volume"] > 0:
                 lines.append(f"certified: {_fmt(br.volume_inner, 4)} ≤ V ≤ {_fmt(br.volume_outer, 4)} "
@@ -387,7 +387,7 @@ class ClientSession:
         else:
             lines.append("*workspace: computing...*")
         if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design:
-            lines.append(f"**TI₁** {ori.ti1:.6g}  **TI₂** {ori.ti2:.6g}  (z0 = {ori.settings.z0:g})")
+            lines.append(f"**TI₁** {_fmt(ori.ti1, 4)}  **TI₂** {_fmt(ori.ti2, 4)}  (z0 = {ori.settings.z0:g})")
         else:
             lines.append("**TI₁ / TI₂** *computing...*")
         if res is not None:
@@ -868,7 +868,7 @@ class ClientSession:
             self._orientation_png = png
             self.panels.orientation_image.image = img
             self.panels.orientation_status.content = (
-                f"TI₁ = {res.ti1:.6g}, TI₂ = {res.ti2:.6g} (z0 = {res.settings.z0:g}; "
+                f"TI₁ = {_fmt(res.ti1, 4)}, TI₂ = {_fmt(res.ti2, 4)} (z0 = {res.settings.z0:g}; "
                 f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28).")
         self._render_numbers()
         self._event("orientation-shown")

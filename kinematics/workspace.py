@@ -410,7 +410,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                             settings.z_floor, cancel=cancel)
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
-    rep(1.0, "done")
+    rep(1.0, "voxels computed")
     return result
 
 

@@ -98,7 +98,7 @@ def full_volume_text(page: Page) -> str:
     """The numbers panel's volume line once it shows a full (not preview) result."""
     def get() -> str:
         text = page.locator("body").inner_text()
-        m = re.search(r"Volume ([0-9.e+]+) \(full, h = ([0-9.]+)\)", text)
+        m = re.search(r"Volume ([0-9.e+]+) units³ \(full, h = ([0-9.]+)\)", text)
         return m.group(0) if m else ""
     return wait_for(get, 60, "a full-result volume in the numbers panel")
 
