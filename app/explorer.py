@@ -52,7 +52,7 @@ from . import jsbridge, pagehook, plots
 from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
 from .limits import MAX_VOXELS, check_workspace_grid
-from .numfmt import fixed
+from .numfmt import fixed, significant
 from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
 from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .optimize_panel import OptimizePanel, ResultStore
@@ -112,7 +112,7 @@ def _fmt(v: Optional[float], digits: int = 4) -> str:
             return "-"
     except TypeError:
         return str(v)
-    return f"{v:.{digits}g}"
+    return significant(float(v), digits)
 
 
 # --------------------------------------------------------------------------------------------
@@ -375,8 +375,10 @@ class ClientSession:
             elif m is not None:
                 lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
                 lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
-                verdict = "complete" if m.boundary_complete else "incomplete"
-                lines.append(f"**Boundary** {verdict}: {md_text(m.completeness_reason)}  ")
+                if m.boundary_complete:
+                    lines.append("**Boundary** complete: one closed surface standing on the base  ")
+                else:
+                    lines.append(f"**Boundary** incomplete: {md_text(m.completeness_reason)}  ")
                 closed = "closed" if m.boundary_closed else "open (cut or in pieces)"
                 lines.append(f"**Topology** surface {closed}, genus {m.genus}, {m.components} "
                              f"component{'s' if m.components != 1 else ''}  ")

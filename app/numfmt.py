@@ -1,5 +1,9 @@
 """Numbers as the explorer and the command line print them.
 
+:func:`significant` writes ``digits`` significant digits, in plain notation with thousands
+separators between 0.001 and one million (``29,400``, ``0.402``) and in scientific notation
+outside (``5.12e+06``), so one panel never mixes ``13579.3`` with ``2.94e+04``.
+
 :func:`fixed` writes a fixed number of decimals and never a negative zero: a value that rounds to
 zero prints as ``0.000``, not ``-0.000`` (a carriage at ``eta = -1e-15`` is at zero, and a minus
 sign there only makes a reader look twice).
@@ -7,7 +11,7 @@ sign there only makes a reader look twice).
 
 from __future__ import annotations
 
-__all__ = ["fixed"]
+__all__ = ["fixed", "significant"]
 
 
 def fixed(value: float, decimals: int = 2, width: int = 0) -> str:
@@ -16,3 +20,21 @@ def fixed(value: float, decimals: int = 2, width: int = 0) -> str:
     if text.startswith("-") and float(text) == 0.0:
         text = text[1:]
     return text.rjust(width)
+
+
+def significant(value: float, digits: int = 4) -> str:
+    """``value`` to ``digits`` significant digits (see the module docstring)."""
+    import math
+
+    v = float(value)
+    if v == 0.0 or not math.isfinite(v):
+        return "0" if v == 0.0 else str(v)
+    a = abs(v)
+    if not 1e-3 <= a < 1e6:
+        return f"{v:.{digits}g}"
+    r = float(f"{v:.{digits}g}")
+    decimals = max(0, digits - 1 - math.floor(math.log10(abs(r))))
+    text = f"{r:,.{decimals}f}"
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return text

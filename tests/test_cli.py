@@ -108,3 +108,11 @@ def test_ik_and_the_pose_table_never_print_negative_zero():
     assert fixed(-0.006, 2) == "-0.01" and fixed(2.5, 1, 6) == "   2.5"
     out = run("ik", "--pose", "0,0,130,0,0,0").stdout
     assert "eta =    0.000" in out and "-0.000" not in out
+
+
+def test_significant_digits_read_the_same_everywhere():
+    from paraspace.app.numfmt import significant
+
+    assert significant(29400.0) == "29,400" and significant(13579.333) == "13,580"
+    assert significant(5.1201e6) == "5.12e+06" and significant(0.402) == "0.402"
+    assert significant(0.0) == "0" and significant(-2.5e-5) == "-2.5e-05"
