@@ -35,6 +35,7 @@ import pytest
 from paraspace.app.api import API_PREFIX, create_api
 from paraspace.app.explorer import ClientSession, Explorer
 from paraspace.app.jobs import JobManager
+from paraspace.app.numfmt import significant
 from paraspace.app.serve import start_api
 from paraspace.app.urlstate import parse_query
 from paraspace.kinematics.design import Design
@@ -291,7 +292,7 @@ def test_concurrent_sessions_protocol_level(explorer: Explorer) -> None:
             if design.a not in cache:
                 cache[design.a] = compute_workspace(design, WorkspaceSettings(voxel=VOXEL)).volume
             assert s.bundle.result.volume == cache[design.a]
-            assert f"{cache[design.a]:.5g}" in s.panels.numbers.content
+            assert f"**Volume** {significant(cache[design.a])} " in s.panels.numbers.content  # its own volume
             assert s.shell.source is s.bundle.mesh
             # the address bar holds its own last state
             wait_for(lambda: parse_query(b.search) == (s.state, []), 10.0, f"session {plan.i}'s address bar")
