@@ -22,6 +22,10 @@ centre ``P`` of the block has ``|P - Pc| <= delta``), and ``e = delta + eps`` wi
   conservative whole-stroke bound, which never rejects a feasible pose, does not reject it).
 * otherwise the chain stays **undecided** for the block.
 
+Joint cones (:mod:`kinematics.joints`) join both tests: the cone function ``k |B - D| - a . (B -
+D)`` is ``(1 + k)``-Lipschitz in ``P`` (for a fixed carriage pose and orientation), so the cones are
+relaxed / tightened by ``(1 + k) e`` exactly like the leg limits by ``e``.
+
 A block is unreachable as soon as one chain fails everywhere; it is reachable when every chain
 succeeds everywhere; otherwise it is split in eight (halving each edge of more than one voxel) and
 the children inherit the chains already decided. A single voxel is decided with the dense test
@@ -55,18 +59,18 @@ UNKNOWN, OK, FAIL = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
-def _chain_state(px, py, pz, u, i, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax, e):
+def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e):
     """OK / FAIL / UNKNOWN for chain ``i`` over the ball of radius ``e`` around P (see module doc);
     ``e = 0`` is the dense test at P itself."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e
-    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lo_r * lo_r, hi_r * hi_r):
+    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_r * lo_r, hi_r * hi_r):
         return FAIL
     if e == 0.0:
         k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                         lmin * lmin, lmax * lmax, n // 2)
+                         lmin * lmin, lmax * lmax, jc[i], n // 2)
         return OK if k >= 0 else FAIL
     # one pass over the samples: relaxed first (the tightened set is inside it), tightened if that holds
     lo_t = lmin + e
@@ -76,12 +80,13 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmi
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
     some = False
     for k in range(n):
-        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
+        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                        jc[i], e):
             some = True
             if not can_ok:
                 break
             if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                            lo_t2, hi_t2):
+                            lo_t2, hi_t2, jc[i], -e):
                 return OK
     return UNKNOWN if some else FAIL
 
@@ -96,7 +101,7 @@ def block_centre(b0, bn, b, xs, ys, zs):
 
 @njit(parallel=True, cache=True, nogil=True)
 def _classify_kernel(b0, bn, state, xs, ys, zs, h, eps, all_chains,
-                     u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax):
+                     u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
     """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3))."""
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
@@ -107,7 +112,7 @@ def _classify_kernel(b0, bn, state, xs, ys, zs, h, eps, all_chains,
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            s = _chain_state(px, py, pz, u, i, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax, e)
+            s = _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e)
             state[b, i] = s
             if s == FAIL and not all_chains:
                 break
@@ -161,7 +166,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
     Returns:
         uint8 array of ``shape``: bit ``i`` set where chain ``i`` is feasible.
     """
-    u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2 = args
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
     eps = 1e-9 * max(1.0, lmax, float(np.abs(xs).max()), float(np.abs(ys).max()), float(np.abs(zs).max()))
@@ -178,7 +183,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
             check(cancel)
             with KERNEL_LOCK:
                 _classify_kernel(b0[s:s + step], bn[s:s + step], state[s:s + step], xs, ys, zs, float(h), eps,
-                                 bool(all_chains), u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax)
+                                 bool(all_chains), u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
         fail = np.any(state == FAIL, axis=1)
         ok = np.all(state == OK, axis=1)
         single = np.all(bn == 1, axis=1)

@@ -76,8 +76,8 @@ class VolumeBracket:
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
-                 u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax):
+def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
+                 u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
         px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
@@ -91,7 +91,7 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
             e0 = delta + eps
             lo0 = max(lmin - e0, 0.0)
             hi0 = lmax + e0
-            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lo0 * lo0, hi0 * hi0):
+            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo0 * lo0, hi0 * hi0):
                 state[b, i] = FAIL
                 break
             e_out = delta + arc_slack + eps
@@ -103,12 +103,12 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
             some = False
             for k in range(n):
                 if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_r * lo_r, hi_r * hi_r):
+                                lo_r * lo_r, hi_r * hi_r, jc[i], delta + cone_slack + eps):
                     some = True
                     if not can_in:
                         break
                     if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                    lo_t * lo_t, hi_t * hi_t):
+                                    lo_t * lo_t, hi_t * hi_t, jc[i], -e0):
                         state[b, i] = OK
                         break
             if not some:
@@ -119,12 +119,16 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, zfloor,
 def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
                  progress: Optional[Reporter] = None, cancel: CancelToken = None) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape)."""
-    u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2 = args
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     lo, hi = design.eta_limits
     d_eta = math.radians(hi - lo) / (n_eta - 1) if n_eta > 1 else 0.0
     arc_slack = math.hypot(design.r, 0.5 * design.b) * 0.5 * d_eta
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
+    # joint cones: between arc samples the U joint moves by <= R_D d_eta/2 (base frame) and, in the
+    # carriage's frame, the S joint by <= |B_xy| d_eta/2 with |B_xy| <= max |P_xy| + |u_xy|
+    rb = math.hypot(max(abs(xs[0]), abs(xs[-1])) + grid.h, max(abs(ys[0]), abs(ys[-1])) + grid.h) + design.a
+    cone_slack = max(math.hypot(design.r, 0.5 * design.b), rb) * 0.5 * d_eta
     eps = 1e-9 * max(1.0, lmax, float(np.abs(xs).max()), float(np.abs(ys).max()), float(np.abs(zs).max()))
     out = np.zeros(grid.shape, np.uint8)
     b0, bn = _top_blocks(grid.shape, TOP_BLOCK)
@@ -136,7 +140,8 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
             check(cancel)
             with KERNEL_LOCK:
                 _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], xs, ys, zs, float(grid.h),
-                             eps, arc_slack, float(z_floor), u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin, lmax)
+                             eps, arc_slack, cone_slack, float(z_floor), u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
+                             lmin, lmax, jc)
         fail = np.any(state == FAIL, axis=1)
         inside = np.all(state == OK, axis=1)
         single = np.all(bn == 1, axis=1)
@@ -169,5 +174,5 @@ def bracket_of(result: "object", progress: Optional[Reporter] = None, cancel: Ca
     from .workspace import _kernel_args
 
     r: Any = result
-    args = _kernel_args(r.design, r.settings.orientation, r.n_eta)
+    args = _kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
     return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel)

@@ -17,7 +17,8 @@ and with ``p_j = B_j . e`` and ``q_j = B_jz^2 + (B_j . t - sigma_j b/2)^2``
 (empty when ``q_j > l_max^2``; the second condition is void when ``q_j < l_min^2``). A chain is
 feasible at ``varpi`` iff the intersection of both legs' sets of (F2) with the rail
 ``[r - d_s, r]`` is non-empty. Further per-chain constraints (passive-joint cones, leg
-interference) join as more interval sets intersected in :func:`_feasible_at`.
+interference) join as more interval sets intersected in :func:`_feasible_at`: the joint cones of
+:mod:`kinematics.joints` are one more interval of ``rho`` per leg and joint (:func:`cone_interval`).
 
 The arc coordinate is sampled at ``n_eta`` equally spaced values that include both ends of the
 stroke. The test can only miss carriage angles between samples: a pose is reported unreachable
@@ -68,18 +69,112 @@ def _overlap(lo_a, hi_a, lo_b, hi_b, rho_lo, rho_hi):
     return lo <= hi
 
 
-@njit(cache=True)
-def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2):
-    """Exact test in rho at one carriage angle (cos c, sin s): both legs' (F2) sets meet the rail."""
+@njit(cache=True, inline="always")
+def cone_interval(alpha, beta, k, p, q):
+    """The set ``{rho : alpha + beta rho >= k sqrt((rho - p)^2 + q)}`` (joint cone (J1) of
+    :mod:`kinematics.joints`, ``0 <= k < 1``, ``q >= 0``) as ``(lo, hi)``; empty when ``lo > hi``.
+
+    The set is convex (``k L(rho) - alpha - beta rho`` is a convex function), hence one interval.
+    With ``x = rho - p`` and ``f = alpha' + beta x`` (``alpha' = alpha + beta p``) it is
+    ``{f >= 0} ∩ {g >= 0}``, ``g(x) = f^2 - k^2 (x^2 + q) = A x^2 + B x + C``: ``g < 0`` at the
+    zero of ``f``, so of the two pieces of ``{g >= 0}`` only one meets ``{f >= 0}``.
+    """
+    big = 1e300
+    a1 = alpha + beta * p
+    # the half-line f >= 0
+    if beta > 0.0:
+        h_lo, h_hi = -a1 / beta, big
+    elif beta < 0.0:
+        h_lo, h_hi = -big, -a1 / beta
+    elif a1 >= 0.0:
+        h_lo, h_hi = -big, big
+    else:
+        return 1.0, 0.0
+    if k <= 0.0:
+        return h_lo + p, h_hi + p
+    kk = k * k
+    qa = beta * beta - kk
+    qb = 2.0 * a1 * beta
+    qc = a1 * a1 - kk * q
+    if qa == 0.0:  # |beta| = k: g is affine
+        if qb > 0.0:
+            g_lo, g_hi = -qc / qb, big
+        elif qb < 0.0:
+            g_lo, g_hi = -big, -qc / qb
+        elif qc >= 0.0:
+            g_lo, g_hi = -big, big
+        else:
+            return 1.0, 0.0
+        return max(g_lo, h_lo) + p, min(g_hi, h_hi) + p
+    disc = qb * qb - 4.0 * qa * qc
+    if disc < 0.0:
+        if qa < 0.0:
+            return 1.0, 0.0
+        disc = 0.0
+    sq = math.sqrt(disc)
+    # numerically stable roots x1 <= x2
+    t = -0.5 * (qb + sq) if qb >= 0.0 else -0.5 * (qb - sq)
+    if t == 0.0:
+        x1 = x2 = 0.0
+    else:
+        x1, x2 = t / qa, qc / t
+    if x1 > x2:
+        x1, x2 = x2, x1
+    if qa < 0.0:  # {g >= 0} = [x1, x2]
+        return max(x1, h_lo) + p, min(x2, h_hi) + p
+    # qa > 0: {g >= 0} = (-inf, x1] U [x2, inf); f >= 0 keeps the ray on its side
+    if beta > 0.0:
+        return max(x2, h_lo) + p, h_hi
+    return -big, min(x1, h_hi) + p
+
+
+@njit(cache=True, inline="always")
+def _leg_cones(jc, j, p, m, q, bx, by, bz, c, s, shb, e, lo, hi):
+    """Intersect ``[lo, hi]`` with the U- and S-cone intervals of leg ``j`` ((J1), relaxed by
+    ``(1 + k) e``: the cone function is (1 + k)-Lipschitz in the platform position)."""
+    ku = jc[j, 6]
+    if ku > -1.0:
+        ae, at, az = jc[j, 0], jc[j, 1], jc[j, 2]
+        a0, a1 = cone_interval(ae * p + at * m + az * bz + (1.0 + ku) * e, -ae, ku, p, q)
+        lo, hi = max(lo, a0), min(hi, a1)
+    ks = jc[j, 7]
+    if ks > -1.0:
+        nx, ny, nz = jc[j, 3], jc[j, 4], jc[j, 5]
+        en = c * nx + s * ny
+        tn = -s * nx + c * ny
+        a0, a1 = cone_interval(bx * nx + by * ny + bz * nz - shb * tn + (1.0 + ks) * e, -en, ks, p, q)
+        lo, hi = max(lo, a0), min(hi, a1)
+    return lo, hi
+
+
+@njit(cache=True, inline="always")
+def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
+    """Both legs' (F2) interval sets at one carriage angle and the rail ``[rho_lo, rho_hi]`` cut by
+    the joint cones: ``(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)``; ``ok`` is
+    False when a set is already empty."""
     p1 = b1x * c + b1y * s
     m1 = -b1x * s + b1y * c - hb
-    n1, a0, a1, a2, a3 = _leg_intervals(p1, b1z * b1z + m1 * m1, lmin2, lmax2)
-    if n1 == 0:
-        return False
+    q1 = b1z * b1z + m1 * m1
+    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lmin2, lmax2)
     p2 = b2x * c + b2y * s
     m2 = -b2x * s + b2y * c + hb
-    n2, c0, c1, c2, c3 = _leg_intervals(p2, b2z * b2z + m2 * m2, lmin2, lmax2)
-    if n2 == 0:
+    q2 = b2z * b2z + m2 * m2
+    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lmin2, lmax2)
+    if n1 == 0 or n2 == 0:
+        return False, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
+    if jc[0, 6] > -1.0 or jc[0, 7] > -1.0:
+        rho_lo, rho_hi = _leg_cones(jc, 0, p1, m1, q1, b1x, b1y, b1z, c, s, hb, cone_e, rho_lo, rho_hi)
+        rho_lo, rho_hi = _leg_cones(jc, 1, p2, m2, q2, b2x, b2y, b2z, c, s, -hb, cone_e, rho_lo, rho_hi)
+    return rho_lo <= rho_hi, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
+
+
+@njit(cache=True)
+def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
+    """Exact test in rho at one carriage angle (cos c, sin s): both legs' (F2) sets meet the rail
+    (and, when ``jc`` sets joint cones, both legs' cone intervals, relaxed by ``cone_e``)."""
+    ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi = _leg_sets(
+        b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
+    if not ok:
         return False
     if _overlap(a0, a1, c0, c1, rho_lo, rho_hi):
         return True
@@ -93,32 +188,66 @@ def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
     return False
 
 
+@njit(cache=True)
+def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, out):
+    """The feasible set of ``rho`` at one carriage angle as at most 4 intervals written to ``out``
+    (shape (4, 2)); returns their number (0: the angle does not serve the chain)."""
+    ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi = _leg_sets(
+        b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, 0.0)
+    if not ok:
+        return 0
+    cnt = 0
+    for u in range(n1):
+        lo_a, hi_a = (a0, a1) if u == 0 else (a2, a3)
+        for v in range(n2):
+            lo_b, hi_b = (c0, c1) if v == 0 else (c2, c3)
+            lo = max(lo_a, lo_b, rho_lo)
+            hi = min(hi_a, hi_b, rho_hi)
+            if lo <= hi:
+                out[cnt, 0] = lo
+                out[cnt, 1] = hi
+                cnt += 1
+    return cnt
+
+
 @njit(cache=True, inline="always")
-def _contains_angle(d0, d1, target):
-    """Whether ``[d0, d1]`` (d1 - d0 < 2 pi) contains ``target + 2 k pi`` for some integer k."""
-    k = math.ceil((d0 - target) / (2.0 * math.pi))
-    return target + 2.0 * math.pi * k <= d1
+def _in_arc(wx, wy, arc):
+    """Whether the direction ``w`` lies in the stroke's arc ``[v0, v1]`` (at most a half-turn):
+    ``arc = (cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)``, ``vm`` the arc's bisector."""
+    return (arc[0] * wy - arc[1] * wx >= 0.0 and wx * arc[3] - wy * arc[2] >= 0.0
+            and wx * arc[4] + wy * arc[5] >= 0.0)
 
 
 @njit(cache=True)
-def _leg_excluded(bx, by, bz, sigma_hb, v0, v1, rho_lo, rho_hi, lmin2, lmax2):
+def _leg_excluded(bx, by, bz, sigma_hb, arc, rho_lo, rho_hi, lmin2, lmax2):
     """Conservative rho-set of one leg over the whole arc stroke ``varpi in [v0, v1]``.
 
+    ``p = B . e(varpi)`` and ``B . t(varpi)`` are ``|B_xy|`` times the cosine and sine of ``beta -
+    varpi`` (``beta`` the polar angle of ``B``). Their extremes over the stroke are the values at
+    the stroke ends (dot and cross products with the end directions) unless the polar direction,
+    or its turn by 90, 180 or 270 degrees, lies inside the arc (then ``+-|B_xy|``): no ``atan2``.
     Returns (empty, lo, hi, gap_lo, gap_hi): the leg's feasible rho for ANY varpi in the stroke lie in
     ``[lo, hi]`` minus the open gap ``(gap_lo, gap_hi)``.
     """
-    rb = math.sqrt(bx * bx + by * by)
-    beta = math.atan2(by, bx)
-    d0 = beta - v1
-    d1 = beta - v0
-    ca, cb = math.cos(d0), math.cos(d1)
-    sa, sb = math.sin(d0), math.sin(d1)
-    cmax = 1.0 if _contains_angle(d0, d1, 0.0) else max(ca, cb)
-    cmin = -1.0 if _contains_angle(d0, d1, math.pi) else min(ca, cb)
-    smax = 1.0 if _contains_angle(d0, d1, 0.5 * math.pi) else max(sa, sb)
-    smin = -1.0 if _contains_angle(d0, d1, -0.5 * math.pi) else min(sa, sb)
-    p_lo, p_hi = rb * cmin, rb * cmax
-    m_lo, m_hi = rb * smin - sigma_hb, rb * smax - sigma_hb
+    pa = bx * arc[2] + by * arc[3]  # |B| cos(beta - v1)
+    pb = bx * arc[0] + by * arc[1]  # |B| cos(beta - v0)
+    sa = by * arc[2] - bx * arc[3]  # |B| sin(beta - v1)
+    sb = by * arc[0] - bx * arc[1]
+    p_hi = max(pa, pb)
+    p_lo = min(pa, pb)
+    s_hi = max(sa, sb)
+    s_lo = min(sa, sb)
+    if _in_arc(bx, by, arc) or _in_arc(-bx, -by, arc) or _in_arc(by, -bx, arc) or _in_arc(-by, bx, arc):
+        rb = math.sqrt(bx * bx + by * by)
+        if _in_arc(bx, by, arc):
+            p_hi = rb
+        if _in_arc(-bx, -by, arc):
+            p_lo = -rb
+        if _in_arc(by, -bx, arc):
+            s_hi = rb
+        if _in_arc(-by, bx, arc):
+            s_lo = -rb
+    m_lo, m_hi = s_lo - sigma_hb, s_hi - sigma_hb
     if m_lo <= 0.0 <= m_hi:
         m2min = 0.0
     else:
@@ -142,12 +271,13 @@ def _leg_excluded(bx, by, bz, sigma_hb, v0, v1, rho_lo, rho_hi, lmin2, lmax2):
 
 
 @njit(cache=True)
-def _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0, v1, rho_lo, rho_hi, lmin2, lmax2):
-    """Conservative whole-stroke rejection: True only if no carriage pose can serve the chain."""
-    e1, lo1, hi1, g1lo, g1hi = _leg_excluded(b1x, b1y, b1z, hb, v0, v1, rho_lo, rho_hi, lmin2, lmax2)
+def _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, rho_lo, rho_hi, lmin2, lmax2):
+    """Conservative whole-stroke rejection: True only if no carriage pose can serve the chain (the
+    joint cones only shrink the feasible set, so the bound without them stays conservative)."""
+    e1, lo1, hi1, g1lo, g1hi = _leg_excluded(b1x, b1y, b1z, hb, arc, rho_lo, rho_hi, lmin2, lmax2)
     if e1:
         return True
-    e2, lo2, hi2, g2lo, g2hi = _leg_excluded(b2x, b2y, b2z, -hb, v0, v1, rho_lo, rho_hi, lmin2, lmax2)
+    e2, lo2, hi2, g2lo, g2hi = _leg_excluded(b2x, b2y, b2z, -hb, arc, rho_lo, rho_hi, lmin2, lmax2)
     if e2:
         return True
     lo, hi = max(lo1, lo2), min(hi1, hi2)
@@ -162,7 +292,7 @@ def _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0, v1, rho_lo, rho_hi, lm
 
 
 @njit(cache=True)
-def chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, start):
+def chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, start):
     """Index of a feasible carriage-angle sample, searching outward from ``start``; -1 if none."""
     n = cos_t.shape[0]
     if start < 0 or start >= n:
@@ -174,7 +304,8 @@ def chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi,
             if off > n:
                 break
             continue
-        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[k], sin_t[k], hb, rho_lo, rho_hi, lmin2, lmax2):
+        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[k], sin_t[k], hb, rho_lo, rho_hi, lmin2, lmax2,
+                        jc, 0.0):
             return k
     return NOT_FOUND
 
@@ -191,8 +322,12 @@ class ChainTables:
         varpi = GAMMA[:, None] + np.radians(self.eta_deg)[None, :]
         self.cos_t = np.ascontiguousarray(np.cos(varpi))
         self.sin_t = np.ascontiguousarray(np.sin(varpi))
-        self.v0 = GAMMA + np.radians(lo)
-        self.v1 = GAMMA + np.radians(hi)
+        v0, v1 = GAMMA + np.radians(lo), GAMMA + np.radians(hi)
+        vm = 0.5 * (v0 + v1)
+        #: per chain ``(cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)``: the stroke's end and
+        #: bisector directions (:func:`_leg_excluded`)
+        self.arc = np.ascontiguousarray(np.stack([np.cos(v0), np.sin(v0), np.cos(v1), np.sin(v1),
+                                                  np.cos(vm), np.sin(vm)], axis=1))
         self.hb = 0.5 * design.b * LEG_SIGN[0]
         self.rho_lo, self.rho_hi = design.rho_limits
         self.lmin2 = design.l_min ** 2

@@ -37,11 +37,15 @@ from .design import Design, ParameterError
 from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .grid import GridSpec
+from .interference import interference_free
+from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
 
 ALL_CHAINS = 7  # bitmask with the three chain bits set
+#: extra mask bit: every chain is feasible on its own but the legs interfere (:mod:`kinematics.interference`)
+INTERFERENCE = 8
 METHODS: tuple[str, ...] = ("blocks", "dense")
 
 
@@ -62,6 +66,8 @@ class WorkspaceSettings:
             both give the same voxels.
         bracket: also compute the certified bracket ``volume_inner <= V <= volume_outer`` of the
             continuous workspace volume (:mod:`kinematics.bracket`).
+        joints: passive-joint cones and leg interference (:mod:`kinematics.joints`); the default
+            is the paper's model (strokes only).
     """
 
     voxel: float = 2.0
@@ -73,8 +79,13 @@ class WorkspaceSettings:
     diagnostics: bool = False
     method: str = "blocks"
     bracket: bool = False
+    joints: Joints = Joints()
 
     def __post_init__(self) -> None:
+        if not isinstance(self.joints, Joints):
+            raise ParameterError("joints", self.joints, "a Joints value")
+        if self.bracket and self.joints.min_distance > 0.0:
+            raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
         if self.method not in METHODS:
             raise ParameterError("method", self.method, " or ".join(METHODS))
         v = self.voxel
@@ -130,8 +141,8 @@ class WorkspaceResult:
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
-                    rho_lo, rho_hi, lmin2, lmax2, all_chains, out):
+def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, arc, hb,
+                    rho_lo, rho_hi, lmin2, lmax2, jc, all_chains, out):
     n_cols = col_ix.shape[0]
     n_eta = cos_t.shape[1]
     nz = zs.shape[0]
@@ -151,10 +162,10 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
                 i = (first + kk) % 3
                 b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
                 ok = False
-                if not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i],
+                if not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i],
                                        rho_lo, rho_hi, lmin2, lmax2):
                     k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
-                                     rho_lo, rho_hi, lmin2, lmax2, start[i])
+                                     rho_lo, rho_hi, lmin2, lmax2, jc[i], start[i])
                     if k >= 0:
                         ok = True
                         start[i] = k
@@ -167,25 +178,26 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, v0, v1, hb,
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _points_kernel(points, u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out):
+def _points_kernel(points, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, out):
     """Bitmask of feasible chains for arbitrary points (all chains evaluated)."""
     n_eta = cos_t.shape[1]
     for p in prange(points.shape[0]):
         mask = 0
         for i in range(3):
             b1x, b1y, b1z, b2x, b2y, b2z = chain_points(points[p, 0], points[p, 1], points[p, 2], u, i)
-            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lmin2, lmax2):
+            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lmin2, lmax2):
                 continue
             if chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
-                            rho_lo, rho_hi, lmin2, lmax2, n_eta // 2) >= 0:
+                            rho_lo, rho_hi, lmin2, lmax2, jc[i], n_eta // 2) >= 0:
                 mask |= 1 << i
         out[p] = mask
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _pairs_kernel(points, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out):
+def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs, out):
     """Reachability of every (point, orientation) pair in one launch: ``us`` holds the rotated
-    platform points of each orientation, shape (M, 3, 2, 3); ``out`` is (P, M)."""
+    platform points of each orientation, shape (M, 3, 2, 3), and ``jcs`` its joint-cone table
+    (M, 3, 2, 8); ``out`` is (P, M)."""
     n_eta = cos_t.shape[1]
     n_m = us.shape[0]
     for q in prange(points.shape[0] * n_m):
@@ -194,11 +206,11 @@ def _pairs_kernel(points, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, l
         ok = True
         for i in range(3):
             b1x, b1y, b1z, b2x, b2y, b2z = chain_points(points[p, 0], points[p, 1], points[p, 2], us[m], i)
-            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, v0[i], v1[i], rho_lo, rho_hi, lmin2, lmax2):
+            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lmin2, lmax2):
                 ok = False
                 break
             if chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
-                            rho_lo, rho_hi, lmin2, lmax2, n_eta // 2) < 0:
+                            rho_lo, rho_hi, lmin2, lmax2, jcs[m, i], n_eta // 2) < 0:
                 ok = False
                 break
         out[p, m] = ok
@@ -208,17 +220,18 @@ def _pairs_kernel(points, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, l
 # Python drivers
 
 
-def _kernel_args(design: Design, orientation_deg, n_eta: int) -> tuple:
+def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Optional[Joints] = None) -> tuple:
     """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
     tab = ChainTables(design, n_eta)
     o = np.asarray(orientation_deg, dtype=float)
     rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
     u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
-    return (u, tab.cos_t, tab.sin_t, tab.v0, tab.v1, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2)
+    jc = cone_table(design, joints or Joints(), rot)
+    return (u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc)
 
 
 def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
-                   eta_step: float = 0.5) -> np.ndarray:
+                   eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
     """Bitmask of the chains that can reach each point (bit ``i`` for chain ``i``) at one orientation.
 
     Args:
@@ -229,36 +242,47 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
     """
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     out = np.zeros(pts.shape[0], np.uint8)
-    args = _kernel_args(design, orientation, default_n_eta(design, eta_step))
+    args = _kernel_args(design, orientation, default_n_eta(design, eta_step), joints)
     with KERNEL_LOCK:
         _points_kernel(pts, *args, out)
     return out
 
 
 def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
-              eta_step: float = 0.5) -> np.ndarray:
+              eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
     """Whether each point is reachable at one orientation (bool array (N,)).
 
     ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
     """
-    return chain_masks_at(design, points, orientation, eta_step) == ALL_CHAINS
+    ok = chain_masks_at(design, points, orientation, eta_step, joints) == ALL_CHAINS
+    if joints is not None and joints.min_distance > 0.0 and ok.any():
+        o = np.asarray(orientation, dtype=float)
+        rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        ok[ok] = interference_free(design, joints, pts[ok], rot[None], default_n_eta(design, eta_step))[:, 0]
+    return ok
 
 
 def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
-                    eta_step: float = 0.5) -> np.ndarray:
+                    eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
     """Whether each point is reachable at each orientation: bool array (N, M) for ``points`` (N, 3)
     and rotation matrices ``rotations`` (M, 3, 3), in one parallel launch (the same test as
     :func:`reachable`, column by column)."""
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     n_eta = default_n_eta(design, eta_step)
-    u, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2 = _kernel_args(design, np.eye(3), n_eta)
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = _kernel_args(design, np.eye(3), n_eta)
     local = platform_points_local(design)
     us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", local, rots))  # (M, 3, 2, 3): R u for each R
+    jn = joints or Joints()
+    jcs = np.ascontiguousarray(np.stack([cone_table(design, jn, r) for r in rots])) if rots.shape[0] else \
+        np.zeros((0, 3, 2, 8))
     out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
     if out.size:
         with KERNEL_LOCK:
-            _pairs_kernel(pts, us, cos_t, sin_t, v0, v1, hb, rho_lo, rho_hi, lmin2, lmax2, out)
+            _pairs_kernel(pts, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs, out)
+        if jn.min_distance > 0.0 and out.any():
+            out &= interference_free(design, jn, pts, rots, n_eta, where=out)
     return out
 
 
@@ -329,7 +353,7 @@ def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
               progress: Optional[Reporter], cancel: CancelToken, all_chains: bool = False):
     n_eta = default_n_eta(design, settings.eta_step)
-    args = _kernel_args(design, settings.orientation, n_eta)
+    args = _kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     out = np.zeros(grid.shape, np.uint8)
@@ -356,6 +380,15 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         b2 = (half >> 2) & 1
         swapped = b0 | (b2 << 1) | (b1 << 2)
         out[:, ny_eval:] = swapped[:, ::-1]
+    if settings.joints.min_distance > 0.0:
+        check(cancel)
+        idx = np.argwhere(out == ALL_CHAINS)
+        if idx.size:
+            pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+            rot = euler_zyx_deg(*settings.orientation)
+            ok = interference_free(design, settings.joints, pts, rot[None], n_eta)[:, 0]
+            bad = idx[~ok]
+            out[bad[:, 0], bad[:, 1], bad[:, 2]] |= INTERFERENCE
     return out, n_eta
 
 
@@ -406,8 +439,8 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
         from .bracket import volume_bracket
 
         t1 = time.perf_counter()
-        br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta), n_eta,
-                            settings.z_floor, cancel=cancel)
+        br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta, settings.joints),
+                            n_eta, settings.z_floor, cancel=cancel)
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
