@@ -57,6 +57,7 @@ from pydantic import BaseModel, ConfigDict, Field, Strict
 
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from paraspace.kinematics.joints import JOINT_RANGES, Joints
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.serialize import jsonable
 
@@ -215,6 +216,30 @@ class BoundsIn(BaseModel):
 _RANGES[("bounds", "lo")] = _RANGES[("bounds", "hi")] = "[-10000, 10000] on each of x, y, z, lo < hi"
 
 
+def _joint_field(name: str, default: Any, description: str, optional: bool = False) -> Any:
+    lo, hi, lo_open, text = JOINT_RANGES[name]
+    _RANGES[("joints", name)] = text + (" or null (no limit)" if optional else "")
+    bound = {"gt": lo} if lo_open else {"ge": lo}
+    return Field(default, le=hi, allow_inf_nan=False, strict=True,
+                 description=f"{description}; valid range {_RANGES[('joints', name)]}", **bound)
+
+
+class JointsIn(BaseModel):
+    """Passive-joint cones and leg interference (``kinematics.joints``); defaults: the paper's model."""
+
+    model_config = _MODEL
+    theta_u: Optional[float] = _joint_field("theta_u", None, "half-angle of every U joint's cone, degrees", True)
+    theta_s: Optional[float] = _joint_field("theta_s", None, "half-angle of every S joint's cone, degrees", True)
+    cone_axis: Literal["normal", "home"] = Field("normal", description="cone axes: base/platform normal or the "
+                                                 "legs' home directions")
+    leg_diameter: float = _joint_field("leg_diameter", 0.0, "legs are capsules of this diameter (0: no interference)")
+    clearance: float = _joint_field("clearance", 0.0, "extra distance required between legs")
+
+    def build(self) -> Any:
+        """The core ``Joints``."""
+        return _core("joints", lambda: Joints(**self.model_dump()))
+
+
 class WorkspaceSettingsIn(BaseModel):
     """How the position workspace is sampled (see ``kinematics.workspace.WorkspaceSettings``)."""
 
@@ -229,6 +254,7 @@ class WorkspaceSettingsIn(BaseModel):
     method: Literal["blocks", "dense"] = Field("blocks", description="engine: coarse-to-fine blocks (default) "
                                                "or every voxel (dense); the same voxels")
     bracket: bool = Field(False, description="also certify volume_inner <= V <= volume_outer (continuous workspace)")
+    joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
     def build(self) -> Any:
         """The core ``WorkspaceSettings``."""
@@ -246,7 +272,7 @@ class WorkspaceSettingsIn(BaseModel):
         return _core("settings", lambda: WorkspaceSettings(
             voxel=self.voxel, orientation=(o.psi, o.theta, o.phi), eta_step=self.eta_step, bounds=bounds,
             z_floor=self.z_floor, symmetry=self.symmetry, diagnostics=self.diagnostics, method=self.method,
-            bracket=self.bracket))
+            bracket=self.bracket, joints=self.joints.build()))
 
 
 class OrientationSettingsIn(BaseModel):
@@ -260,19 +286,23 @@ class OrientationSettingsIn(BaseModel):
     position_step: float = _num("orientation", "position_step", 1.0, 0.01, 100.0, "position sample spacing")
     delta: Literal["extent", "area"] = Field("extent", description="Δ of eq. (28): extent products or area")
     region: Literal["all", "connected"] = Field("all", description="feasible samples counted")
-    position_delta: Literal["per_region", "line"] = Field("per_region", description="position Δ definition")
+    position_delta: Literal["per_region", "line", "phi"] = Field(
+        "per_region", description="position Δ: each region's own, the union of a line's regions, or one per line "
+                                  "from the φ region (the literal eq. (28))")
     eta_step: float = _num("orientation", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
     z_min: float = _num("orientation", "z_min", 0.0, -1e4, 1e4, "lower end of the z line")
     z_max: Optional[float] = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
                                    description="upper end of the z line; null: l_max; valid range [z_min, 10000]")
     s_max: Optional[float] = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
                                    description="half-length of the x and y' lines; null: derived; valid range [0, 10000]")
+    joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
     def build(self) -> Any:
         """The core ``OrientationSettings``."""
         from paraspace.kinematics.orientation import OrientationSettings
 
-        return _core("orientation", lambda: OrientationSettings(**self.model_dump()))
+        fields = self.model_dump(exclude={"joints"})
+        return _core("orientation", lambda: OrientationSettings(**fields, joints=self.joints.build()))
 
 
 _RANGES[("orientation", "z_max")] = "[z_min, 10000] or null"
@@ -290,6 +320,7 @@ class IkRequest(BaseModel):
                                      description="carriage strokes d_1..d_3, each in [0, d_s]")
     eta: Optional[list[Num]] = Field(None, min_length=3, max_length=3,
                                        description="arc positions eta_1..eta_3 in degrees, within the arc stroke")
+    joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
 
 class WorkspaceRequest(BaseModel):
@@ -891,10 +922,13 @@ def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
             missing = "eta" if req.eta is None else "d"
             raise FieldError(missing, f"{missing} is required when {'d' if missing == 'eta' else 'eta'} is "
                                       f"given: set both carriages d_1..d_3 and eta_1..eta_3, or neither")
+        joints = req.joints.build()
         if req.d is None:
-            res = resolve_redundancy(design, pose)
+            run = lambda: resolve_redundancy(design, pose, joints)  # noqa: E731
         else:
-            res = _core("carriage", lambda: inverse_kinematics(design, pose, req.d, req.eta))
+            run = lambda: _core("carriage", lambda: inverse_kinematics(design, pose, req.d, req.eta, joints))  # noqa: E731
+        # with joint options the engine's compiled witness search runs: off the event loop
+        res = run() if joints.is_default else await run_in_threadpool(run)
         return jsonable({"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()})
 
     # ----- workspace ------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 """The ``paraspace`` command line.
 
-    paraspace workspace   [design flags] [--voxel H] [--json] [--export FILE.stl|.ply|.obj|.glb]
-    paraspace orientation [design flags] [--z0 Z] [--json]
+    paraspace workspace   [design flags] [joint flags] [--voxel H] [--json] [--export FILE.stl|.ply|.obj|.glb]
+    paraspace orientation [design flags] [joint flags] [--z0 Z] [--position-delta per_region|line|phi] [--json]
     paraspace sweep       [design flags] --param NAME --values V1,V2,... [--param2 NAME --values2 ...]
                           [--voxel H] [--json] [--csv FILE] [--plot FILE.png] [--scheduler ADDR] [--workers N]
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
@@ -11,6 +11,8 @@
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
+Joint flags (``workspace``, ``orientation``, ``sweep``, ``ik``): ``--u-cone DEG --s-cone DEG
+[--cone-axis normal|home] --leg-diameter W [--clearance C]``.
 Every command except ``serve`` uses only the numerical core (no web packages are imported).
 Bad flags or values exit with status 2 and one line naming the field and its valid range.
 """
@@ -71,6 +73,29 @@ def _design(ns: argparse.Namespace) -> Design:
     return Design(**values, eta_range=ns.eta_range)
 
 
+def _add_joint_flags(p: argparse.ArgumentParser) -> None:
+    from paraspace.kinematics.joints import CONE_AXES
+
+    g = p.add_argument_group("joints (default: the paper's model, strokes only; see README 'Joint limits')")
+    g.add_argument("--u-cone", dest="theta_u", metavar="DEG",
+                   help="half-angle of every U joint's cone, (0, 90] degrees")
+    g.add_argument("--s-cone", dest="theta_s", metavar="DEG",
+                   help="half-angle of every S joint's cone, (0, 90] degrees")
+    g.add_argument("--cone-axis", dest="cone_axis", default="normal", metavar="|".join(CONE_AXES),
+                   help="cone axes: base / platform normal (default) or the legs' home directions")
+    g.add_argument("--leg-diameter", dest="leg_diameter", default=0.0, metavar="W",
+                   help="legs are capsules of this diameter; two legs closer than W + C interfere (default 0: off)")
+    g.add_argument("--clearance", default=0.0, metavar="C", help="extra distance between legs (default 0)")
+
+
+def _joints(ns: argparse.Namespace):
+    """The joint flags as :class:`~kinematics.joints.Joints` (which validates every value)."""
+    from paraspace.kinematics.joints import Joints
+
+    return Joints(theta_u=ns.theta_u, theta_s=ns.theta_s, cone_axis=ns.cone_axis, leg_diameter=ns.leg_diameter,
+                  clearance=ns.clearance)
+
+
 def _voxel(ns: argparse.Namespace) -> float:
     try:
         return float(ns.voxel)
@@ -88,7 +113,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     design = _design(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket)
+    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
+                                 joints=_joints(ns))
     fmt = None
     if ns.export:
         fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
@@ -101,7 +127,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     finally:
         done()
     measures = measure_workspace(result)
-    out = {"design": design.to_dict(), **measures.to_dict(), "voxel_size": result.grid.h, "voxels": result.voxels,
+    out = {"design": design.to_dict(), "joints": settings.joints.to_dict(), **measures.to_dict(),
+           "voxel_size": result.grid.h, "voxels": result.voxels,
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "eta_samples": result.n_eta}
     if ns.bracket:
@@ -146,7 +173,7 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
         z0 = float(ns.z0)
     except (TypeError, ValueError):
         raise ParameterError("z0", ns.z0, "a number") from None
-    settings = OrientationSettings(z0=z0)
+    settings = OrientationSettings(z0=z0, joints=_joints(ns), position_delta=ns.position_delta)
     warm_up()
     progress, done = progress_line("orientation")
     try:
@@ -158,6 +185,8 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
         _emit(out)
     else:
         print(f"TI_1 = {out['TI_1']:.6g}   TI_2 = {out['TI_2']:.6g}   (z0 = {z0:g})")
+        if out["saturation_note"]:
+            print(f"note: {out['saturation_note']}")
         for name, val in out.get("deltas", {}).items():
             print(f"  {name:<8} {val:.6g}")
     return 0
@@ -168,7 +197,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
     design = _design(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns))
+    settings = WorkspaceSettings(voxel=_voxel(ns), joints=_joints(ns))
     for field in ("param", "param2"):
         name = getattr(ns, field)
         if name is not None and name not in PARAMS:
@@ -280,12 +309,13 @@ def cmd_ik(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
     design = _design(ns)
+    joints = _joints(ns)
     pose = Pose.from_array(_floats("pose", ns.pose, 6))
     if ns.carriage:
         c = _floats("carriage", ns.carriage, 6)
-        res = inverse_kinematics(design, pose, c[:3], c[3:])
+        res = inverse_kinematics(design, pose, c[:3], c[3:], joints)
     else:
-        res = resolve_redundancy(design, pose)
+        res = resolve_redundancy(design, pose, joints)
     out = {"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()}
     if ns.json:
         _emit(out)
@@ -295,6 +325,11 @@ def cmd_ik(ns: argparse.Namespace) -> int:
             print(f"chain {ch.chain + 1}: d = {fixed(ch.d, 3, 8)}  eta = {fixed(ch.eta, 3, 8)} deg  lengths = "
                   f"{fixed(ch.lengths[0], 3, 8)} {fixed(ch.lengths[1], 3, 8)}  ({', '.join(ch.leg_status)})")
         print(f"condition number of J: {out['condition_number']}")
+        if res.cone_angles is not None:
+            print(f"largest joint angles: U {res.cone_angles[:, :, 0].max():.2f} deg, "
+                  f"S {res.cone_angles[:, :, 1].max():.2f} deg")
+        if res.min_leg_distance is not None:
+            print(f"closest two legs: {res.min_leg_distance:.2f} apart (axes)")
     return 0 if res.feasible or not ns.strict else 1
 
 
@@ -462,12 +497,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also certify volume_inner <= V <= volume_outer for the continuous workspace")
     w.add_argument("--diagnostics", action="store_true",
                    help="which chain and which leg limit bind (evaluates every chain everywhere; slower)")
+    _add_joint_flags(w)
     w.set_defaults(func=cmd_workspace)
 
     o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")
     _add_design_flags(o)
     o.add_argument("--z0", default=130.0, help="height of the x and y' lines (default 130)")
     o.add_argument("--json", action="store_true")
+    o.add_argument("--position-delta", dest="position_delta", default="per_region",
+                   choices=("per_region", "line", "phi"),
+                   help="eq. (28)'s position Δ: each region's own (default), the union of a line's regions, "
+                        "or the literal reading: one Δ per line taken from the φ region")
+    _add_joint_flags(o)
     o.set_defaults(func=cmd_orientation)
 
     s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
@@ -482,6 +523,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="FILE.png")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    _add_joint_flags(s)
     s.set_defaults(func=cmd_sweep)
 
     _add_optimize_parser(sub)
@@ -492,6 +534,7 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--carriage", help="hand-set d1,d2,d3,eta1,eta2,eta3 instead of the resolution")
     k.add_argument("--json", action="store_true")
     k.add_argument("--strict", action="store_true", help="exit 1 when the pose is unreachable")
+    _add_joint_flags(k)
     k.set_defaults(func=cmd_ik)
 
     v = sub.add_parser("serve", help="run the browser explorer and the REST API")

@@ -31,7 +31,7 @@ class ParameterError(ValueError):
         self.field = field
         self.value = value
         self.valid = valid
-        kind = "valid range" if valid.startswith("[") else "expected"
+        kind = "valid range" if valid.startswith(("[", "(")) else "expected"
         super().__init__(f"{field} = {value!r} is invalid: {kind} {valid}")
 
 

@@ -11,6 +11,12 @@ least violation over the strokes) names the leg and the limit it violates there:
 * ``"sampling"`` -- the continuous optimiser finds a feasible carriage pose that the engine's arc
   samples missed (the engine's documented one-sided error; rare, at the very surface).
 
+With the joint options of :mod:`kinematics.joints` a chain that the strokes alone allow but the
+cones do not is attributed to ``"u_cone"`` (it passes with the S cones alone), ``"s_cone"`` (it
+passes with the U cones alone) or ``"cones"`` (only both together stop it); a voxel whose three
+chains pass on their own but whose legs collide in every configuration the witness search tries
+counts once as ``"interference"``.
+
 Reported per chain and overall as fractions of the chain failures in the sample, with a sentence
 a designer can read ("the surface is set by l_max (71 %) ...": lengthen the legs' stroke upward).
 """
@@ -24,12 +30,13 @@ import numpy as np
 from scipy import ndimage as ndi
 
 from .geometry import platform_points
+from .joints import Joints
 from .inverse import leg_margin
 from .redundancy import _best_carriage, _chain_margins
 from .rotation import euler_zyx_deg
 from .workspace import WorkspaceResult, chain_masks_at
 
-LIMITS: tuple[str, ...] = ("l_max", "l_min", "sampling")
+LIMITS: tuple[str, ...] = ("l_max", "l_min", "u_cone", "s_cone", "cones", "interference", "sampling")
 
 
 @dataclasses.dataclass
@@ -44,6 +51,16 @@ class LimitBinding:
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+_HINTS: dict[str, str] = {
+    "l_max": "legs too short to reach: a longer stroke l_s (or a larger l_min) moves it out",
+    "l_min": "legs too long at the closest approach: a smaller l_min moves it out",
+    "u_cone": "the U joints' cone: a wider theta_U or tilted U mounts (cone axis 'home') move it out",
+    "s_cone": "the S joints' cone: a wider theta_S or tilted S mounts move it out",
+    "cones": "the U and S cones together",
+    "interference": "legs collide: thinner legs or a wider spacing b move it out",
+}
 
 
 def surface_layer(occupancy: np.ndarray) -> np.ndarray:
@@ -85,29 +102,49 @@ def limit_binding(result: WorkspaceResult, *, voxels: Optional[np.ndarray] = Non
         idx = idx[np.random.default_rng(seed).choice(len(idx), size=max_samples, replace=False)]
     pts = np.asarray(result.grid.origin) + result.grid.h * idx
     orientation = result.settings.orientation
-    masks = chain_masks_at(design, pts, orientation, result.settings.eta_step) if len(pts) else np.zeros(0, np.uint8)
+    joints = result.settings.joints
+    step = result.settings.eta_step
+    cones = Joints(theta_u=joints.theta_u, theta_s=joints.theta_s, cone_axis=joints.cone_axis)
+
+    def masks_with(j: Joints) -> np.ndarray:
+        return chain_masks_at(design, pts, orientation, step, j) if len(pts) else np.zeros(0, np.uint8)
+
+    plain = masks_with(Joints())
+    masks = masks_with(cones) if cones.has_cones else plain
+    only_u = masks_with(dataclasses.replace(cones, theta_s=None)) if cones.has_cones else plain
+    only_s = masks_with(dataclasses.replace(cones, theta_u=None)) if cones.has_cones else plain
     rot = euler_zyx_deg(*orientation)
     counts = np.zeros((3, len(LIMITS)), int)
-    for p, mask in zip(pts, masks):
+    collisions = 0
+    for n, (p, mask) in enumerate(zip(pts, masks)):
+        if mask == 7:
+            collisions += joints.min_distance > 0.0
+            continue
         B = platform_points(design, p, rot)
         for i in range(3):
-            if not (mask >> i) & 1:
-                counts[i, LIMITS.index(_violated_limit(design, B[i], i))] += 1
-    total = int(counts.sum())
+            if (mask >> i) & 1:
+                continue
+            if (plain[n] >> i) & 1:
+                lim = "u_cone" if not (only_u[n] >> i) & 1 else ("s_cone" if not (only_s[n] >> i) & 1 else "cones")
+            else:
+                lim = _violated_limit(design, B[i], i)
+            counts[i, LIMITS.index(lim)] += 1
+    total = int(counts.sum()) + collisions
     frac = {lim: (float(counts[:, k].sum()) / total if total else 0.0) for k, lim in enumerate(LIMITS)}
+    frac["interference"] = collisions / total if total else 0.0
     per_chain = []
     for i in range(3):
         n = int(counts[i].sum())
         per_chain.append({"chain": i + 1, "failures": n,
                           **{lim: (float(counts[i, k]) / n if n else 0.0) for k, lim in enumerate(LIMITS)}})
-    if total and frac["l_max"] + frac["l_min"] == 0.0:
+    physical = [k for k in LIMITS if k != "sampling"]
+    if total and sum(frac[k] for k in physical) == 0.0:
         summary = "every chain failure in the sample is within the arc-sampling error (eta_step)"
     elif total:
-        main = max(("l_max", "l_min"), key=lambda k: frac[k])
-        hint = ("legs too short to reach: a longer stroke l_s (or a larger l_min) moves it out"
-                if main == "l_max" else "legs too long at the closest approach: a smaller l_min moves it out")
-        summary = (f"the workspace surface is set by {main} in {100 * frac[main]:.0f} % of the chain failures "
-                   f"({hint}); l_max {100 * frac['l_max']:.0f} %, l_min {100 * frac['l_min']:.0f} %")
+        main = max(physical, key=lambda k: frac[k])
+        hint = _HINTS[main]
+        rest = ", ".join(f"{k} {100 * frac[k]:.0f} %" for k in physical if frac[k] > 0.0)
+        summary = f"the workspace surface is set by {main} in {100 * frac[main]:.0f} % of the failures ({hint}); {rest}"
     else:
         summary = "no surface layer (empty workspace or no unreachable neighbour)"
     return LimitBinding(samples=int(len(pts)), failures=total, fractions=frac, per_chain=per_chain, summary=summary)

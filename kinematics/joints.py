@@ -40,19 +40,32 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .design import Design, ParameterError, _check_number
+from .design import Design, ParameterError
 from .geometry import GAMMA, LEG_SIGN, platform_points_local
 
 ConeAxis = Literal["normal", "home"]
 CONE_AXES: tuple[str, ...] = ("normal", "home")
 
-#: Valid ranges, one rule for every entry point (CLI, REST, URL, explorer).
-JOINT_RANGES: dict[str, tuple[float, float, str]] = {
-    "theta_u": (0.0, 90.0, "degrees, 0 < theta_u <= 90"),
-    "theta_s": (0.0, 90.0, "degrees, 0 < theta_s <= 90"),
-    "leg_diameter": (0.0, 100.0, "units"),
-    "clearance": (0.0, 100.0, "units"),
+#: Valid ranges ``(lo, hi, lo_open, text)``: one rule and one message for every entry point (CLI,
+#: REST, URL, explorer).
+JOINT_RANGES: dict[str, tuple[float, float, bool, str]] = {
+    "theta_u": (0.0, 90.0, True, "(0, 90] degrees"),
+    "theta_s": (0.0, 90.0, True, "(0, 90] degrees"),
+    "leg_diameter": (0.0, 100.0, False, "[0, 100] (length units)"),
+    "clearance": (0.0, 100.0, False, "[0, 100] (length units)"),
 }
+
+
+def check_joint_value(name: str, value: Any) -> float:
+    """Validate one joint field against :data:`JOINT_RANGES` (the one message for every entry point)."""
+    lo, hi, lo_open, text = JOINT_RANGES[name]
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, text) from None
+    if not math.isfinite(v) or v > hi or v < lo or (lo_open and v <= lo):
+        raise ParameterError(name, value, text)
+    return v
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,19 +88,12 @@ class Joints:
 
     def __post_init__(self) -> None:
         for name in ("theta_u", "theta_s"):
-            v = getattr(self, name)
-            if v is None:
-                continue
-            lo, hi, unit = JOINT_RANGES[name]
-            v = _check_number(name, v, lo, hi)
-            if v <= 0.0:
-                raise ParameterError(name, v, f"(0, 90] {unit.split(',')[0]}")
-            object.__setattr__(self, name, v)
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, check_joint_value(name, getattr(self, name)))
         if self.cone_axis not in CONE_AXES:
             raise ParameterError("cone_axis", self.cone_axis, " or ".join(CONE_AXES))
         for name in ("leg_diameter", "clearance"):
-            lo, hi, _ = JOINT_RANGES[name]
-            object.__setattr__(self, name, _check_number(name, getattr(self, name), lo, hi))
+            object.__setattr__(self, name, check_joint_value(name, getattr(self, name)))
         if self.clearance > 0.0 and self.leg_diameter <= 0.0:
             raise ParameterError("clearance", self.clearance, "0 unless leg_diameter > 0")
 

@@ -58,7 +58,13 @@ With ``delta="extent"`` (the paper's reading) each product of eq. (28) is ``P = 
 region; with ``delta="area"`` it is ``P = area`` (the actual size of a non-convex region). With
 ``position_delta="line"`` the position Δ of a line is that of the union of its three regions (the
 paper's "Δz" is one number per line) instead of each region's own (``"per_region"``, default); it
-only matters for ``delta="extent"``. Eq. (28) is then
+only matters for ``delta="extent"``. ``position_delta="phi"`` is the literal reading of eq. (28):
+one position Δ per line (``Δz``, ``Δy'``, ``Δx``) taken from the φ region of that line and used
+in all three of the line's products.
+
+A Δ is **saturated** when it equals the whole scanned range (``Δα = 2A`` or ``Δs = s_hi -
+s_lo``): the index then measures the scan, not the mechanism (the result's ``saturated`` flags;
+joint cones, :mod:`kinematics.joints`, are what makes φ finite for most designs). Eq. (28) is then
 
     TI_1 = (P(phi, z) + P(phi, y') + P(phi, x)) / 3                                       (28a)
     TI_2 = (P(tau, z) + P(psi, z) + P(tau, y') + P(psi, y') + P(tau, x) + P(psi, x)) / 6    (28b)
@@ -76,6 +82,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .design import Design, ParameterError
+from .joints import Joints
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
 from .workspace import reachable, reachable_pairs  # noqa: F401 - reachable: the documented test
@@ -89,7 +96,7 @@ ROTATION_SYMBOL: dict[str, str] = {"phi_z": "φ", "tau_yprime": "τ", "psi_x": "
 LINE_SYMBOL: dict[str, str] = {"z": "z", "y_prime": "y'", "x": "x"}
 DELTAS: tuple[str, ...] = ("extent", "area")
 REGION_MODES: tuple[str, ...] = ("all", "connected")
-POSITION_DELTAS: tuple[str, ...] = ("per_region", "line")
+POSITION_DELTAS: tuple[str, ...] = ("per_region", "line", "phi")
 
 #: Largest (positions x angles) grid of one line that :func:`orientation_workspace` accepts.
 MAX_SAMPLES = 20_000_000
@@ -129,6 +136,8 @@ class OrientationSettings:
         z_min: lower end of the z line (default 0, the base plane).
         z_max: upper end of the z line; ``None``: ``l_max`` (a rigorous cover).
         s_max: half-length of the x and y' lines; ``None``: ``sqrt(r^2 + b^2/4) + l_max``.
+        joints: passive-joint cones and leg interference of the reachability test
+            (:mod:`kinematics.joints`); default: none (the paper's model).
     """
 
     z0: float = 130.0
@@ -142,9 +151,12 @@ class OrientationSettings:
     z_min: float = 0.0
     z_max: Optional[float] = None
     s_max: Optional[float] = None
+    joints: Joints = Joints()
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        if not isinstance(self.joints, Joints):
+            raise ParameterError("joints", self.joints, "a Joints value")
         set_("z0", _num("z0", self.z0, -1e4, 1e4))
         set_("angle_range", _num("angle_range", self.angle_range, 0.0, 180.0, lo_open=True))
         set_("angle_step", _num("angle_step", self.angle_step, 0.01, 30.0))
@@ -294,6 +306,16 @@ class OrientationRegion:
         """``Δα Δs`` of this region."""
         return self.delta_angle * self.delta_position
 
+    @property
+    def angle_saturated(self) -> bool:
+        """``Δα`` equals the whole scanned angle range (limited by the scan, not the mechanism)."""
+        return self.delta_angle >= (self.angle_range[1] - self.angle_range[0]) - 1e-9 > 0.0
+
+    @property
+    def position_saturated(self) -> bool:
+        """``Δs`` equals the whole scanned line."""
+        return self.delta_position >= (self.position_range[1] - self.position_range[0]) - 1e-9 > 0.0
+
     def to_dict(self, include_grid: bool = False) -> dict[str, Any]:
         """JSON-serializable summary; with ``include_grid`` also the sample axes and the grids."""
         sel = self.feasible if self.selected is None else self.selected
@@ -307,6 +329,7 @@ class OrientationRegion:
             "n_feasible": int(np.count_nonzero(self.feasible)), "n_selected": int(np.count_nonzero(sel)),
             "position_range": [float(v) for v in self.position_range],
             "angle_range": [float(v) for v in self.angle_range],
+            "angle_saturated": bool(self.angle_saturated), "position_saturated": bool(self.position_saturated),
         }
         if include_grid:
             out["positions"] = [float(v) for v in self.positions]
@@ -380,7 +403,8 @@ def tilt_indices(regions: dict[tuple[str, str], OrientationRegion], delta: str =
     products: dict[tuple[str, str], float] = {}
     for ln in LINES:
         line_regions = [regions[(ln, rt)] for rt in ROTATIONS]
-        d_line = _line_position_delta(line_regions)
+        d_line = _line_position_delta(line_regions) if position_delta == "line" else \
+            regions[(ln, "phi_z")].delta_position
         for rt in ROTATIONS:
             reg = regions[(ln, rt)]
             d_pos = reg.delta_position if position_delta == "per_region" else d_line
@@ -406,12 +430,43 @@ class OrientationResult:
     deltas: dict[str, float] = dataclasses.field(default_factory=dict)
     design: Optional[Design] = None
 
+    @property
+    def saturated(self) -> dict[str, bool]:
+        """Per Δ of eq. (28) (``"Δφ_z"``, ``"Δz(φ)"``...): whether it equals the scanned range."""
+        out: dict[str, bool] = {}
+        for (ln, rt), reg in self.regions.items():
+            out[f"Δ{ROTATION_SYMBOL[rt]}_{LINE_SYMBOL[ln]}"] = bool(reg.angle_saturated)
+            out[f"Δ{LINE_SYMBOL[ln]}({ROTATION_SYMBOL[rt]})"] = bool(reg.position_saturated)
+        return out
+
+    def saturation_note(self) -> str:
+        """One sentence naming the saturated angle Δ's of TI_1 and TI_2 ('' when none is)."""
+        sat = self.saturated
+        a = self.settings.angle_range
+        ti1 = [k for k in sat if sat[k] and k.startswith("Δφ_")]
+        ti2 = [k for k in sat if sat[k] and (k.startswith("Δτ_") or k.startswith("Δψ_"))]
+        parts = []
+        if ti1:
+            parts.append(f"TI_1: {', '.join(ti1)}")
+        if ti2:
+            parts.append(f"TI_2: {', '.join(ti2)}")
+        if not parts:
+            return ""
+        return (f"limited by the scan range ±{a:g}°, not by the mechanism ({'; '.join(parts)}); "
+                "set joint cones or widen the scan")
+
     def to_dict(self, include_grids: bool = False) -> dict[str, Any]:
-        """JSON-serializable: ``"TI_1"``, ``"TI_2"``, ``"deltas"``, ``"regions"`` (keyed
-        ``"<line>/<rotation>"``), ``"settings"``, ``"design"``, ``"compute_seconds"``."""
+        """JSON-serializable: ``"TI_1"``, ``"TI_2"``, ``"deltas"``, ``"saturated"`` (per Δ),
+        ``"scan"`` (the scanned ranges), ``"regions"`` (keyed ``"<line>/<rotation>"``),
+        ``"settings"``, ``"design"``, ``"compute_seconds"``."""
         return {
             "TI_1": float(self.ti1), "TI_2": float(self.ti2),
             "deltas": {k: float(v) for k, v in self.deltas.items()},
+            "saturated": self.saturated,
+            "saturation_note": self.saturation_note(),
+            "scan": {"angle_range": [-float(self.settings.angle_range), float(self.settings.angle_range)],
+                     "lines": {ln: [float(v) for v in reg.position_range]
+                               for (ln, rt), reg in self.regions.items() if rt == "phi_z"}},
             "regions": {f"{ln}/{rt}": reg.to_dict(include_grid=include_grids)
                         for (ln, rt), reg in self.regions.items()},
             "settings": self.settings.to_dict(),
@@ -436,7 +491,8 @@ def scan_line(design: Design, line: str, rotation: str, settings: OrientationSet
         for m in range(0, ang.size, step):
             check(cancel)
             rep(m / ang.size, f"orientation {LINE_SYMBOL[line]} line, {ROTATION_SYMBOL[rotation]}")
-            feas[:, m:m + step] = reachable_pairs(design, pts, rots[m:m + step], settings.eta_step)
+            feas[:, m:m + step] = reachable_pairs(design, pts, rots[m:m + step], settings.eta_step,
+                                                  settings.joints)
     rep(1.0, "")
     return make_region(line, rotation, pos, ang, feas, position_step=settings.position_step,
                        angle_step=settings.angle_step, position_range=line_range(design, line, settings),

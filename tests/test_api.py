@@ -362,3 +362,40 @@ def test_root_serves_landing_page_to_browsers_and_json_to_scripts(http):
     assert 'href="http://127.0.0.1:9999"' in page.text
     index = http.get("/", headers={"accept": "application/json"}).json()
     assert index["docs"] == "/docs"
+
+
+def test_joint_options_over_http(http):
+    """Joint cones and leg interference reach the engine through the API: the result echoes them, the
+    cones shrink the volume, ik reports the joint angles, and a bad value is a 422 with the one range."""
+    plain = http.post(f"{V1}/workspace", params={"wait": 60}, json={"settings": {"voxel": 6}})
+    joints = {"theta_u": 45, "theta_s": 45, "cone_axis": "home", "leg_diameter": 10, "clearance": 1}
+    coned = http.post(f"{V1}/workspace", params={"wait": 60}, json={"settings": {"voxel": 6, "joints": joints}})
+    vols = []
+    for r in (plain, coned):
+        st = _poll(http, r.json()["job_id"])
+        assert st["status"] == "done", st
+        res = http.get(f"{V1}/jobs/{st['id']}/result").json()["result"]
+        vols.append(res["volume"])
+        last = res
+    assert last["settings"]["joints"] == {**joints, "theta_u": 45.0, "theta_s": 45.0, "leg_diameter": 10.0,
+                                          "clearance": 1.0}
+    assert 0 < vols[1] < vols[0]
+    r = http.post(f"{V1}/ik", json={"joints": {"theta_u": 30, "leg_diameter": 10}})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["joints"]["theta_u"] == 30.0 and body["min_leg_distance"] > 10.0
+    assert max(max(a[0] for a in leg) for leg in body["cone_angles"]) <= 30.0
+    for bad, field, rng in (({"theta_u": 0}, "joints.theta_u", "(0, 90] degrees"),
+                            ({"theta_s": 120}, "joints.theta_s", "(0, 90] degrees"),
+                            ({"leg_diameter": -2}, "joints.leg_diameter", "[0, 100]"),
+                            ({"cone_axis": "up"}, "joints.cone_axis", "normal")):
+        r = http.post(f"{V1}/ik", json={"joints": bad})
+        assert r.status_code == 422, r.text
+        hit = [d for d in r.json()["detail"] if d["field"] == field]
+        assert hit and rng in hit[0]["message"], r.text
+    r = http.post(f"{V1}/orientation", params={"wait": 60},
+                  json={"settings": {"angle_step": 3, "position_step": 5, "joints": {"theta_s": 30, "theta_u": 30}}})
+    st = _poll(http, r.json()["job_id"])
+    res = http.get(f"{V1}/jobs/{st['id']}/result").json()["result"]
+    assert set(res["saturated"]) == set(res["deltas"]) - {k for k in res["deltas"] if k.startswith("P(")}
+    assert res["settings"]["joints"]["theta_s"] == 30.0

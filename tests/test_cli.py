@@ -116,3 +116,28 @@ def test_significant_digits_read_the_same_everywhere():
     assert significant(29400.0) == "29,400" and significant(13579.333) == "13,580"
     assert significant(5.1201e6) == "5.12e+06" and significant(0.402) == "0.402"
     assert significant(0.0) == "0" and significant(-2.5e-5) == "-2.5e-05"
+
+
+def test_cli_joint_flags_echo_and_one_message():
+    import subprocess
+    import sys as _sys
+
+    def run(*args):
+        return subprocess.run([_sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                              timeout=300)
+
+    r = run("workspace", "--voxel", "8", "--u-cone", "45", "--s-cone", "40", "--cone-axis", "home",
+            "--leg-diameter", "6", "--json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["joints"] == {"theta_u": 45.0, "theta_s": 40.0, "cone_axis": "home", "leg_diameter": 6.0,
+                             "clearance": 0.0}
+    for flag, value, text in (("--u-cone", "0", "theta_u"), ("--s-cone", "x", "theta_s"),
+                              ("--leg-diameter", "-1", "leg_diameter")):
+        r = run("ik", "--pose", "0,0,130,0,0,0", flag, value)
+        assert r.returncode == 2 and text in r.stderr and "valid range" in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
+    r = run("orientation", "--json", "--u-cone", "30", "--s-cone", "30")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert "saturated" in out and out["settings"]["joints"]["theta_u"] == 30.0
