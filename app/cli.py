@@ -29,7 +29,7 @@ import sys
 from typing import Any, Optional, Sequence
 
 import paraspace
-from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
 
 from .numfmt import fixed
 from .progressline import progress_line
@@ -56,8 +56,8 @@ def _add_design_flags(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design (paper Table I; defaults are the paper's design)")
     for name, spec in PARAMS.items():
         g.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
-                       help=f"{spec.description} (default {spec.default:g}; Table I range "
-                            f"[{spec.slider_min:g}, {spec.slider_max:g}]{' deg' if spec.unit else ''})")
+                       help=f"{spec.description} (default {spec.default:g}; {paper_range_text(name)}; "
+                            f"accepted [{spec.model_min:g}, {spec.model_max:g}]{' deg' if spec.unit else ''})")
     g.add_argument("--eta-range", dest="eta_range", default="centered", metavar="|".join(ETA_RANGES),
                    help="zero of the arc stroke: eta in [-eta_s/2, eta_s/2] (centered) or [0, eta_s]")
 

@@ -57,16 +57,19 @@ from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
 from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .optimize_panel import OptimizePanel, ResultStore
 from .textsafe import md_text, plain_text
-from .panels import Panels, build_panels
+from .panels import Panels, build_panels, slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
-    D_KEYS, DESIGN_KEYS, ETA_KEYS, POSE_KEYS, POSE_RANGES, ExplorerState, encode_query, panel_pairs, parse_query,
+    D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState, encode_query,
+    panel_pairs, parse_query,
 )
 
 log = logging.getLogger(__name__)
 
 #: Voxel edge of the coarse preview shell.
 PREVIEW_VOXEL = 6.0
+#: Seconds of quiet after which a value typed outside a slider's range is applied (see on_design_input).
+TYPING_PAUSE = 0.8
 #: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
@@ -119,6 +122,20 @@ def _fmt(v: Optional[float], digits: int = 4) -> str:
 # one browser
 
 
+def _joints_text(j: Any) -> str:
+    """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
+    parts = []
+    if j.theta_u is not None:
+        parts.append(f"theta_U {j.theta_u:g}°")
+    if j.theta_s is not None:
+        parts.append(f"theta_S {j.theta_s:g}°")
+    if parts:
+        parts[-1] += f" ({j.cone_axis} axes)"
+    if j.leg_diameter > 0:
+        parts.append(f"legs Ø {j.leg_diameter:g}" + (f" + clearance {j.clearance:g}" if j.clearance else ""))
+    return ", ".join(parts)
+
+
 class ClientSession:
     """State, GUI and scene of one browser (see the module docstring).
 
@@ -138,6 +155,7 @@ class ClientSession:
         self.optimize: Optional[OptimizePanel] = None
         self.job_client = f"viser-{client.client_id}"
         self.lock = threading.RLock()
+        self._design_timer: Optional[threading.Timer] = None  # pending typed design value
         self.view_lock = threading.Lock()
         self.input_lock = threading.RLock()  # serialises design input (see on_design_input)
         self.mech_lock = threading.Lock()
@@ -230,7 +248,7 @@ class ClientSession:
             self.gizmo = self.client.scene.add_transform_controls(
                 "/gizmo", scale=max(25.0, 0.9 * s.design.a), position=s.pose.position,
                 wxyz=self.mechanism.platform.wxyz, depth_test=False, opacity=0.8,
-                translation_limits=tuple((POSE_RANGES[k].lo, POSE_RANGES[k].hi) for k in ("x", "y", "z")))
+                translation_limits=tuple((POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi) for k in ("x", "y", "z")))
         self._wire()
         self._show_url_messages()
         self.update_mechanism()  # pose marker, gizmo, tables
@@ -256,7 +274,9 @@ class ClientSession:
         with self.input_lock:
             with self.programmatic():
                 for key in DESIGN_KEYS:
-                    self.panels.design[key].value = float(getattr(design, key))
+                    h, v = self.panels.design[key], float(getattr(design, key))
+                    h.min, h.max = slider_span(DESIGN_SLIDERS[key].lo, DESIGN_SLIDERS[key].hi, v)
+                    h.value = v
                 self.panels.eta_range.value = design.eta_range
             self.design_error = None
             self.panels.design_message.visible = False
@@ -268,6 +288,8 @@ class ClientSession:
             p.design[key].on_update(self._callback(self.on_design_input))
         p.eta_range.on_update(self._callback(self.on_design_input))
         p.reset.on_click(self._callback(self.reset_design))
+        for h in p.joints.handles():
+            h.on_update(self._callback(self.on_joints_input))
         p.voxel.on_update(self._callback(self.on_voxel))
         for key in ("x", "y", "z"):
             p.pose[key].on_update(self._callback(lambda: self.on_pose_input(orientation_changed=False)))
@@ -314,8 +336,13 @@ class ClientSession:
     @staticmethod
     def _resolve(state: ExplorerState) -> Resolution:
         if state.carriages == "manual":
-            return inverse_kinematics(state.design, state.pose, state.d, state.eta)
-        return resolve_redundancy(state.design, state.pose)
+            return inverse_kinematics(state.design, state.pose, state.d, state.eta, state.joints)
+        return resolve_redundancy(state.design, state.pose, state.joints)
+
+    @staticmethod
+    def _ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
+        """The engine settings of ``s`` at voxel edge ``voxel`` (its orientation and joint options)."""
+        return WorkspaceSettings(voxel=voxel, orientation=(s.pose.psi, s.pose.theta, s.pose.phi), joints=s.joints)
 
     def update_mechanism(self) -> Resolution:
         """IK at the current state and move the mechanism (the latest state always wins)."""
@@ -323,7 +350,8 @@ class ClientSession:
             with self.lock:
                 s = self.state
             res = self._resolve(s)
-            inside = bool(reachable(s.design, s.pose.position[None, :], (s.pose.psi, s.pose.theta, s.pose.phi))[0])
+            inside = bool(reachable(s.design, s.pose.position[None, :], (s.pose.psi, s.pose.theta, s.pose.phi),
+                                    joints=s.joints)[0])
             with self.client.atomic():
                 if s.design != self.mechanism.design:
                     self.mechanism.set_design(s.design, s.pose, res.d, res.eta, res.leg_status)
@@ -361,6 +389,8 @@ class ClientSession:
             ori = self.orientation
             s = self.state
         lines: list[str] = []
+        if not s.joints.is_default:
+            lines.append(f"**Joints** {md_text(_joints_text(s.joints))}  ")
         if info:
             m = info.get("measures")
             kind = "preview" if info.get("preview") else "full"
@@ -388,8 +418,12 @@ class ClientSession:
                          + (f", {info['shell_seconds']:.2f} s shell" if info.get("shell_seconds") else ""))
         else:
             lines.append("*workspace: computing...*")
-        if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design:
-            lines.append(f"**TI₁** {_fmt(ori.ti1, 4)}  **TI₂** {_fmt(ori.ti2, 4)}  (z0 = {ori.settings.z0:g})")
+        if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design and ori.settings.joints == s.joints:
+            lines.append(f"**TI₁** {_fmt(ori.ti1, 4)}  **TI₂** {_fmt(ori.ti2, 4)}  (z0 = {ori.settings.z0:g}, "
+                         "degree × length units)  ")
+            note = ori.saturation_note()
+            if note:
+                lines.append(f"⚠ {md_text(note)}  ")
         else:
             lines.append("**TI₁ / TI₂** *computing...*")
         if res is not None:
@@ -408,7 +442,25 @@ class ClientSession:
         design happen under ``input_lock`` (viser runs one session's callbacks concurrently; the newest
         slider values must win). Worker threads never take ``input_lock``, so it cannot invert the
         ``view_lock`` -> ``lock`` order of :meth:`_publish`."""
+        p = self.panels
+        typed = [k for k in DESIGN_KEYS
+                 if not DESIGN_SLIDERS[k].lo <= float(p.design[k].value) <= DESIGN_SLIDERS[k].hi]
         with self.input_lock:
+            if self._design_timer is not None:
+                self._design_timer.cancel()
+                self._design_timer = None
+            if typed:
+                # a value outside the slider's Table I range can only come from the number box, where
+                # every keystroke arrives ("80" is "8" first): apply it once typing pauses
+                self._design_timer = threading.Timer(TYPING_PAUSE, self._callback(self._apply_typed_design))
+                self._design_timer.daemon = True
+                self._design_timer.start()
+                return
+            self._on_design_input_locked()
+
+    def _apply_typed_design(self) -> None:
+        with self.input_lock:
+            self._design_timer = None
             self._on_design_input_locked()
 
     def _on_design_input_locked(self) -> None:
@@ -464,6 +516,25 @@ class ClientSession:
                 p.eta[i].max = max(hi, lo + 1e-6)
                 p.eta[i].value = eta[i]
 
+    def on_joints_input(self) -> None:
+        """A Joints control changed: the core validates the values; a valid set recomputes the
+        workspace, the orientation maps and the pose's IK with the new limits."""
+        with self.input_lock:
+            joints, error = self.panels.joints.read()
+            msg = self.panels.joints.message
+            if error:
+                msg.content = f"**Not applied:** {md_text(error)}. The last valid joints stay."
+                msg.visible = True
+                return
+            msg.visible = False
+            with self.lock:
+                if joints == self.state.joints:
+                    return
+                self.state = self.state.replace(joints=joints)
+        self.update_mechanism()
+        self.submit_workspace()
+        self.schedule_url()
+
     def reset_design(self) -> None:
         """Reset the design sliders to the paper's defaults (Fig. 3 design)."""
         self.load_design(Design())
@@ -481,7 +552,11 @@ class ClientSession:
         with self.lock:  # read the sliders under the lock: a concurrent older callback cannot write last
             vals = {k: float(p.pose[k].value) for k in POSE_KEYS}
             old = self.state.pose
-            pose = Pose(**vals)
+            try:
+                pose = Pose(**vals)
+            except ParameterError as exc:  # a typed value outside the pose's valid range
+                self._notify("Pose not applied", str(exc), color="orange")
+                return
             self.state = self.state.replace(pose=pose)
         self.update_mechanism()
         if orientation_changed and (old.psi, old.theta, old.phi) != (pose.psi, pose.theta, pose.phi):
@@ -510,14 +585,16 @@ class ClientSession:
         bad = [f"{k} = {v:g} outside {POSE_RANGES[k].text()}" for k, v in vals.items()
                if not POSE_RANGES[k].lo <= v <= POSE_RANGES[k].hi]
         if bad:
-            self._notify("Pose not applied", "; ".join(bad) + " (slider range)", color="orange")
+            self._notify("Pose not applied", "; ".join(bad) + " (valid range)", color="orange")
             with self.programmatic():
                 self.gizmo.position = self.state.pose.position
                 self.gizmo.wxyz = self.mechanism.platform.wxyz
             return
         with self.programmatic():
             for k in POSE_KEYS:
-                self.panels.pose[k].value = vals[k]
+                h = self.panels.pose[k]
+                h.min, h.max = slider_span(POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi, vals[k])
+                h.value = vals[k]
         with self.lock:
             old = self.state.pose
             pose = Pose(**vals)
@@ -615,7 +692,7 @@ class ClientSession:
 
     # ----- workspace job -------------------------------------------------------------------------
     def _ws_key(self, s: ExplorerState, voxel: float) -> tuple:
-        return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel))
+        return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel), s.joints.key())
 
     def submit_workspace(self) -> None:
         """(Re)compute the workspace for the current design/orientation/voxel; the last call wins."""
@@ -624,7 +701,7 @@ class ClientSession:
             gen = self._ws_gen
             s = self.state
             # maps of another design are stale: never show them, and free the worker at once
-            stale_maps = self._or_key is not None and self._or_key != (s.design.key(), s.z0)
+            stale_maps = self._or_key is not None and self._or_key != (s.design.key(), s.z0, s.joints.key())
             if stale_maps:
                 self._or_gen += 1
                 self._or_key = None
@@ -635,8 +712,7 @@ class ClientSession:
                 if not self.closed:
                     self.panels.orientation_status.content = "waiting for the new design's workspace..."
         try:  # the same grid limit as the API, before any work is queued
-            check_workspace_grid(s.design, WorkspaceSettings(voxel=s.voxel, orientation=(
-                s.pose.psi, s.pose.theta, s.pose.phi)), self.explorer.max_voxels)
+            check_workspace_grid(s.design, self._ws_settings(s, s.voxel), self.explorer.max_voxels)
         except ParameterError as exc:
             self._cancel_job(self._ws_job)
             self._set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
@@ -671,7 +747,6 @@ class ClientSession:
 
     def _workspace_fn(self, gen: int, s: ExplorerState) -> Callable[[Callable[[float, str], None], threading.Event], Any]:
         design = s.design
-        orientation = (s.pose.psi, s.pose.theta, s.pose.phi)
         voxel = s.voxel
         cache = self.explorer.shell_cache
 
@@ -682,7 +757,7 @@ class ClientSession:
                 pkey = self._ws_key(s, PREVIEW_VOXEL)
                 pre = cache.get(pkey)
                 if pre is None:
-                    res = compute_workspace(design, WorkspaceSettings(voxel=PREVIEW_VOXEL, orientation=orientation),
+                    res = compute_workspace(design, self._ws_settings(s, PREVIEW_VOXEL),
                                             progress=lambda f, m: progress(0.12 * f, f"preview: {m}"), cancel=cancel)
                     t1 = time.perf_counter()
                     pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
@@ -695,7 +770,7 @@ class ClientSession:
                 self._publish(gen, pre, preview=True, seconds=time.perf_counter() - t0)
                 self._publish_measures(gen, pre, preview=True)
                 progress(0.15, f"full workspace h = {voxel:g}...")
-            res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation),
+            res = compute_workspace(design, self._ws_settings(s, voxel),
                                     progress=lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"),
                                     cancel=cancel)
             progress(0.78, "meshing the shell...")
@@ -821,7 +896,7 @@ class ClientSession:
             self._or_gen += 1
             gen = self._or_gen
             s = self.state
-            key = (s.design.key(), s.z0)
+            key = (s.design.key(), s.z0, s.joints.key())
             self._or_key = key
         hit = self.explorer.orientation_cache.get(key)
         if hit is not None:
@@ -830,7 +905,7 @@ class ClientSession:
             return
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
-            res = orientation_workspace(s.design, OrientationSettings(z0=s.z0),
+            res = orientation_workspace(s.design, OrientationSettings(z0=s.z0, joints=s.joints),
                                         progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
             progress(0.9, "drawing...")
             img, png = plots.render(plots.orientation_figure(res, s.z0))
@@ -871,7 +946,8 @@ class ClientSession:
             self.panels.orientation_image.image = img
             self.panels.orientation_status.content = (
                 f"TI₁ = {_fmt(res.ti1, 4)}, TI₂ = {_fmt(res.ti2, 4)} (z0 = {res.settings.z0:g}; "
-                f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28).")
+                f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28)."
+                + (f"\n\n⚠ {md_text(res.saturation_note())}" if res.saturation_note() else ""))
         self._render_numbers()
         self._event("orientation-shown")
 
@@ -893,8 +969,7 @@ class ClientSession:
         voxel = float(p.study_voxel.value)
         s = self.state
         values = study_values(param, n)
-        orient = (s.pose.psi, s.pose.theta, s.pose.phi)
-        settings = WorkspaceSettings(voxel=voxel, orientation=orient)
+        settings = self._ws_settings(s, voxel)
         cache = self.explorer.study_cache
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
@@ -907,7 +982,7 @@ class ClientSession:
                                      current, cur_vol, voxel)
             img, png = plots.render(fig)
             return {"param": param, "rows": rows, "current": current, "current_volume": cur_vol,
-                    "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": orient}
+                    "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": settings.orientation}
 
         def done(job: Job) -> None:
             p.sweep_stop.visible = False
@@ -936,8 +1011,7 @@ class ClientSession:
         s = self.state
         xs = study_values("a", n)
         ys = [v for v in study_values("d_s", n) if v <= s.design.r]
-        orient = (s.pose.psi, s.pose.theta, s.pose.phi)
-        settings = WorkspaceSettings(voxel=voxel, orientation=orient)
+        settings = self._ws_settings(s, voxel)
         cache = self.explorer.study_cache
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
@@ -946,7 +1020,7 @@ class ClientSession:
             fig = plots.surface_figure(out["values_x"], out["values_y"], out["volume"],
                                        (s.design.a, s.design.d_s), voxel)
             img, png = plots.render(fig)
-            return {**out, "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": orient}
+            return {**out, "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": settings.orientation}
 
         def done(job: Job) -> None:
             p.surface_stop.visible = False
@@ -1115,6 +1189,8 @@ class ClientSession:
         with self.lock:
             if self._url_timer is not None:
                 self._url_timer.cancel()
+            if self._design_timer is not None:
+                self._design_timer.cancel()
         for job in self.explorer.jobs.active(self.job_client):
             self.explorer.jobs.cancel(job.id)
 

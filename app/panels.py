@@ -21,11 +21,12 @@ import viser
 
 import paraspace
 
-from paraspace.kinematics.design import ETA_RANGES, PARAMS
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 
+from .joints_panel import JointsControls, build_joints_folder
 from .urlstate import (
-    CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, ETA_KEYS, POSE_KEYS, POSE_RANGES,
-    SETTING_RANGES, ExplorerState,
+    CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS,
+    POSE_SLIDERS, SETTING_SLIDERS, ExplorerState,
 )
 
 POSE_HINTS: dict[str, str] = {
@@ -52,6 +53,7 @@ class Panels:
     reset: Any
     voxel: Any
     design_message: Any
+    joints: JointsControls
     # pose
     pose: dict[str, Any]
     gizmo: Any
@@ -97,6 +99,12 @@ class Panels:
     version: Any
 
 
+def slider_span(lo: float, hi: float, value: float) -> tuple[float, float]:
+    """A slider's ``(min, max)``: its range widened to hold ``value`` (a value typed in the number
+    box or restored from a link may lie outside the Table I range; the slider must still show it)."""
+    return min(lo, value), max(hi, value)
+
+
 def _blank(h: int = 40, w: int = 320) -> np.ndarray:
     return np.full((h, w, 3), 255, dtype=np.uint8)
 
@@ -115,25 +123,30 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
     with tabs.add_tab("Design", viser.Icon.RULER_MEASURE):
         design = {}
         for key in DESIGN_KEYS:
-            rng = DESIGN_RANGES[key]
+            rng = DESIGN_SLIDERS[key]
             spec = PARAMS[key]
-            design[key] = gui.add_slider(key, min=rng.lo, max=rng.hi, step=rng.step,
-                                         initial_value=float(getattr(state.design, key)),
-                                         hint=f"{spec.description}; Table I range {rng.text(spec.unit)}")
+            value = float(getattr(state.design, key))
+            lo, hi = slider_span(rng.lo, rng.hi, value)
+            design[key] = gui.add_slider(key, min=lo, max=hi, step=rng.step, initial_value=value,
+                                         hint=f"{spec.description}; {paper_range_text(key)}; type values "
+                                              f"in {DESIGN_RANGES[key].text(spec.unit)} in the box")
         eta_range = gui.add_dropdown("eta_range", ETA_RANGES, initial_value=state.design.eta_range,
                                      hint="arc stroke: centered [-eta_s/2, eta_s/2] or from-zero [0, eta_s]")
         design_message = gui.add_markdown("", visible=False)
         reset = gui.add_button("Reset to paper defaults", icon=viser.Icon.RESTORE)
-        rng = SETTING_RANGES["voxel"]
-        voxel = gui.add_slider("voxel h", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.voxel,
+        rng = SETTING_SLIDERS["voxel"]
+        voxel = gui.add_slider("voxel h", *slider_span(rng.lo, rng.hi, state.voxel), step=rng.step,
+                               initial_value=state.voxel,
                                hint="voxel edge of the full workspace computation (preview: h = 6)")
+        joints = build_joints_folder(gui, state.joints)
 
     with tabs.add_tab("Pose", viser.Icon.ARROWS_MOVE):
         pose = {}
         for key in POSE_KEYS:
-            rng = POSE_RANGES[key]
-            pose[key] = gui.add_slider(key, min=rng.lo, max=rng.hi, step=rng.step,
-                                       initial_value=float(getattr(state.pose, key)), hint=POSE_HINTS[key])
+            rng = POSE_SLIDERS[key]
+            value = float(getattr(state.pose, key))
+            lo, hi = slider_span(rng.lo, rng.hi, value)
+            pose[key] = gui.add_slider(key, min=lo, max=hi, step=rng.step, initial_value=value, hint=POSE_HINTS[key])
         gizmo = gui.add_checkbox("drag gizmo", True, hint="show the drag handle on the platform")
         carriages = gui.add_dropdown("carriages", ("auto", "manual"), initial_value=state.carriages,
                                      hint="auto: redundancy resolved (max leg margin); manual: set d_i, eta_i")
@@ -152,19 +165,20 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
     with tabs.add_tab("View", viser.Icon.EYE):
         view_buttons = gui.add_button_group("camera", CAMERA_PRESETS)
         cut = gui.add_checkbox("cut plane", state.cut, hint="cut the shell by a horizontal plane")
-        rng = SETTING_RANGES["cut_z"]
-        cut_z = gui.add_slider("cut height", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.cut_z)
+        rng = SETTING_SLIDERS["cut_z"]
+        cut_z = gui.add_slider("cut height", *slider_span(rng.lo, rng.hi, state.cut_z), step=rng.step,
+                               initial_value=state.cut_z)
         cut_keep = gui.add_dropdown("keep", CUT_KEEPS, initial_value=state.cut_keep,
                                     hint="which side of the cut plane stays visible")
-        rng = SETTING_RANGES["opacity"]
-        opacity = gui.add_slider("shell opacity", min=rng.lo, max=rng.hi, step=rng.step,
+        rng = SETTING_SLIDERS["opacity"]
+        opacity = gui.add_slider("shell opacity", *slider_span(rng.lo, rng.hi, state.opacity), step=rng.step,
                                  initial_value=state.opacity)
         payload = gui.add_markdown("")
 
     with tabs.add_tab("Plots", viser.Icon.CHART_LINE):
         with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True):
-            rng = SETTING_RANGES["z0"]
-            z0 = gui.add_slider("z0", min=rng.lo, max=rng.hi, step=rng.step, initial_value=state.z0,
+            rng = SETTING_SLIDERS["z0"]
+            z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
                                 hint="height of the x and y' lines")
             orientation_status = gui.add_markdown("*waiting for the workspace...*")
             orientation_image = gui.add_image(_blank(), format="png")
@@ -202,7 +216,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
 
     return Panels(
         url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
-        design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message,
+        design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
         view_buttons=view_buttons, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,
         z0=z0, orientation_status=orientation_status, orientation_image=orientation_image,

@@ -11,6 +11,7 @@ URL format (keys are the CLI's names)::
      &x=0&y=0&z=130&psi=0&theta=0&phi=0
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
      [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
+     [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -20,7 +21,8 @@ from its default (short links); the six carriage values are written whenever
 so ``parse_query(encode_query(s)) == (s, [])`` exactly.
 
 Parsing policy (:func:`parse_query`): never raises. Each bad field (not a number, not one of the
-choices, outside the slider range of the explorer, or inconsistent such as ``d_s > r``) produces one
+choices, outside the field's accepted range (the same as the model's and the explorer's number
+boxes; sliders span the narrower Table I ranges), or inconsistent such as ``d_s > r``) produces one
 message naming the field, the value and the valid range; that field keeps its default and every
 other field still applies. Nothing is silently clamped. Only the explorer's own keys
 (:func:`known_keys`) are accepted: any other key, including those viser's web client would act on
@@ -38,7 +40,8 @@ import urllib.parse
 from typing import Any, Literal, Optional
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
-from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
+from paraspace.kinematics.pose import POSE_LIMITS, Pose
 
 CarriageMode = Literal["auto", "manual"]
 CameraPreset = Literal["iso", "top", "bottom", "side"]
@@ -67,14 +70,26 @@ class Range:
         return f"[{self.lo:g}, {self.hi:g}]" + (f" {unit}" if unit else "")
 
 
-#: Slider ranges of the design parameters: paper Table I (from :data:`kinematics.design.PARAMS`).
+# One rule per field (every entry point: slider, number box, URL, CLI, REST): a field ACCEPTS its
+# model range (the *_RANGES below, the same as kinematics' validation); its SLIDER spans the
+# paper's Table I range (or a practical range where Table I fixes a value), and the number box
+# inside the slider takes any accepted value, so whatever the explorer applies, its link restores.
+
+#: Accepted ranges of the design parameters: the model's (:data:`kinematics.design.PARAMS`);
+#: ``d_s <= r`` is checked across fields.
 DESIGN_RANGES: dict[str, Range] = {
+    name: Range(spec.model_min, spec.model_max, 0.5) for name, spec in PARAMS.items()
+}
+#: Slider ranges of the design parameters: paper Table I where it gives a range.
+DESIGN_SLIDERS: dict[str, Range] = {
     name: Range(spec.slider_min, spec.slider_max, 0.5) for name, spec in PARAMS.items()
 }
+#: Accepted ranges of the pose (:data:`kinematics.pose.POSE_LIMITS`).
+POSE_RANGES: dict[str, Range] = {k: Range(lo, hi, 0.5) for k, (lo, hi) in POSE_LIMITS.items()}
 #: Slider ranges of the pose. Positions cover the reach of every design in the Table I ranges
 #: (``|P_xy| <= sqrt(r^2 + b^2/4) + l_max <= 500`` is loose; the workspaces found stay well inside
 #: these); angles are limited to what a slider can still set precisely.
-POSE_RANGES: dict[str, Range] = {
+POSE_SLIDERS: dict[str, Range] = {
     "x": Range(-300.0, 300.0, 0.5),
     "y": Range(-300.0, 300.0, 0.5),
     "z": Range(0.0, 350.0, 0.5),
@@ -82,13 +97,31 @@ POSE_RANGES: dict[str, Range] = {
     "theta": Range(-60.0, 60.0, 0.5),
     "phi": Range(-60.0, 60.0, 0.5),
 }
-#: Other numeric settings.
+#: Accepted ranges of the other numeric settings (voxel: ``WorkspaceSettings``; z0: the
+#: orientation settings; a grid over the voxel limit is refused when computed, with its message).
 SETTING_RANGES: dict[str, Range] = {
+    "voxel": Range(0.25, 100.0, 0.5),
+    "z0": Range(-1e4, 1e4, 1.0),
+    "cut_z": Range(-1e4, 1e4, 1.0),
+    "opacity": Range(0.0, 1.0, 0.05),
+}
+#: Slider ranges of the other numeric settings.
+SETTING_SLIDERS: dict[str, Range] = {
     "voxel": Range(1.0, 10.0, 0.5),
     "z0": Range(0.0, 350.0, 1.0),
     "cut_z": Range(0.0, 350.0, 1.0),
     "opacity": Range(0.1, 1.0, 0.05),
 }
+#: Keys of the joint options (:mod:`kinematics.joints`), written only when set.
+JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
+
+
+def check_field(key: str, value: float) -> Optional[str]:
+    """The one message for a numeric field outside its accepted range (``None`` when valid)."""
+    rng = {**DESIGN_RANGES, **POSE_RANGES, **SETTING_RANGES}[key]
+    if not (math.isfinite(value) and rng.lo <= value <= rng.hi):
+        return f"{key} = {value:g} is out of range; valid range {rng.text(UNITS.get(key, ''))}"
+    return None
 UNITS: dict[str, str] = {"eta_s": "deg", "psi": "deg", "theta": "deg", "phi": "deg"}
 
 #: Longest quote of a user's value (or key) in a message.
@@ -124,6 +157,7 @@ class ExplorerState:
         cut_z: height of the cut plane.
         cut_keep: which side of the cut plane stays visible.
         opacity: shell opacity.
+        joints: joint cones and leg interference (:mod:`kinematics.joints`).
     """
 
     design: Design = dataclasses.field(default_factory=Design)
@@ -138,6 +172,7 @@ class ExplorerState:
     cut_z: float = 80.0
     cut_keep: CutKeep = "below"
     opacity: float = 0.6
+    joints: Joints = dataclasses.field(default_factory=Joints)
 
     def replace(self, **changes: Any) -> "ExplorerState":
         """A copy with some fields changed (no validation beyond the dataclasses')."""
@@ -219,7 +254,7 @@ def panel_pairs(query: str) -> dict[str, str]:
 def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
-            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity"))
+            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity") + JOINT_KEYS)
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -337,8 +372,30 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         else:
             cut_keep = v  # type: ignore[assignment]
 
+    joint_fields: dict[str, Any] = {}
+    for key in JOINT_KEYS:
+        if key not in values:
+            continue
+        if key == "cone_axis":
+            v, msg = _parse_choice(key, values[key], CONE_AXES)
+            if msg:
+                messages.append(msg)
+            else:
+                joint_fields[key] = v
+            continue
+        try:
+            joint_fields[key] = check_joint_value(key, values[key])
+        except ParameterError as exc:
+            messages.append(f"{key} = {_quote(values[key])} is invalid; valid range {exc.valid}")
+    try:
+        joints = Joints(**joint_fields)
+    except ParameterError as exc:  # e.g. a clearance without a leg diameter
+        messages.append(f"{exc.field} = {_quote(str(exc.value))} is invalid; {exc.valid}")
+        joint_fields.pop(exc.field, None)
+        joints = Joints(**joint_fields)
+
     state = ExplorerState(
-        design=design, pose=pose, carriages=carriages,
+        design=design, pose=pose, carriages=carriages, joints=joints,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
         view=view, cut=cut, cut_z=numbers.get("cut_z", DEFAULT_STATE.cut_z), cut_keep=cut_keep,
@@ -374,6 +431,11 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
         pairs.append(("cut_keep", state.cut_keep))
     if state.opacity != DEFAULT_STATE.opacity:
         pairs.append(("opacity", format_number(state.opacity)))
+    j = state.joints
+    for key in JOINT_KEYS:
+        v = getattr(j, key)
+        if v != getattr(DEFAULT_STATE.joints, key):
+            pairs.append((key, v if isinstance(v, str) else format_number(v)))
     return pairs
 
 

@@ -39,8 +39,10 @@ class ParameterError(ValueError):
 class ParamSpec:
     """Range information of one design parameter.
 
-    ``model_min``/``model_max`` bound what the model accepts; ``slider_min``/``slider_max`` are
-    the ranges of paper Table I (used by the explorer's sliders and by parameter studies).
+    ``model_min``/``model_max`` bound what the model accepts (every entry point accepts exactly
+    this range); ``slider_min``/``slider_max`` are the ranges of paper Table I (used by the
+    explorer's sliders and by parameter studies), or a practical range around the value where
+    Table I fixes one (``table_fixed``: b, r, l_min).
     """
 
     name: str
@@ -51,18 +53,29 @@ class ParamSpec:
     slider_min: float
     slider_max: float
     unit: str = ""
+    table_fixed: float | None = None
 
 
 PARAMS: dict[str, ParamSpec] = {
     "a": ParamSpec("a", "radius of the moving platform", 50.0, 1e-6, 1000.0, 10.0, 100.0),
-    "b": ParamSpec("b", "spacing of a carriage's two U joints", 14.0, 0.0, 1000.0, 0.0, 40.0),
+    "b": ParamSpec("b", "spacing of a carriage's two U joints", 14.0, 0.0, 1000.0, 0.0, 40.0, table_fixed=14.0),
     "d_s": ParamSpec("d_s", "stroke of the radial prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0),
-    "r": ParamSpec("r", "radius of the fixed base", 100.0, 1e-6, 1000.0, 50.0, 200.0),
-    "l_min": ParamSpec("l_min", "minimum leg length", 114.5, 1e-6, 1000.0, 50.0, 200.0),
+    "r": ParamSpec("r", "radius of the fixed base", 100.0, 1e-6, 1000.0, 50.0, 200.0, table_fixed=100.0),
+    "l_min": ParamSpec("l_min", "minimum leg length", 114.5, 1e-6, 1000.0, 50.0, 200.0, table_fixed=114.5),
     "l_s": ParamSpec("l_s", "stroke of the leg prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0),
     "eta_s": ParamSpec("eta_s", "stroke of the arc joint", 30.0, 0.0, 180.0, 10.0, 100.0, "deg"),
 }
 PARAM_NAMES: tuple[str, ...] = tuple(PARAMS)
+
+
+def paper_range_text(name: str) -> str:
+    """What paper Table I says about a parameter, and the explorer's slider range: "Table I range
+    [10, 100]" or "Table I fixes b = 14 (slider [0, 40])"."""
+    spec = PARAMS[name]
+    unit = " deg" if spec.unit else ""
+    if spec.table_fixed is not None:
+        return f"Table I fixes {name} = {spec.table_fixed:g}{unit} (slider [{spec.slider_min:g}, {spec.slider_max:g}])"
+    return f"Table I range [{spec.slider_min:g}, {spec.slider_max:g}]{unit}"
 
 
 def _check_number(field: str, value: Any, lo: float, hi: float, hi_text: str | None = None) -> float:

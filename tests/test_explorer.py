@@ -55,7 +55,7 @@ def browsers(explorer):
 
 
 def test_link_restores_state_and_names_bad_fields(explorer, browsers):
-    b = browsers("a=60&d_s=40&z=140&psi=5&voxel=4&view=top&b=99&color=red")
+    b = browsers("a=60&d_s=40&z=140&psi=5&voxel=4&view=top&b=9999&color=red")
     s = b.session
     assert s.state.design.a == 60.0 and s.state.design.d_s == 40.0 and s.state.design.b == 14.0
     assert s.state.pose.z == 140.0 and s.state.pose.psi == 5.0 and s.state.voxel == 4.0 and s.state.view == "top"
@@ -65,7 +65,7 @@ def test_link_restores_state_and_names_bad_fields(explorer, browsers):
     # one on-screen message per bad field, naming it and its range
     text = s.panels.url_messages.content.replace("\\", "")  # values are shown escaped (app/textsafe.py)
     assert s.panels.url_messages.visible
-    assert "b = 99" in text and "[0, 40]" in text and "'color'" in text
+    assert "b = 9999" in text and "[0, 1000]" in text and "'color'" in text
     # the address bar is rewritten (JS bridge) to a link that parses back to the same state
     wait_for(lambda: "eta_range=centered" in b.search, 5.0, "replaceState")
     parsed, msgs = parse_query(b.search)
@@ -264,9 +264,17 @@ def test_gizmo_drag_sets_the_pose_sliders(explorer, browsers):
     assert s.panels.pose["x"].value == 20.0 and s.panels.pose["psi"].value == 12.0
     wait_idle(explorer, s)
     assert s.bundle.result.settings.orientation == (12.0, 0.0, 0.0)  # orientation change -> new workspace
-    # a drag outside the slider ranges is refused and the gizmo snaps back
+    # one rule per field: a pose outside the slider's range but inside the pose's valid range is
+    # applied (the slider widens to show it); outside the valid range it is refused and snaps back
     b._send({"type": "TransformControlsUpdateMessage", "name": "/gizmo", "owner": str(s.client.client_id),
              "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (20.0, -10.0, 380.0)})
+    wait_for(lambda: s.state.pose.z == 380.0, 5.0, "a pose beyond the slider")
+    assert s.panels.pose["z"].max >= 380.0 and s.panels.pose["z"].value == 380.0
+    b._send({"type": "TransformControlsUpdateMessage", "name": "/gizmo", "owner": str(s.client.client_id),
+             "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (20.0, -10.0, 140.0)})
+    wait_for(lambda: s.state.pose.z == 140.0, 5.0, "back to 140")
+    b._send({"type": "TransformControlsUpdateMessage", "name": "/gizmo", "owner": str(s.client.client_id),
+             "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (20.0, -10.0, 20000.0)})
     time.sleep(0.5)
     assert s.state.pose.z == 140.0
     wait_for(lambda: np.allclose(s.gizmo.position, (20.0, -10.0, 140.0)), 5.0, "gizmo snapped back")
@@ -369,9 +377,56 @@ def test_pose_table_has_no_negative_zero(explorer, browsers):
 
 
 def test_link_problems_note_closes_at_the_first_change(explorer, browsers):
-    b = browsers("a=60&b=99")
+    b = browsers("a=60&b=9999")
     s = b.session
-    assert s.panels.url_messages.visible and "b = 99" in s.panels.url_messages.content.replace("\\", "")
+    assert s.panels.url_messages.visible and "b = 9999" in s.panels.url_messages.content.replace("\\", "")
     b.set(s.panels.design["a"], 61.0)
     wait_for(lambda: not s.panels.url_messages.visible, 5.0, "the note to close")
     wait_for(lambda: s.state.design.a == 61.0, 5.0, "the change applied")
+
+
+def test_typed_value_outside_the_slider_waits_for_the_pause_and_its_link_restores_it(explorer, browsers):
+    """Issue 8 defects 1 and 2: typing "80" sends "8" first; a value outside the slider's Table I
+    range is applied only when typing pauses, so "8" followed at once by "80" never computes a = 8;
+    a = 8 itself (typed and left) is applied, and the link written for it restores a = 8 exactly."""
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    seen: list[float] = []
+    orig = s.apply_design
+    s.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
+    b.set(s.panels.design["a"], 8.0)
+    b.set(s.panels.design["a"], 80.0)
+    wait_for(lambda: s.state.design.a == 80.0, 5.0, "a = 80 applied")
+    time.sleep(1.2)  # longer than the typing pause: the "8" must not come back
+    assert seen == [80.0] and s.state.design.a == 80.0
+    b.set(s.panels.design["a"], 8.0)
+    wait_for(lambda: s.state.design.a == 8.0, 5.0, "a = 8 applied after the pause")
+    wait_for(lambda: "a=8&" in b.search, 5.0, "the link")
+    state, msgs = parse_query(b.search)
+    assert msgs == [] and state.design.a == 8.0
+    b2 = browsers(b.search.lstrip("?"))
+    assert b2.session.state.design.a == 8.0 and not b2.session.panels.url_messages.visible
+    assert b2.session.panels.design["a"].value == 8.0 and b2.session.panels.design["a"].min <= 8.0
+
+
+def test_joints_group_changes_the_workspace_and_travels_in_the_link(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    plain = s.bundle.result.volume
+    j = s.panels.joints
+    b.set(j.u_on, True)
+    b.set(j.u_angle, 40.0)
+    b.set(j.s_on, True)
+    b.set(j.s_angle, 40.0)
+    wait_for(lambda: s.state.joints.theta_u == 40.0 and s.state.joints.theta_s == 40.0, 5.0, "joints applied")
+    wait_idle(explorer, s)
+    wait_for(lambda: s.bundle.result.settings.joints == s.state.joints, 30.0, "a workspace with the cones")
+    assert 0 < s.bundle.result.volume < plain
+    assert "Joints" in s.panels.numbers.content
+    wait_for(lambda: "theta_u=40" in b.search and "theta_s=40" in b.search, 5.0, "the link")
+    b.set(j.diameter, 200.0)  # a typed value outside [0, 100]
+    wait_for(lambda: j.message.visible, 5.0, "the message")
+    assert "leg_diameter" in j.message.content.replace("\\", "") and "[0, 100]" in j.message.content.replace("\\", "")
+    assert s.state.joints.leg_diameter == 0.0

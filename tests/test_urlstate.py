@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from paraspace.app.urlstate import (
-    CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES,
+    CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES, check_field,
     ExplorerState, encode_query, known_keys, parse_query,
 )
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design
@@ -68,7 +68,7 @@ def test_encoding_is_readable_and_names_cli_keys() -> None:
 
 
 def test_bad_values_are_reported_by_field_and_the_rest_applies() -> None:
-    state, messages = parse_query("a=60&b=abc&l_s=500&eta_s=nan&eta_range=sideways&z=140&view=front&voxel=0.1")
+    state, messages = parse_query("a=60&b=abc&l_s=5000&eta_s=nan&eta_range=sideways&z=140&view=front&voxel=0.1")
     assert state.design.a == 60.0 and state.pose.z == 140.0  # good fields applied
     # bad fields keep their defaults: nothing clamped
     assert state.design.b == PARAMS["b"].default
@@ -77,17 +77,53 @@ def test_bad_values_are_reported_by_field_and_the_rest_applies() -> None:
     assert state.design.eta_range == "centered" and state.view == "iso" and state.voxel == 2.0
     assert len(messages) == 6
     text = "\n".join(messages)
-    for field, valid in (("b", "[0, 40]"), ("l_s", "[10, 100]"), ("eta_s", "[10, 100] deg"),
+    for field, valid in (("b", "[0, 1000]"), ("l_s", "[0, 1000]"), ("eta_s", "[0, 180] deg"),
                          ("eta_range", "centered, from-zero"), ("view", "iso, top, bottom, side"),
-                         ("voxel", "[1, 10]")):
+                         ("voxel", "[0.25, 100]")):
         assert any(m.startswith(field + " = ") and valid in m for m in messages), (field, text)
 
 
-def test_out_of_slider_range_is_rejected_not_clamped() -> None:
-    state, messages = parse_query("a=100.5&x=-301&theta=61")
+def test_out_of_range_is_rejected_not_clamped() -> None:
+    state, messages = parse_query("a=1000.5&x=-10001&theta=91")
     assert state.design.a == 50.0 and state.pose.x == 0.0 and state.pose.theta == 0.0
     assert [m.split(" ")[0] for m in messages] == ["a", "x", "theta"]
     assert all("out of range" in m for m in messages)
+
+
+def test_one_rule_per_field_the_link_accepts_what_the_model_accepts() -> None:
+    """Issue 8 defect 1: a value outside the slider (Table I) range that the number box accepts
+    (a = 8) is restored exactly by its link, and the range a link reports for a field is the one
+    the core reports (CLI, REST, explorer)."""
+    from paraspace.kinematics.design import Design, ParameterError
+    from paraspace.kinematics.pose import Pose
+    from paraspace.kinematics.workspace import WorkspaceSettings
+
+    typed = DEFAULT_STATE.replace(design=Design(a=8.0, l_min=250.0), pose=Pose(x=400.0, psi=120.0), voxel=0.5)
+    state, messages = parse_query(encode_query(typed))
+    assert messages == [] and state == typed
+    for key, bad, build in (("a", 2000.0, lambda v: Design(a=v)), ("eta_s", 190.0, lambda v: Design(eta_s=v)),
+                            ("z", 2e4, lambda v: Pose(z=v)), ("theta", 95.0, lambda v: Pose(theta=v)),
+                            ("voxel", 0.1, lambda v: WorkspaceSettings(voxel=v))):
+        _, msgs = parse_query(f"{key}={bad:g}")
+        with pytest.raises(ParameterError) as err:
+            build(bad)
+        assert len(msgs) == 1 and err.value.valid.split(" ")[0] in msgs[0], (key, msgs, err.value.valid)
+        assert check_field(key, bad) is not None and check_field(key, bad).split(";")[1] == msgs[0].split(";")[1]
+
+
+def test_joint_keys_round_trip_and_bad_ones_name_the_range() -> None:
+    from paraspace.kinematics.joints import Joints
+
+    s = DEFAULT_STATE.replace(joints=Joints(theta_u=45.0, theta_s=37.5, cone_axis="home", leg_diameter=10.0,
+                                            clearance=1.0))
+    q = encode_query(s)
+    assert "theta_u=45" in q and "cone_axis=home" in q
+    assert parse_query(q) == (s, [])
+    assert "theta_u" not in encode_query(DEFAULT_STATE)
+    state, messages = parse_query("theta_u=0&cone_axis=up&leg_diameter=-3")
+    assert state.joints == Joints()
+    assert [m.split(" ")[0] for m in messages] == ["theta_u", "cone_axis", "leg_diameter"]
+    assert "(0, 90] degrees" in messages[0] and "[0, 100]" in messages[2]
 
 
 def test_inconsistent_design_names_the_field() -> None:
