@@ -214,6 +214,7 @@ class BoundsIn(BaseModel):
 
 
 _RANGES[("bounds", "lo")] = _RANGES[("bounds", "hi")] = "[-10000, 10000] on each of x, y, z, lo < hi"
+_RANGES[("settings", "bracket_refine")] = "[0, 3]"
 
 
 def _joint_field(name: str, default: Any, description: str, optional: bool = False) -> Any:
@@ -254,6 +255,8 @@ class WorkspaceSettingsIn(BaseModel):
     method: Literal["blocks", "dense"] = Field("blocks", description="engine: coarse-to-fine blocks (default) "
                                                "or every voxel (dense); the same voxels")
     bracket: bool = Field(False, description="also certify volume_inner <= V <= volume_outer (continuous workspace)")
+    bracket_refine: int = Field(2, ge=0, le=3, strict=True, description="halvings of the bracket's boundary "
+                                "cubes; valid range [0, 3]")
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
     def build(self) -> Any:
@@ -272,7 +275,7 @@ class WorkspaceSettingsIn(BaseModel):
         return _core("settings", lambda: WorkspaceSettings(
             voxel=self.voxel, orientation=(o.psi, o.theta, o.phi), eta_step=self.eta_step, bounds=bounds,
             z_floor=self.z_floor, symmetry=self.symmetry, diagnostics=self.diagnostics, method=self.method,
-            bracket=self.bracket, joints=self.joints.build()))
+            bracket=self.bracket, bracket_refine=self.bracket_refine, joints=self.joints.build()))
 
 
 class OrientationSettingsIn(BaseModel):

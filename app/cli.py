@@ -113,7 +113,12 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     design = _design(ns)
+    try:
+        refine = int(ns.bracket_refine)
+    except (TypeError, ValueError):
+        raise ParameterError("bracket_refine", ns.bracket_refine, "[0, 3] (an integer)") from None
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
+                                 bracket_refine=refine,
                                  joints=_joints(ns))
     fmt = None
     if ns.export:
@@ -134,6 +139,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if ns.bracket:
         out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
         out["bracket_seconds"] = result.bracket_seconds
+        out["bracket_refine"] = refine
     if ns.diagnostics:
         from paraspace.kinematics.diagnostics import limit_binding
 
@@ -493,6 +499,9 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
     w.add_argument("--method", default="blocks", metavar="blocks|dense",
                    help="engine: coarse-to-fine blocks (default) or every voxel (dense, the oracle); same voxels")
+    w.add_argument("--bracket-refine", dest="bracket_refine", default=2, metavar="N",
+                   help="halvings of the bracket's boundary cubes, 0-3 (default 2; each about halves the gap "
+                        "and costs about 4x the previous one)")
     w.add_argument("--bracket", action="store_true",
                    help="also certify volume_inner <= V <= volume_outer for the continuous workspace")
     w.add_argument("--diagnostics", action="store_true",

@@ -1208,10 +1208,19 @@ def _measure(result: WorkspaceResult) -> Any:
     return measure_workspace(result)
 
 
+#: Boundary refinements of the explorer's certified bracket (one: about 1 s at h = 2; the CLI and
+#: the API default to two).
+EXPLORER_BRACKET_REFINE = 1
+
+
 def _bracket(result: WorkspaceResult) -> Any:
+    """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
+    bracket does not model)."""
     from paraspace.kinematics.bracket import bracket_of
 
-    return bracket_of(result)
+    if result.settings.joints.min_distance > 0.0:
+        return None
+    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE)
 
 
 def _json_default(obj: Any) -> Any:

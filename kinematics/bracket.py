@@ -32,6 +32,13 @@ reaching below ``z_floor`` are never counted inside. The voxel estimate lies in 
 construction (an inside cube has a reachable centre; a reachable centre's cube is not outside),
 and the gap ``N_boundary h^3`` shrinks about linearly with ``h`` (the boundary cubes form a
 shell of about one cube's thickness).
+
+**Refinement** (``refine`` levels, default :data:`REFINE`): every boundary cube is split into 8
+children of half the edge, each classified by the same two tests (its own centre and
+half-diagonal); inside children add their volume to the inner bound, outside children remove theirs
+from the outer bound, boundary children are split again. Each level is as rigorous as the first
+and divides the gap by about two, at the cost of testing the boundary shell only. The arc slack
+``R_D Delta_eta / 2`` does not shrink with the cubes: it bounds what refinement can gain.
 """
 
 from __future__ import annotations
@@ -44,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre
-from .design import Design
+from .design import Design, ParameterError
 from .feasibility import _chain_excluded, _feasible_at, chain_points
 from .grid import GridSpec
 from .parallel import KERNEL_LOCK
@@ -53,6 +60,8 @@ from .progress import CancelToken, Reporter, check
 __all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
 
 INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
+#: Halvings of the boundary cubes by default (each one divides the bracket's gap by about 2).
+REFINE = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +73,8 @@ class VolumeBracket:
     cubes_inside: int
     cubes_boundary: int
     voxel: float
+    refine: int = 0
+    boundary_left: int = 0
 
     @property
     def gap(self) -> float:
@@ -75,6 +86,37 @@ class VolumeBracket:
         return {**dataclasses.asdict(self), "gap": self.gap}
 
 
+@njit(cache=True, inline="always")
+def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
+                u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
+    """OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or block) of centre
+    ``P`` and half-diagonal ``delta`` (module docstring)."""
+    n = cos_t.shape[1]
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    e0 = delta + eps
+    lo0 = max(lmin - e0, 0.0)
+    hi0 = lmax + e0
+    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo0 * lo0, hi0 * hi0):
+        return FAIL
+    e_out = delta + arc_slack + eps
+    lo_r = max(lmin - e_out, 0.0)
+    hi_r = lmax + e_out
+    lo_t = lmin + e0
+    hi_t = lmax - e0
+    can_in = lo_t <= hi_t and not below
+    some = False
+    for k in range(n):
+        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                        lo_r * lo_r, hi_r * hi_r, jc[i], delta + cone_slack + eps):
+            some = True
+            if not can_in:
+                break
+            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                            lo_t * lo_t, hi_t * hi_t, jc[i], -e0):
+                return OK
+    return UNKNOWN if some else FAIL
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
                  u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
@@ -83,53 +125,64 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloo
         px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
         delta = 0.5 * h * math.sqrt(nx * nx + ny * ny + nz * nz)
         below = zs[b0[b, 2]] - 0.5 * h < zfloor - eps
-        n = cos_t.shape[1]
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-            e0 = delta + eps
-            lo0 = max(lmin - e0, 0.0)
-            hi0 = lmax + e0
-            if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo0 * lo0, hi0 * hi0):
-                state[b, i] = FAIL
-                break
-            e_out = delta + arc_slack + eps
-            lo_r = max(lmin - e_out, 0.0)
-            hi_r = lmax + e_out
-            lo_t = lmin + e0
-            hi_t = lmax - e0
-            can_in = lo_t <= hi_t and not below
-            some = False
-            for k in range(n):
-                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_r * lo_r, hi_r * hi_r, jc[i], delta + cone_slack + eps):
-                    some = True
-                    if not can_in:
-                        break
-                    if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                    lo_t * lo_t, hi_t * hi_t, jc[i], -e0):
-                        state[b, i] = OK
-                        break
-            if not some:
-                state[b, i] = FAIL
+            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
+                             u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            state[b, i] = st
+            if st == FAIL:
                 break
 
 
-def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
-                 progress: Optional[Reporter] = None, cancel: CancelToken = None) -> np.ndarray:
-    """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape)."""
-    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
-    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+@njit(parallel=True, cache=True, nogil=True)
+def _subcube_kernel(centres, bits, size, eps, arc_slack, cone_slack, zfloor,
+                    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
+    """INSIDE / OUTSIDE / BOUNDARY of cubes of edge ``size`` centred at ``centres`` (N, 3); bit ``i``
+    of ``bits`` marks chain ``i`` as already inside (inherited from the parent cube; updated)."""
+    delta = 0.5 * size * math.sqrt(3.0)
+    for c in prange(centres.shape[0]):
+        px, py, pz = centres[c, 0], centres[c, 1], centres[c, 2]
+        below = pz - 0.5 * size < zfloor - eps
+        cls = INSIDE
+        for i in range(3):
+            if (bits[c] >> i) & 1:
+                continue
+            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
+                             u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            if st == FAIL:
+                cls = OUTSIDE
+                break
+            if st == UNKNOWN:
+                cls = BOUNDARY
+            else:
+                bits[c] |= 1 << i
+        out[c] = cls
+
+
+def _slacks(design: Design, grid: GridSpec, lmax: float, n_eta: int) -> tuple[float, float, float]:
+    """``(arc_slack, cone_slack, eps)`` of the outside test (module docstring)."""
     lo, hi = design.eta_limits
     d_eta = math.radians(hi - lo) / (n_eta - 1) if n_eta > 1 else 0.0
     arc_slack = math.hypot(design.r, 0.5 * design.b) * 0.5 * d_eta
-    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
+    xs, ys, zs = grid.axes()
     # joint cones: between arc samples the U joint moves by <= R_D d_eta/2 (base frame) and, in the
     # carriage's frame, the S joint by <= |B_xy| d_eta/2 with |B_xy| <= max |P_xy| + |u_xy|
     rb = math.hypot(max(abs(xs[0]), abs(xs[-1])) + grid.h, max(abs(ys[0]), abs(ys[-1])) + grid.h) + design.a
     cone_slack = max(math.hypot(design.r, 0.5 * design.b), rb) * 0.5 * d_eta
     eps = 1e-9 * max(1.0, lmax, float(np.abs(xs).max()), float(np.abs(ys).max()), float(np.abs(zs).max()))
+    return arc_slack, cone_slack, eps
+
+
+def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
+                 progress: Optional[Reporter] = None, cancel: CancelToken = None,
+                 chain_bits: Optional[np.ndarray] = None) -> np.ndarray:
+    """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
+    ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube."""
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    arc_slack, cone_slack, eps = _slacks(design, grid, lmax, n_eta)
+    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
     out = np.zeros(grid.shape, np.uint8)
     b0, bn = _top_blocks(grid.shape, TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
@@ -148,31 +201,89 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
         done = fail | inside | single
         cls = np.where(fail, OUTSIDE, np.where(inside, INSIDE, BOUNDARY)).astype(np.uint8)
         _fill_kernel(b0[done], bn[done], cls[done], out)
+        if chain_bits is not None:
+            bits = ((state == OK) * np.array([1, 2, 4], np.int8)[None, :]).sum(axis=1).astype(np.uint8)
+            _fill_kernel(b0[done], bn[done], bits[done], chain_bits)
         level += 1
         if progress is not None:
-            progress(min(1.0, level / 5.0), f"volume bracket: level {level}")
+            progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
         if done.all():
             break
         b0, bn, state = _split(b0[~done], bn[~done], state[~done])
     return out
 
 
+#: The eight child-cube offsets (in units of the child's edge) from a cube's centre.
+_CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) for dz in (-0.5, 0.5)])
+
+
+def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float, cls: np.ndarray,
+                    chain_bits: np.ndarray, levels: int, progress: Optional[Reporter] = None,
+                    cancel: CancelToken = None) -> tuple[float, float, int]:
+    """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
+    same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
+    boundary children left)``; the bracket becomes ``[V_in + inside, V_out - outside]``. A child
+    inherits the chains its parent proved inside (``chain_bits``) and tests only the others."""
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    arc_slack, cone_slack, eps = _slacks(design, grid, lmax, n_eta)
+    idx = np.argwhere(cls == BOUNDARY)
+    centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
+    parent_bits = chain_bits[cls == BOUNDARY]
+    size = float(grid.h)
+    inside = outside = 0.0
+    chunk = 1 << 18
+    for level in range(levels):
+        size *= 0.5
+        left, left_bits = [], []
+        for s in range(0, centres.shape[0], chunk // 8):
+            check(cancel)
+            kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
+            bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
+            out = np.empty(kids.shape[0], np.uint8)
+            with KERNEL_LOCK:
+                _subcube_kernel(kids, bits, size, eps, arc_slack, cone_slack, float(z_floor), u, cos_t, sin_t, arc,
+                                hb, rho_lo, rho_hi, lmin, lmax, jc, out)
+            inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
+            outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
+            left.append(kids[out == BOUNDARY])
+            left_bits.append(bits[out == BOUNDARY])
+        centres = np.concatenate(left) if left else np.zeros((0, 3))
+        parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
+        if progress is not None:
+            progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
+    return inside, outside, int(centres.shape[0])
+
+
 def volume_bracket(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float = 0.0,
-                   progress: Optional[Reporter] = None, cancel: CancelToken = None) -> VolumeBracket:
-    """The certified bracket of the continuous workspace volume over ``grid`` (module docstring)."""
-    cls = cube_classes(design, grid, args, n_eta, z_floor, progress, cancel)
+                   progress: Optional[Reporter] = None, cancel: CancelToken = None,
+                   refine: int = REFINE) -> VolumeBracket:
+    """The certified bracket of the continuous workspace volume over ``grid`` (module docstring):
+    cubes of the grid, then ``refine`` halvings of the boundary cubes (:func:`refine_boundary`)."""
+    bits = np.zeros(grid.shape, np.uint8)
+    cls = cube_classes(design, grid, args, n_eta, z_floor, progress, cancel, chain_bits=bits)
     n_in = int(np.count_nonzero(cls == INSIDE))
     n_b = int(np.count_nonzero(cls == BOUNDARY))
     v = grid.voxel_volume
-    return VolumeBracket(volume_inner=n_in * v, volume_outer=(n_in + n_b) * v, cubes_inside=n_in,
-                         cubes_boundary=n_b, voxel=grid.h)
+    add, cut, left = (refine_boundary(design, grid, args, n_eta, z_floor, cls, bits, refine, progress, cancel)
+                      if refine > 0 else (0.0, 0.0, n_b))
+    return VolumeBracket(volume_inner=n_in * v + add, volume_outer=(n_in + n_b) * v - cut, cubes_inside=n_in,
+                         cubes_boundary=n_b, voxel=grid.h, refine=refine, boundary_left=left)
 
 
-def bracket_of(result: "object", progress: Optional[Reporter] = None, cancel: CancelToken = None) -> VolumeBracket:
-    """:func:`volume_bracket` on the grid, orientation and arc samples of a computed
-    ``kinematics.workspace.WorkspaceResult``."""
+def bracket_of(result: "object", progress: Optional[Reporter] = None, cancel: CancelToken = None,
+               refine: Optional[int] = None) -> VolumeBracket:
+    """:func:`volume_bracket` on the grid, orientation, arc samples and joint cones of a computed
+    ``kinematics.workspace.WorkspaceResult`` (``refine``: default the settings' ``bracket_refine``).
+
+    Raises:
+        ParameterError: with leg interference (the bracket does not model it).
+    """
     from .workspace import _kernel_args
 
     r: Any = result
+    if r.settings.joints.min_distance > 0.0:
+        raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
     args = _kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
-    return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel)
+    return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel,
+                          refine=r.settings.bracket_refine if refine is None else refine)

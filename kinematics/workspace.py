@@ -68,6 +68,8 @@ class WorkspaceSettings:
             continuous workspace volume (:mod:`kinematics.bracket`).
         joints: passive-joint cones and leg interference (:mod:`kinematics.joints`); the default
             is the paper's model (strokes only).
+        bracket_refine: halvings of the bracket's boundary cubes, 0-3 (each about halves the gap
+            and costs about four times the previous level; :mod:`kinematics.bracket`).
     """
 
     voxel: float = 2.0
@@ -80,8 +82,12 @@ class WorkspaceSettings:
     method: str = "blocks"
     bracket: bool = False
     joints: Joints = Joints()
+    bracket_refine: int = 2
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.bracket_refine, int) and not isinstance(self.bracket_refine, bool)
+                and 0 <= self.bracket_refine <= 3):
+            raise ParameterError("bracket_refine", self.bracket_refine, "[0, 3] (an integer)")
         if not isinstance(self.joints, Joints):
             raise ParameterError("joints", self.joints, "a Joints value")
         if self.bracket and self.joints.min_distance > 0.0:
@@ -440,7 +446,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
 
         t1 = time.perf_counter()
         br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta, settings.joints),
-                            n_eta, settings.z_floor, cancel=cancel)
+                            n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine)
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
