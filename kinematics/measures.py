@@ -477,6 +477,13 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         bmin.append(float(grid.origin[a] + h * lo_i - 0.5 * h))
         bmax.append(float(grid.origin[a] + h * hi_i + 0.5 * h))
 
+    # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
+    # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
+    # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
+    lo_i = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
+    hi_i = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
+    occ = occ[lo_i[0]:hi_i[0], lo_i[1]:hi_i[1], 0:hi_i[2]]
+
     # topology
     labels, components = ndi.label(occ, structure=_structure(connectivity))
     largest = float(np.bincount(labels.ravel())[1:].max() / n)
@@ -525,7 +532,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         void_ratio=_ratio(void_volume, volume),
         hollowness=_ratio(hollow_volume, volume), column_gap_ratio=_ratio(gap_volume, volume),
         boundary_closed=closed, genus=genus, euler_characteristic=chi_w,
-        box_contact_fraction=box_contact_fraction(occ),
+        box_contact_fraction=box_contact_fraction(result.occupancy),
         boundary_complete=complete, chain_binding=binding,
         hollow_volume=hollow_volume, filled_components=int(filled_components),
         touched_faces=touched, clipped_faces=clipped, hull_volume=hull_volume,

@@ -320,3 +320,28 @@ def test_default_design_measures(default_h6):
     assert c2["fails_volume"] == c3["fails_volume"]
     assert abs(c1["fails_fraction"] - c2["fails_fraction"]) < 0.02
     assert c1["fails_fraction"] + c2["fails_fraction"] + c3["fails_fraction"] >= 1.0
+
+
+@pytest.mark.parametrize("a", [50.0, 10.0, 80.0])
+def test_measures_do_not_depend_on_empty_space_around_the_workspace(a):
+    """measure_workspace works on the workspace's box (issue 10): the same occupancy inside a grid
+    with 12 more empty layers in x and y and 7 on top gives the same measures (except the ones that
+    describe the box itself)."""
+    import dataclasses
+
+    from paraspace.kinematics.grid import GridSpec
+    from paraspace.kinematics.measures import measure_workspace
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    res = compute_workspace(Design(a=a), WorkspaceSettings(voxel=4.0))
+    g = res.grid
+    pad = ((12, 12), (12, 12), (0, 7))
+    big = dataclasses.replace(
+        res, occupancy=np.pad(res.occupancy, pad),
+        grid=GridSpec(origin=(g.origin[0] - 12 * g.h, g.origin[1] - 12 * g.h, g.origin[2]), h=g.h,
+                      shape=tuple(n + p[0] + p[1] for n, p in zip(g.shape, pad))))
+    m0, m1 = measure_workspace(res).to_dict(), measure_workspace(big).to_dict()
+    for key in ("touched_faces", "clipped_faces", "box_contact_fraction", "boundary_closed", "boundary_complete",
+                "completeness_reason"):
+        m0.pop(key), m1.pop(key)
+    assert m0 == m1
