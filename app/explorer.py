@@ -101,10 +101,11 @@ _OPT_DEFAULT_QUERY = {k: (f"{_OPT_DEFAULTS[v]:g}" if isinstance(_OPT_DEFAULTS[v]
 
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
     """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
-    (block re-mesh: fast, smooth and volume-preserving, which is what a display needs)."""
-    from paraspace.kinematics.shell import workspace_shell
+    (block re-mesh: fast and volume-preserving) and smoothed for display (no voxel terracing;
+    :func:`kinematics.shell.smooth_for_display`)."""
+    from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
-    return workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh")
+    return smooth_for_display(workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh"))
 
 
 def _fmt(v: Optional[float], digits: int = 4) -> str:
