@@ -358,7 +358,7 @@ class ClientSession:
                     self.mechanism.set_design(s.design, s.pose, res.d, res.eta, res.leg_status)
                 else:
                     self.mechanism.update_pose(s.pose, res.d, res.eta, res.leg_status)
-                self.shell.set_marker(s.pose.position, inside)
+                self.mechanism.set_reachable(inside)
                 self.gizmo.position = s.pose.position
                 self.gizmo.wxyz = self.mechanism.platform.wxyz
             with self.lock:
@@ -744,7 +744,20 @@ class ClientSession:
         with self.lock:
             if gen == self._ws_gen:
                 self._ws_job = job
+        self._mark_stale()
         self._set_status(gen, "queued...", 0.0, running=True)
+
+    def _mark_stale(self) -> None:
+        """The shell on screen belongs to an older state while a new one computes: say so on it and
+        in the legend (cleared when the new shell is shown)."""
+        with self.view_lock:
+            if self.closed or self.shell.source is None:
+                return
+            with self.client.atomic():
+                self.shell.set_stale("previous result - recomputing")
+                zr = self.shell.z_range()
+                if zr is not None:
+                    self.panels.legend.show_z_range(*zr, stale=True)
 
     def _workspace_fn(self, gen: int, s: ExplorerState) -> Callable[[Callable[[float, str], None], threading.Event], Any]:
         design = s.design
@@ -849,6 +862,10 @@ class ClientSession:
                 s = self.state
             with self.client.atomic():
                 size = self.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                self.shell.set_stale(None)
+                zr = self.shell.z_range()
+                if zr is not None:
+                    self.panels.legend.show_z_range(*zr)
             with self.lock:
                 if preview:
                     self.preview = bundle
@@ -876,8 +893,43 @@ class ClientSession:
         self._event("measures-preview" if preview else "measures-full")
 
     def stop_workspace(self) -> None:
-        """The Stop button: cancel the running workspace job."""
+        """The Stop button: cancel the running workspace job and go back to the state of the shell on
+        screen (design, orientation, voxel, joints), so the controls, the numbers and the link all
+        describe a result that exists (issue 8 defect 10)."""
         self._cancel_job(self._ws_job)
+        shown = self.bundle
+        if shown is None:
+            return
+        r = shown.result
+        psi, theta, phi = r.settings.orientation
+        with self.input_lock:
+            with self.lock:
+                s = self.state
+                back = s.replace(design=r.design, voxel=float(r.settings.voxel), joints=r.settings.joints,
+                                 pose=dataclasses.replace(s.pose, psi=psi, theta=theta, phi=phi))
+                if back == s:
+                    return
+                self._ws_gen += 1  # late progress of the cancelled job must not touch the status
+                self.state = back
+            p = self.panels
+            with self.programmatic():
+                for key in DESIGN_KEYS:
+                    h, v = p.design[key], float(getattr(r.design, key))
+                    h.min, h.max = slider_span(DESIGN_SLIDERS[key].lo, DESIGN_SLIDERS[key].hi, v)
+                    h.value = v
+                p.eta_range.value = r.design.eta_range
+                p.voxel.value = float(r.settings.voxel)
+                for k, v in (("psi", psi), ("theta", theta), ("phi", phi)):
+                    p.pose[k].value = v
+                p.joints.show(r.settings.joints)
+        self._set_carriage_slider_ranges(r.design, list(self.state.d), list(self.state.eta))
+        self.shell.set_stale(None)
+        zr = self.shell.z_range()
+        if zr is not None:
+            self.panels.legend.show_z_range(*zr)
+        self._set_status(self._ws_gen, "stopped: back to the design on screen", 100.0, running=False)
+        self.update_mechanism()
+        self.schedule_url()
 
     def _cancel_job(self, job: Optional[Job]) -> None:
         if job is not None and not job.is_final:
@@ -1179,9 +1231,12 @@ class ClientSession:
     def copy_link(self) -> None:
         """Bring the address bar up to date and try to copy the link to the clipboard."""
         self._sync_url_now()
-        jsbridge.copy_to_clipboard(self.client, self.link())
-        self._notify("Link", "copied to the clipboard (if the browser allowed it); it is also in the text "
-                             "field above", color="blue")
+        ok = jsbridge.copy_to_clipboard(self.client, self.link())
+        if ok:
+            self._notify("Link copied", "the link to this design, pose and view is on the clipboard", color="green")
+        else:
+            self._notify("Link not copied", "the browser did not allow the clipboard here; select the link in "
+                                            "the text field above and copy it (Ctrl+C)", color="orange")
 
     # ----- teardown --------------------------------------------------------------------------------
     def close(self) -> None:

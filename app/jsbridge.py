@@ -72,10 +72,28 @@ def replace_query(client: viser.ClientHandle, query: str) -> None:
     ))
 
 
-def copy_to_clipboard(client: viser.ClientHandle, text: str) -> None:
-    """Try to put ``text`` on the clipboard of this client's browser (best effort)."""
+def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.0) -> Optional[bool]:
+    """Try to put ``text`` on the clipboard of this client's browser and report what happened:
+    ``True`` copied, ``False`` refused by the browser (e.g. not a secure context, no permission),
+    ``None`` no answer within ``timeout`` seconds. Blocks for one round trip (a ``def`` callback)."""
+    key = f"paraspace_clip_{client.client_id}"
+    k = json.dumps(VISER_STORAGE_PREFIX + key)
     run_js(client, (
-        f"var t = {json.dumps(text)};"
+        f"var t = {json.dumps(text)}; var k = {k};"
+        "function put(v) { localStorage.setItem(k, v); }"
         "if (navigator.clipboard && navigator.clipboard.writeText) {"
-        " navigator.clipboard.writeText(t).catch(function (e) { console.warn('clipboard:', e); }); }"
+        " navigator.clipboard.writeText(t).then(function () { put('ok'); },"
+        " function (e) { console.warn('clipboard:', e); put('refused'); }); }"
+        " else { put('refused'); }"
     ))
+    try:
+        raw = client.local_storage.get_item(key, timeout=timeout)
+    except (TimeoutError, RuntimeError):
+        return None
+    try:
+        client.local_storage.remove_item(key)
+    except Exception:  # noqa: BLE001 - the client may be gone already
+        pass
+    if raw is None:
+        return None
+    return raw == "ok"

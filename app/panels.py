@@ -24,6 +24,7 @@ import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 
 from .joints_panel import JointsControls, build_joints_folder
+from .legend import LegendPanel, build_legend_folder
 from .urlstate import (
     CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS,
     POSE_SLIDERS, SETTING_SLIDERS, ExplorerState,
@@ -47,6 +48,7 @@ class Panels:
     stop: Any
     numbers: Any
     tabs: Any
+    legend: LegendPanel
     # design
     design: dict[str, Any]
     eta_range: Any
@@ -118,6 +120,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         stop = gui.add_button("Stop computation", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
     with gui.add_folder("Numbers", expand_by_default=True):
         numbers = gui.add_markdown("*computing...*")
+    legend = build_legend_folder(gui)
     tabs = gui.add_tab_group()
 
     with tabs.add_tab("Design", viser.Icon.RULER_MEASURE):
@@ -216,6 +219,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
 
     return Panels(
         url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
+        legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
         view_buttons=view_buttons, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,

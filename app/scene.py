@@ -6,7 +6,10 @@ joints, and the platform with its frame. Static parts are rebuilt when the desig
 change only moves nodes (a few array assignments inside ``client.atomic()``).
 
 :class:`ShellScene` shows the marching-cubes shell of the workspace (colored by z, translucent,
-optionally cut by a horizontal plane) and the current pose as a green (reachable) or red point.
+optionally cut by a horizontal plane). The platform plate is green when the pose lies in the
+workspace and red otherwise, with a label above it; legs outside their stroke carry a label naming
+their state; the x, y, z axes are drawn from the origin with labelled tips. Labels are screen
+overlays: the translucent shell and the drag gizmo never hide them.
 The shell is sent as a GLB (vertex colors survive; a material with alpha is patched in).
 
 Coordinates are the paper's base frame ``O-xyz`` (z up), in the paper's dimensionless lengths.
@@ -142,6 +145,23 @@ class MechanismScene:
         self.platform_mesh = sc.add_mesh_simple("/platform/plate", verts, faces, color=PLATFORM_COLOR,
                                                 opacity=0.85, side="double", cast_shadow=False,
                                                 receive_shadow=False)
+        # labels are drawn over the 3-D scene: never hidden by the translucent shell or the gizmo
+        self.pose_label = sc.add_label("/platform/pose_label", "P", position=(0.0, 0.0, 0.9 * design.a),
+                                       font_size_mode="screen", font_screen_scale=0.9)
+        self.leg_labels = [sc.add_label(f"/mechanism/leg_label_{k}", "", position=(0.0, 0.0, 0.0), visible=False,
+                                        font_size_mode="screen", font_screen_scale=0.75) for k in range(6)]
+        self._leg_mid = ctr
+        self._leg_status = leg_status
+        self._show_leg_labels()
+        ax_len = 1.35 * design.r
+        self.axes = sc.add_line_segments(
+            "/mechanism/axes", np.array([[[0, 0, 0], [ax_len, 0, 0]], [[0, 0, 0], [0, ax_len, 0]],
+                                         [[0, 0, 0], [0, 0, ax_len]]], float),
+            np.array([[[200, 40, 40]] * 2, [[40, 150, 40]] * 2, [[40, 70, 200]] * 2], np.uint8), thickness=2.0)
+        self.axis_labels = [sc.add_label(f"/mechanism/axis_{n}", n, position=tuple(1.08 * ax_len * e),
+                                         font_size_mode="screen", font_screen_scale=0.9)
+                            for n, e in (("x", np.array([1.0, 0, 0])), ("y", np.array([0, 1.0, 0])),
+                                         ("z", np.array([0, 0, 1.0])))]
 
     @staticmethod
     def _geometry(design: Design) -> dict[str, Any]:
@@ -215,6 +235,12 @@ class MechanismScene:
         self.platform.axes_radius = 0.03 * design.a
         self.platform.origin_radius = 0.05 * design.a
         self.platform_mesh.vertices = g["plate"][0]
+        self.pose_label.position = (0.0, 0.0, 0.9 * design.a)
+        ax_len = 1.35 * design.r
+        self.axes.points = np.array([[[0, 0, 0], [ax_len, 0, 0]], [[0, 0, 0], [0, ax_len, 0]],
+                                     [[0, 0, 0], [0, 0, ax_len]]], float)
+        for lab, e in zip(self.axis_labels, np.eye(3)):
+            lab.position = tuple(1.08 * ax_len * e)
         self.design = design
         self.update_pose(pose, d, eta, leg_status)
 
@@ -235,6 +261,26 @@ class MechanismScene:
         self.radials.points = self._radial_segments(design, eta)
         self.platform.position = pose.position
         self.platform.wxyz = rotation_wxyz(pose.rotation)
+        self._leg_mid = ctr
+        self._leg_status = leg_status
+        self._show_leg_labels()
+
+    def _show_leg_labels(self) -> None:
+        """A label on every leg that is not inside its stroke (its state in words)."""
+        for k, lab in enumerate(self.leg_labels):
+            st = self._leg_status[k // 2][k % 2]
+            if st == "inside":
+                lab.visible = False
+                continue
+            lab.text = f"chain {k // 2 + 1} leg {k % 2 + 1}: {LEG_STATE_TEXT.get(st, st)}"
+            lab.position = tuple(float(v) for v in self._leg_mid[k])
+            lab.visible = True
+
+    def set_reachable(self, reachable: bool) -> None:
+        """Colour the platform plate by whether the pose lies in the workspace and say so in a label
+        above it (the label stays readable over the shell and the drag gizmo)."""
+        self.platform_mesh.color = REACHABLE_COLOR if reachable else UNREACHABLE_COLOR
+        self.pose_label.text = "P: in the workspace" if reachable else "P: outside the workspace"
 
 
 # --------------------------------------------------------------------------------------------
@@ -309,8 +355,8 @@ class ShellScene:
         self.source: Optional[trimesh.Trimesh] = None
         self.last_payload_bytes = 0
         self.last_faces = 0
-        self.marker = scene.add_icosphere("/workspace/pose_marker", radius=5.0, color=REACHABLE_COLOR,
-                                          subdivisions=2)
+        self.stale_label = scene.add_label("/workspace/stale_label", "", position=(0.0, 0.0, 0.0), visible=False,
+                                           font_size_mode="screen", font_screen_scale=1.0)
 
     def show(self, mesh: Optional[trimesh.Trimesh], opacity: float, cut: bool, cut_z: float, keep: str) -> int:
         """Replace the shell (``None`` removes it); returns the GLB payload size in bytes."""
@@ -346,7 +392,20 @@ class ShellScene:
         self.last_faces = int(len(shown.faces))
         return len(glb)
 
-    def set_marker(self, position: np.ndarray, reachable: bool) -> None:
-        """Move the pose marker; green when the pose is inside the workspace, red otherwise."""
-        self.marker.position = np.asarray(position, float)
-        self.marker.color = REACHABLE_COLOR if reachable else UNREACHABLE_COLOR
+    def set_stale(self, text: Optional[str]) -> None:
+        """Mark the shown shell as belonging to a previous design (``text`` over its top) or clear it."""
+        mesh = self.source
+        if not text or mesh is None or len(mesh.vertices) == 0:
+            self.stale_label.visible = False
+            return
+        top = mesh.vertices[np.argmax(mesh.vertices[:, 2])]
+        self.stale_label.text = text
+        self.stale_label.position = (float(top[0]), float(top[1]), float(top[2]) + 10.0)
+        self.stale_label.visible = True
+
+    def z_range(self) -> Optional[tuple[float, float]]:
+        """The z range that the shell's colours span (``None`` without a shell)."""
+        mesh = self.source
+        if mesh is None or len(mesh.vertices) == 0:
+            return None
+        return float(mesh.vertices[:, 2].min()), float(mesh.vertices[:, 2].max())

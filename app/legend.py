@@ -1,0 +1,83 @@
+"""The explorer's "Legend" folder: what the 3-D view's colours, labels and units mean.
+
+* a colour bar of the shell's height colouring (the viridis map of :func:`kinematics.shell.viridis`
+  over the shell's z range, with tick values), redrawn when a new shell arrives;
+* the leg colours by state, the platform's colour (pose in or out of the workspace), the axes;
+* the units: lengths in the paper's dimensionless units, volumes in units³, angles in degrees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+from typing import Any
+
+import numpy as np
+import viser
+
+from paraspace.kinematics.shell import viridis
+
+#: Pixel size of the colour bar image.
+BAR_SIZE = (360, 78)
+
+LEGEND_TEXT = (
+    "**Legs:** 🟦 inside their stroke · 🟧 at a limit · 🟥 out of range (a label names the leg)  \n"
+    "**Platform:** 🟩 the pose is in the workspace · 🟥 outside (label above the platform)  \n"
+    "**Axes:** x red, y green, z blue, from the base centre; grid cells r/5, sections r  \n"
+    "**Units:** lengths in the paper's units (dimensionless, r = 100 by default), volumes in units³, "
+    "angles in degrees"
+)
+
+
+@dataclasses.dataclass
+class LegendPanel:
+    """Handles of one client's Legend folder."""
+
+    colorbar: Any
+    caption: Any
+    text: Any
+
+    def show_z_range(self, lo: float, hi: float, stale: bool = False) -> None:
+        """Redraw the colour bar for a shell spanning ``z in [lo, hi]``."""
+        self.colorbar.image = colorbar_image(lo, hi)
+        self.caption.content = (f"Shell colour = height z, from {lo:.4g} (bottom) to {hi:.4g} (top), length units"
+                                + (" - *previous design, recomputing*" if stale else ""))
+
+
+def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE) -> np.ndarray:
+    """RGB image (H, W, 3) of the shell's colour map from ``lo`` to ``hi`` with five labelled ticks
+    (drawn with matplotlib's object API: safe in worker threads)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import ListedColormap
+    from matplotlib.figure import Figure
+
+    w, h = size
+    fig = Figure(figsize=(w / 100.0, h / 100.0), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.04, 0.52, 0.92, 0.3))
+    cmap = ListedColormap(viridis(np.linspace(0.0, 1.0, 256))[:, :3] / 255.0)
+    span = hi - lo if hi > lo else 1.0
+    ax.imshow(np.linspace(0.0, 1.0, 256)[None, :], aspect="auto", cmap=cmap, extent=(lo, lo + span, 0.0, 1.0))
+    ax.set_yticks([])
+    ticks = np.linspace(lo, lo + span, 5)
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([f"{t:.3g}" for t in ticks], fontsize=9)
+    ax.set_xlabel("z (length units)", fontsize=9, labelpad=1)
+    fig.canvas.draw()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="raw", dpi=100)
+    rgba = np.frombuffer(buf.getvalue(), np.uint8).reshape(int(fig.bbox.height), int(fig.bbox.width), 4)
+    return np.ascontiguousarray(rgba[:, :, :3])
+
+
+def build_legend_folder(gui: viser.GuiApi) -> LegendPanel:
+    """The Legend folder (open by default: a first-time user needs it)."""
+    with gui.add_folder("Legend", expand_by_default=True):
+        colorbar = gui.add_image(np.full((BAR_SIZE[1], BAR_SIZE[0], 3), 255, np.uint8), format="png",
+                                 label="shell colour = height z")
+        caption = gui.add_markdown("Shell colour = height z (waiting for the workspace)")
+        text = gui.add_markdown(LEGEND_TEXT)
+    return LegendPanel(colorbar=colorbar, caption=caption, text=text)
