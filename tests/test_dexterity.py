@@ -158,3 +158,29 @@ def test_kappa_min_is_validated(coarse, bad):
 def test_mode_is_validated(coarse):
     with pytest.raises(ParameterError, match="mode"):
         dexterity_field(coarse, mode="worst")
+
+
+def cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_cli_workspace_dexterity_json():
+    proc = cli("workspace", "--voxel", "8", "--dexterity", "--kappa-min", "0.004", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    ref = dexterity_field(compute_workspace(DESIGN, WorkspaceSettings(voxel=8.0)), 0.004)
+    assert out["gci"] == pytest.approx(ref.gci)
+    assert out["well_conditioned_volume"] == pytest.approx(ref.well_conditioned_volume)
+    assert out["kappa_min"] == 0.004 and out["dexterity"]["dexterity_mode"] == "resolved"
+
+
+@pytest.mark.parametrize("args,field,valid", [(("--kappa-min", "0"), "kappa_min", "(0, 1]"),
+                                              (("--kappa-min", "abc"), "kappa_min", "(0, 1]"),
+                                              (("--dexterity", "--dexterity-mode", "worst"), "dexterity_mode",
+                                               "resolved or best")])
+def test_cli_dexterity_bad_input(args, field, valid):
+    proc = cli("workspace", "--voxel", "8", *args, "--json")
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and valid in lines[0]

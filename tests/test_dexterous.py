@@ -114,3 +114,36 @@ def test_bad_input(kw, field):
 def test_nonzero_base_orientation_is_refused():
     with pytest.raises(ParameterError, match="orientation"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, settings=WorkspaceSettings(voxel=8.0, orientation=(0, 5, 0)))
+
+
+def cli(*args: str):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_cli_workspace_total_orientation_json(plain):
+    import json
+
+    proc = cli("workspace", "--voxel", "8", "--tilt", "10", "--torsion", "10", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    ref = run(10.0, 10.0, 5.0, plain)
+    t = out["total_orientation"]
+    assert t["volume"] == pytest.approx(ref.volume) and t["voxels"] == ref.voxels
+    assert t["orientations"] == len(ref.samples) and t["tilt"] == 10.0 and t["torsion"] == 10.0
+    assert t["measures"]["volume"] == pytest.approx(ref.volume)
+    assert out["volume"] == pytest.approx(plain.volume)  # the position workspace stays the top level
+
+
+@pytest.mark.parametrize("args,field,rng", [(("--tilt", "100"), "tilt", "[0, 90]"),
+                                            (("--torsion", "-1"), "torsion", "[0, 180]"),
+                                            (("--tilt", "5", "--angle-step", "0"), "angle_step", "[0.25, 30]"),
+                                            (("--tilt", "nan"), "tilt", "[0, 90]")])
+def test_cli_total_orientation_bad_input(args, field, rng):
+    proc = cli("workspace", "--voxel", "8", *args, "--json")
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and rng in lines[0]

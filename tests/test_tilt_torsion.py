@@ -109,3 +109,32 @@ def test_unreachable_position():
 def test_settings_are_validated(field, value):
     with pytest.raises(ParameterError, match=field):
         TiltTorsionSettings(**{field: value})
+
+
+def cli(*args: str):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_cli_orientation_at_json():
+    import json
+
+    proc = cli("orientation", "--at", "20,10,120", "--azimuth-step", "30", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    ref = tilt_torsion_at(DESIGN, (20.0, 10.0, 120.0), TiltTorsionSettings(azimuth_step=30.0)).to_dict()
+    assert out["max_tilt"] == pytest.approx(ref["max_tilt"]) and out["azimuths"] == ref["azimuths"]
+    assert out["torsion_range"] == pytest.approx(ref["torsion_range"])
+    assert out["min_max_tilt"] == pytest.approx(min(ref["max_tilt"])) and out["reachable"]
+
+
+@pytest.mark.parametrize("args,field", [(("--at", "1,2"), "at"), (("--at", "1,2,x"), "at"),
+                                        (("--at", "0,0,130", "--azimuth-step", "0"), "azimuth_step")])
+def test_cli_orientation_at_bad_input(args, field):
+    proc = cli("orientation", *args, "--json")
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ")
