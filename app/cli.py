@@ -1,7 +1,10 @@
 """The ``paraspace`` command line.
 
     paraspace workspace   [design flags] [joint flags] [--voxel H] [--json] [--export FILE.stl|.ply|.obj|.glb]
+                          [--bracket [--bracket-refine N]] [--tilt DEG --torsion DEG [--angle-step DEG]]
+                          [--dexterity [--kappa-min X]]
     paraspace orientation [design flags] [joint flags] [--z0 Z] [--position-delta per_region|line|phi] [--json]
+    paraspace orientation [design flags] [joint flags] --at x,y,z [--azimuth-step DEG] [--json]   (tilt-and-torsion)
     paraspace sweep       [design flags] --param NAME --values V1,V2,... [--param2 NAME --values2 ...]
                           [--voxel H] [--json] [--csv FILE] [--plot FILE.png] [--scheduler ADDR] [--workers N]
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
@@ -103,6 +106,16 @@ def _voxel(ns: argparse.Namespace) -> float:
         raise ParameterError("voxel", ns.voxel, "[0.25, 100] (a number)") from None
 
 
+def _float_arg(field: str, raw: Any, valid: str) -> float:
+    try:
+        v = float(raw)
+    except (TypeError, ValueError):
+        raise ParameterError(field, raw, f"{valid} (a number)") from None
+    if not math.isfinite(v):
+        raise ParameterError(field, raw, valid)
+    return v
+
+
 def _emit(obj: Any) -> None:
     json.dump(obj, sys.stdout, indent=2)
     sys.stdout.write("\n")
@@ -120,6 +133,21 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
                                  bracket_refine=refine,
                                  joints=_joints(ns))
+    from paraspace.kinematics.dexterous import check_step, orientation_samples
+
+    step = check_step(_float_arg("angle_step", ns.angle_step, "[0.25, 30] degrees"))
+    total = ns.tilt is not None or ns.torsion is not None
+    if total:
+        tilt = _float_arg("tilt", 0.0 if ns.tilt is None else ns.tilt, "[0, 90] degrees")
+        torsion = _float_arg("torsion", 0.0 if ns.torsion is None else ns.torsion, "[0, 180] degrees")
+        orientation_samples(tilt, torsion, step)  # validates tilt and torsion
+    dexterity = ns.dexterity or ns.kappa_min is not None
+    if dexterity:
+        from paraspace.kinematics.dexterity import MODES, check_kappa_min
+
+        kappa_min = check_kappa_min(0.005 if ns.kappa_min is None else ns.kappa_min)
+        if ns.dexterity_mode not in MODES:
+            raise ParameterError("dexterity_mode", ns.dexterity_mode, " or ".join(MODES))
     fmt = None
     if ns.export:
         fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
@@ -144,6 +172,18 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         from paraspace.kinematics.diagnostics import limit_binding
 
         out["limit_binding"] = limit_binding(result).to_dict()
+    if dexterity:
+        from paraspace.kinematics.dexterity import dexterity_field
+
+        dex = dexterity_field(result, kappa_min, ns.dexterity_mode).summary()
+        out["gci"], out["well_conditioned_volume"], out["kappa_min"] = (
+            dex["gci"], dex["well_conditioned_volume"], dex["kappa_min"])
+        out["dexterity"] = dex
+    if total:
+        from paraspace.kinematics.dexterous import total_orientation_workspace
+
+        dx = total_orientation_workspace(design, tilt, torsion, step, settings, position=result)
+        out["total_orientation"] = {**dx.summary(), "measures": measure_workspace(dx.result).to_dict()}
     if fmt:
         from paraspace.kinematics.shell import export_shell, workspace_shell
 
@@ -165,6 +205,15 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
             print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
+        if dexterity:
+            d = out["dexterity"]
+            print(f"gci             {d['gci']:.6g}  (mean 1/kappa of eq. (26), {d['dexterity_mode']} carriages; "
+                  f"range {d['inverse_condition_min']:.3g} .. {d['inverse_condition_max']:.3g})")
+            print(f"well_cond_volume {d['well_conditioned_volume']:.6g}  (1/kappa >= {d['kappa_min']:g})")
+        if total:
+            t = out["total_orientation"]
+            print(f"total_orient_vol {t['volume']:.6g}  (tilt <= {t['tilt']:g}, |torsion| <= {t['torsion']:g} deg; "
+                  f"{t['orientations']} orientations, step {t['angle_step']:g} deg; {t['seconds']:.1f} s)")
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
     return 0
@@ -175,6 +224,8 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.workspace import warm_up
 
     design = _design(ns)
+    if ns.at is not None:
+        return _tilt_torsion(ns, design)
     try:
         z0 = float(ns.z0)
     except (TypeError, ValueError):
@@ -195,6 +246,31 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
             print(f"note: {out['saturation_note']}")
         for name, val in out.get("deltas", {}).items():
             print(f"  {name:<8} {val:.6g}")
+    return 0
+
+
+def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
+    """``paraspace orientation --at x,y,z``: the tilt-and-torsion report at one position."""
+    from paraspace.kinematics.tilt_torsion import TiltTorsionSettings, tilt_torsion_at
+    from paraspace.kinematics.workspace import warm_up
+
+    at = _floats("at", ns.at, 3)
+    settings = TiltTorsionSettings(azimuth_step=_float_arg("azimuth_step", ns.azimuth_step, "(0, 90] degrees"))
+    warm_up()
+    joints = _joints(ns)
+    report = tilt_torsion_at(design, at, settings, joints)
+    out = {"design": design.to_dict(), "joints": joints.to_dict(), **report.to_dict()}
+    if ns.json:
+        _emit(out)
+    elif not report.reachable:
+        print(f"position {at} is not reachable at the zero orientation")
+    else:
+        az, mt = out["azimuths"], out["max_tilt"]
+        k = int(min(range(len(mt)), key=lambda i: mt[i]))
+        print(f"tilt (zero torsion): {out['min_max_tilt']:.4g} deg in every direction "
+              f"(smallest at azimuth {az[k]:g}), up to {out['max_max_tilt']:.4g} deg")
+        sat = " (scan limit)" if any(out["torsion_saturated"]) else ""
+        print(f"torsion (zero tilt): {out['torsion_range'][0]:.4g} .. {out['torsion_range'][1]:.4g} deg{sat}")
     return 0
 
 
@@ -506,12 +582,28 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also certify volume_inner <= V <= volume_outer for the continuous workspace")
     w.add_argument("--diagnostics", action="store_true",
                    help="which chain and which leg limit bind (evaluates every chain everywhere; slower)")
+    w.add_argument("--tilt", metavar="DEG",
+                   help="total-orientation workspace: every tilt up to DEG (all azimuths), [0, 90]")
+    w.add_argument("--torsion", metavar="DEG",
+                   help="total-orientation workspace: every torsion in [-DEG, DEG], [0, 180]")
+    w.add_argument("--angle-step", dest="angle_step", default=5.0, metavar="DEG",
+                   help="largest spacing of the total-orientation samples (default 5 degrees)")
+    w.add_argument("--dexterity", action="store_true",
+                   help="1/kappa of eq. (26) over the workspace: gci and well_conditioned_volume")
+    w.add_argument("--kappa-min", dest="kappa_min", metavar="X",
+                   help="threshold on 1/kappa of the well-conditioned workspace, (0, 1] (default 0.005)")
+    w.add_argument("--dexterity-mode", dest="dexterity_mode", default="resolved", metavar="resolved|best",
+                   help="carriage pose of 1/kappa: the redundancy resolution's (default) or the best sampled")
     _add_joint_flags(w)
     w.set_defaults(func=cmd_workspace)
 
     o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")
     _add_design_flags(o)
     o.add_argument("--z0", default=130.0, help="height of the x and y' lines (default 130)")
+    o.add_argument("--at", metavar="x,y,z",
+                   help="tilt-and-torsion report at this position instead: maximal tilt per azimuth, torsion range")
+    o.add_argument("--azimuth-step", dest="azimuth_step", default=5.0, metavar="DEG",
+                   help="azimuth spacing of the tilt-and-torsion report (default 5)")
     o.add_argument("--json", action="store_true")
     o.add_argument("--position-delta", dest="position_delta", default="per_region",
                    choices=("per_region", "line", "phi"),

@@ -2,7 +2,8 @@
 
 Model, inverse/forward kinematics, redundancy resolution, Jacobians and mobility of the
 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism; its position and orientation workspaces,
-their measures, shells and parameter studies.
+their measures, shells and parameter studies; dexterity (1/kappa, GCI), the tilt-and-torsion
+orientation report and the total-orientation workspace.
 
 Heavier modules (measures, shell, orientation, sweep, distributed) import lazily, so
 ``import kinematics`` stays cheap.
@@ -28,6 +29,9 @@ _LAZY = {
     "workspace_shell": "shell", "export_shell": "shell",
     "orientation_workspace": "orientation", "OrientationSettings": "orientation",
     "sweep_1d": "sweep", "sweep_2d": "sweep", "evaluate_design": "sweep", "ResultCache": "sweep",
+    "dexterity_at": "dexterity", "dexterity_field": "dexterity",
+    "tilt_torsion_at": "tilt_torsion", "TiltTorsionSettings": "tilt_torsion",
+    "total_orientation_workspace": "dexterous",
 }
 
 

@@ -1,0 +1,454 @@
+"""Dexterity: local conditioning ``1/kappa`` of the homogeneous Jacobian (paper eq. (26), ``L = a/2``),
+as a value at a pose and as a field over a computed workspace, with the Gosselin-Angeles global
+conditioning index (GCI) and the well-conditioned workspace.
+
+Definitions (our documented reading of the paper and of Gosselin & Angeles 1991)
+--------------------------------------------------------------------------------
+* ``J = J_h^{-1} J_q`` (eq. (26); :mod:`kinematics.jacobian` for ``J_x``, ``J_q``, ``J_h``) at a pose
+  and a carriage pose ``(d_i, eta_i)``; ``kappa = sigma_max(J) / sigma_min(J)`` (2-norm condition
+  number of the 6 x 12 matrix), and the local conditioning index is ``1/kappa in [0, 1]``
+  (0 where ``J_h`` is singular).
+* **Resolved** (``mode="resolved"``, default): the carriage pose is the one chosen by the
+  redundancy resolution (:func:`kinematics.redundancy.resolve_redundancy`: per chain the
+  ``(eta, d)`` that keeps both legs furthest inside their limits).
+* **Best** (``mode="best"``): the largest ``1/kappa`` over feasible carriage poses. ``J``'s rows of
+  chain ``i`` depend only on chain ``i``'s carriage, but ``kappa`` couples the chains, so the search
+  is over a product set. Sampling (stated): per chain the ``n_eta x n_d`` grid of
+  ``eta in linspace(eta_lo, eta_hi, n_eta)``, ``d in linspace(0, d_s, n_d)`` (defaults 7 x 6), a
+  sample kept only if both of the chain's legs are inside ``[l_min, l_max]``; the search starts at
+  the resolved carriage pose and does ``sweeps`` (default 2) passes of coordinate ascent (for
+  chain 1, 2, 3 in turn: the best of its feasible samples with the other two chains fixed). It
+  is therefore a lower bound of the true best over the continuous strokes, and never below the
+  resolved value. :func:`dexterity_at` with ``search="exhaustive"`` searches the whole product of
+  the per-chain samples instead (pointwise only; ``(n_eta n_d)^3`` Jacobians).
+* **Field** over a :class:`kinematics.workspace.WorkspaceResult`: ``1/kappa`` at the centre of
+  every reachable voxel, at the workspace's constant orientation (NaN outside the workspace).
+* **GCI** = the mean of ``1/kappa`` over the reachable voxels, the voxel form of Gosselin-Angeles'
+  ``int_W (1/kappa) dV / int_W dV``.
+* **Well-conditioned workspace**: the reachable voxels with ``1/kappa >= kappa_min``; its volume is
+  their count times ``h^3``.
+
+Scale of the numbers: eq. (26) homogenises only ``J_x``; ``J_q``'s arc columns ``f = s . t`` are
+lengths per radian (``|t| ~ r - d``, norm about 20 for the paper's design) while its leg and radial
+columns are dimensionless (norm 1 and 0.5). ``sigma_max`` is therefore set by the arc columns and
+``1/kappa`` stays small: at most about 0.012 over the paper's design's workspace (GCI 0.0029), so
+a threshold like 0.1 selects nothing; the CLI's default ``kappa_min`` is 0.005 (about the upper
+quarter of the workspace). Dividing the arc columns by ``L`` as well would give ``1/kappa`` 0.14
+at the home pose ``(0, 0, 130)``; that is not the paper's definition and is not done here.
+
+Cost: the resolved carriage pose is found per voxel by a compiled copy of the resolver's search
+(a 73 x 61 grid and two 21 x 21 zooms per chain, about 5,300 margin evaluations per chain), the
+Jacobians are assembled by a compiled kernel and ``J`` and its singular values are computed with
+numpy's batched ``solve``/``svd`` in chunks of :data:`CHUNK` voxels. ``mode="best"`` adds
+``sweeps x 3 x n_eta x n_d`` Jacobians per voxel (252 with the defaults). Measured on 2 shared
+cores for the paper's design (resolved): 17 s for the 189,656 voxels at ``h = 3``, 51 s for the
+640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import time
+from typing import Optional, Sequence
+
+import numpy as np
+from numba import njit, prange
+
+from .design import Design, ParameterError
+from .geometry import LEG_SIGN, platform_points_local
+from .parallel import KERNEL_LOCK
+from .pose import Pose
+from .progress import CancelToken, ProgressFn, Reporter, check
+from .redundancy import resolve_redundancy
+from .rotation import euler_rate_matrix, euler_zyx_deg
+from .workspace import WorkspaceResult
+
+MODES: tuple[str, ...] = ("resolved", "best")
+#: Voxels per batched ``solve``/``svd`` call.
+CHUNK = 32768
+
+
+# --------------------------------------------------------------------------------------------
+# compiled kernels
+
+
+@njit(cache=True, inline="always")
+def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
+    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
+    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
+    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
+    dx = bx0 - (c * rho - s * hb)
+    dy = by0 - (s * rho + c * hb)
+    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
+    dx = bx1 - (c * rho + s * hb)
+    dy = by1 - (s * rho - c * hb)
+    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
+    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
+
+
+@njit(cache=True, inline="always")
+def _margin(bx0, by0, bz0, bx1, by1, bz1, varpi, rho, hb, lmin, lmax):
+    """:func:`_margin_cs` at the carriage angle ``varpi`` (radians)."""
+    return _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi), rho, hb, lmin, lmax)
+
+
+@njit(cache=True, inline="always")
+def _lin(lo, hi, n, k):
+    """``np.linspace(lo, hi, n)[k]``."""
+    if n == 1:
+        return lo
+    if k == n - 1:
+        return hi
+    return lo + k * ((hi - lo) / (n - 1))
+
+
+@njit(cache=True)
+def _best_carriage_one(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax):
+    """Compiled copy of :func:`kinematics.redundancy._best_carriage`: returns (rho, eta_rad)."""
+    lo_e, hi_e, lo_r, hi_r = e_lo, e_hi, r_lo, r_hi
+    n_e = 1 if hi_e <= lo_e else 73
+    n_r = 1 if hi_r <= lo_r else 61
+    be, br = 0.5 * (e_lo + e_hi), 0.5 * (r_lo + r_hi)
+    for _ in range(3):
+        best = -np.inf
+        ke, kr = 0, 0
+        for a in range(n_e):
+            varpi = gamma + _lin(lo_e, hi_e, n_e, a)
+            c, s = math.cos(varpi), math.sin(varpi)
+            for b in range(n_r):
+                m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, _lin(lo_r, hi_r, n_r, b), hb, lmin, lmax)
+                if m > best:
+                    best, ke, kr = m, a, b
+        be = _lin(lo_e, hi_e, n_e, ke)
+        br = _lin(lo_r, hi_r, n_r, kr)
+        de = (hi_e - lo_e) / max(n_e - 1, 1)
+        dr = (hi_r - lo_r) / max(n_r - 1, 1)
+        lo_e, hi_e = max(e_lo, be - 2 * de), min(e_hi, be + 2 * de)
+        lo_r, hi_r = max(r_lo, br - 2 * dr), min(r_hi, br + 2 * dr)
+        n_e = 1 if hi_e <= lo_e else 21
+        n_r = 1 if hi_r <= lo_r else 21
+    return br, be
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _resolve_kernel(points, u, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, rho_out, eta_out):
+    for p in prange(points.shape[0]):
+        for i in range(3):
+            g = 2.0 * math.pi * i / 3.0
+            rho, eta = _best_carriage_one(points[p, 0] + u[i, 0, 0], points[p, 1] + u[i, 0, 1],
+                                          points[p, 2] + u[i, 0, 2], points[p, 0] + u[i, 1, 0],
+                                          points[p, 1] + u[i, 1, 1], points[p, 2] + u[i, 1, 2],
+                                          g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax)
+            rho_out[p, i] = rho
+            eta_out[p, i] = eta
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _assemble_kernel(points, u, R2, rho, eta, hb, inv_L, J_h, J_q):
+    """``J_h`` (N, 6, 6) and ``J_q`` (N, 6, 12) of eqs. (23), (25), (26) for per-point carriages
+    ``rho = r - d`` (N, 3) and ``eta`` (N, 3, radians); ``J_q`` must come zeroed."""
+    for p in prange(points.shape[0]):
+        for i in range(3):
+            varpi = 2.0 * math.pi * i / 3.0 + eta[p, i]
+            c, s = math.cos(varpi), math.sin(varpi)
+            for j in range(2):
+                row = 2 * i + j
+                lat = hb if j == 0 else -hb
+                ux, uy, uz = u[i, j, 0], u[i, j, 1], u[i, j, 2]
+                vx = points[p, 0] + ux - (c * rho[p, i] - s * lat)
+                vy = points[p, 1] + uy - (s * rho[p, i] + c * lat)
+                vz = points[p, 2] + uz
+                n = math.sqrt(vx * vx + vy * vy + vz * vz)
+                sx, sy, sz = vx / n, vy / n, vz / n
+                # -s^T [u]_x R2 = (u x s)^T R2
+                cx = uy * sz - uz * sy
+                cy = uz * sx - ux * sz
+                cz = ux * sy - uy * sx
+                J_h[p, row, 0] = sx
+                J_h[p, row, 1] = sy
+                J_h[p, row, 2] = sz
+                for k in range(3):
+                    J_h[p, row, 3 + k] = (cx * R2[0, k] + cy * R2[1, k] + cz * R2[2, k]) * inv_L
+                J_q[p, row, row] = 1.0
+                J_q[p, row, 6 + i] = -(sx * c + sy * s)  # s . h, h = -(cos, sin, 0)
+                J_q[p, row, 9 + i] = sx * (-rho[p, i] * s - lat * c) + sy * (rho[p, i] * c - lat * s)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _chain_ok_kernel(points, u, i, rho, eta, hb, lmin, lmax, out):
+    """Whether chain ``i``'s legs are inside their limits at per-point carriage (rho, eta rad)."""
+    g = 2.0 * math.pi * i / 3.0
+    for p in prange(points.shape[0]):
+        m = _margin(points[p, 0] + u[i, 0, 0], points[p, 1] + u[i, 0, 1], points[p, 2] + u[i, 0, 2],
+                    points[p, 0] + u[i, 1, 0], points[p, 1] + u[i, 1, 1], points[p, 2] + u[i, 1, 2],
+                    g + eta, rho, hb, lmin, lmax)
+        out[p] = m >= -1e-9
+
+
+# --------------------------------------------------------------------------------------------
+# batched linear algebra
+
+
+def _inv_kappa_batch(J_h: np.ndarray, J_q: np.ndarray) -> np.ndarray:
+    """``1/kappa`` of ``J_h^{-1} J_q`` for a stack; 0 where ``J_h`` is singular."""
+    out = np.zeros(J_h.shape[0])
+    try:
+        J = np.linalg.solve(J_h, J_q)
+        ok = np.ones(J_h.shape[0], bool)
+    except np.linalg.LinAlgError:
+        J = np.empty_like(J_q)
+        ok = np.zeros(J_h.shape[0], bool)
+        for k in range(J_h.shape[0]):
+            try:
+                J[k] = np.linalg.solve(J_h[k], J_q[k])
+                ok[k] = True
+            except np.linalg.LinAlgError:
+                pass
+    if ok.any():
+        sv = np.linalg.svd(J[ok], compute_uv=False)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = sv[:, -1] / sv[:, 0]
+        out[ok] = np.where(np.isfinite(r), r, 0.0)
+    return out
+
+
+def _constants(design: Design, orientation_deg: Sequence[float]):
+    psi, theta, phi = (float(v) for v in orientation_deg)
+    rot = euler_zyx_deg(psi, theta, phi)
+    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
+    R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
+    return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
+
+
+def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0)
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """The redundancy resolution's carriage pose (module docstring) at many positions of one
+    orientation ``(psi, theta, phi)`` (degrees): ``d`` (N, 3) and ``eta`` (N, 3, degrees)."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    u, _R2, hb, _ = _constants(design, orientation)
+    e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
+    r_lo, r_hi = design.rho_limits
+    rho = np.zeros((pts.shape[0], 3))
+    eta = np.zeros((pts.shape[0], 3))
+    if pts.shape[0]:
+        with KERNEL_LOCK:
+            _resolve_kernel(pts, u, e_lo, e_hi, r_lo, r_hi, hb, design.l_min, design.l_max, rho, eta)
+    return design.r - rho, np.degrees(eta) + 0.0
+
+
+def inverse_condition_batch(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np.ndarray,
+                            orientation: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """``1/kappa`` of eq. (26)'s ``J`` at positions ``points`` (N, 3) of one orientation with
+    per-point carriages ``d`` (N, 3) and ``eta_deg`` (N, 3); batched (see the module docstring)."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    n = pts.shape[0]
+    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
+    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
+    u, R2, hb, inv_L = _constants(design, orientation)
+    out = np.zeros(n)
+    for s in range(0, n, CHUNK):
+        sl = slice(s, min(n, s + CHUNK))
+        m = sl.stop - sl.start
+        J_h = np.zeros((m, 6, 6))
+        J_q = np.zeros((m, 6, 12))
+        with KERNEL_LOCK:
+            _assemble_kernel(pts[sl], u, R2, rho[sl], eta[sl], hb, inv_L, J_h, J_q)
+        out[sl] = _inv_kappa_batch(J_h, J_q)
+    return out
+
+
+def carriage_samples(design: Design, n_eta: int = 7, n_d: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    """The per-chain carriage samples of ``mode="best"``: ``(d, eta_deg)``, each of length
+    ``n_eta * n_d`` (``eta`` outer), on ``linspace`` grids over the strokes."""
+    if not (isinstance(n_eta, int) and isinstance(n_d, int) and 1 <= n_eta <= 101 and 1 <= n_d <= 101):
+        raise ParameterError("carriage_samples", (n_eta, n_d), "[1, 101] samples of eta and of d")
+    lo, hi = design.eta_limits
+    eta = np.linspace(lo, hi, n_eta) if hi > lo and n_eta > 1 else np.array([lo])
+    d = np.linspace(0.0, design.d_s, n_d) if design.d_s > 0 and n_d > 1 else np.array([0.0])
+    ee, dd = np.meshgrid(eta, d, indexing="ij")
+    return dd.ravel(), ee.ravel()
+
+
+def _chain_ok(design: Design, pts: np.ndarray, u: np.ndarray, i: int, d: float, eta_deg: float, hb: float
+              ) -> np.ndarray:
+    out = np.zeros(pts.shape[0], np.bool_)
+    with KERNEL_LOCK:
+        _chain_ok_kernel(pts, u, i, design.r - d, math.radians(eta_deg), hb, design.l_min, design.l_max, out)
+    return out
+
+
+def best_inverse_condition_batch(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0),
+                                 n_eta: int = 7, n_d: int = 6, sweeps: int = 2,
+                                 cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``mode="best"`` at many positions (module docstring: coordinate ascent from the resolved
+    carriage pose over the per-chain samples). Returns ``(best, resolved, d, eta_deg)``: the best
+    ``1/kappa`` found, the resolved one, and the carriage pose of the best (N, 3 each)."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    d, eta = resolved_carriages(design, pts, orientation)
+    resolved = inverse_condition_batch(design, pts, d, eta, orientation)
+    best = resolved.copy()
+    u, _R2, hb, _ = _constants(design, orientation)
+    ds, es = carriage_samples(design, n_eta, n_d)
+    for _sweep in range(int(sweeps)):
+        for i in range(3):
+            for dv, ev in zip(ds, es):
+                check(cancel)
+                ok = _chain_ok(design, pts, u, i, float(dv), float(ev), hb)
+                if not ok.any():
+                    continue
+                dd, ee = d[ok].copy(), eta[ok].copy()
+                dd[:, i], ee[:, i] = dv, ev
+                val = inverse_condition_batch(design, pts[ok], dd, ee, orientation)
+                better = val > best[ok]
+                idx = np.flatnonzero(ok)[better]
+                best[idx] = val[better]
+                d[idx], eta[idx] = dd[better], ee[better]
+    return best, resolved, d, eta
+
+
+# --------------------------------------------------------------------------------------------
+# pointwise
+
+
+@dataclasses.dataclass
+class Dexterity:
+    """``1/kappa`` of eq. (26) at one pose (module docstring)."""
+
+    inverse_condition: float  # 1/kappa at the carriage pose below
+    resolved: float  # 1/kappa at the redundancy resolution's carriage pose
+    d: list[float]
+    eta: list[float]  # degrees
+    mode: str
+    feasible: bool  # the resolution found a feasible carriage pose for every chain
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def _check_mode(mode: str) -> str:
+    if mode not in MODES:
+        raise ParameterError("mode", mode, " or ".join(MODES))
+    return mode
+
+
+def dexterity_at(design: Design, pose: Pose, mode: str = "resolved", *, n_eta: int = 7, n_d: int = 6,
+                 sweeps: int = 2, search: str = "coordinate") -> Dexterity:
+    """``1/kappa`` of ``J = J_h^{-1} J_q`` (eq. (26), ``L = a/2``) at ``pose``: at the resolved
+    carriage pose, or (``mode="best"``) the best over the per-chain carriage samples, by
+    coordinate ascent (``search="coordinate"``, as the field) or over their whole product
+    (``search="exhaustive"``). See the module docstring."""
+    _check_mode(mode)
+    if search not in ("coordinate", "exhaustive"):
+        raise ParameterError("search", search, "coordinate or exhaustive")
+    res = resolve_redundancy(design, pose)
+    p = pose.position[None, :]
+    o = (pose.psi, pose.theta, pose.phi)
+    resolved = float(inverse_condition_batch(design, p, res.d[None, :], res.eta[None, :], o)[0])
+    if mode == "resolved":
+        return Dexterity(resolved, resolved, [float(v) for v in res.d], [float(v) for v in res.eta], mode,
+                         res.feasible)
+    if search == "coordinate":
+        best, _r, d, eta = best_inverse_condition_batch(design, p, o, n_eta, n_d, sweeps)
+        return Dexterity(float(best[0]), resolved, [float(v) for v in d[0]], [float(v) for v in eta[0]], mode,
+                         res.feasible)
+    u, _R2, hb, _ = _constants(design, o)
+    ds, es = carriage_samples(design, n_eta, n_d)
+    per_chain = []
+    for i in range(3):
+        ok = np.array([_chain_ok(design, np.ascontiguousarray(p), u, i, float(a), float(b), hb)[0]
+                       for a, b in zip(ds, es)])
+        cand = [(float(a), float(b)) for a, b, k in zip(ds, es, ok) if k]
+        cand.append((float(res.d[i]), float(res.eta[i])))
+        per_chain.append(cand)
+    combos = list(itertools.product(*per_chain))
+    dd = np.array([[c[0] for c in combo] for combo in combos])
+    ee = np.array([[c[1] for c in combo] for combo in combos])
+    vals = inverse_condition_batch(design, np.repeat(p, len(combos), axis=0), dd, ee, o)
+    k = int(np.argmax(vals))
+    return Dexterity(float(vals[k]), resolved, [float(v) for v in dd[k]], [float(v) for v in ee[k]], mode,
+                     res.feasible)
+
+
+# --------------------------------------------------------------------------------------------
+# field over a workspace
+
+
+@dataclasses.dataclass
+class DexterityField:
+    """``1/kappa`` over a computed workspace, its GCI and the well-conditioned workspace."""
+
+    inverse_condition: np.ndarray  # float, grid shape; NaN outside the workspace
+    gci: float  # mean of 1/kappa over the reachable voxels (NaN for an empty workspace)
+    kappa_min: float  # threshold on 1/kappa
+    well_conditioned: np.ndarray  # bool, grid shape: reachable and 1/kappa >= kappa_min
+    well_conditioned_volume: float
+    volume: float  # of the workspace
+    mode: str
+    seconds: float
+    minimum: float
+    maximum: float
+
+    def well_conditioned_result(self, result: WorkspaceResult) -> WorkspaceResult:
+        """The well-conditioned workspace as a :class:`WorkspaceResult` on ``result``'s grid (so its
+        volume, shell and measures are computed as for the position workspace)."""
+        return dataclasses.replace(result, occupancy=self.well_conditioned.copy(), chain_mask=None,
+                                   volume_inner=None, volume_outer=None)
+
+    def summary(self) -> dict:
+        """The scalar results as a JSON-ready dict."""
+        f = (lambda v: None if not math.isfinite(v) else float(v))
+        return {"gci": f(self.gci), "kappa_min": self.kappa_min,
+                "well_conditioned_volume": float(self.well_conditioned_volume),
+                "well_conditioned_fraction": f(self.well_conditioned_volume / self.volume) if self.volume else None,
+                "inverse_condition_min": f(self.minimum), "inverse_condition_max": f(self.maximum),
+                "dexterity_mode": self.mode, "dexterity_seconds": self.seconds}
+
+
+def check_kappa_min(kappa_min: float) -> float:
+    """Validate the threshold on ``1/kappa``: a number in ``(0, 1]``."""
+    try:
+        v = float(kappa_min)
+    except (TypeError, ValueError):
+        raise ParameterError("kappa_min", kappa_min, "(0, 1] (a number)") from None
+    if not (math.isfinite(v) and 0.0 < v <= 1.0):
+        raise ParameterError("kappa_min", kappa_min, "(0, 1]")
+    return v
+
+
+def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved", *,
+                    n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: Optional[ProgressFn] = None,
+                    cancel: CancelToken = None) -> DexterityField:
+    """``1/kappa`` at every reachable voxel centre of ``result`` (at its orientation), the GCI and
+    the well-conditioned workspace ``1/kappa >= kappa_min`` (module docstring)."""
+    _check_mode(mode)
+    kappa_min = check_kappa_min(kappa_min)
+    rep = Reporter(progress)
+    t0 = time.perf_counter()
+    design = result.design
+    occ = np.asarray(result.occupancy, bool)
+    pts = result.grid.points()[occ]
+    orientation = result.settings.orientation
+    vals = np.zeros(pts.shape[0])
+    step = 8 * CHUNK
+    for s in range(0, pts.shape[0], step):
+        check(cancel)
+        p = pts[s:s + step]
+        if mode == "resolved":
+            d, eta = resolved_carriages(design, p, orientation)
+            vals[s:s + step] = inverse_condition_batch(design, p, d, eta, orientation)
+        else:
+            vals[s:s + step] = best_inverse_condition_batch(design, p, orientation, n_eta, n_d, sweeps, cancel)[0]
+        rep(min(1.0, (s + step) / max(pts.shape[0], 1)), "dexterity")
+    field = np.full(occ.shape, np.nan)
+    field[occ] = vals
+    well = np.zeros(occ.shape, bool)
+    well[occ] = vals >= kappa_min
+    vv = result.grid.voxel_volume
+    n = vals.size
+    return DexterityField(
+        inverse_condition=field, gci=float(vals.mean()) if n else float("nan"), kappa_min=kappa_min,
+        well_conditioned=well, well_conditioned_volume=float(well.sum()) * vv, volume=n * vv, mode=mode,
+        seconds=time.perf_counter() - t0, minimum=float(vals.min()) if n else float("nan"),
+        maximum=float(vals.max()) if n else float("nan"))

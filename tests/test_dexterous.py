@@ -1,0 +1,149 @@
+"""Total-orientation workspace (issue 9): the intersection of constant-orientation workspaces over
+a stated orientation sample set."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.dexterous import orientation_samples, total_orientation_workspace
+from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.rotation import euler_zyx_from_matrix
+from paraspace.kinematics.tilt_torsion import tt_rotations
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+DESIGN = Design()
+
+
+@pytest.fixture(scope="module")
+def plain():
+    return compute_workspace(DESIGN, WorkspaceSettings(voxel=8.0))
+
+
+def run(tilt, torsion, step, plain):
+    return total_orientation_workspace(DESIGN, tilt, torsion, step, WorkspaceSettings(voxel=8.0), position=plain)
+
+
+def _key(rows):
+    R = tt_rotations(rows[:, 0], rows[:, 1], rows[:, 2]).reshape(-1, 9)
+    return {tuple(np.round(r, 9)) for r in R}
+
+
+def test_zero_tilt_and_torsion_is_the_position_workspace(plain):
+    r = total_orientation_workspace(DESIGN, 0.0, 0.0, 5.0, WorkspaceSettings(voxel=8.0))  # computes its own
+    assert r.samples.shape == (1, 3)
+    assert r.result.grid == plain.grid and np.array_equal(r.occupancy, plain.occupancy)
+
+
+def test_is_the_intersection_of_constant_orientation_workspaces(plain):
+    """The literal definition, computed by the workspace engine once per sampled orientation."""
+    r = run(6.0, 6.0, 6.0, plain)
+    lo, hi = plain.grid.lo, plain.grid.hi
+    inter = plain.occupancy.copy()
+    for R in tt_rotations(r.samples[:, 0], r.samples[:, 1], r.samples[:, 2]):
+        psi, theta, phi = np.degrees(euler_zyx_from_matrix(R))
+        w = compute_workspace(DESIGN, WorkspaceSettings(voxel=8.0, orientation=(psi, theta, phi), bounds=(lo, hi)))
+        assert w.grid.shape == plain.grid.shape
+        inter &= w.occupancy
+    assert np.array_equal(r.occupancy, inter)
+    assert 0 < r.voxels < plain.voxels
+
+
+def test_subset_and_monotone_in_tilt_and_torsion(plain):
+    prev = plain.occupancy
+    prev_samples = None
+    for tilt in (0.0, 8.0, 16.0, 32.0):  # step 4: the sample sets nest
+        r = run(tilt, 0.0, 4.0, plain)
+        if prev_samples is not None:
+            assert _key(prev_samples) <= _key(r.samples)
+        assert not np.any(r.occupancy & ~prev), tilt
+        prev, prev_samples = r.occupancy, r.samples
+    prev = plain.occupancy
+    for torsion in (0.0, 8.0, 16.0):
+        r = run(0.0, torsion, 4.0, plain)
+        assert not np.any(r.occupancy & ~prev), torsion
+        prev = r.occupancy
+    assert r.voxels < plain.voxels
+
+
+def test_denser_sampling_only_removes_voxels(plain):
+    sparse = run(12.0, 10.0, 8.0, plain)
+    dense = run(12.0, 10.0, 2.0, plain)
+    assert _key(sparse.samples) < _key(dense.samples)
+    assert not np.any(dense.occupancy & ~sparse.occupancy)
+    assert not np.any(sparse.occupancy & ~plain.occupancy)
+
+
+@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (30.0, 7.0, 2.0), (3.0, 90.0, 10.0)])
+def test_sample_set_spacing_is_as_stated(tilt, torsion, step):
+    s = orientation_samples(tilt, torsion, step)
+    assert s[:, 1].max() == pytest.approx(tilt) and s[:, 1].min() == 0.0
+    assert s[:, 2].min() == pytest.approx(-torsion) and s[:, 2].max() == pytest.approx(torsion)
+    assert np.any(np.all(s == 0.0, axis=1))  # the identity
+    tors = np.unique(s[:, 2])
+    assert np.all(np.diff(tors) <= step + 1e-9)
+    rings = np.unique(s[:, 1])
+    assert np.all(np.diff(rings) <= step + 1e-9)
+    for th in rings[1:]:
+        az = np.unique(s[s[:, 1] == th, 0])
+        normals = tt_rotations(az, np.full_like(az, th), 0 * az)[:, :, 2]
+        nxt = np.roll(normals, -1, axis=0)
+        gaps = np.degrees(np.arccos(np.clip(np.sum(normals * nxt, axis=1), -1, 1)))
+        assert np.all(gaps <= step + 1e-9)
+        assert az.min() == 0.0 and len(az) >= 4
+
+
+def test_result_has_workspace_measures(plain):
+    r = run(10.0, 10.0, 5.0, plain)
+    m = measure_workspace(r.result)
+    assert m.volume == pytest.approx(r.volume) == pytest.approx(r.voxels * 8.0 ** 3)
+    s = r.summary()
+    assert s["position_volume"] == pytest.approx(plain.volume)
+    assert s["orientations"] == len(r.samples) and 0 < s["fraction_of_position"] < 1
+
+
+@pytest.mark.parametrize("kw,field", [({"tilt": 91.0}, "tilt"), ({"torsion": -1.0}, "torsion"),
+                                      ({"step": 0.0}, "angle_step"), ({"tilt": "x"}, "tilt")])
+def test_bad_input(kw, field):
+    args = {"tilt": 10.0, "torsion": 10.0, "step": 5.0, **kw}
+    with pytest.raises(ParameterError, match=field):
+        orientation_samples(**args)
+
+
+def test_nonzero_base_orientation_is_refused():
+    with pytest.raises(ParameterError, match="orientation"):
+        total_orientation_workspace(DESIGN, 5.0, 5.0, settings=WorkspaceSettings(voxel=8.0, orientation=(0, 5, 0)))
+
+
+def cli(*args: str):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_cli_workspace_total_orientation_json(plain):
+    import json
+
+    proc = cli("workspace", "--voxel", "8", "--tilt", "10", "--torsion", "10", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    ref = run(10.0, 10.0, 5.0, plain)
+    t = out["total_orientation"]
+    assert t["volume"] == pytest.approx(ref.volume) and t["voxels"] == ref.voxels
+    assert t["orientations"] == len(ref.samples) and t["tilt"] == 10.0 and t["torsion"] == 10.0
+    assert t["measures"]["volume"] == pytest.approx(ref.volume)
+    assert out["volume"] == pytest.approx(plain.volume)  # the position workspace stays the top level
+
+
+@pytest.mark.parametrize("args,field,rng", [(("--tilt", "100"), "tilt", "[0, 90]"),
+                                            (("--torsion", "-1"), "torsion", "[0, 180]"),
+                                            (("--tilt", "5", "--angle-step", "0"), "angle_step", "[0.25, 30]"),
+                                            (("--tilt", "nan"), "tilt", "[0, 90]")])
+def test_cli_total_orientation_bad_input(args, field, rng):
+    proc = cli("workspace", "--voxel", "8", *args, "--json")
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and rng in lines[0]
