@@ -10,6 +10,7 @@
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
+    paraspace paper       [--voxel H] [--json]   (the paper's numbers and claims beside ours)
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
@@ -271,6 +272,37 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
               f"(smallest at azimuth {az[k]:g}), up to {out['max_max_tilt']:.4g} deg")
         sat = " (scan limit)" if any(out["torsion_saturated"]) else ""
         print(f"torsion (zero tilt): {out['torsion_range'][0]:.4g} .. {out['torsion_range'][1]:.4g} deg{sat}")
+    return 0
+
+
+def cmd_paper(ns: argparse.Namespace) -> int:
+    """``paraspace paper``: the paper's reported numbers and Sec. III claims beside ours."""
+    from paraspace.kinematics.paper import paper_comparison
+    from paraspace.kinematics.workspace import warm_up
+
+    voxel = _voxel(ns)
+    warm_up()
+    progress, done = progress_line("paper")
+    try:
+        out = paper_comparison(voxel, progress)
+    finally:
+        done()
+    if ns.json:
+        _emit(out)
+        return 0
+    rep = out["reported"]
+    print(f"paper: V = {rep['volume']:.3g}, TI_1 = {rep['TI_1']:g}, TI_2 = {rep['TI_2']:g} (default design)")
+    for row in out["volume"]["ours"]:
+        print(f"  V = {row['volume']:.3g}   {row['convention']}")
+    print(f"  closest to the paper's V: {out['volume']['closest']}")
+    for row in out["indices"]["ours"]:
+        note = f"  ({row['saturation_note']})" if row["saturation_note"] else ""
+        print(f"  TI_1 = {row['TI_1']:.4g}, TI_2 = {row['TI_2']:.4g}   {row['convention']}{note}")
+    print(f"  closest TI_1: {out['indices']['closest_TI_1']}; closest TI_2: {out['indices']['closest_TI_2']}")
+    for c in out["claims"]:
+        ours = c["ours"] if isinstance(c["ours"], bool) else f"{c['ours']:.4g} (default {c['default']:.4g})"
+        print(f"  [{'holds' if c['holds'] else 'FAILS'}] {c['design']}: {c['measure']} {c['paper']}; ours {ours}")
+    print(out["summary"])
     return 0
 
 
@@ -628,6 +660,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_sweep)
 
     _add_optimize_parser(sub)
+
+    pp = sub.add_parser("paper", help="the paper's reported numbers and Sec. III claims beside ours")
+    pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")
+    pp.add_argument("--json", action="store_true")
+    pp.set_defaults(func=cmd_paper)
 
     k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")
     _add_design_flags(k)

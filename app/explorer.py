@@ -58,6 +58,7 @@ from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .optimize_panel import OptimizePanel, ResultStore
 from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels, slider_span
+from .paper_panel import PaperPanel
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
     D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState, encode_query,
@@ -241,6 +242,9 @@ class ClientSession:
         s = self.state
         self.panels = build_panels(self.client.gui, s)
         self._build_optimize_tab()
+        with self.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
+            self.paper = PaperPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
+                                    cache=self.explorer.paper_results, notify=self._notify)
         res = self._resolve(s)
         self.resolution = res
         with self.client.atomic():
@@ -1319,6 +1323,7 @@ class Explorer:
 
         self.study_cache = ResultCache(max_entries=1024)
         self.optimize_results = ResultStore(16)  # finished Optimize runs by settings (a shared link reopens them)
+        self.paper_results: dict = {}  # the Paper tab's comparison, by voxel (a few kB)
         self.warm = threading.Event()
         self.connect_seconds: list[float] = []
 

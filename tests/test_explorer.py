@@ -433,3 +433,17 @@ def test_joints_group_changes_the_workspace_and_travels_in_the_link(explorer, br
     wait_for(lambda: j.message.visible, 5.0, "the message")
     assert "leg_diameter" in j.message.content.replace("\\", "") and "[0, 100]" in j.message.content.replace("\\", "")
     assert s.state.joints.leg_diameter == 0.0
+
+
+def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, monkeypatch):
+    from paraspace.app import paper_panel
+
+    monkeypatch.setattr(paper_panel, "PAPER_VOXEL", 10.0)
+    b = browsers("voxel=6")
+    s = b.session
+    explorer.paper_results.clear()
+    b.click(s.paper.run)
+    wait_for(lambda: "Sec. III claims" in s.paper.result.content, 120.0, "the comparison")
+    text = s.paper.result.content
+    assert "3.47e+06" in text.replace("\\", "") and "holds" in text
+    assert 10.0 in explorer.paper_results
