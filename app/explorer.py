@@ -33,6 +33,7 @@ import errno
 import io
 import json
 import logging
+import math
 import threading
 import time
 import urllib.parse
@@ -124,6 +125,41 @@ def _fmt(v: Optional[float], digits: int = 4) -> str:
 # one browser
 
 
+#: Directions (from the target to the camera) of the camera presets.
+PRESET_DIRECTIONS: dict[str, tuple[float, float, float]] = {
+    "iso": (0.55, -0.7, 0.45), "top": (0.0, -0.002, 1.0), "bottom": (0.0, -0.002, -1.0), "side": (0.0, -1.0, 0.0),
+}
+#: Share of the window's width that the control panel covers (on the right).
+PANEL_SHARE = 0.3
+
+
+def camera_framing(lo: np.ndarray, hi: np.ndarray, preset: str, fov: float, aspect: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """``(position, look_at)`` of a camera that shows the box ``[lo, hi]`` whole from the preset's
+    direction, in the part of the window the control panel leaves free.
+
+    The box's bounding sphere (radius ``rho``) fits the narrower of the vertical field ``fov`` and
+    the free horizontal field (``(1 - PANEL_SHARE)`` of ``aspect`` times it); the look-at point is
+    moved along the camera's right vector by half the panel's share of the visible width, so the
+    box is centred in the free part."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    centre = 0.5 * (lo + hi)
+    rho = max(0.5 * float(np.linalg.norm(hi - lo)), 1.0)
+    d = np.asarray(PRESET_DIRECTIONS.get(preset, PRESET_DIRECTIONS["iso"]), float)
+    d /= np.linalg.norm(d)
+    half_v = 0.5 * fov
+    half_h = math.atan(math.tan(half_v) * aspect * (1.0 - PANEL_SHARE))
+    dist = 1.08 * rho / math.sin(min(half_v, half_h))
+    up = np.array([0.0, 0.0, 1.0])
+    right = np.cross(-d, up)
+    if np.linalg.norm(right) < 1e-6:  # looking straight down or up
+        right = np.array([1.0, 0.0, 0.0])
+    right /= np.linalg.norm(right)
+    visible_w = 2.0 * dist * math.tan(half_v) * aspect
+    look_at = centre + right * (0.5 * PANEL_SHARE * visible_w)
+    return look_at + dist * d, look_at
+
+
 def _joints_text(j: Any) -> str:
     """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
     parts = []
@@ -158,6 +194,7 @@ class ClientSession:
         self.job_client = f"viser-{client.client_id}"
         self.lock = threading.RLock()
         self._design_timer: Optional[threading.Timer] = None  # pending typed design value
+        self._framed = False  # the camera has framed a shell once
         self.view_lock = threading.Lock()
         self.input_lock = threading.RLock()  # serialises design input (see on_design_input)
         self.mech_lock = threading.Lock()
@@ -306,6 +343,7 @@ class ClientSession:
         for h in p.d + p.eta:
             h.on_update(self._callback(self.on_manual_carriage))
         p.view_buttons.on_click(self._callback(lambda: self.on_view(str(self.panels.view_buttons.value))))
+        p.fit_view.on_click(self._callback(self.fit_view))
         for h in (p.cut, p.cut_z, p.cut_keep, p.opacity):
             h.on_update(self._callback(self.on_view_settings))
         p.stop.on_click(self._callback(self.stop_workspace))
@@ -649,23 +687,34 @@ class ClientSession:
         self.schedule_url()
 
     # ----- view -----------------------------------------------------------------------------------
-    def set_camera(self, preset: str) -> None:
-        """Move this client's camera to a preset (iso, top, bottom, side)."""
+    def _framing_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The box to frame: the shell's (or, before one exists, the reach of the design)."""
+        mesh = self.shell.source if getattr(self, "shell", None) is not None else None
+        if mesh is not None and len(mesh.vertices):
+            return mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         d = self.state.design
-        zc = 0.45 * d.l_max
-        R = 1.45 * (d.r + 0.6 * d.l_max)
-        positions = {
-            "iso": (0.75 * R, -0.95 * R, zc + 0.75 * R),
-            "top": (0.0, -0.002 * R, zc + 1.6 * R),
-            "bottom": (0.0, -0.002 * R, zc - 1.6 * R),
-            "side": (0.0, -1.6 * R, zc),
-        }
+        R = d.r + 0.6 * d.l_max
+        return np.array([-R, -R, 0.0]), np.array([R, R, d.l_max])
+
+    def set_camera(self, preset: str) -> None:
+        """Move this client's camera to a preset (iso, top, bottom, side) framing the workspace's box
+        (see :func:`camera_framing`; the control panel's share of the window is left free)."""
+        lo, hi = self._framing_box()
         cam = self.client.camera
+        try:
+            fov, aspect = float(cam.fov), float(cam.aspect)
+        except Exception:  # noqa: BLE001 - before the browser reported its camera
+            fov, aspect = math.radians(50.0), 16.0 / 9.0
+        position, look_at = camera_framing(lo, hi, preset, fov, aspect)
         with self.client.atomic():
             cam.up_direction = (0.0, 0.0, 1.0)
             # position first: viser moves look_at along with the position, then aims at look_at
-            cam.position = positions.get(preset, positions["iso"])
-            cam.look_at = (0.0, 0.0, zc)
+            cam.position = tuple(position)
+            cam.look_at = tuple(look_at)
+
+    def fit_view(self) -> None:
+        """The Fit view button: frame the workspace with the current preset's direction."""
+        self.set_camera(self.state.view)
 
     def on_view(self, preset: str) -> None:
         """A camera preset button was clicked."""
@@ -875,6 +924,10 @@ class ClientSession:
                     self.preview = bundle
                 else:
                     self.bundle = bundle
+                first = not self._framed
+                self._framed = True
+            if first:  # the first shell: frame it (later shells keep the user's camera)
+                self.set_camera(s.view)
                 self._ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
                                  "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
                                  "measures": None, "gen": gen, "cached": from_cache}

@@ -65,6 +65,7 @@ class Panels:
     pose_table: Any
     # view
     view_buttons: Any
+    fit_view: Any
     cut: Any
     cut_z: Any
     cut_keep: Any
@@ -167,6 +168,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
 
     with tabs.add_tab("View", viser.Icon.EYE):
         view_buttons = gui.add_button_group("camera", CAMERA_PRESETS)
+        fit_view = gui.add_button("Fit view", icon=viser.Icon.FOCUS_CENTERED,
+                                  hint="frame the workspace in the part of the window the panel leaves free")
         cut = gui.add_checkbox("cut plane", state.cut, hint="cut the shell by a horizontal plane")
         rng = SETTING_SLIDERS["cut_z"]
         cut_z = gui.add_slider("cut height", *slider_span(rng.lo, rng.hi, state.cut_z), step=rng.step,
@@ -222,7 +225,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
-        view_buttons=view_buttons, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,
+        view_buttons=view_buttons, fit_view=fit_view, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,
         z0=z0, orientation_status=orientation_status, orientation_image=orientation_image,
         orientation_png=orientation_png, study_voxel=study_voxel, sweep_param=sweep_param,
         sweep_points=sweep_points, sweep_run=sweep_run, sweep_stop=sweep_stop, sweep_progress=sweep_progress,

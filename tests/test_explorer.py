@@ -11,6 +11,7 @@ server-side session.
 from __future__ import annotations
 
 import csv
+import itertools
 import io
 import json
 import time
@@ -447,3 +448,31 @@ def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, mon
     text = s.paper.result.content
     assert "3.47e+06" in text.replace("\\", "") and "holds" in text
     assert 10.0 in explorer.paper_results
+
+
+@pytest.mark.parametrize("preset", ["iso", "top", "bottom", "side"])
+@pytest.mark.parametrize("aspect", [16 / 9, 4 / 3, 1.0])
+def test_camera_framing_shows_the_whole_box_beside_the_panel(preset, aspect):
+    """Issue 8 defect 5: every corner of the workspace's box projects inside the view and left of
+    the control panel (its share of the width on the right), and the box fills a good part of it."""
+    from paraspace.app.explorer import PANEL_SHARE, camera_framing
+
+    lo, hi = np.array([-150.0, -140.0, 0.0]), np.array([150.0, 140.0, 170.0])
+    fov = np.radians(50.0)
+    pos, look = camera_framing(lo, hi, preset, fov, aspect)
+    f = (look - pos) / np.linalg.norm(look - pos)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r = r / np.linalg.norm(r) if np.linalg.norm(r) > 1e-6 else np.array([1.0, 0.0, 0.0])
+    u = np.cross(r, f)
+    tv = np.tan(fov / 2)
+    th = tv * aspect
+    xs, ys = [], []
+    for c in itertools.product(*zip(lo, hi)):
+        v = np.asarray(c) - pos
+        z = v @ f
+        assert z > 0
+        xs.append((v @ r) / z)
+        ys.append((v @ u) / z)
+    assert max(abs(y) for y in ys) <= tv
+    assert min(xs) >= -th and max(xs) <= th * (1 - 2 * PANEL_SHARE)
+    assert (max(xs) - min(xs)) > 0.4 * th * (2 - 2 * PANEL_SHARE) or (max(ys) - min(ys)) > 0.4 * 2 * tv
