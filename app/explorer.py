@@ -59,6 +59,7 @@ from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .optimize_panel import OptimizePanel, ResultStore
 from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels, slider_span
+from .compare_panel import CompareHooks, ComparePanel
 from .paper_panel import PaperPanel
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
@@ -279,6 +280,13 @@ class ClientSession:
         s = self.state
         self.panels = build_panels(self.client.gui, s)
         self._build_optimize_tab()
+        with self.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
+            self.compare = ComparePanel(self.client.gui, self.client.scene, self.explorer.jobs, self.job_client,
+                                        CompareHooks(get_state=lambda: self.state, set_pin=self._set_pin,
+                                                     bundle_for=self._cached_bundle,
+                                                     compute_bundle=self._compute_bundle,
+                                                     current_bundle=lambda: self.bundle,
+                                                     load_design=self.load_design, notify=self._notify))
         with self.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
             self.paper = PaperPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
                                     cache=self.explorer.paper_results, notify=self._notify)
@@ -297,7 +305,27 @@ class ClientSession:
         self.set_camera(s.view)
         self._sync_url_now()
         self.submit_workspace()
+        if s.pin is not None:
+            self.compare.restore(s.pin)
         self.ready.set()
+
+    # ----- Compare tab hooks ------------------------------------------------------------------------
+    def _set_pin(self, design: Optional[Design]) -> None:
+        with self.lock:
+            self.state = self.state.replace(pin=design)
+        self.schedule_url()
+
+    def _cached_bundle(self, state: ExplorerState) -> Optional[ShellBundle]:
+        hit = self.explorer.shell_cache.get(self._ws_key(state, state.voxel))
+        return hit if hit is not None and hit.measures is not None else None
+
+    def _compute_bundle(self, state: ExplorerState, progress: Callable[[float, str], None],
+                        cancel: threading.Event) -> ShellBundle:
+        res = compute_workspace(state.design, self._ws_settings(state, state.voxel), progress=progress, cancel=cancel)
+        bundle = ShellBundle(res, make_shell(res, FULL_FACES))
+        bundle.measures = _measure(res)
+        self.explorer.shell_cache.put(self._ws_key(state, state.voxel), bundle)
+        return bundle
 
     def _build_optimize_tab(self) -> None:
         """The Optimize tab (app/optimize_panel.py): a bounded multi-objective run of this session's
@@ -947,6 +975,8 @@ class ClientSession:
             self._ws_info["measures"] = bundle.measures
             self._ws_info["bracket"] = bundle.bracket
         self._render_numbers()
+        if not preview:
+            self.compare.refresh()
         self._event("measures-preview" if preview else "measures-full")
 
     def stop_workspace(self) -> None:

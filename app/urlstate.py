@@ -12,6 +12,7 @@ URL format (keys are the CLI's names)::
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
      [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
+     [&pin=10,14,50,100,114.5,50,30,centered]
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -116,6 +117,31 @@ SETTING_SLIDERS: dict[str, Range] = {
 JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
 
 
+def encode_pin(design: Design) -> str:
+    """The ``pin`` value: the seven design numbers in :data:`DESIGN_KEYS` order and the arc range,
+    comma-separated (``50,14,50,100,114.5,50,30,centered``)."""
+    return ",".join([format_number(getattr(design, k)) for k in DESIGN_KEYS] + [design.eta_range])
+
+
+def parse_pin(raw: str) -> tuple[Optional[Design], Optional[str]]:
+    """:func:`encode_pin` read back, or ``(None, message)`` naming what is wrong (the same ranges as
+    the design fields)."""
+    parts = [p.strip() for p in raw.split(",")]
+    if len(parts) != len(DESIGN_KEYS) + 1:
+        return None, (f"pin = {_quote(raw)} is invalid; expected {len(DESIGN_KEYS)} numbers "
+                      f"({', '.join(DESIGN_KEYS)}) and centered or from-zero")
+    fields: dict[str, Any] = {}
+    for key, text in zip(DESIGN_KEYS, parts):
+        v, msg = _parse_number(key, text, DESIGN_RANGES[key], UNITS.get(key, ""))
+        if msg:
+            return None, f"pin: {msg}"
+        fields[key] = v
+    try:
+        return Design(**fields, eta_range=parts[-1]), None  # type: ignore[arg-type]
+    except ParameterError as exc:
+        return None, f"pin: {exc}"
+
+
 def check_field(key: str, value: float) -> Optional[str]:
     """The one message for a numeric field outside its accepted range (``None`` when valid)."""
     rng = {**DESIGN_RANGES, **POSE_RANGES, **SETTING_RANGES}[key]
@@ -158,6 +184,7 @@ class ExplorerState:
         cut_keep: which side of the cut plane stays visible.
         opacity: shell opacity.
         joints: joint cones and leg interference (:mod:`kinematics.joints`).
+        pin: a pinned design shown beside the current one (Compare tab), or ``None``.
     """
 
     design: Design = dataclasses.field(default_factory=Design)
@@ -173,6 +200,7 @@ class ExplorerState:
     cut_keep: CutKeep = "below"
     opacity: float = 0.6
     joints: Joints = dataclasses.field(default_factory=Joints)
+    pin: Optional[Design] = None
 
     def replace(self, **changes: Any) -> "ExplorerState":
         """A copy with some fields changed (no validation beyond the dataclasses')."""
@@ -254,7 +282,7 @@ def panel_pairs(query: str) -> dict[str, str]:
 def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
-            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity") + JOINT_KEYS)
+            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity") + JOINT_KEYS + ("pin",))
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -394,8 +422,14 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         joint_fields.pop(exc.field, None)
         joints = Joints(**joint_fields)
 
+    pin = None
+    if "pin" in values:
+        pin, msg = parse_pin(values["pin"])
+        if msg:
+            messages.append(msg)
+
     state = ExplorerState(
-        design=design, pose=pose, carriages=carriages, joints=joints,
+        design=design, pose=pose, carriages=carriages, joints=joints, pin=pin,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
         view=view, cut=cut, cut_z=numbers.get("cut_z", DEFAULT_STATE.cut_z), cut_keep=cut_keep,
@@ -431,6 +465,8 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
         pairs.append(("cut_keep", state.cut_keep))
     if state.opacity != DEFAULT_STATE.opacity:
         pairs.append(("opacity", format_number(state.opacity)))
+    if state.pin is not None:
+        pairs.append(("pin", encode_pin(state.pin)))
     j = state.joints
     for key in JOINT_KEYS:
         v = getattr(j, key)

@@ -476,3 +476,28 @@ def test_camera_framing_shows_the_whole_box_beside_the_panel(preset, aspect):
     assert max(abs(y) for y in ys) <= tv
     assert min(xs) >= -th and max(xs) <= th * (1 - 2 * PANEL_SHARE)
     assert (max(xs) - min(xs)) > 0.4 * th * (2 - 2 * PANEL_SHARE) or (max(ys) - min(ys)) > 0.4 * 2 * tv
+
+
+def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    b.set(s.compare.pairs, "a 10|80")
+    wait_for(lambda: s.state.design.a == 80.0 and s.state.pin is not None and s.state.pin.a == 10.0, 10.0,
+             "pair loaded")
+    wait_idle(explorer, s)
+    wait_for(lambda: s.compare.pinned is not None and "| volume" in s.compare.table.content, 30.0, "the table")
+    text = s.compare.table.content
+    assert "pinned" in text and "current" in text and "change" in text
+    v10 = s.compare.pinned.result.volume
+    v80 = s.bundle.result.volume
+    assert s.compare.pinned.result.design.a == 10.0 and s.bundle.result.design.a == 80.0 and v10 != v80
+    assert s.compare.handle is not None  # the ghost is in the scene
+    wait_for(lambda: "pin=" in b.search, 5.0, "pin in the link")
+    b2 = browsers(b.search.lstrip("?"))
+    s2 = b2.session
+    wait_for(lambda: s2.compare.pinned is not None, 30.0, "pin restored from the link")
+    assert s2.compare.pinned.result.design.a == 10.0
+    b2.click(s2.compare.unpin_button)
+    wait_for(lambda: s2.state.pin is None and s2.compare.handle is None, 5.0, "unpinned")
+    wait_for(lambda: "pin=" not in b2.search, 5.0, "pin gone from the link")

@@ -168,3 +168,14 @@ def test_garbage_never_raises(query: str) -> None:
     state, messages = parse_query(query)
     assert isinstance(state, ExplorerState)
     assert isinstance(messages, list)
+
+
+def test_pinned_design_round_trips_and_bad_pins_are_named() -> None:
+    s = DEFAULT_STATE.replace(pin=Design(a=10.0, eta_range="from-zero"))
+    q = encode_query(s)
+    assert "pin=10%2C14%2C50%2C100%2C114.5%2C50%2C30%2Cfrom-zero" in q or "pin=10,14,50,100,114.5,50,30,from-zero" in q
+    assert parse_query(q) == (s, [])
+    for bad, text in (("1,2,3", "expected 7 numbers"), ("10,14,50,100,114.5,50,300,centered", "eta_s"),
+                      ("10,14,150,100,114.5,50,30,centered", "d_s"), ("10,14,50,100,114.5,50,30,sideways", "eta_range")):
+        state, messages = parse_query("pin=" + bad)
+        assert state.pin is None and len(messages) == 1 and text in messages[0], (bad, messages)
