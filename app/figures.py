@@ -98,6 +98,8 @@ BOX_COLOR = "#222222"
 SATURATED_COLOR = "#CC0000"
 OUTSIDE_COLOR = "#D9D9D9"
 SERIES_COLOR = "#0072B2"
+#: Largest number of samples per axis of an orientation map sent to the browser.
+MAX_PLOTLY_SAMPLES = 250
 
 
 # --------------------------------------------------------------------------------------------
@@ -535,7 +537,10 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
                                      hovertemplate=p.hover or None, name=""), **at)
         elif p.kind == "mask" and p.mask is not None:
             m = p.mask
-            fig.add_trace(go.Heatmap(x=m.x, y=m.y, z=m.inside.astype(np.uint8), zmin=0, zmax=1, showscale=False,
+            # the screen shows at most ~250 samples per axis: thin the grid (the files keep every sample)
+            sy, sx = (max(1, math.ceil(n / MAX_PLOTLY_SAMPLES)) for n in m.inside.shape)
+            fig.add_trace(go.Heatmap(x=m.x[::sx], y=m.y[::sy], z=m.inside[::sy, ::sx].astype(np.uint8), zmin=0, zmax=1,
+                                     showscale=False,
                                      colorscale=[[0.0, "rgba(0,0,0,0)"], [1.0, m.color]],
                                      hovertemplate=p.hover or None, name=_esc(m.name)), **at)
             # grey bands outside the scan

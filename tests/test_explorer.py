@@ -324,7 +324,7 @@ def test_surface_study(explorer, browsers):
     assert vol.shape == (3, 3)
     ref = compute_workspace(Design(a=55.0, d_s=10.0), WorkspaceSettings(voxel=10.0)).volume
     assert vol[0, 1] == ref  # [iy][ix]: d_s = 10, a = 55
-    assert s.panels.surface_image.visible and not s.panels.surface_csv.disabled
+    assert s.panels.surface_plot.visible and not s.panels.surface_csv.disabled
     b.click(s.panels.surface_csv)
     rows = list(csv.reader(io.StringIO(b.download("paraspace_volume_a_d_s.csv").decode())))
     assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
