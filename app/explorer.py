@@ -958,7 +958,7 @@ class ClientSession:
 
     def run_surface(self) -> None:
         """Volume over the (a, d_s) grid (Fig. 5) on request, with progress and Stop."""
-        from paraspace.kinematics.sweep import study_values, sweep_2d
+        from paraspace.kinematics.sweep import study_values, sweep_1d, sweep_2d
 
         p = self.panels
         n = int(p.surface_points.value)

@@ -183,6 +183,7 @@ class Panel:
     x_range: Optional[tuple[float, float]] = None
     y_range: Optional[tuple[float, float]] = None
     hover: str = ""  # plotly hover template (value names and units)
+    short_title: str = ""  # the title in a narrow interactive panel ("\n": line break); default ``title``
 
 
 @dataclasses.dataclass
@@ -206,7 +207,7 @@ class FigureSpec:
     legend: list[LegendEntry] = dataclasses.field(default_factory=list)
     warnings: list[str] = dataclasses.field(default_factory=list)
     size: tuple[float, float] = (7.0, 4.2)  # inches, static export
-    aspect: float = 1.4  # width / height in the explorer
+    aspect: float = 0.75  # height / width of the plot in the explorer (viser's ``aspect``)
     filename: str = "paraspace_plot"
 
 
@@ -286,7 +287,7 @@ def sweep_spec(rows: Sequence[dict], param: str, measure: str = "volume", *, cur
         label = f"current design: {param} = {current:g}" + (f", {short} = {_fmt(cv)}" if cv is not None else "")
         panel.markers.append(Marker(label, float(current), cv, vline=True))
     title = f"Fig. 4 - {short} vs {param}{_voxel_note(voxel)}"
-    return FigureSpec(title=title, panels=[panel], size=(7.0, 4.4), aspect=1.35,
+    return FigureSpec(title=title, panels=[panel], size=(7.0, 4.4), aspect=0.95,
                       filename=f"paraspace_{measure}_vs_{param}")
 
 
@@ -325,7 +326,7 @@ def study_spec(values_x: Sequence[float], values_y: Sequence[float], grid: Seque
                          grid=Grid(xs, ys, z), markers=list(markers), hover=hover))
     title = f"Fig. 5 - {short} over ({param_x}, {param_y}){_voxel_note(voxel)}"
     n = len(out)
-    return FigureSpec(title=title, panels=out, rows=n, cols=1, size=(6.6, 5.0 * n), aspect=1.25 / max(n, 1) ** 0.9,
+    return FigureSpec(title=title, panels=out, rows=n, cols=1, size=(6.6, 5.0 * n), aspect=0.3 + 0.85 * n,
                       filename=f"paraspace_{measure}_{param_x}_{param_y}")
 
 
@@ -426,6 +427,7 @@ def orientation_spec(result: Any, z0: Optional[float] = None) -> FigureSpec:
             sym = ROTATION_SYMBOLS[rot]
             color = ROTATION_COLORS[rot]
             title = f"{sym} on {ls}"
+            short = ""
             notes: list[str] = []
             boxes: list[Box] = []
             mask = None
@@ -443,14 +445,17 @@ def orientation_spec(result: Any, z0: Optional[float] = None) -> FigureSpec:
                     boxes.append(Box(a0, a1, p0, p1, saturated=sat_a or sat_p))
                     title = (f"{sym} on {ls}: Δ{sym} = {reg.delta_angle:g}°{'*' if sat_a else ''}, "
                              f"Δ{ls} = {reg.delta_position:.4g}{'*' if sat_p else ''}")
+                    short = (f"{sym} on {ls}\nΔ{sym} {reg.delta_angle:g}°{'*' if sat_a else ''} · "
+                             f"Δ{ls} {reg.delta_position:.4g}{'*' if sat_p else ''}")
                     if sat_a:
                         notes.append(f"Δ{sym} = whole scan")
                     if sat_p:
                         notes.append(f"Δ{ls} = whole line")
                 else:
                     title = f"{sym} on {ls}: no feasible sample"
+                    short = f"{sym} on {ls}\nno feasible sample"
             panels.append(Panel(
-                kind="mask", title=title, x_title=f"{sym} [deg]",
+                kind="mask", title=title, short_title=short, x_title=f"{sym} [deg]",
                 y_title=f"{ls} [{LENGTH}]" if rot == ROTATIONS[0] else "",
                 mask=mask, boxes=boxes, notes=notes,
                 x_range=(arange[0] - a_pad, arange[1] + a_pad), y_range=(y_lo, y_hi),
@@ -461,15 +466,15 @@ def orientation_spec(result: Any, z0: Optional[float] = None) -> FigureSpec:
         legend.append(LegendEntry("* Δ = whole scan (saturated)", SATURATED_COLOR, "saturated"))
     legend.append(LegendEntry("outside the scan", OUTSIDE_COLOR))
     warn = saturation_warning(result)
-    title = (f"Fig. 3(e)-(g) - orientation workspace, z0 = {z0:g}: "
+    title = (f"Fig. 3(e)-(g) - orientation workspace, z0 = {z0:g}:\n"
              f"TI₁ = {_fmt(result.ti1)}, TI₂ = {_fmt(result.ti2)} [deg·{LENGTH}]")
     return FigureSpec(title=title, panels=panels, rows=3, cols=3, legend=legend, warnings=[warn] if warn else [],
-                      size=(10.0, 10.0), aspect=0.78, filename="paraspace_orientation")
+                      size=(10.0, 10.0), aspect=1.75, filename="paraspace_orientation")
 
 
 def placeholder_spec(text: str) -> FigureSpec:
     """A figure with no data that shows ``text`` (before a computation has run)."""
-    return FigureSpec(title=text, panels=[], size=(6.0, 1.5), aspect=3.0, filename="paraspace_placeholder")
+    return FigureSpec(title=text, panels=[], size=(6.0, 1.5), aspect=0.3, filename="paraspace_placeholder")
 
 
 # --------------------------------------------------------------------------------------------
@@ -482,6 +487,18 @@ def _esc(text: str) -> str:
 
 
 _PLOTLY_SYMBOL = {"diamond": "diamond", "star": "star", "circle": "circle-open"}
+
+
+def _lines(text: str) -> str:
+    """Escaped plotly text; ``"\n"`` becomes a line break."""
+    return "<br>".join(_esc(t) for t in str(text).split("\n"))
+
+
+def _short_axis(title: str) -> str:
+    """``"a - platform radius [units]"`` -> ``"a [units]"`` (3-D axes have little room)."""
+    name, _, rest = title.partition(" - ")
+    unit = "[" + title.rsplit("[", 1)[-1] if "[" in title else ""
+    return f"{name} {unit}".strip() if rest else title
 
 
 def _axis_ref(i: int, axis: str) -> str:
@@ -503,7 +520,7 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
              for r in range(spec.rows)]
     multi = len(spec.panels) > 1
     fig = make_subplots(rows=spec.rows, cols=spec.cols, specs=types,
-                        subplot_titles=[_esc(p.title) for p in spec.panels] if multi else None,
+                        subplot_titles=[_lines(p.short_title or p.title) for p in spec.panels] if multi else None,
                         horizontal_spacing=0.06 if spec.cols > 1 else 0.02,
                         vertical_spacing=0.09 if spec.rows > 1 else 0.02)
     legend_seen: set[str] = set()
@@ -600,15 +617,23 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
                                          line=dict(color=mk.color, dash="dash")), **at)
         if p.kind == "surface":
             scene = "scene" if i == 0 else f"scene{i + 1}"
-            fig.layout[scene].update(xaxis_title=_esc(p.x_title), yaxis_title=_esc(p.y_title),
-                                     zaxis=dict(title=_esc(p.z_title), exponentformat="power"),
-                                     camera=dict(eye=dict(x=1.6, y=-1.6, z=1.0)), aspectmode="cube")
+            fig.layout[scene].update(xaxis_title=_esc(_short_axis(p.x_title)), yaxis_title=_esc(_short_axis(p.y_title)),
+                                     zaxis=dict(title=_esc(_short_axis(p.z_title)), exponentformat="power"),
+                                     camera=dict(eye=dict(x=1.9, y=-1.9, z=1.2)), aspectmode="cube")
         else:
-            fig.update_xaxes(title_text=_esc(p.x_title), row=row, col=col, showgrid=True, gridcolor="#E5E5E5",
+            compact = p.kind == "mask" and spec.cols > 1
+            x_title = "" if compact and row < spec.rows else p.x_title
+            fig.update_xaxes(title_text=_esc(x_title), row=row, col=col, showgrid=True, gridcolor="#E5E5E5",
                              zeroline=False, ticks="outside", mirror=True, showline=True, linecolor="#888888")
             fig.update_yaxes(title_text=_esc(p.y_title), row=row, col=col, showgrid=True, gridcolor="#E5E5E5",
                              zeroline=False, ticks="outside", mirror=True, showline=True, linecolor="#888888",
                              exponentformat="power")
+            if compact:
+                m = p.mask
+                ticks = [m.scan[0], 0.0, m.scan[1]] if m is not None and m.scan[0] < 0 < m.scan[1] else None
+                fig.update_xaxes(tickfont_size=9, nticks=4, title_standoff=2, tickvals=ticks, row=row, col=col,
+                                 showticklabels=row == spec.rows)  # one shared angle scale per column
+                fig.update_yaxes(tickfont_size=9, nticks=5, title_standoff=2, row=row, col=col)
             if p.x_range is not None:
                 fig.update_xaxes(range=list(p.x_range), row=row, col=col)
             if p.y_range is not None:
@@ -624,17 +649,23 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
                             line=dict(color=e.color, width=3 if e.kind == "saturated" else 1.5,
                                       dash="dashdot" if e.kind == "saturated" else "dash"))
         fig.add_trace(tr, row=1, col=1)
-    if multi and spec.panels[0].kind == "mask":
-        fig.update_annotations(font_size=10)
-    title = _esc(spec.title)
+    if multi:
+        fig.update_annotations(font_size=10 if spec.panels[0].kind == "mask" else 12)
+    import textwrap
+
+    title = _lines(spec.title)
+    n_lines = spec.title.count("\n") + 1
     if spec.warnings:
-        title += "<br><span style='font-size:11px;color:#CC0000'>⚠ " + "<br>".join(_esc(w) for w in spec.warnings) \
+        wrapped = [ln for w in spec.warnings for ln in textwrap.wrap("⚠ " + w, 62)]
+        n_lines += len(wrapped)
+        title += "<br><span style='font-size:11px;color:#CC0000'>" + "<br>".join(_esc(w) for w in wrapped) \
             + "</span>"
     fig.update_layout(
-        title=dict(text=title, font=dict(size=13), x=0.01, xanchor="left"),
+        title=dict(text=title, font=dict(size=13), x=0.01, xanchor="left", y=1.0, yanchor="top", yref="container",
+                   pad=dict(t=24)),  # below plotly's tool bar
         font=dict(size=11), plot_bgcolor="white", paper_bgcolor="white",
-        margin=dict(l=60, r=20, t=70 + 15 * len(spec.warnings), b=40),
-        legend=dict(orientation="h", yanchor="top", y=-0.08 if spec.rows > 1 else -0.2, x=0, font=dict(size=11)),
+        margin=dict(l=55, r=15, t=50 + 17 * n_lines + (25 if multi else 0), b=40),
+        legend=dict(orientation="h", yanchor="top", y=-0.08 if spec.rows > 1 else -0.3, x=0, font=dict(size=11)),
         hoverlabel=dict(font_size=12), showlegend=True,
     )
     return fig
