@@ -6,7 +6,8 @@
     paraspace orientation [design flags] [joint flags] [--z0 Z] [--position-delta per_region|line|phi] [--json]
     paraspace orientation [design flags] [joint flags] --at x,y,z [--azimuth-step DEG] [--json]   (tilt-and-torsion)
     paraspace sweep       [design flags] --param NAME --values V1,V2,... [--param2 NAME --values2 ...]
-                          [--voxel H] [--json] [--csv FILE] [--plot FILE.png] [--scheduler ADDR] [--workers N]
+                          [--voxel H] [--json] [--csv FILE] [--plot FILE.png|.svg|.pdf] [--measure NAME]
+                          [--z0 Z] [--scheduler ADDR] [--workers N]
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
@@ -319,6 +320,14 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     values = _floats("values", ns.values)
     if (ns.param2 is None) != (ns.values2 is None):
         raise ParameterError("param2", ns.param2, "given together with --values2")
+    orientation = _sweep_orientation(ns)
+    if ns.plot:
+        from paraspace.app.figures import export_format
+
+        try:
+            export_format(ns.plot)
+        except ValueError as err:
+            raise ParameterError("plot", ns.plot, str(err)) from None
     distributed = ns.scheduler is not None or ns.workers is not None
     cores = os.cpu_count() or 1
     if ns.scheduler is None and ns.workers is not None and ns.workers > cores:
@@ -335,17 +344,18 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
             if distributed:
                 from paraspace.kinematics.distributed import sweep_grid
 
-                rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings,
+                rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings, orientation=orientation,
                                   scheduler=ns.scheduler, n_workers=ns.workers, progress=progress)
             else:
-                rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, progress=progress)["points"]
+                rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, orientation=orientation,
+                                progress=progress)["points"]
         elif distributed:
             from paraspace.kinematics.distributed import sweep_grid
 
-            rows = sweep_grid(design, {ns.param: values}, settings, scheduler=ns.scheduler, n_workers=ns.workers,
-                              progress=progress)
+            rows = sweep_grid(design, {ns.param: values}, settings, orientation=orientation, scheduler=ns.scheduler,
+                              n_workers=ns.workers, progress=progress)
         else:
-            rows = sweep_1d(design, ns.param, values, settings, progress=progress)
+            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress)
     finally:
         done()
     rows = [_with_value(r, ns.param, ns.param2) for r in rows]
@@ -354,7 +364,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         with open(ns.csv, "w", newline="") as fh:
             fh.write(rows_to_csv(rows))
     if ns.plot:
-        plot_sweep(rows, ns.param, ns.param2, ns.plot)
+        plot_sweep(rows, ns.param, ns.param2, ns.plot, ns.measure, design, settings.voxel)
     if ns.json:
         _emit(rows)
     else:
@@ -364,6 +374,23 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
                          f"(first: {failed[0].get('error', '?')})\n")
         return 1
     return 0
+
+
+def _sweep_orientation(ns: argparse.Namespace) -> Any:
+    """The orientation settings of a sweep: ``--z0``, or the paper's z0 = 130 when ``--measure`` is
+    TI_1/TI_2 (``None``: no orientation maps). Checks ``--measure``."""
+    from paraspace.app.figures import MEASURES
+    from paraspace.kinematics.orientation import OrientationSettings
+
+    if ns.measure not in MEASURES:
+        raise ParameterError("measure", ns.measure, "one of " + ", ".join(MEASURES))
+    if ns.z0 is None:
+        return OrientationSettings() if ns.measure in ("TI_1", "TI_2") else None
+    try:
+        z0 = float(ns.z0)
+    except (TypeError, ValueError):
+        raise ParameterError("z0", ns.z0, "a number") from None
+    return OrientationSettings(z0=z0)
 
 
 def _with_value(row: dict, param: str, param2: Optional[str]) -> dict:
@@ -388,34 +415,30 @@ def rows_to_csv(rows: Sequence[dict]) -> str:
     return buf.getvalue()
 
 
-def plot_sweep(rows: Sequence[dict], param: str, param2: Optional[str], path: str) -> None:
-    """Volume against one parameter (paper Fig. 4) or a heat map over two (Fig. 5), as PNG."""
-    import matplotlib
+def plot_sweep(rows: Sequence[dict], param: str, param2: Optional[str], path: str, measure: str = "volume",
+               design: Optional[Design] = None, voxel: Optional[float] = None) -> None:
+    """``measure`` against one parameter (paper Fig. 4) or over two (Fig. 5: a 3-D surface and a heat
+    map whose cells are centred on the samples), written to ``path`` (.png at 200 dpi, .svg or .pdf)
+    with :mod:`paraspace.app.figures`, the explorer's plotting module. ``design`` (the design the
+    sweep varies) is marked."""
+    from paraspace.app import figures
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    fig, ax = plt.subplots(figsize=(6, 4.2), dpi=120)
+    fmt = figures.export_format(path)
     if param2 is None:
-        ax.plot([r["value"] for r in rows], [r["volume"] for r in rows], "o-")
-        ax.set_xlabel(param)
-        ax.set_ylabel("workspace volume V")
-        ax.grid(alpha=0.3)
+        cur = float(getattr(design, param)) if design is not None else None
+        spec = figures.sweep_spec(rows, param, measure, current=cur, voxel=voxel)
     else:
-        xs = sorted({r["value"] for r in rows})
-        ys = sorted({r["value2"] for r in rows})
-        grid = np.full((len(ys), len(xs)), np.nan)
+        xs = sorted({float(r["value"]) for r in rows})
+        ys = sorted({float(r["value2"]) for r in rows})
+        grid: list[list[Any]] = [[None] * len(xs) for _ in ys]
         for r in rows:
-            grid[ys.index(r["value2"]), xs.index(r["value"])] = r["volume"]
-        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis",
-                       extent=(xs[0], xs[-1], ys[0], ys[-1]) if len(xs) > 1 and len(ys) > 1 else None)
-        fig.colorbar(im, ax=ax, label="workspace volume V")
-        ax.set_xlabel(param)
-        ax.set_ylabel(param2)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+            grid[ys.index(float(r["value2"]))][xs.index(float(r["value"]))] = r.get(measure)
+        cur2 = (float(getattr(design, param)), float(getattr(design, param2))) if design is not None else None
+        spec = figures.study_spec(xs, ys, grid, param_x=param, param_y=param2, measure=measure, current=cur2,
+                                  voxel=voxel)
+    data = figures.export(spec, fmt)
+    with open(path, "wb") as fh:
+        fh.write(data)
 
 
 def cmd_ik(ns: argparse.Namespace) -> int:
@@ -653,7 +676,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
     s.add_argument("--json", action="store_true", help="a JSON list of objects with value and volume")
     s.add_argument("--csv", metavar="FILE")
-    s.add_argument("--plot", metavar="FILE.png")
+    s.add_argument("--plot", metavar="FILE", help="a picture of the study: .png (200 dpi), .svg or .pdf")
+    s.add_argument("--measure", default="volume", metavar="NAME",
+                   help="the plotted measure (default volume; hollowness, void_ratio, solidity, voids, genus, ...; "
+                        "TI_1/TI_2 need --z0)")
+    s.add_argument("--z0", default=None, metavar="Z",
+                   help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
     _add_joint_flags(s)

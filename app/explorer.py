@@ -49,7 +49,7 @@ from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable, warm_up
 
-from . import jsbridge, pagehook, plots
+from . import figures, jsbridge, pagehook
 from .bytecache import ByteLRU
 from .jobs import Job, JobManager, LimitExceeded
 from .limits import MAX_VOXELS, check_workspace_grid
@@ -216,7 +216,8 @@ class ClientSession:
         self._or_job: Optional[Job] = None
         self._or_key: Optional[tuple] = None  # (design key, z0) of the maps being computed/shown
         self.orientation: Any = None
-        self._orientation_png: Optional[bytes] = None
+        self._orientation_spec: Optional[figures.FigureSpec] = None
+        self._exports: dict[tuple[str, str], tuple[Any, bytes]] = {}  # (plot, format) -> file of the plot on screen
         self._sweep_job: Optional[Job] = None
         self._sweep: Optional[dict] = None
         self._surface_job: Optional[Job] = None
@@ -376,15 +377,19 @@ class ClientSession:
             h.on_update(self._callback(self.on_view_settings))
         p.stop.on_click(self._callback(self.stop_workspace))
         p.z0.on_update(self._callback(self.on_z0))
-        p.orientation_png.on_click(self._callback(self.download_orientation_png))
+        p.orientation_png.on_click(self._callback(lambda: self.download_plot("orientation", "png")))
+        p.orientation_svg.on_click(self._callback(lambda: self.download_plot("orientation", "svg")))
+        p.sweep_measure.on_update(self._callback(self.on_sweep_measure))
         p.sweep_run.on_click(self._callback(self.run_sweep))
         p.sweep_stop.on_click(self._callback(lambda: self._cancel_job(self._sweep_job)))
         p.sweep_csv.on_click(self._callback(self.download_sweep_csv))
-        p.sweep_png.on_click(self._callback(lambda: self._download_png("sweep")))
+        p.sweep_png.on_click(self._callback(lambda: self.download_plot("sweep", "png")))
+        p.sweep_svg.on_click(self._callback(lambda: self.download_plot("sweep", "svg")))
         p.surface_run.on_click(self._callback(self.run_surface))
         p.surface_stop.on_click(self._callback(lambda: self._cancel_job(self._surface_job)))
         p.surface_csv.on_click(self._callback(self.download_surface_csv))
-        p.surface_png.on_click(self._callback(lambda: self._download_png("surface")))
+        p.surface_png.on_click(self._callback(lambda: self.download_plot("surface", "png")))
+        p.surface_svg.on_click(self._callback(lambda: self.download_plot("surface", "svg")))
         p.copy_link.on_click(self._callback(self.copy_link))
         p.download_stl.on_click(self._callback(lambda: self.download_shell("stl")))
         p.download_ply.on_click(self._callback(lambda: self.download_shell("ply")))
@@ -490,11 +495,12 @@ class ClientSession:
         else:
             lines.append("*workspace: computing...*")
         if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design and ori.settings.joints == s.joints:
-            lines.append(f"**TI₁** {_fmt(ori.ti1, 4)}  **TI₂** {_fmt(ori.ti2, 4)}  (z0 = {ori.settings.z0:g}, "
-                         "degree × length units)  ")
-            note = ori.saturation_note()
-            if note:
-                lines.append(f"⚠ {md_text(note)}  ")
+            sat = {x.index for x in figures.orientation_saturation(ori)}
+            flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
+            lines.append(f"**TI₁** {_fmt(ori.ti1, 4)}{flag['TI_1']}  **TI₂** {_fmt(ori.ti2, 4)}{flag['TI_2']} "
+                         f"deg·units  (z0 = {ori.settings.z0:g})")
+            if sat:
+                lines.append(f"⚠ {md_text(figures.saturation_warning(ori), 600)}")
         else:
             lines.append("**TI₁ / TI₂** *computing...*")
         if res is not None:
@@ -952,13 +958,13 @@ class ClientSession:
                     self.preview = bundle
                 else:
                     self.bundle = bundle
+                self._ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
+                                 "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
+                                 "measures": None, "gen": gen, "cached": from_cache}
                 first = not self._framed
                 self._framed = True
             if first:  # the first shell: frame it (later shells keep the user's camera)
                 self.set_camera(s.view)
-                self._ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
-                                 "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
-                                 "measures": None, "gen": gen, "cached": from_cache}
             self._show_payload(size)
             self.payloads["preview" if preview else "full"] = size
         self.client.flush()
@@ -1048,9 +1054,9 @@ class ClientSession:
             res = orientation_workspace(s.design, OrientationSettings(z0=s.z0, joints=s.joints),
                                         progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
             progress(0.9, "drawing...")
-            img, png = plots.render(plots.orientation_figure(res, s.z0))
-            self.explorer.orientation_cache.put(key, (res, img, png))
-            return res, img, png
+            spec = figures.orientation_spec(res, s.z0)
+            self.explorer.orientation_cache.put(key, (res, spec))
+            return res, spec
 
         def done(job: Job) -> None:
             if job.status == "done":
@@ -1077,26 +1083,45 @@ class ClientSession:
                 return
             self.panels.orientation_status.content = text
 
-    def _publish_orientation(self, gen: int, res: Any, img: np.ndarray, png: bytes) -> None:
+    def _publish_orientation(self, gen: int, res: Any, spec: figures.FigureSpec) -> None:
+        fig = figures.to_plotly(spec)
+        warning = figures.saturation_warning(res)
         with self.lock:
             if gen != self._or_gen or self.closed:
                 return
             self.orientation = res
-            self._orientation_png = png
-            self.panels.orientation_image.image = img
+            self._orientation_spec = spec
+            self._clear_exports("orientation")
+            self.panels.orientation_plot.aspect = spec.aspect
+            self.panels.orientation_plot.figure = fig
             self.panels.orientation_status.content = (
-                f"TI₁ = {_fmt(res.ti1, 4)}, TI₂ = {_fmt(res.ti2, 4)} (z0 = {res.settings.z0:g}; "
+                f"TI₁ = {_fmt(res.ti1, 4)}, TI₂ = {_fmt(res.ti2, 4)} deg·units (z0 = {res.settings.z0:g}; "
                 f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28)."
-                + (f"\n\n⚠ {md_text(res.saturation_note())}" if res.saturation_note() else ""))
+                + (f"  \n⚠ {md_text(warning, 600)}" if warning else ""))
         self._render_numbers()
         self._event("orientation-shown")
 
-    def download_orientation_png(self) -> None:
-        """Send the orientation maps as a PNG."""
-        if self._orientation_png is None:
-            self._notify("Not ready", "the orientation maps are still being computed", color="orange")
+    def _clear_exports(self, which: str) -> None:
+        for k in [k for k in self._exports if k[0] == which]:
+            del self._exports[k]
+
+    def download_plot(self, which: str, fmt: str) -> None:
+        """Send the plot ``which`` (``"orientation"``, ``"sweep"``, ``"surface"``) as it is on screen,
+        as a static ``fmt`` file (``"png"`` at ``figures.EXPORT_DPI`` dpi or ``"svg"``)."""
+        with self.lock:
+            spec = {"orientation": self._orientation_spec,
+                    "sweep": (self._sweep or {}).get("spec"), "surface": (self._surface or {}).get("spec")}[which]
+            hit = self._exports.get((which, fmt))
+        if spec is None:
+            self._notify("Not ready", "this plot has not been computed yet", color="orange")
             return
-        self.client.send_file_download("paraspace_orientation.png", self._orientation_png, save_immediately=True)
+        if hit is not None and hit[0] is spec:
+            data = hit[1]
+        else:
+            data = figures.export(spec, fmt)
+            with self.lock:
+                self._exports[(which, fmt)] = (spec, data)
+        self.client.send_file_download(f"{spec.filename}.{fmt}", data, save_immediately=True)
 
     # ----- parameter studies --------------------------------------------------------------------------
     def run_sweep(self) -> None:
@@ -1105,6 +1130,7 @@ class ClientSession:
 
         p = self.panels
         param = str(p.sweep_param.value)
+        measure = str(p.sweep_measure.value)
         n = int(p.sweep_points.value)
         voxel = float(p.study_voxel.value)
         s = self.state
@@ -1112,28 +1138,27 @@ class ClientSession:
         settings = self._ws_settings(s, voxel)
         cache = self.explorer.study_cache
 
+        # TI_1/TI_2 need the orientation maps of every point (at the current z0)
+        ori = OrientationSettings(z0=s.z0, joints=s.joints) if measure in ("TI_1", "TI_2") else None
+
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
-            rows = sweep_1d(s.design, param, values, settings, progress=lambda f, m: progress(0.95 * f, m),
-                            cancel=cancel, cache=cache)
+            rows = sweep_1d(s.design, param, values, settings, orientation=ori,
+                            progress=lambda f, m: progress(0.95 * f, m), cancel=cancel, cache=cache)
             current = float(getattr(s.design, param))
-            cur_rows = sweep_1d(s.design, param, [current], settings, cancel=cancel, cache=cache)
-            cur_vol = cur_rows[0]["volume"]
-            fig = plots.sweep_figure(param, [r["value"] for r in rows], [r["volume"] for r in rows],
-                                     current, cur_vol, voxel)
-            img, png = plots.render(fig)
-            return {"param": param, "rows": rows, "current": current, "current_volume": cur_vol,
-                    "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": settings.orientation}
+            cur_row = sweep_1d(s.design, param, [current], settings, orientation=ori, cancel=cancel, cache=cache)[0]
+            out = {"param": param, "rows": rows, "current": current, "current_row": cur_row,
+                   "current_volume": cur_row["volume"], "voxel": voxel, "design": s.design, "orientation": settings.orientation}
+            out["spec"] = self._sweep_spec(out, measure)
+            out["figure"] = figures.to_plotly(out["spec"])
+            return out
 
         def done(job: Job) -> None:
             p.sweep_stop.visible = False
             p.sweep_run.disabled = False
             if job.status == "done":
-                p.sweep_image.image = job.result["img"]
-                p.sweep_image.visible = True
+                self._show_sweep(job.result)
                 p.sweep_progress.visible = False
                 p.sweep_csv.disabled = False
-                p.sweep_png.disabled = False
-                self._sweep = job.result
             else:
                 p.sweep_progress.visible = False
                 if job.status == "failed":
@@ -1143,7 +1168,7 @@ class ClientSession:
 
     def run_surface(self) -> None:
         """Volume over the (a, d_s) grid (Fig. 5) on request, with progress and Stop."""
-        from paraspace.kinematics.sweep import study_values, sweep_2d
+        from paraspace.kinematics.sweep import study_values, sweep_1d, sweep_2d
 
         p = self.panels
         n = int(p.surface_points.value)
@@ -1157,21 +1182,26 @@ class ClientSession:
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
             out = sweep_2d(s.design, "a", xs, "d_s", ys, settings, progress=lambda f, m: progress(0.97 * f, m),
                            cancel=cancel, cache=cache)
-            fig = plots.surface_figure(out["values_x"], out["values_y"], out["volume"],
-                                       (s.design.a, s.design.d_s), voxel)
-            img, png = plots.render(fig)
-            return {**out, "img": img, "png": png, "voxel": voxel, "design": s.design, "orientation": settings.orientation}
+            cur = sweep_1d(s.design, "a", [s.design.a], settings, cancel=cancel, cache=cache)[0]
+            spec = figures.study_spec(out["values_x"], out["values_y"], out["volume"], param_x="a", param_y="d_s",
+                                      current=(s.design.a, s.design.d_s), current_value=cur["volume"], voxel=voxel)
+            return {**out, "spec": spec, "figure": figures.to_plotly(spec), "voxel": voxel, "design": s.design,
+                    "orientation": settings.orientation}
 
         def done(job: Job) -> None:
             p.surface_stop.visible = False
             p.surface_run.disabled = False
             p.surface_progress.visible = False
             if job.status == "done":
-                p.surface_image.image = job.result["img"]
-                p.surface_image.visible = True
+                with self.lock:
+                    self._surface = job.result
+                    self._clear_exports("surface")
+                p.surface_plot.aspect = job.result["spec"].aspect
+                p.surface_plot.figure = job.result["figure"]
+                p.surface_plot.visible = True
                 p.surface_csv.disabled = False
                 p.surface_png.disabled = False
-                self._surface = job.result
+                p.surface_svg.disabled = False
             elif job.status == "failed":
                 self._notify("Study failed", str(job.error))
 
@@ -1195,13 +1225,37 @@ class ClientSession:
         run.disabled = True
         return job
 
-    # ----- downloads --------------------------------------------------------------------------------
-    def _download_png(self, which: str) -> None:
-        data = self._sweep if which == "sweep" else self._surface
+    @staticmethod
+    def _sweep_spec(data: dict, measure: str) -> figures.FigureSpec:
+        cur = data["current_row"].get(measure)
+        return figures.sweep_spec(data["rows"], data["param"], measure, current=data["current"],
+                                  current_value=None if cur is None else float(cur), voxel=data["voxel"])
+
+    def _show_sweep(self, data: dict) -> None:
+        p = self.panels
+        with self.lock:
+            self._sweep = data
+            self._clear_exports("sweep")
+        p.sweep_plot.aspect = data["spec"].aspect
+        p.sweep_plot.figure = data["figure"]
+        p.sweep_plot.visible = True
+        p.sweep_png.disabled = False
+        p.sweep_svg.disabled = False
+
+    def on_sweep_measure(self) -> None:
+        """The sweep's measure menu changed: redraw the last sweep when its rows carry that measure."""
+        measure = str(self.panels.sweep_measure.value)
+        data = self._sweep
         if data is None:
             return
-        name = (f"paraspace_volume_vs_{data['param']}.png" if which == "sweep" else "paraspace_volume_a_d_s.png")
-        self.client.send_file_download(name, data["png"], save_immediately=True)
+        if not any(measure in r for r in data["rows"]):
+            self._notify("Run the sweep again", f"the last sweep did not compute {measure}; press Run sweep",
+                         color="orange")
+            return
+        spec = self._sweep_spec(data, measure)
+        self._show_sweep({**data, "spec": spec, "figure": figures.to_plotly(spec)})
+
+    # ----- downloads --------------------------------------------------------------------------------
 
     def download_sweep_csv(self) -> None:
         """Send the last volume-vs-parameter sweep as CSV (one row per value)."""

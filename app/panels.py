@@ -16,13 +16,13 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-import numpy as np
 import viser
 
 import paraspace
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 
+from . import figures
 from .joints_panel import JointsControls, build_joints_folder
 from .legend import LegendPanel, build_legend_folder
 from .urlstate import (
@@ -74,24 +74,28 @@ class Panels:
     # plots
     z0: Any
     orientation_status: Any
-    orientation_image: Any
+    orientation_plot: Any
     orientation_png: Any
+    orientation_svg: Any
     study_voxel: Any
     sweep_param: Any
+    sweep_measure: Any
     sweep_points: Any
     sweep_run: Any
     sweep_stop: Any
     sweep_progress: Any
-    sweep_image: Any
+    sweep_plot: Any
     sweep_csv: Any
     sweep_png: Any
+    sweep_svg: Any
     surface_points: Any
     surface_run: Any
     surface_stop: Any
     surface_progress: Any
-    surface_image: Any
+    surface_plot: Any
     surface_csv: Any
     surface_png: Any
+    surface_svg: Any
     # share
     link: Any
     copy_link: Any
@@ -108,8 +112,26 @@ def slider_span(lo: float, hi: float, value: float) -> tuple[float, float]:
     return min(lo, value), max(hi, value)
 
 
-def _blank(h: int = 40, w: int = 320) -> np.ndarray:
-    return np.full((h, w, 3), 255, dtype=np.uint8)
+#: Measures offered by the sweep's "measure" menu (``app.figures.MEASURES`` names).
+SWEEP_MEASURES: tuple[str, ...] = ("volume", "hollowness", "void_ratio", "solidity", "voids", "components", "genus",
+                                   "TI_1", "TI_2")
+#: plotly options of the explorer's plots: zoom/pan/reset kept, plotly's own picture button removed
+#: (the PNG and SVG buttons below each plot give the print-quality files).
+PLOT_CONFIG: dict[str, Any] = {"displaylogo": False, "responsive": True,
+                               "modeBarButtonsToRemove": ["toImage", "lasso2d", "select2d"]}
+
+
+def _plot(gui: viser.GuiApi, text: str, visible: bool = True) -> Any:
+    """An interactive plotly plot (``app.figures``) showing ``text`` until it gets a figure."""
+    spec = figures.placeholder_spec(text)
+    return gui.add_plotly(figures.to_plotly(spec), config=PLOT_CONFIG, aspect=spec.aspect, visible=visible)
+
+
+def _downloads(gui: viser.GuiApi, disabled: bool = True) -> tuple[Any, Any]:
+    """The PNG and SVG download buttons of one plot, side by side."""
+    png = gui.add_button(f"PNG ({figures.EXPORT_DPI} dpi)", icon=viser.Icon.DOWNLOAD, disabled=disabled)
+    svg = gui.add_button("SVG", icon=viser.Icon.DOWNLOAD, disabled=disabled)
+    return png, svg
 
 
 def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
@@ -187,27 +209,30 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
                                 hint="height of the x and y' lines")
             orientation_status = gui.add_markdown("*waiting for the workspace...*")
-            orientation_image = gui.add_image(_blank(), format="png")
-            orientation_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD)
+            orientation_plot = _plot(gui, "the orientation maps appear here")
+            orientation_png, orientation_svg = _downloads(gui, disabled=False)
         study_voxel = gui.add_slider("study voxel h", min=2.0, max=10.0, step=1.0, initial_value=4.0,
                                      hint="voxel edge used by the parameter studies below")
         with gui.add_folder("Volume vs parameter (Fig. 4)", expand_by_default=False):
             sweep_param = gui.add_dropdown("parameter", STUDY_PARAMS, initial_value="a")
+            sweep_measure = gui.add_dropdown("measure", SWEEP_MEASURES, initial_value="volume",
+                                             hint="the plotted measure; TI_1/TI_2 add the orientation maps of "
+                                                  "every point (about 5 s each)")
             sweep_points = gui.add_slider("points", min=3, max=31, step=1, initial_value=10)
             sweep_run = gui.add_button("Run sweep", icon=viser.Icon.PLAYER_PLAY)
             sweep_stop = gui.add_button("Stop sweep", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             sweep_progress = gui.add_progress_bar(0.0, visible=False)
-            sweep_image = gui.add_image(_blank(), format="png", visible=False)
+            sweep_plot = _plot(gui, "", visible=False)
             sweep_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
-            sweep_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD, disabled=True)
+            sweep_png, sweep_svg = _downloads(gui)
         with gui.add_folder("Volume over (a, d_s) (Fig. 5)", expand_by_default=False):
             surface_points = gui.add_slider("grid points per axis", min=3, max=15, step=1, initial_value=7)
             surface_run = gui.add_button("Run (a, d_s) study", icon=viser.Icon.PLAYER_PLAY)
             surface_stop = gui.add_button("Stop study", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             surface_progress = gui.add_progress_bar(0.0, visible=False)
-            surface_image = gui.add_image(_blank(), format="png", visible=False)
+            surface_plot = _plot(gui, "", visible=False)
             surface_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
-            surface_png = gui.add_button("Download PNG", icon=viser.Icon.DOWNLOAD, disabled=True)
+            surface_png, surface_svg = _downloads(gui)
 
     with tabs.add_tab("Share", viser.Icon.SHARE):
         link = gui.add_text("link", "", hint="this link restores the design, pose and view")
@@ -225,13 +250,16 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
-        view_buttons=view_buttons, fit_view=fit_view, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity, payload=payload,
-        z0=z0, orientation_status=orientation_status, orientation_image=orientation_image,
-        orientation_png=orientation_png, study_voxel=study_voxel, sweep_param=sweep_param,
+        view_buttons=view_buttons, fit_view=fit_view, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity,
+        payload=payload,
+        z0=z0, orientation_status=orientation_status, orientation_plot=orientation_plot,
+        orientation_png=orientation_png, orientation_svg=orientation_svg, study_voxel=study_voxel,
+        sweep_param=sweep_param, sweep_measure=sweep_measure,
         sweep_points=sweep_points, sweep_run=sweep_run, sweep_stop=sweep_stop, sweep_progress=sweep_progress,
-        sweep_image=sweep_image, sweep_csv=sweep_csv, sweep_png=sweep_png, surface_points=surface_points,
+        sweep_plot=sweep_plot, sweep_csv=sweep_csv, sweep_png=sweep_png, sweep_svg=sweep_svg,
+        surface_points=surface_points,
         surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
-        surface_image=surface_image, surface_csv=surface_csv, surface_png=surface_png,
+        surface_plot=surface_plot, surface_csv=surface_csv, surface_png=surface_png, surface_svg=surface_svg,
         link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
         download_glb=download_glb, download_json=download_json, version=version,
     )

@@ -184,12 +184,16 @@ def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> No
     # README screenshot 2: the orientation maps
     page.get_by_role("tab", name="Plots").click()
     wait_for(lambda: "TI₁ =" in page.locator("body").inner_text(), 60, "orientation maps")
-    image = page.locator('img[src^="blob:"]').first
-    image.scroll_into_view_if_needed()
-    box = image.bounding_box()
-    assert box is not None and box["height"] > 300  # three stacked maps
-    shot = element_screenshot_not_blank(image, SHOTS / "orientation_maps.png")
+    plot = page.locator(".js-plotly-plot").filter(has_text="orientation workspace").first
+    plot.wait_for(timeout=30000)
+    plot.scroll_into_view_if_needed()
+    box = plot.bounding_box()
+    assert box is not None and box["height"] > 300  # three lines x three rotations
+    shot = element_screenshot_not_blank(plot, SHOTS / "orientation_maps.png")
     assert shot.shape[0] > 200
+    # the interactive plot has a readable legend (plotly text, not pixels of a picture)
+    legend = plot.locator(".legendtext").all_text_contents()  # SVG text
+    assert any("φ (about z) feasible" in t for t in legend) and any("τ" in t for t in legend)
     page.context.close()
     page2.context.close()
 

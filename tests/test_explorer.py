@@ -252,6 +252,21 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     b.click(s.panels.sweep_csv)
     table = list(csv.reader(io.StringIO(b.download("paraspace_sweep_eta_s.csv").decode())))
     assert table[0][0] == "eta_s" and len(table) == 4
+    # the interactive plot shows the rows, the current design (eta_s = 30) marked at its volume
+    fig = s.panels.sweep_plot.figure
+    assert s.panels.sweep_plot.visible and list(fig.data[0].x) == [10.0, 55.0, 100.0]
+    cur = [t for t in fig.data if (t.name or "").startswith("current design")]
+    assert list(cur[0].x) == [30.0] and cur[0].y[0] == s._sweep["current_row"]["volume"]
+    # PNG (200 dpi) and SVG downloads of the same figure
+    b.click(s.panels.sweep_png)
+    png = b.download("paraspace_volume_vs_eta_s.png", timeout=60.0)
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and b"pHYs" in png[:200]
+    b.click(s.panels.sweep_svg)
+    assert b"<svg" in b.download("paraspace_volume_vs_eta_s.svg", timeout=60.0)[:2000]
+    # another measure of the same rows: redrawn without a new computation
+    b.set(s.panels.sweep_measure, "hollowness")
+    wait_for(lambda: "hollowness" in (s.panels.sweep_plot.figure.layout.yaxis.title.text or ""), 10.0, "redraw")
+    assert list(s.panels.sweep_plot.figure.data[0].y) == [r["hollowness"] for r in rows]
 
 
 def test_gizmo_drag_sets_the_pose_sliders(explorer, browsers):
@@ -336,7 +351,10 @@ def test_surface_study(explorer, browsers):
     assert vol.shape == (3, 3)
     ref = compute_workspace(Design(a=55.0, d_s=10.0), WorkspaceSettings(voxel=10.0)).volume
     assert vol[0, 1] == ref  # [iy][ix]: d_s = 10, a = 55
-    assert s.panels.surface_image.visible and not s.panels.surface_csv.disabled
+    assert s.panels.surface_plot.visible and not s.panels.surface_csv.disabled
+    heat = [t for t in s.panels.surface_plot.figure.data if t.type == "heatmap"]
+    assert list(heat[0].x) == out["values_x"] and list(heat[0].y) == out["values_y"]  # cells centred on samples
+    assert any(t.type == "surface" for t in s.panels.surface_plot.figure.data)
     b.click(s.panels.surface_csv)
     rows = list(csv.reader(io.StringIO(b.download("paraspace_volume_a_d_s.csv").decode())))
     assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
