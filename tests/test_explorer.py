@@ -360,10 +360,24 @@ def test_surface_study(explorer, browsers):
     assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
 
 
-def test_design_change_cancels_stale_orientation_maps(explorer, browsers):
+def test_design_change_cancels_stale_orientation_maps(explorer, browsers, monkeypatch):
     """Maps of a design that is no longer current are cancelled at once and never shown, so the
     worker is free for the new design (regression: with both workers busy drawing maps, the stale
-    job ran to the end, held the new design's workspace in the queue, and its maps were shown)."""
+    job ran to the end, held the new design's workspace in the queue, and its maps were shown).
+    The maps are made to take 4 s (cancellable) so that both workers are surely busy with them."""
+    from paraspace.app import explorer as explorer_module
+    from paraspace.kinematics.progress import Cancelled
+
+    real = explorer_module.orientation_workspace
+
+    def slow(design, settings, progress=None, cancel=None):
+        for _ in range(80):
+            if cancel is not None and cancel.is_set():
+                raise Cancelled()
+            time.sleep(0.05)
+        return real(design, settings, progress=progress, cancel=cancel)
+
+    monkeypatch.setattr(explorer_module, "orientation_workspace", slow)
     b1, b2 = browsers("voxel=6&a=31"), browsers("voxel=6&a=41")  # values no other test uses (no cache hits)
     s1, s2 = b1.session, b2.session
     wait_idle(explorer, s1)
