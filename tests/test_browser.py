@@ -30,6 +30,7 @@ if not os.path.exists(CHROMIUM):
 from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 
 from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
+from paraspace.app.numfmt import significant  # noqa: E402
 from paraspace.app.urlstate import parse_query  # noqa: E402
 from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 
@@ -155,6 +156,7 @@ def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> No
     uuid = session.panels.design["a"]._impl.uuid
     old_shell = shell_uuid(page)
     track = page.locator(f'[id="{uuid}"] .mantine-Slider-track')
+    track.scroll_into_view_if_needed()
     box = track.bounding_box()
     assert box is not None
     page.mouse.click(box["x"] + 0.8 * box["width"], box["y"] + box["height"] / 2)
@@ -168,7 +170,11 @@ def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> No
     assert 70.0 <= a_new <= 90.0
     # the shell is replaced, the numbers change, the address bar follows
     wait_for(lambda: shell_uuid(page) != old_shell, 30, "a new shell node")
-    after_volume = wait_for(lambda: (lambda t: t if t != before_volume else "")(full_volume_text(page)), 60,
+    # the numbers of the final design (the click and the two key presses each start a job)
+    wait_for(lambda: session.bundle is not None and session.bundle.result.design == session.state.design
+             and not explorer.jobs.active(session.job_client), 60, "the final design's workspace")
+    expected = f"Volume {significant(session.bundle.result.volume, 4)} units³"
+    after_volume = wait_for(lambda: (lambda t: t if t.startswith(expected) else "")(full_volume_text(page)), 60,
                             "new numbers")
     assert after_volume != before_volume
     wait_for(lambda: f"a={a_new:g}" in page.url, 10, "the address bar")
@@ -215,3 +221,45 @@ def test_two_browsers_keep_separate_states(browser: Browser, explorer: Explorer)
     assert "eta_s=30" in p2.url and "z=120" in p2.url
     p1.context.close()
     p2.context.close()
+
+
+def test_the_explorer_explains_itself(browser: Browser, explorer: Explorer) -> None:
+    """Issue 8 in a real Chromium: page title, the colour bar and legend, a value typed outside the
+    slider (applied after the pause, its link restores it; an invalid one names its range), no
+    "-0.00" anywhere, the joints group, and README screenshots of the legend and of the comparison
+    of the paper's a = 10 / a = 80 pair."""
+    page, session = open_page(browser, explorer)
+    assert page.title() == "paraspace"
+    full_volume_text(page)
+    body = page.locator("body").inner_text()
+    assert "Shell colour = height z, from" in body and "length units" in body  # the colour bar's caption
+    assert "Legs:" in body and "Units:" in body
+    assert "-0.00" not in body
+    assert page.locator("img").count() >= 1  # the colour bar is an image
+    legend = page.locator(".mantine-Accordion-item, details, div").filter(has_text="Shell colour = height z").last
+    element_screenshot_not_blank(legend, SHOTS / "legend.png")
+    # a value typed in the number box of the 'a' slider, outside Table I's [10, 100]
+    slider = page.locator(f'[id="{session.panels.design["a"]._impl.uuid}"]')
+    box = slider.locator("xpath=..").locator("input[inputmode=decimal]").first  # the number box beside it
+    box.scroll_into_view_if_needed()
+    box.fill("8")
+    box.press("Enter")
+    wait_for(lambda: session.state.design.a == 8.0, 10, "a = 8 applied after the typing pause")
+    wait_for(lambda: "a=8&" in page.evaluate("() => location.search"), 10, "a = 8 in the address bar")
+    page2, session2 = open_page(browser, explorer, page.evaluate("() => location.search").lstrip("?"))
+    assert session2.state.design.a == 8.0 and "link had problems" not in page2.locator("body").inner_text()
+    page2.context.close()
+    box.fill("2000")
+    box.press("Enter")
+    wait_for(lambda: "valid range [1e-06, 1000]" in page.locator("body").inner_text(), 10, "the range message")
+    assert session.state.design.a == 8.0
+    # the Compare tab: the paper's a = 10 / a = 80 pair in one click, screenshot for the README
+    page.get_by_role("tab", name="Compare").click()
+    page.get_by_role("button", name="a 10|80").click()
+    wait_for(lambda: session.compare.pinned is not None and "| volume" in session.compare.table.content, 60,
+             "the comparison")
+    wait_for(lambda: "change" in page.locator("body").inner_text(), 10, "the table on screen")
+    full_volume_text(page)
+    time.sleep(1.0)
+    screenshot_not_blank(page, SHOTS / "compare_a10_a80.png")
+    page.context.close()
