@@ -12,7 +12,14 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      runs, the ratio, and whether the voxels are identical; idle, then with a second process busy
      on one core (``--no-load`` skips the loaded rows).
 
+  5. the cost of each engine option relative to the plain model at h = 2 (joint cones with both
+     axes, leg interference, diagnostics, the certified bracket at each refinement level with its
+     gap), medians of alternating runs;
+  6. one thread against two, idle and with a second process busy on one core (numba's threads
+     sleep between launches: see kinematics/parallel.py).
+
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
+                                            [--options] [--threads]
 """
 
 from __future__ import annotations
@@ -64,12 +71,83 @@ def engine_v2_rows(design: Design, runs: int = 5) -> None:
               f"{max(blocks_t) * 1e3:.0f} ms)")
 
 
+def _median_time(fn, runs: int) -> tuple[float, object]:
+    ts, out = [], None
+    for _ in range(runs):
+        t = time.perf_counter()
+        out = fn()
+        ts.append(time.perf_counter() - t)
+    return statistics.median(ts), out
+
+
+def option_rows(design: Design, runs: int = 5) -> None:
+    """Item 5 of the module docstring."""
+    from paraspace.kinematics.joints import Joints
+
+    plain = WorkspaceSettings(voxel=2.0)
+    options = {
+        "plain (strokes only)": plain,
+        "cones 45 deg, normal axes": WorkspaceSettings(voxel=2.0, joints=Joints(theta_u=45, theta_s=45)),
+        "cones 45 deg, home axes": WorkspaceSettings(voxel=2.0, joints=Joints(theta_u=45, theta_s=45, cone_axis="home")),
+        "legs of diameter 10": WorkspaceSettings(voxel=2.0, joints=Joints(leg_diameter=10.0)),
+        "diagnostics (every chain)": WorkspaceSettings(voxel=2.0, diagnostics=True),
+    }
+    for st in options.values():
+        compute_workspace(design, st)  # compile
+    base, ref = _median_time(lambda: compute_workspace(design, plain), runs)
+    for name, st in options.items():
+        t, res = _median_time(lambda st=st: compute_workspace(design, st), runs)
+        print(f"  {name:<28} {t * 1e3:8.1f} ms  x{t / base:5.2f}  volume {res.volume:.4g}")
+    for refine in (0, 1, 2):
+        st = WorkspaceSettings(voxel=2.0, bracket=True, bracket_refine=refine)
+        t, res = _median_time(lambda st=st: compute_workspace(design, st), max(1, runs // 2))
+        gap = (res.volume_outer - res.volume_inner) / res.volume
+        print(f"  bracket, {refine} refinement(s)      {t * 1e3:8.1f} ms  x{t / base:5.2f}  gap {100 * gap:.1f} % of V "
+              f"[{res.volume_inner:.5g}, {res.volume_outer:.5g}]")
+
+
+def thread_rows(design: Design, runs: int = 5) -> None:
+    """Item 6 of the module docstring."""
+    import numba
+
+    from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+    work = {"blocks h=2": lambda: compute_workspace(design, WorkspaceSettings(voxel=2.0)),
+            "dense h=2": lambda: compute_workspace(design, WorkspaceSettings(voxel=2.0, method="dense")),
+            "orientation indices": lambda: orientation_workspace(design, OrientationSettings())}
+    for f in work.values():
+        f()
+    for loaded in (False, True):
+        stop = multiprocessing.Event()
+        spinner = None
+        if loaded:
+            spinner = multiprocessing.Process(target=_spin, args=(stop,), daemon=True)
+            spinner.start()
+            time.sleep(0.3)
+        print(f"  {'with a second process busy on one core' if loaded else 'idle'} "
+              f"(OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}, layer {numba.threading_layer()}):")
+        for name, f in work.items():
+            row = []
+            for n in (1, 2):
+                numba.set_num_threads(n)
+                t, _ = _median_time(f, runs)
+                row.append(t)
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+            print(f"    {name:<22} 1 thread {row[0] * 1e3:8.1f} ms   2 threads {row[1] * 1e3:8.1f} ms   "
+                  f"ratio {row[0] / row[1]:.2f}")
+        if spinner is not None:
+            stop.set()
+            spinner.join(2)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--voxel", type=float, default=4.0, help="grid of the engine-vs-numpy comparison")
     ap.add_argument("--skip-converged", action="store_true")
     ap.add_argument("--no-load", action="store_true", help="skip the rows under a second busy process")
     ap.add_argument("--only-v2", action="store_true", help="only the engine-v2 rows")
+    ap.add_argument("--options", action="store_true", help="only the option-cost rows (item 5)")
+    ap.add_argument("--threads", action="store_true", help="only the thread rows (item 6)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
