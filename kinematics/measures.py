@@ -162,15 +162,16 @@ feature_radius, feature_radius_voxels
     ``feature_radius_extent`` (default 0.02) times the largest of ``extents`` (so the filter
     scales with the workspace, never with the voxel: about 4-7.5 length units on the paper's nine
     designs). ``feature_radius_voxels = r / h``. The filter is resolved when ``r / h >= 1``; for
-    ``r < h`` the digital ball is the single voxel, ``S_r = W`` and ``stable_genus`` /
-    ``stable_components`` equal ``genus`` / ``filled_components``.
+    ``r < h`` the digital ball is the single voxel, ``S_r = P`` and ``stable_genus`` /
+    ``stable_components`` are the raw genus / components of the pieces.
 stable_genus, stable_components, stable_volume_fraction
     With ``B_r = {d in h Z^3 : |d| <= r}`` (the digital Euclidean ball of radius ``r``), the
-    opening ``O_r(W) = (W (-) B_r) (+) B_r`` (erosion then dilation; the grid is padded with
+    opening ``O_r(X) = (X (-) B_r) (+) B_r`` (erosion then dilation; the grid is padded with
     unreachable voxels) and the closing ``C_r(X) = (X (+) B_r) (-) B_r``, the *filtered solid* is
-    ``S_r = C_r(O_r(W))``: the opening drops every part of ``W`` thinner than about ``2 r``
-    (knife-edged sheets, specks, thin bridges), the closing then fills every gap, slot or tunnel
-    narrower than about ``2 r``. With ``F_S = S_r u voids(S_r)``: ``stable_genus = b0(F_S) -
+    ``S_r = C_r(O_r(P))`` (of the pieces: the fragments are dropped first, so that they do not
+    count even when the filter is not resolved): the opening drops every part thinner than about
+    ``2 r`` (knife-edged sheets, specks, thin bridges), the closing then fills every gap, slot or
+    tunnel narrower than about ``2 r``. With ``F_S = S_r u voids(S_r)``: ``stable_genus = b0(F_S) -
     chi(F_S)`` (the genus definition above applied to ``S_r``), ``stable_components = b0(F_S)``
     and ``stable_volume_fraction = |S_r| / N``. It counts the tunnels and windows that are at
     least ``2 r`` wide and walled by material at least ``2 r`` thick; smaller ones are below the
@@ -697,7 +698,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     piece_clipped = [f for f in touched_faces(piece_set) if not (floor_closes and f == floor_face)]
     extent = max(b - a for a, b in zip(bmin, bmax))
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
-    stable = feature_filter(occ, r / h)
+    stable = feature_filter(piece_set, r / h)
     stable_components, stable_genus = filled_genus(stable, connectivity)
     stable_fraction = float(stable.sum() / n)
     del stable
