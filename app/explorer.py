@@ -485,9 +485,13 @@ class ClientSession:
                     lines.append("**Boundary** complete: one closed surface standing on the base  ")
                 else:
                     lines.append(f"**Boundary** incomplete: {md_text(m.completeness_reason)}  ")
-                closed = "closed" if m.boundary_closed else "open (cut or in pieces)"
-                lines.append(f"**Topology** surface {closed}, genus {m.genus}, {m.components} "
-                             f"component{'s' if m.components != 1 else ''}  ")
+                closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
+                frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
+                        f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
+                lines.append(f"**Topology** surface {closed}, {m.pieces} piece{'s' if m.pieces != 1 else ''}"
+                             f"{frag}, genus {m.stable_genus} (features > {2 * m.feature_radius:.3g}; "
+                             f"voxel-level: genus {m.genus}, {m.components} "
+                             f"component{'s' if m.components != 1 else ''})  ")
             else:
                 lines.append("*measures: computing...*  ")
             lines.append(f"**Compute** {info['seconds']:.2f} s workspace"

@@ -162,6 +162,11 @@ for _m in (
     Measure("l_max", "longest leg l_min + l_s", derive=_l_max),
     Measure("boundary_complete", "the workspace boundary is complete (kinematics.measures)", flag=True),
     Measure("boundary_closed", "the workspace boundary is closed (kinematics.measures)", flag=True),
+    Measure("pieces", "components holding >= 1 % of the volume (kinematics.measures, stable in h)"),
+    Measure("fragment_volume_fraction", "volume fraction of the components below 1 % (kinematics.measures)"),
+    Measure("stable_genus", "genus of the open-close filtered solid (kinematics.measures, stable in h)"),
+    Measure("boundary_closed_stable", "one piece, not cut by the box (kinematics.measures, stable in h)",
+            flag=True),
 ):
     register_measure(_m)
 # Measures other work adds (GCI, total-orientation volume, joint cones) become available with one
