@@ -61,6 +61,7 @@ from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels, slider_span
 from .compare_panel import CompareHooks, ComparePanel
 from .paper_panel import PaperPanel
+from .tilt_panel import TiltPanel
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
     D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState, encode_query,
@@ -281,6 +282,10 @@ class ClientSession:
         s = self.state
         self.panels = build_panels(self.client.gui, s)
         self._build_optimize_tab()
+        with self.panels.pose_tab:
+            self.tilt = TiltPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
+                                  get_input=lambda: (self.state.design, self.state.pose.position, self.state.joints),
+                                  notify=self._notify)
         with self.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
             self.compare = ComparePanel(self.client.gui, self.client.scene, self.explorer.jobs, self.job_client,
                                         CompareHooks(get_state=lambda: self.state, set_pin=self._set_pin,

@@ -57,6 +57,7 @@ class Panels:
     design_message: Any
     joints: JointsControls
     # pose
+    pose_tab: Any
     pose: dict[str, Any]
     gizmo: Any
     carriages: Any
@@ -166,7 +167,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
                                hint="voxel edge of the full workspace computation (preview: h = 6)")
         joints = build_joints_folder(gui, state.joints)
 
-    with tabs.add_tab("Pose", viser.Icon.ARROWS_MOVE):
+    pose_tab = tabs.add_tab("Pose", viser.Icon.ARROWS_MOVE)
+    with pose_tab:
         pose = {}
         for key in POSE_KEYS:
             rng = POSE_SLIDERS[key]
@@ -249,7 +251,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
-        pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
+        pose_tab=pose_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
         view_buttons=view_buttons, fit_view=fit_view, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity,
         payload=payload,
         z0=z0, orientation_status=orientation_status, orientation_plot=orientation_plot,

@@ -533,3 +533,17 @@ def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
     b2.click(s2.compare.unpin_button)
     wait_for(lambda: s2.state.pin is None and s2.compare.handle is None, 5.0, "unpinned")
     wait_for(lambda: "pin=" not in b2.search, 5.0, "pin gone from the link")
+
+
+def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):
+    from paraspace.kinematics.tilt_torsion import tilt_torsion_at
+
+    b = browsers("voxel=6&z=130")
+    s = b.session
+    b.click(s.tilt.run)
+    wait_for(lambda: s.tilt.report is not None and s.tilt.plot.visible, 20.0, "the polar plot")
+    ref = tilt_torsion_at(s.state.design, s.state.pose.position)
+    assert s.tilt.report.max_tilt == ref.max_tilt  # the plot shows the engine's report
+    fig = s.tilt.plot.figure
+    assert list(fig.data[0].r)[:-1] == [v or 0.0 for v in ref.max_tilt]
+    assert "tilt in every direction" in s.tilt.text.content
