@@ -34,17 +34,10 @@ def run_js(client: viser.ClientHandle, source: str) -> None:
     client._websock_connection.queue_message(_messages.RunJavascriptMessage(source=wrapped))  # noqa: SLF001
 
 
-def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> Optional[tuple[str, str]]:
-    """The page's ``(location.search, origin + pathname)``, or ``None`` if the browser did not answer.
-
-    Blocks for one round trip: call it from a thread-pool callback (a ``def`` callback), never from
-    an ``async def`` one.
-    """
-    key = f"paraspace_location_{client.client_id}"
-    run_js(client, (
-        f"localStorage.setItem({json.dumps(VISER_STORAGE_PREFIX + key)}, "
-        "JSON.stringify({search: window.location.search, base: window.location.origin + window.location.pathname}));"
-    ))
+def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: float) -> Optional[str]:
+    """Run ``source`` (which stores its answer under the JS variable ``k``'s localStorage key) and
+    read the answer back; ``None`` if the browser did not answer within ``timeout`` seconds."""
+    run_js(client, f"var k = {json.dumps(VISER_STORAGE_PREFIX + key)};" + source)
     try:
         raw = client.local_storage.get_item(key, timeout=timeout)
     except (TimeoutError, RuntimeError):
@@ -53,6 +46,18 @@ def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> Optional[
         client.local_storage.remove_item(key)
     except Exception:  # noqa: BLE001 - the client may be gone already
         pass
+    return raw
+
+
+def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> Optional[tuple[str, str]]:
+    """The page's ``(location.search, origin + pathname)``, or ``None`` if the browser did not answer.
+
+    Blocks for one round trip: call it from a thread-pool callback (a ``def`` callback), never from
+    an ``async def`` one.
+    """
+    raw = _round_trip(client, f"paraspace_location_{client.client_id}", (
+        "localStorage.setItem(k, JSON.stringify({search: window.location.search, "
+        "base: window.location.origin + window.location.pathname}));"), timeout)
     if raw is None:
         return None
     try:
@@ -76,24 +81,11 @@ def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.
     """Try to put ``text`` on the clipboard of this client's browser and report what happened:
     ``True`` copied, ``False`` refused by the browser (e.g. not a secure context, no permission),
     ``None`` no answer within ``timeout`` seconds. Blocks for one round trip (a ``def`` callback)."""
-    key = f"paraspace_clip_{client.client_id}"
-    k = json.dumps(VISER_STORAGE_PREFIX + key)
-    run_js(client, (
-        f"var t = {json.dumps(text)}; var k = {k};"
+    raw = _round_trip(client, f"paraspace_clip_{client.client_id}", (
+        f"var t = {json.dumps(text)};"
         "function put(v) { localStorage.setItem(k, v); }"
         "if (navigator.clipboard && navigator.clipboard.writeText) {"
         " navigator.clipboard.writeText(t).then(function () { put('ok'); },"
         " function (e) { console.warn('clipboard:', e); put('refused'); }); }"
-        " else { put('refused'); }"
-    ))
-    try:
-        raw = client.local_storage.get_item(key, timeout=timeout)
-    except (TimeoutError, RuntimeError):
-        return None
-    try:
-        client.local_storage.remove_item(key)
-    except Exception:  # noqa: BLE001 - the client may be gone already
-        pass
-    if raw is None:
-        return None
-    return raw == "ok"
+        " else { put('refused'); }"), timeout)
+    return None if raw is None else raw == "ok"

@@ -78,10 +78,11 @@ class FakeBrowser:
             with self.lock:
                 self.scripts.append(src)
             # Play the browser: the two scripts of app/jsbridge.py that matter here.
-            set_loc = re.search(r"localStorage\.setItem\((\"[^\"]+\"),", src)
-            if set_loc and "location.search" in src:
-                key = json.loads(set_loc.group(1))
-                self.storage[key] = json.dumps({"search": self.search, "base": self.base})
+            var_k = re.search(r"var k = (\"[^\"]+\");", src)
+            if var_k and "location.search" in src:
+                self.storage[json.loads(var_k.group(1))] = json.dumps({"search": self.search, "base": self.base})
+            if var_k and "navigator.clipboard" in src:  # a page without clipboard access
+                self.storage[json.loads(var_k.group(1))] = "refused"
             q = re.search(r"var q = (\"(?:[^\"\\]|\\.)*\");", src)
             if q and "replaceState" in src:
                 self.search = json.loads(q.group(1))
