@@ -112,11 +112,8 @@ def test_platform_and_base_points():
     assert np.allclose(np.linalg.norm(B - [1, 2, 3], axis=-1), 37)
 
 
-def test_mobility_eq1_and_numerically():
+def test_mobility_eq1():
     t = topology()
     assert (t.n, t.g, t.f_sum) == (20, 24, 42)
     assert mobility(t) == 12
-    # independent: dim of {(xdot, qdot): J_x xdot = J_q qdot} at a regular configuration
-    J = jacobians(Design(), Pose(5, -3, 130, 4, -2, 3), [10, 20, 30], [5, -5, 0])
-    rank = np.linalg.matrix_rank(np.hstack([J.J_x, -J.J_q]))
-    assert 18 - rank == 12
+    # the numerical check that can fail: tests/test_mobility.py (an independent multibody model)
