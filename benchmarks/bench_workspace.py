@@ -151,6 +151,14 @@ def main() -> None:
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
+    if ns.options or ns.threads:
+        if ns.options:
+            print(f"\noption costs at h = 2, default design (load average {os.getloadavg()[0]:.2f}):")
+            option_rows(design)
+        if ns.threads:
+            print(f"\none thread against two (load average {os.getloadavg()[0]:.2f}):")
+            thread_rows(design)
+        return
     print(f"\nengine v2 vs dense, paper default design, derived bounds (load average {os.getloadavg()[0]:.2f}):")
     engine_v2_rows(design)
     if not ns.no_load:
