@@ -31,7 +31,7 @@ from .textsafe import md_text
 FIG3_PAIRS: tuple[tuple[str, float, float], ...] = (("a", 10.0, 80.0), ("d_s", 10.0, 80.0),
                                                     ("eta_s", 10.0, 60.0), ("l_s", 20.0, 80.0))
 GHOST_COLOR = (255, 140, 0, 255)
-GHOST_OPACITY = 0.22
+GHOST_OPACITY = 0.5
 
 #: Rows of the comparison table: (label, how to read it from a bundle, digits or None for text).
 ROWS: tuple[tuple[str, Callable[[Any], Any], Optional[int]], ...] = (

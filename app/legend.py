@@ -21,8 +21,8 @@ from paraspace.kinematics.shell import viridis
 BAR_SIZE = (360, 78)
 
 LEGEND_TEXT = (
-    "**Legs:** 🟦 inside their stroke · 🟧 at a limit · 🟥 out of range (a label names the leg)  \n"
-    "**Platform:** 🟩 the pose is in the workspace · 🟥 outside (label above the platform)  \n"
+    "**Legs:** blue = inside their stroke, orange = at a limit, red = out of range (a label names the leg)  \n"
+    "**Platform:** green = the pose is in the workspace, red = outside (label above the platform)  \n"
     "**Axes:** x red, y green, z blue, from the base centre; grid cells r/5, sections r  \n"
     "**Units:** lengths in the paper's units (dimensionless, r = 100 by default), volumes in units³, "
     "angles in degrees"
@@ -57,7 +57,7 @@ def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE) -> np
     w, h = size
     fig = Figure(figsize=(w / 100.0, h / 100.0), dpi=100)
     FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.04, 0.52, 0.92, 0.3))
+    ax = fig.add_axes((0.09, 0.52, 0.82, 0.3))  # room for the end ticks' labels
     cmap = ListedColormap(viridis(np.linspace(0.0, 1.0, 256))[:, :3] / 255.0)
     span = hi - lo if hi > lo else 1.0
     ax.imshow(np.linspace(0.0, 1.0, 256)[None, :], aspect="auto", cmap=cmap, extent=(lo, lo + span, 0.0, 1.0))

@@ -42,7 +42,7 @@ def comparison_markdown(out: dict[str, Any]) -> str:
         ours = ("complete" if c["ours"] else "incomplete") if isinstance(c["ours"], bool) else \
             f"{significant(c['ours'], 3)} (default {significant(c['default'], 3)})"
         lines.append(f"| {md_text(c['design'])} | {md_text(c['measure'])} | {md_text(c['paper'])} | {ours} | "
-                     f"{'✅ holds' if c['holds'] else '❌ fails'} |")
+                     f"{'holds' if c['holds'] else '**fails**'} |")
     return "\n".join(lines)
 
 

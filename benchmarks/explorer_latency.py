@@ -133,7 +133,12 @@ def main() -> None:
             for _ in range(args.reps):
                 n = page.evaluate("() => window.__probe.shell.length")
                 thumb_a.press("ArrowRight")
-                page.wait_for_function(f"() => window.__probe.shell.length >= {n + 2}", timeout=60000)
+                try:
+                    page.wait_for_function(f"() => window.__probe.shell.length >= {n + 2}", timeout=60000)
+                except Exception:
+                    print("DEBUG", page.evaluate("() => JSON.stringify(window.__probe)")[:500], session.state.design,
+                          session.panels.status.content, file=sys.stderr)
+                    raise
                 key, pre, full = page.evaluate(
                     f"() => [window.__probe.key, window.__probe.shell[{n}], window.__probe.shell[{n + 1}]]")
                 rows["preview shell: key -> drawn (s)"].append((pre[1] - key) / 1e3)
