@@ -61,6 +61,8 @@ from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels, slider_span
 from .compare_panel import CompareHooks, ComparePanel
 from .paper_panel import PaperPanel
+from .dexterity_colour import COLOUR_MODES, DEXTERITY_VOXEL, field_colours
+from .dexterous_panel import DexterousPanel
 from .tilt_panel import TiltPanel
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
 from .urlstate import (
@@ -286,6 +288,10 @@ class ClientSession:
             self.tilt = TiltPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
                                   get_input=lambda: (self.state.design, self.state.pose.position, self.state.joints),
                                   notify=self._notify)
+            self.dexterous = DexterousPanel(self.client.gui, self.client.scene, self.explorer.jobs,
+                                            client=self.job_client,
+                                            get_input=lambda: (self.state.design, self.state.joints),
+                                            notify=self._notify)
         with self.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
             self.compare = ComparePanel(self.client.gui, self.client.scene, self.explorer.jobs, self.job_client,
                                         CompareHooks(get_state=lambda: self.state, set_pin=self._set_pin,
@@ -378,6 +384,7 @@ class ClientSession:
             h.on_update(self._callback(self.on_manual_carriage))
         p.view_buttons.on_click(self._callback(lambda: self.on_view(str(self.panels.view_buttons.value))))
         p.fit_view.on_click(self._callback(self.fit_view))
+        p.shell_colour.on_update(self._callback(self.recolour_shell))
         for h in (p.cut, p.cut_z, p.cut_keep, p.opacity):
             h.on_update(self._callback(self.on_view_settings))
         p.stop.on_click(self._callback(self.stop_workspace))
@@ -754,6 +761,51 @@ class ClientSession:
             # position first: viser moves look_at along with the position, then aims at look_at
             cam.position = tuple(position)
             cam.look_at = tuple(look_at)
+
+    def recolour_shell(self) -> None:
+        """The View tab's "shell colour": height z (the shell's own colours) or the local dexterity
+        1/kappa (app/dexterity_colour.py), computed in the background for the shell on screen."""
+        bundle = self.bundle
+        if bundle is None:
+            return
+        if str(self.panels.shell_colour.value) == COLOUR_MODES[0]:
+            self._show_mesh(bundle.mesh)
+            zr = self.shell.z_range()
+            if zr is not None:
+                self.panels.legend.show_z_range(*zr)
+            return
+        s = self.state
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            from paraspace.kinematics.dexterity import dexterity_field
+
+            res = compute_workspace(s.design, self._ws_settings(s, DEXTERITY_VOXEL), cancel=cancel)
+            dex = dexterity_field(res, 0.005)
+            return field_colours(bundle.mesh, dex, res) + (dex,)
+
+        def done(job: Job) -> None:
+            if job.status != "done" or self.bundle is not bundle or \
+                    str(self.panels.shell_colour.value) == COLOUR_MODES[0]:
+                return
+            mesh, lo, hi, dex = job.result
+            self._show_mesh(mesh)
+            self.panels.legend.show_field_range(
+                lo, hi, "1/kappa (eq. (26), L = a/2)",
+                f"Shell colour = local dexterity 1/kappa at the resolved carriages, from {lo:.3g} to {hi:.3g} "
+                f"(h = {DEXTERITY_VOXEL:g}); GCI (mean) {dex.gci:.3g}")
+
+        try:
+            self.explorer.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
+        except (LimitExceeded, RuntimeError) as exc:
+            self._notify("Dexterity colours not started", str(exc))
+
+    def _show_mesh(self, mesh: Any) -> None:
+        with self.view_lock:
+            if self.closed:
+                return
+            s = self.state
+            with self.client.atomic():
+                self.shell.show(mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
 
     def fit_view(self) -> None:
         """The Fit view button: frame the workspace with the current preset's direction."""

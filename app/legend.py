@@ -43,8 +43,14 @@ class LegendPanel:
         self.caption.content = (f"Shell colour = height z, from {lo:.4g} (bottom) to {hi:.4g} (top), length units"
                                 + (" - *previous design, recomputing*" if stale else ""))
 
+    def show_field_range(self, lo: float, hi: float, label: str, caption: str) -> None:
+        """Redraw the colour bar for a shell coloured by another field (e.g. 1/kappa)."""
+        self.colorbar.image = colorbar_image(lo, hi, label=label)
+        self.caption.content = caption
 
-def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE) -> np.ndarray:
+
+def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE,
+                   label: str = "z (length units)") -> np.ndarray:
     """RGB image (H, W, 3) of the shell's colour map from ``lo`` to ``hi`` with five labelled ticks
     (drawn with matplotlib's object API: safe in worker threads)."""
     import matplotlib
@@ -65,7 +71,7 @@ def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE) -> np
     ticks = np.linspace(lo, lo + span, 5)
     ax.set_xticks(ticks)
     ax.set_xticklabels([f"{t:.3g}" for t in ticks], fontsize=9)
-    ax.set_xlabel("z (length units)", fontsize=9, labelpad=1)
+    ax.set_xlabel(label, fontsize=9, labelpad=1)
     fig.canvas.draw()
     buf = io.BytesIO()
     fig.savefig(buf, format="raw", dpi=100)

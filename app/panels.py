@@ -23,6 +23,7 @@ import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 
 from . import figures
+from .dexterity_colour import COLOUR_MODES
 from .joints_panel import JointsControls, build_joints_folder
 from .legend import LegendPanel, build_legend_folder
 from .urlstate import (
@@ -67,6 +68,7 @@ class Panels:
     # view
     view_buttons: Any
     fit_view: Any
+    shell_colour: Any
     cut: Any
     cut_z: Any
     cut_keep: Any
@@ -200,6 +202,9 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
                                initial_value=state.cut_z)
         cut_keep = gui.add_dropdown("keep", CUT_KEEPS, initial_value=state.cut_keep,
                                     hint="which side of the cut plane stays visible")
+        shell_colour = gui.add_dropdown("shell colour", COLOUR_MODES, initial_value=COLOUR_MODES[0],
+                                        hint="height z, or the local dexterity 1/kappa (eq. (26)) computed at "
+                                             "h = 6 in the background")
         rng = SETTING_SLIDERS["opacity"]
         opacity = gui.add_slider("shell opacity", *slider_span(rng.lo, rng.hi, state.opacity), step=rng.step,
                                  initial_value=state.opacity)
@@ -252,7 +257,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose_tab=pose_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
-        view_buttons=view_buttons, fit_view=fit_view, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity,
+        view_buttons=view_buttons, fit_view=fit_view, shell_colour=shell_colour, cut=cut, cut_z=cut_z, cut_keep=cut_keep, opacity=opacity,
         payload=payload,
         z0=z0, orientation_status=orientation_status, orientation_plot=orientation_plot,
         orientation_png=orientation_png, orientation_svg=orientation_svg, study_voxel=study_voxel,

@@ -547,3 +547,63 @@ def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):
     fig = s.tilt.plot.figure
     assert list(fig.data[0].r)[:-1] == [v or 0.0 for v in ref.max_tilt]
     assert "tilt in every direction" in s.tilt.text.content
+
+
+def test_total_orientation_workspace_shown_on_request(explorer, browsers):
+    from paraspace.app.dexterous_panel import DEXTEROUS_VOXEL
+    from paraspace.kinematics.dexterous import total_orientation_workspace
+
+    b = browsers("voxel=6")
+    s = b.session
+    b.set(s.dexterous.tilt, 10.0)
+    b.set(s.dexterous.torsion, 10.0)
+    b.set(s.dexterous.step, 10.0)
+    wait_for(lambda: s.dexterous.tilt.value == 10.0 and s.dexterous.step.value == 10.0, 5.0, "inputs")
+    b.click(s.dexterous.show)
+    wait_for(lambda: s.dexterous.result is not None, 60.0, "the total-orientation workspace")
+    ref = total_orientation_workspace(s.state.design, 10.0, 10.0, 10.0, WorkspaceSettings(voxel=DEXTEROUS_VOXEL))
+    assert s.dexterous.result.volume == ref.volume > 0
+    assert s.dexterous.handle is not None and "% of the position workspace" in s.dexterous.text.content
+    b.click(s.dexterous.hide)
+    wait_for(lambda: s.dexterous.handle is None, 5.0, "hidden")
+
+
+def test_shell_coloured_by_dexterity(explorer, browsers):
+    """Issue 9: the shell coloured by 1/kappa; the colours are the field's at the vertices."""
+    from paraspace.app.dexterity_colour import DEXTERITY_VOXEL
+    from paraspace.kinematics.dexterity import dexterity_field
+    from paraspace.kinematics.shell import viridis
+
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    b.set(s.panels.shell_colour, "dexterity 1/kappa")
+    wait_for(lambda: "1/kappa" in s.panels.legend.caption.content, 60.0, "dexterity colours")
+    res = compute_workspace(s.state.design, WorkspaceSettings(voxel=DEXTERITY_VOXEL))
+    dex = dexterity_field(res, 0.005)
+    shown = s.shell.source
+    # the colours are viridis of the sampled values, and each sampled value is checked independently:
+    # the containing cell's when finite, else the value of one of the finite cells nearest to it
+    from scipy.spatial import cKDTree
+
+    from paraspace.app.dexterity_colour import field_values_at
+
+    f = dex.inverse_condition
+    vals = field_values_at(f, res.grid.origin, res.grid.h, shown.vertices)
+    expect = viridis((vals - dex.minimum) / (dex.maximum - dex.minimum))
+    assert np.array_equal(np.asarray(shown.visual.vertex_colors)[:, :3], expect[:, :3])
+    finite = np.argwhere(np.isfinite(f))
+    tree = cKDTree(finite)
+    ijk = np.clip(np.rint((shown.vertices - np.asarray(res.grid.origin)) / res.grid.h).astype(int), 0,
+                  np.array(f.shape) - 1)
+    for n in range(0, len(ijk), 37):  # a sample of the vertices
+        c = f[tuple(ijk[n])]
+        if np.isfinite(c):
+            assert vals[n] == c
+        else:
+            dmin, _ = tree.query(ijk[n])
+            ties = finite[tree.query_ball_point(ijk[n], dmin + 1e-9)]
+            assert vals[n] in {f[tuple(t)] for t in ties}
+    assert len(np.unique(expect[:, 1])) > 10  # the field varies over the surface
+    b.set(s.panels.shell_colour, "height z")
+    wait_for(lambda: "height z, from" in s.panels.legend.caption.content, 10.0, "height colours back")

@@ -1,0 +1,129 @@
+"""The Pose tab's "Total-orientation workspace" group: the positions from which every orientation
+with tilt <= T (all azimuths) and torsion within ±S is reachable (:mod:`kinematics.dexterous`).
+
+*Show* computes it in the background for the current design and joint options (zero base
+orientation, the sample spacing ``angle step``; at h = 6 a few seconds, at h = 2 about a minute on
+two cores) and draws it as a purple surface inside the position workspace's shell, with its volume
+and its share of the position workspace; *Hide* removes it. The computation is cancellable.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable, Optional
+
+import numpy as np
+import viser
+
+from .jobs import Job, JobManager, LimitExceeded
+from .numfmt import significant
+from .scene import glb_with_material
+from .textsafe import md_text
+
+#: Voxel edge of the total-orientation workspace (coarser than the shell: it costs a workspace
+#: test per sampled orientation per voxel).
+DEXTEROUS_VOXEL = 6.0
+COLOR = (140, 60, 200, 255)
+
+
+class DexterousPanel:
+    """Sliders, Show / Hide, the purple surface and its numbers (module docstring)."""
+
+    NODE = "/workspace/total_orientation"
+
+    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager, *, client: str,
+                 get_input: Callable[[], tuple[Any, Any]], notify: Callable[[str, str], None]) -> None:
+        self.scene = scene
+        self.jobs = jobs
+        self.client = client
+        self.get_input = get_input  # -> (design, joints)
+        self.notify = notify
+        self.lock = threading.Lock()
+        self.job: Optional[Job] = None
+        self.handle: Optional[Any] = None
+        self.result: Optional[Any] = None
+        with gui.add_folder("Total-orientation workspace", expand_by_default=False):
+            self.tilt = gui.add_slider("tilt T (deg)", min=0.0, max=45.0, step=1.0, initial_value=15.0,
+                                       hint="every tilt up to T, in every azimuth")
+            self.torsion = gui.add_slider("torsion S (deg)", min=0.0, max=90.0, step=1.0, initial_value=15.0,
+                                          hint="every torsion in [-S, S]")
+            self.step = gui.add_slider("angle step (deg)", min=2.5, max=15.0, step=2.5, initial_value=5.0,
+                                       hint="largest spacing of the sampled orientations")
+            self.show = gui.add_button(f"Show (h = {DEXTEROUS_VOXEL:g})", icon=viser.Icon.PLAYER_PLAY)
+            self.hide = gui.add_button("Hide", icon=viser.Icon.EYE_OFF, disabled=True)
+            self.text = gui.add_markdown("The positions from which every such orientation is reachable, drawn "
+                                         "in purple inside the workspace.")
+        self.show.on_click(lambda _e: self.start())
+        self.hide.on_click(lambda _e: self.clear())
+
+    def start(self) -> None:
+        from paraspace.kinematics.dexterous import total_orientation_workspace
+        from paraspace.kinematics.workspace import WorkspaceSettings
+
+        design, joints = self.get_input()
+        tilt, torsion, step = float(self.tilt.value), float(self.torsion.value), float(self.step.value)
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            return total_orientation_workspace(design, tilt, torsion, step,
+                                               WorkspaceSettings(voxel=DEXTEROUS_VOXEL, joints=joints),
+                                               progress=progress, cancel=cancel)
+
+        def on_progress(job: Job) -> None:
+            self.text.content = f"computing... {100 * job.progress:.0f} %"
+
+        def done(job: Job) -> None:
+            self.show.disabled = False
+            if job.status == "done":
+                self._draw(job.result)
+            elif job.status == "failed":
+                self.text.content = f"**failed:** {md_text(job.error)}"
+            else:
+                self.text.content = "stopped"
+
+        with self.lock:
+            old = self.job
+        if old is not None and not old.is_final:
+            self.jobs.cancel(old.id)
+        try:
+            job = self.jobs.submit(fn, kind="dexterous", client=self.client, supersede=True, on_done=done,
+                                   on_progress=on_progress)
+        except (LimitExceeded, RuntimeError) as exc:
+            self.notify("Total-orientation workspace not started", str(exc))
+            return
+        with self.lock:
+            self.job = job
+        self.show.disabled = True
+        self.text.content = "computing..."
+
+    def _draw(self, res: Any) -> None:
+        from paraspace.kinematics.shell import workspace_shell
+
+        self.result = res
+        s = res.summary()
+        frac = s["fraction_of_position"]
+        self.text.content = md_text(
+            f"tilt <= {res.tilt:g} deg, torsion within ±{res.torsion:g} deg ({s['orientations']} orientations, "
+            f"step {res.step:g} deg): V = {significant(s['volume'], 4)} units³, "
+            f"{100 * frac:.1f} % of the position workspace at h = {DEXTEROUS_VOXEL:g}" if frac is not None
+            else "empty position workspace")
+        self._remove()
+        if res.voxels == 0:
+            return
+        mesh = workspace_shell(res.result, max_faces=30000, color_by_z=False)
+        mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))
+        glb = glb_with_material(mesh.export(file_type="glb", include_normals=True), 0.85)
+        self.handle = self.scene.add_glb(self.NODE, glb, cast_shadow=False, receive_shadow=False)
+        self.hide.disabled = False
+
+    def _remove(self) -> None:
+        if self.handle is not None:
+            try:
+                self.handle.remove()
+            except Exception:  # noqa: BLE001 - the client may be gone
+                pass
+            self.handle = None
+
+    def clear(self) -> None:
+        """The Hide button."""
+        self._remove()
+        self.hide.disabled = True
