@@ -4,7 +4,8 @@
 coarser grid, h = :data:`DEXTERITY_VOXEL`) at the shell's vertices: every grid cell outside the
 workspace takes the value of its nearest reachable cell (a Euclidean distance transform), and a
 vertex takes the value of the cell it lies in. Colours: viridis over the field's range on the
-workspace. The explorer's View tab switches between "height z" and "dexterity 1/kappa".
+workspace. :func:`binding_labels` names the limit that bounds the workspace at each surface point.
+The explorer's View tab switches between "height z", "dexterity 1/kappa" and "binding limit".
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from paraspace.kinematics.shell import viridis
 
 #: Voxel edge of the dexterity field shown on the shell (about 1 s on two cores for the default design).
 DEXTERITY_VOXEL = 6.0
-COLOUR_MODES: tuple[str, ...] = ("height z", "dexterity 1/kappa")
+COLOUR_MODES: tuple[str, ...] = ("height z", "dexterity 1/kappa", "binding limit")
 
 
 def field_values_at(field: np.ndarray, origin: Any, h: float, points: np.ndarray) -> np.ndarray:
@@ -43,3 +44,47 @@ def field_colours(mesh: Any, dex: Any, result: Any) -> tuple[Any, float, float]:
     out = mesh.copy()
     out.visual.vertex_colors = viridis(np.nan_to_num(u))
     return out, lo, hi
+
+
+#: Colours of the binding limits (:func:`binding_labels`).
+LIMIT_COLOURS: dict[str, tuple[int, int, int]] = {
+    "l_max": (215, 40, 40), "l_min": (40, 110, 215), "carriage strokes": (240, 160, 20),
+    "joint cones": (150, 60, 200), "interference": (30, 160, 80), "other": (128, 128, 128),
+}
+
+
+def binding_labels(design: Any, settings: Any, points: np.ndarray, normals: np.ndarray, step: float) -> list[str]:
+    """Which limit bounds the workspace at each surface point (our definition, for the colours):
+    at ``p + step n`` (just outside, ``n`` the outward normal) a chain fails; the first of these
+    relaxations that makes every failing chain feasible names the limit: ``l_max`` (legs longer by
+    ``2 step``), ``l_min`` (shorter by ``2 step``), ``carriage strokes`` (``d_s`` and ``eta_s`` larger
+    by 20 %), ``joint cones`` (no cones); ``interference`` when the chains pass alone but the legs
+    collide; ``other`` when none does."""
+    import dataclasses
+
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.workspace import ALL_CHAINS, chain_masks_at, reachable
+
+    out_pts = np.asarray(points, float) + step * np.asarray(normals, float)
+    o, eta_step, j = settings.orientation, settings.eta_step, settings.joints
+    base = chain_masks_at(design, out_pts, o, eta_step, j)
+    labels = np.full(len(out_pts), "other", dtype=object)
+    todo = base != ALL_CHAINS
+    if j.min_distance > 0:
+        inter = (~todo) & ~reachable(design, out_pts, o, eta_step, j)
+        labels[inter] = "interference"
+    relaxations = (
+        ("l_max", design.replace(l_s=design.l_s + 2 * step), j),
+        ("l_min", design.replace(l_min=max(design.l_min - 2 * step, 1e-6), l_s=design.l_s + 2 * step), j),
+        ("carriage strokes", design.replace(d_s=min(design.r, 1.2 * design.d_s + 1.0),
+                                            eta_s=min(180.0, 1.2 * design.eta_s + 1.0)), j),
+        ("joint cones", design, dataclasses.replace(j, theta_u=None, theta_s=None) if j.has_cones else Joints()),
+    )
+    for name, d2, j2 in relaxations:
+        idx = np.flatnonzero(todo & (labels == "other"))
+        if not idx.size:
+            break
+        m = chain_masks_at(d2, out_pts[idx], o, eta_step, j2)
+        fixed = (m & ~base[idx] & ALL_CHAINS) == (~base[idx] & ALL_CHAINS)
+        labels[idx[fixed]] = name
+    return list(labels)

@@ -61,7 +61,7 @@ from .textsafe import md_text, plain_text
 from .panels import Panels, build_panels, slider_span
 from .compare_panel import CompareHooks, ComparePanel
 from .paper_panel import PaperPanel
-from .dexterity_colour import COLOUR_MODES, DEXTERITY_VOXEL, field_colours
+from .dexterity_colour import COLOUR_MODES, DEXTERITY_VOXEL, LIMIT_COLOURS, binding_labels, field_colours
 from .dexterous_panel import DexterousPanel
 from .tilt_panel import TiltPanel
 from .scene import LEG_STATE_TEXT, MechanismScene, ShellScene
@@ -775,6 +775,9 @@ class ClientSession:
                 self.panels.legend.show_z_range(*zr)
             return
         s = self.state
+        if str(self.panels.shell_colour.value) == COLOUR_MODES[2]:
+            self._colour_by_limit(bundle, s)
+            return
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
             from paraspace.kinematics.dexterity import dexterity_field
@@ -798,6 +801,34 @@ class ClientSession:
             self.explorer.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
         except (LimitExceeded, RuntimeError) as exc:
             self._notify("Dexterity colours not started", str(exc))
+
+    def _colour_by_limit(self, bundle: ShellBundle, s: ExplorerState) -> None:
+        """The shell coloured by the limit that bounds the workspace there (background job)."""
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            mesh = bundle.mesh
+            labels = binding_labels(s.design, bundle.result.settings, mesh.vertices, mesh.vertex_normals,
+                                    bundle.result.grid.h)
+            out = mesh.copy()
+            out.visual.vertex_colors = np.array([LIMIT_COLOURS[x] + (255,) for x in labels], np.uint8)
+            counts = {k: labels.count(k) for k in LIMIT_COLOURS if labels.count(k)}
+            return out, counts
+
+        def done(job: Job) -> None:
+            if job.status != "done" or self.bundle is not bundle or \
+                    str(self.panels.shell_colour.value) != COLOUR_MODES[2]:
+                return
+            mesh, counts = job.result
+            self._show_mesh(mesh)
+            total = sum(counts.values()) or 1
+            names = {"l_max": "red", "l_min": "blue", "carriage strokes": "orange", "joint cones": "purple",
+                     "interference": "green", "other": "grey"}
+            self.panels.legend.caption.content = "Shell colour = the limit that bounds the workspace there: " + \
+                ", ".join(f"{names[k]} {k} ({100 * v / total:.0f} %)" for k, v in counts.items())
+
+        try:
+            self.explorer.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
+        except (LimitExceeded, RuntimeError) as exc:
+            self._notify("Limit colours not started", str(exc))
 
     def _show_mesh(self, mesh: Any) -> None:
         with self.view_lock:

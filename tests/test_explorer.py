@@ -607,3 +607,26 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
     assert len(np.unique(expect[:, 1])) > 10  # the field varies over the surface
     b.set(s.panels.shell_colour, "height z")
     wait_for(lambda: "height z, from" in s.panels.legend.caption.content, 10.0, "height colours back")
+
+
+def test_shell_coloured_by_the_binding_limit(explorer, browsers):
+    """Issue 9: the shell coloured by the limit that binds; checked against the definition: at the
+    points just outside, relaxing the named limit makes the failing chains feasible."""
+    from paraspace.app.dexterity_colour import LIMIT_COLOURS, binding_labels
+    from paraspace.kinematics.workspace import chain_masks_at
+
+    b = browsers("voxel=6&theta_u=40&theta_s=40")
+    s = b.session
+    wait_idle(explorer, s)
+    b.set(s.panels.shell_colour, "binding limit")
+    wait_for(lambda: "bounds the workspace there" in s.panels.legend.caption.content, 60.0, "limit colours")
+    text = s.panels.legend.caption.content
+    assert "joint cones" in text and "l_max" in text  # both bind on the default design with 40° cones
+    mesh = s.bundle.mesh
+    labels = binding_labels(s.state.design, s.bundle.result.settings, mesh.vertices, mesh.vertex_normals, 6.0)
+    shown = np.asarray(s.shell.source.visual.vertex_colors)[:, :3]
+    assert np.array_equal(shown, np.array([LIMIT_COLOURS[x] for x in labels], np.uint8))
+    # the definition, independently for the cone-labelled points: without cones the chains pass there
+    pts = (mesh.vertices + 6.0 * mesh.vertex_normals)[np.array(labels) == "joint cones"][:200]
+    masks = chain_masks_at(s.state.design, pts, (0.0, 0.0, 0.0), 0.5)
+    assert np.all(masks == 7)
