@@ -164,6 +164,26 @@ def camera_framing(lo: np.ndarray, hi: np.ndarray, preset: str, fov: float, aspe
     return look_at + dist * d, look_at
 
 
+class SessionJobs:
+    """The job manager as one browser's session sees it: the same jobs, but progress and completion
+    callbacks are dropped once the browser has left (no GUI writes to a closed connection)."""
+
+    def __init__(self, jobs: JobManager, is_closed: Callable[[], bool]) -> None:
+        self._jobs = jobs
+        self._closed = is_closed
+
+    def submit(self, fn: Any, *, on_done: Optional[Callable[[Job], None]] = None,
+               on_progress: Optional[Callable[[Job], None]] = None, **kw: Any) -> Job:
+        def alive(cb: Optional[Callable[[Job], None]]) -> Optional[Callable[[Job], None]]:
+            if cb is None:
+                return None
+            return lambda job: None if self._closed() else cb(job)
+        return self._jobs.submit(fn, on_done=alive(on_done), on_progress=alive(on_progress), **kw)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._jobs, name)
+
+
 def _joints_text(j: Any) -> str:
     """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
     parts = []
@@ -199,6 +219,7 @@ class ClientSession:
         self.lock = threading.RLock()
         self._design_timer: Optional[threading.Timer] = None  # pending typed design value
         self._framed = False  # the camera has framed a shell once
+        self.jobs = SessionJobs(explorer.jobs, lambda: self.closed)
         self.view_lock = threading.Lock()
         self.input_lock = threading.RLock()  # serialises design input (see on_design_input)
         self.mech_lock = threading.Lock()
@@ -285,22 +306,22 @@ class ClientSession:
         self.panels = build_panels(self.client.gui, s)
         self._build_optimize_tab()
         with self.panels.pose_tab:
-            self.tilt = TiltPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
+            self.tilt = TiltPanel(self.client.gui, self.jobs, client=self.job_client,
                                   get_input=lambda: (self.state.design, self.state.pose.position, self.state.joints),
                                   notify=self._notify)
-            self.dexterous = DexterousPanel(self.client.gui, self.client.scene, self.explorer.jobs,
+            self.dexterous = DexterousPanel(self.client.gui, self.client.scene, self.jobs,
                                             client=self.job_client,
                                             get_input=lambda: (self.state.design, self.state.joints),
                                             notify=self._notify)
         with self.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
-            self.compare = ComparePanel(self.client.gui, self.client.scene, self.explorer.jobs, self.job_client,
+            self.compare = ComparePanel(self.client.gui, self.client.scene, self.jobs, self.job_client,
                                         CompareHooks(get_state=lambda: self.state, set_pin=self._set_pin,
                                                      bundle_for=self._cached_bundle,
                                                      compute_bundle=self._compute_bundle,
                                                      current_bundle=lambda: self.bundle,
                                                      load_design=self.load_design, notify=self._notify))
         with self.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
-            self.paper = PaperPanel(self.client.gui, self.explorer.jobs, client=self.job_client,
+            self.paper = PaperPanel(self.client.gui, self.jobs, client=self.job_client,
                                     cache=self.explorer.paper_results, notify=self._notify)
         res = self._resolve(s)
         self.resolution = res
@@ -344,7 +365,7 @@ class ClientSession:
         design, its front, "Load this design"; its settings travel in the link (opt_* keys)."""
         with self.panels.tabs.add_tab("Optimize", viser.Icon.CHART_DOTS):
             self.optimize = OptimizePanel(
-                self.client.gui, self.explorer.jobs, client=self.job_client,
+                self.client.gui, self.jobs, client=self.job_client,
                 get_design=lambda: self.state.design, load_design=self.load_design,
                 cache=self.explorer.study_cache, results=self.explorer.optimize_results,
                 on_settings_change=lambda _q: self.schedule_url())
@@ -456,6 +477,8 @@ class ClientSession:
             return res
 
     def _update_pose_views(self, res: Resolution) -> None:
+        if self.closed:
+            return
         s = self.state
         rows = ["| chain | d | η (°) | leg 1 | leg 2 | margin |", "|---|---|---|---|---|---|"]
         for c in res.chains:
@@ -470,6 +493,8 @@ class ClientSession:
         self._render_numbers()
 
     def _render_numbers(self) -> None:
+        if self.closed:  # the browser left: its GUI handles lead nowhere
+            return
         with self.lock:
             info = dict(self._ws_info)
             res = self.resolution
@@ -798,7 +823,7 @@ class ClientSession:
                 f"(h = {DEXTERITY_VOXEL:g}); GCI (mean) {dex.gci:.3g}")
 
         try:
-            self.explorer.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
+            self.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
         except (LimitExceeded, RuntimeError) as exc:
             self._notify("Dexterity colours not started", str(exc))
 
@@ -826,7 +851,7 @@ class ClientSession:
                 ", ".join(f"{names[k]} {k} ({100 * v / total:.0f} %)" for k, v in counts.items())
 
         try:
-            self.explorer.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
+            self.jobs.submit(fn, kind="dexterity", client=self.job_client, supersede=True, on_done=done)
         except (LimitExceeded, RuntimeError) as exc:
             self._notify("Limit colours not started", str(exc))
 
@@ -911,7 +936,7 @@ class ClientSession:
         self._event("workspace-submit")
         fn = self._workspace_fn(gen, s)
         try:
-            job = self.explorer.jobs.submit(fn, kind="workspace", client=self.job_client, supersede=True,
+            job = self.jobs.submit(fn, kind="workspace", client=self.job_client, supersede=True,
                                             on_progress=lambda j, g=gen: self._on_ws_progress(g, j),
                                             on_done=lambda j, g=gen: self._on_ws_done(g, j))
         except LimitExceeded as exc:
@@ -1157,7 +1182,7 @@ class ClientSession:
                 self._set_orientation_status(gen, f"**failed:** {md_text(job.error)}")
 
         try:
-            job = self.explorer.jobs.submit(
+            job = self.jobs.submit(
                 fn, kind="orientation", client=self.job_client, supersede=True, on_done=done,
                 on_progress=lambda j: None if self._throttled("or-progress", 4 * PROGRESS_INTERVAL) else
                 self._set_orientation_status(gen, f"computing... {100 * j.progress:.0f} %"))
@@ -1305,7 +1330,7 @@ class ClientSession:
             if not self._throttled(kind + "-progress", PROGRESS_INTERVAL):
                 bar.value = 100.0 * job.progress
         try:
-            job = self.explorer.jobs.submit(fn, kind=kind, client=self.job_client, supersede=True,
+            job = self.jobs.submit(fn, kind=kind, client=self.job_client, supersede=True,
                                             on_done=done, on_progress=on_progress)
         except (LimitExceeded, RuntimeError) as exc:
             self._notify("Not started", str(exc), color="orange")
