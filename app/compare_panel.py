@@ -24,7 +24,7 @@ from paraspace.kinematics.design import Design
 
 from .jobs import Job, JobManager, LimitExceeded
 from .numfmt import significant
-from .scene import glb_with_material
+from .scene import glb_with_material, remove_node
 from .textsafe import md_text
 
 #: The paper's Fig. 3 pairs: parameter, first (pinned) and second (current) value.
@@ -189,12 +189,8 @@ class ComparePanel:
         self.refresh()
 
     def _remove_ghost(self) -> None:
-        if self.handle is not None:
-            try:
-                self.handle.remove()
-            except Exception:  # noqa: BLE001 - the client may be gone
-                pass
-            self.handle = None
+        remove_node(self.handle)
+        self.handle = None
 
     def _show_ghost(self) -> None:
         pinned = self.pinned

@@ -17,7 +17,7 @@ import viser
 
 from .jobs import Job, JobManager, LimitExceeded
 from .numfmt import significant
-from .scene import glb_with_material
+from .scene import glb_with_material, remove_node
 from .textsafe import md_text
 
 #: Voxel edge of the total-orientation workspace (coarser than the shell: it costs a workspace
@@ -116,12 +116,8 @@ class DexterousPanel:
         self.hide.disabled = False
 
     def _remove(self) -> None:
-        if self.handle is not None:
-            try:
-                self.handle.remove()
-            except Exception:  # noqa: BLE001 - the client may be gone
-                pass
-            self.handle = None
+        remove_node(self.handle)
+        self.handle = None
 
     def clear(self) -> None:
         """The Hide button."""

@@ -287,6 +287,15 @@ class MechanismScene:
 # workspace shell
 
 
+def remove_node(handle: Optional[Any]) -> None:
+    """Remove a scene node if there is one (quietly: its browser may have left)."""
+    if handle is not None:
+        try:
+            handle.remove()
+        except Exception:  # noqa: BLE001 - the client may be gone
+            pass
+
+
 def glb_with_material(glb: bytes, opacity: float) -> bytes:
     """Give every primitive of a GLB one double-sided material with alpha ``opacity``.
 
