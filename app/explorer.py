@@ -372,15 +372,20 @@ class ClientSession:
         if self.optimize_query:
             self.url_messages += self.optimize.apply_query(self.optimize_query)
 
+    def _show_design(self, design: Design) -> None:
+        """Put ``design`` into the design sliders (each widened to hold its value); the caller
+        suppresses the callbacks."""
+        for key in DESIGN_KEYS:
+            h, v = self.panels.design[key], float(getattr(design, key))
+            h.min, h.max = slider_span(DESIGN_SLIDERS[key].lo, DESIGN_SLIDERS[key].hi, v)
+            h.value = v
+        self.panels.eta_range.value = design.eta_range
+
     def load_design(self, design: Design) -> None:
         """Put ``design`` into the design sliders and apply it (as if typed)."""
         with self.input_lock:
             with self.programmatic():
-                for key in DESIGN_KEYS:
-                    h, v = self.panels.design[key], float(getattr(design, key))
-                    h.min, h.max = slider_span(DESIGN_SLIDERS[key].lo, DESIGN_SLIDERS[key].hi, v)
-                    h.value = v
-                self.panels.eta_range.value = design.eta_range
+                self._show_design(design)
             self.design_error = None
             self.panels.design_message.visible = False
             self.apply_design(design)
@@ -1123,11 +1128,7 @@ class ClientSession:
                 self.state = back
             p = self.panels
             with self.programmatic():
-                for key in DESIGN_KEYS:
-                    h, v = p.design[key], float(getattr(r.design, key))
-                    h.min, h.max = slider_span(DESIGN_SLIDERS[key].lo, DESIGN_SLIDERS[key].hi, v)
-                    h.value = v
-                p.eta_range.value = r.design.eta_range
+                self._show_design(r.design)
                 p.voxel.value = float(r.settings.voxel)
                 for k, v in (("psi", psi), ("theta", theta), ("phi", phi)):
                     p.pose[k].value = v

@@ -281,8 +281,11 @@ def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
     local = platform_points_local(design)
     us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", local, rots))  # (M, 3, 2, 3): R u for each R
     jn = joints or Joints()
-    jcs = np.ascontiguousarray(np.stack([cone_table(design, jn, r) for r in rots])) if rots.shape[0] else \
-        np.zeros((0, 3, 2, 8))
+    if jn.has_cones:  # the S cones' axes turn with each rotation
+        jcs = np.ascontiguousarray(np.stack([cone_table(design, jn, r) for r in rots])) if rots.shape[0] else \
+            np.zeros((0, 3, 2, 8))
+    else:  # no cone: one table serves every rotation (no per-rotation work on the orientation scans)
+        jcs = np.ascontiguousarray(np.broadcast_to(cone_table(design, jn, np.eye(3)), (rots.shape[0], 3, 2, 8)))
     out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
     if out.size:
         with KERNEL_LOCK:
