@@ -50,7 +50,7 @@ from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_sear
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
-__all__ = ["run_blocks", "TOP_BLOCK"]
+__all__ = ["run_blocks", "sub_arcs", "TOP_BLOCK"]
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP_BLOCK = 16
@@ -59,36 +59,89 @@ UNKNOWN, OK, FAIL = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
-def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e):
-    """OK / FAIL / UNKNOWN for chain ``i`` over the ball of radius ``e`` around P (see module doc);
-    ``e = 0`` is the dense test at P itself."""
+def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo, hi):
+    """False when the whole-arc bound rejects the chain over one sub-arc with limits ``[lo, hi]``."""
+    return not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo * lo, hi * hi)
+
+
+@njit(cache=True, inline="always")
+def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e, eps,
+                 hint):
+    """``(state, k)``: OK / FAIL / UNKNOWN for chain ``i`` over the ball of radius ``e`` around P
+    (module docstring) and a sample worth trying first in the block's children (``hint``: the
+    parent's); ``e = 0`` is the dense test at P itself.
+
+    Samples are visited by sub-arc (``seg_k``: first and last sample of each, ``seg_arc``: its end
+    and bisector directions), starting with the hint's sub-arc; a sub-arc the whole-arc bound
+    rejects (limits relaxed by one more ``eps``) holds no sample that passes, so skipping it
+    changes no decision."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e
     if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_r * lo_r, hi_r * hi_r):
-        return FAIL
-    if e == 0.0:
-        k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                         lmin * lmin, lmax * lmax, jc[i], n // 2)
-        return OK if k >= 0 else FAIL
-    # one pass over the samples: relaxed first (the tightened set is inside it), tightened if that holds
+        return FAIL, hint
     lo_t = lmin + e
     hi_t = lmax - e
     can_ok = lo_t <= hi_t
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
-    some = False
-    for k in range(n):
-        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                        jc[i], e):
-            some = True
-            if not can_ok:
+    if hint < 0 or hint >= n:
+        hint = n // 2
+    # the hint first: it usually serves the whole block
+    if can_ok and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb, rho_lo, rho_hi,
+                               lo_t2, hi_t2, jc[i], -e):
+        return OK, hint
+    n_seg = seg_k.shape[0]
+    first = 0
+    while first < n_seg - 1 and seg_k[first, 1] < hint:
+        first += 1
+    lo_s = max(lo_r - eps, 0.0)
+    hi_s = hi_r + eps
+    some = -1
+    for step in range(2 * n_seg):
+        off = (step + 1) // 2
+        g = first + off if step % 2 == 1 else first - off
+        if g < 0 or g >= n_seg:
+            if off > n_seg:
                 break
-            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                            lo_t2, hi_t2, jc[i], -e):
-                return OK
-    return UNKNOWN if some else FAIL
+            continue
+        if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo_s, hi_s):
+            continue
+        for k in range(seg_k[g, 0], seg_k[g, 1] + 1):
+            if e == 0.0:
+                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                                lo_r2, hi_r2, jc[i], 0.0):
+                    return OK, k
+                continue
+            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                            jc[i], e):
+                if some < 0:
+                    some = k
+                if not can_ok:
+                    return UNKNOWN, k
+                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                                lo_t2, hi_t2, jc[i], -e):
+                    return OK, k
+    if some >= 0:
+        return UNKNOWN, some
+    return FAIL, hint
+
+
+def sub_arcs(cos_t: np.ndarray, sin_t: np.ndarray, per: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """Split each chain's arc samples into sub-arcs of ``per`` sample gaps: ``(seg_k, seg_arc)`` with
+    ``seg_k[g] = (first, last)`` sample of sub-arc ``g`` (consecutive sub-arcs share their end
+    sample) and ``seg_arc[i, g]`` its ``(cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)`` for
+    :func:`kinematics.feasibility._leg_excluded` (``vm`` the bisector)."""
+    n = cos_t.shape[1]
+    starts = list(range(0, max(n - 1, 1), per))
+    seg_k = np.array([[k, min(k + per, n - 1)] for k in starts], np.int64)
+    c0, s0 = cos_t[:, seg_k[:, 0]], sin_t[:, seg_k[:, 0]]
+    c1, s1 = cos_t[:, seg_k[:, 1]], sin_t[:, seg_k[:, 1]]
+    cm, sm = c0 + c1, s0 + s1
+    norm = np.hypot(cm, sm)
+    seg_arc = np.ascontiguousarray(np.stack([c0, s0, c1, s1, cm / norm, sm / norm], axis=2))
+    return seg_k, seg_arc
 
 
 @njit(cache=True, inline="always")
@@ -100,9 +153,10 @@ def block_centre(b0, bn, b, xs, ys, zs):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _classify_kernel(b0, bn, state, xs, ys, zs, h, eps, all_chains,
-                     u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
-    """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3))."""
+def _classify_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, all_chains,
+                     u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
+    """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3)); ``hint``
+    (nb, 3) holds the sample to try first and receives the one to hand to the children."""
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
         px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
@@ -112,8 +166,10 @@ def _classify_kernel(b0, bn, state, xs, ys, zs, h, eps, all_chains,
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            s = _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e)
+            s, k = _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
+                                lmin, lmax, jc, e, eps, hint[b, i])
             state[b, i] = s
+            hint[b, i] = k
             if s == FAIL and not all_chains:
                 break
 
@@ -135,10 +191,12 @@ def _top_blocks(shape: tuple[int, int, int], size: int) -> tuple[np.ndarray, np.
     return b0, bn
 
 
-def _split(b0: np.ndarray, bn: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Eight children per block (halving every edge longer than one voxel), inheriting ``state``."""
-    kids0, kidsn, kidss = [], [], []
+def _split(b0: np.ndarray, bn: np.ndarray, *inherited: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Eight children per block (halving every edge longer than one voxel): ``(b0, bn, *inherited)``
+    with each per-block array of ``inherited`` (e.g. the chain states) repeated for the children."""
     half = (bn + 1) // 2  # first half gets the extra voxel
+    kids0, kidsn = [], []
+    kids: list[list[np.ndarray]] = [[] for _ in inherited]
     for dx in (0, 1):
         for dy in (0, 1):
             for dz in (0, 1):
@@ -147,8 +205,75 @@ def _split(b0: np.ndarray, bn: np.ndarray, state: np.ndarray) -> tuple[np.ndarra
                 keep = np.all(n > 0, axis=1)
                 kids0.append((b0 + d * half)[keep])
                 kidsn.append(n[keep])
-                kidss.append(state[keep])
-    return np.concatenate(kids0), np.concatenate(kidsn), np.concatenate(kidss)
+                for lst, arr in zip(kids, inherited):
+                    lst.append(arr[keep])
+    return (np.concatenate(kids0), np.concatenate(kidsn), *(np.concatenate(lst) for lst in kids))
+
+
+@njit(cache=True, nogil=True)
+def _advance(b0, bn, state, hint, all_chains, out):
+    """One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
+    undecided ones split in eight (as :func:`_split` does; each block's children consecutive), with the chain
+    states and hints they inherit."""
+    nb = b0.shape[0]
+    keep = np.zeros(nb, np.bool_)
+    n_kids = 0
+    for b in range(nb):
+        unknown = False
+        fail = False
+        bits = 0
+        for i in range(3):
+            st = state[b, i]
+            if st == UNKNOWN:
+                unknown = True
+            elif st == FAIL:
+                fail = True
+            else:
+                bits |= 1 << i
+        single = bn[b, 0] == 1 and bn[b, 1] == 1 and bn[b, 2] == 1
+        if single or not unknown or (fail and not all_chains):
+            for x in range(b0[b, 0], b0[b, 0] + bn[b, 0]):
+                for y in range(b0[b, 1], b0[b, 1] + bn[b, 1]):
+                    for z in range(b0[b, 2], b0[b, 2] + bn[b, 2]):
+                        out[x, y, z] = bits
+        else:
+            keep[b] = True
+            c = 1
+            for a in range(3):
+                if bn[b, a] > 1:
+                    c *= 2
+            n_kids += c
+    k0 = np.empty((n_kids, 3), np.int64)
+    kn = np.empty((n_kids, 3), np.int64)
+    ks = np.empty((n_kids, 3), np.int8)
+    kh = np.empty((n_kids, 3), np.int64)
+    m = 0
+    for b in range(nb):
+        if not keep[b]:
+            continue
+        for d in range(8):
+            ok = True
+            for a in range(3):
+                if (d >> (2 - a)) & 1 and bn[b, a] == 1:
+                    ok = False
+            if not ok:
+                continue
+            for a in range(3):
+                half = (bn[b, a] + 1) // 2
+                if bn[b, a] == 1:
+                    k0[m, a] = b0[b, a]
+                    kn[m, a] = 1
+                elif (d >> (2 - a)) & 1:
+                    k0[m, a] = b0[b, a] + half
+                    kn[m, a] = bn[b, a] - half
+                else:
+                    k0[m, a] = b0[b, a]
+                    kn[m, a] = half
+            for i in range(3):
+                ks[m, i] = state[b, i]
+                kh[m, i] = hint[b, i]
+            m += 1
+    return k0, kn, ks, kh
 
 
 def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, np.ndarray], h: float,
@@ -174,6 +299,8 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
     sub = (shape[0], ny_eval, shape[2])
     b0, bn = _top_blocks(sub, TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
+    hint = np.full((b0.shape[0], 3), cos_t.shape[1] // 2, np.int64)
+    seg_k, seg_arc = sub_arcs(cos_t, sin_t)
     level = 0
     n_levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     while b0.shape[0]:
@@ -182,19 +309,13 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
         for s in range(0, b0.shape[0], step):
             check(cancel)
             with KERNEL_LOCK:
-                _classify_kernel(b0[s:s + step], bn[s:s + step], state[s:s + step], xs, ys, zs, float(h), eps,
-                                 bool(all_chains), u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
-        fail = np.any(state == FAIL, axis=1)
-        ok = np.all(state == OK, axis=1)
-        single = np.all(bn == 1, axis=1)
-        done = ok | (fail & ~np.bool_(all_chains)) | ~np.any(state == UNKNOWN, axis=1) | single
-        bits = ((state == OK) * np.array([1, 2, 4], np.uint8)[None, :]).sum(axis=1).astype(np.uint8)
-        _fill_kernel(b0[done], bn[done], bits[done], out)
-        keep = ~done
+                _classify_kernel(b0[s:s + step], bn[s:s + step], state[s:s + step], hint[s:s + step], xs, ys, zs,
+                                 float(h), eps, bool(all_chains), u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo,
+                                 rho_hi, lmin, lmax, jc)
+        n_before = b0.shape[0]
+        b0, bn, state, hint = _advance(b0, bn, state, hint, bool(all_chains), out)
         level += 1
         if progress is not None:
-            progress(min(1.0, level / n_levels), f"position workspace: level {level}, {int(keep.sum())} blocks split")
-        if not keep.any():
-            break
-        b0, bn, state = _split(b0[keep], bn[keep], state[keep])
+            progress(min(1.0, level / n_levels), f"position workspace: level {level}, {b0.shape[0]} blocks "
+                     f"from {n_before}")
     return out

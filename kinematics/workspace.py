@@ -225,6 +225,9 @@ def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
 # --------------------------------------------------------------------------------------------
 # Python drivers
 
+#: chain mask under the mirror ``y -> -y``: chain 1 onto itself, chains 2 and 3 swapped (bits 1, 2)
+_MIRROR_BITS = np.array([(v & 1) | (((v >> 2) & 1) << 1) | (((v >> 1) & 1) << 2) for v in range(256)], np.uint8)
+
 
 def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Optional[Joints] = None) -> tuple:
     """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
@@ -368,12 +371,12 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
     out = np.zeros(grid.shape, np.uint8)
     mirror = _use_mirror(design, settings, grid)
     ny_eval = (ny + 1) // 2 if mirror else ny
-    ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
-    ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
-    n = ix.size
     if settings.method == "blocks":
         out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
     else:
+        ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
+        ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
+        n = ix.size
         # chunks of about 64k voxels: progress/cancel granularity of a few ms
         step = max(64, int(65536 // max(nz, 1)))
         for s in range(0, n, step):
@@ -383,12 +386,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
             if progress is not None:
                 progress(min(1.0, (s + step) / n), "position workspace")
     if mirror:
-        half = out[:, : ny - ny_eval]  # rows that have mirror images
-        b0 = half & 1
-        b1 = (half >> 1) & 1
-        b2 = (half >> 2) & 1
-        swapped = b0 | (b2 << 1) | (b1 << 2)
-        out[:, ny_eval:] = swapped[:, ::-1]
+        # rows that have mirror images, with chains 2 and 3 swapped
+        out[:, ny_eval:] = _MIRROR_BITS[out[:, : ny - ny_eval]][:, ::-1]
     if settings.joints.min_distance > 0.0:
         check(cancel)
         idx = np.argwhere(out == ALL_CHAINS)
