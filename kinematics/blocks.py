@@ -50,7 +50,7 @@ from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_sear
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
-__all__ = ["run_blocks", "sub_arcs", "TOP_BLOCK"]
+__all__ = ["run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP_BLOCK = 16
@@ -79,8 +79,6 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e
-    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_r * lo_r, hi_r * hi_r):
-        return FAIL, hint
     lo_t = lmin + e
     hi_t = lmax - e
     can_ok = lo_t <= hi_t
@@ -88,16 +86,19 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
     if hint < 0 or hint >= n:
         hint = n // 2
-    # the hint first: it usually serves the whole block
+    # the hint first: it usually serves the whole block (for a single voxel, e = 0: the exact test)
     if can_ok and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb, rho_lo, rho_hi,
                                lo_t2, hi_t2, jc[i], -e):
         return OK, hint
+    # the bounds below reject only with one more eps of slack: they never contradict a sample test
+    lo_s = max(lo_r - eps, 0.0)
+    hi_s = hi_r + eps
+    if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_s, hi_s):
+        return FAIL, hint
     n_seg = seg_k.shape[0]
     first = 0
     while first < n_seg - 1 and seg_k[first, 1] < hint:
         first += 1
-    lo_s = max(lo_r - eps, 0.0)
-    hi_s = hi_r + eps
     some = -1
     for step in range(2 * n_seg):
         off = (step + 1) // 2
@@ -126,6 +127,14 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if some >= 0:
         return UNKNOWN, some
     return FAIL, hint
+
+
+def rounding_margin(lmax: float, axes: tuple[np.ndarray, ...]) -> float:
+    """``eps``: 1e-9 of the design's scale (the leg length and the grid's extent), far above the
+    rounding error of the tests and far below any geometric feature. The whole-arc bounds reject a
+    chain only with their limits relaxed by ``eps``, so they never contradict a sample test: both
+    engines then decide exactly "some arc sample passes" (:mod:`kinematics.feasibility`)."""
+    return 1e-9 * max(1.0, lmax, *(float(np.abs(a).max()) for a in axes))
 
 
 def sub_arcs(cos_t: np.ndarray, sin_t: np.ndarray, per: int = 12) -> tuple[np.ndarray, np.ndarray]:
@@ -294,7 +303,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
     u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
-    eps = 1e-9 * max(1.0, lmax, float(np.abs(xs).max()), float(np.abs(ys).max()), float(np.abs(zs).max()))
+    eps = rounding_margin(lmax, (xs, ys, zs))
     out = np.zeros(shape, np.uint8)
     sub = (shape[0], ny_eval, shape[2])
     b0, bn = _top_blocks(sub, TOP_BLOCK)

@@ -50,7 +50,7 @@ from typing import Any, Optional
 import numpy as np
 from numba import njit, prange
 
-from .blocks import FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre
+from .blocks import FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre, rounding_margin
 from .design import Design, ParameterError
 from .feasibility import _chain_excluded, _feasible_at, chain_points
 from .grid import GridSpec
@@ -170,8 +170,7 @@ def _slacks(design: Design, grid: GridSpec, lmax: float, n_eta: int) -> tuple[fl
     # carriage's frame, the S joint by <= |B_xy| d_eta/2 with |B_xy| <= max |P_xy| + |u_xy|
     rb = math.hypot(max(abs(xs[0]), abs(xs[-1])) + grid.h, max(abs(ys[0]), abs(ys[-1])) + grid.h) + design.a
     cone_slack = max(math.hypot(design.r, 0.5 * design.b), rb) * 0.5 * d_eta
-    eps = 1e-9 * max(1.0, lmax, float(np.abs(xs).max()), float(np.abs(ys).max()), float(np.abs(zs).max()))
-    return arc_slack, cone_slack, eps
+    return arc_slack, cone_slack, rounding_margin(lmax, (xs, ys, zs))
 
 
 def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,

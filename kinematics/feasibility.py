@@ -25,7 +25,9 @@ stroke. The test can only miss carriage angles between samples: a pose is report
 only if every sample fails, so the error is one-sided (the computed set is an inner
 approximation) and confined to poses whose feasible ``eta`` set is narrower than the spacing.
 A whole-stroke bound (:func:`_chain_excluded`) rejects most unreachable poses before sampling; it
-is conservative (it never rejects a reachable pose).
+is conservative (it never rejects a reachable pose). The workspace engines apply it with the leg
+limits relaxed by a rounding margin (:func:`kinematics.blocks.rounding_margin`), so it never
+contradicts a sample test in floating point: the decision is exactly "some arc sample passes".
 """
 
 from __future__ import annotations

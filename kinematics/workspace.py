@@ -32,7 +32,7 @@ from typing import Optional
 import numpy as np
 from numba import njit, prange
 
-from .blocks import run_blocks
+from .blocks import rounding_margin, run_blocks
 from .design import Design, ParameterError
 from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
@@ -148,7 +148,10 @@ class WorkspaceResult:
 
 @njit(parallel=True, cache=True, nogil=True)
 def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, arc, hb,
-                    rho_lo, rho_hi, lmin2, lmax2, jc, all_chains, out):
+                    rho_lo, rho_hi, lmin2, lmax2, jc, all_chains, xlo2, xhi2, out):
+    """Chain masks of the columns ``(col_ix, col_iy)``: each chain rejected by the whole-stroke bound
+    (limits ``[xlo2, xhi2]``: relaxed by the rounding margin of :func:`kinematics.blocks.rounding_margin`)
+    or by every arc sample, searched from the sample that served the voxel below."""
     n_cols = col_ix.shape[0]
     n_eta = cos_t.shape[1]
     nz = zs.shape[0]
@@ -169,7 +172,7 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, u, cos_t, sin_t, arc, hb,
                 b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
                 ok = False
                 if not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i],
-                                       rho_lo, rho_hi, lmin2, lmax2):
+                                       rho_lo, rho_hi, xlo2, xhi2):
                     k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb,
                                      rho_lo, rho_hi, lmin2, lmax2, jc[i], start[i])
                     if k >= 0:
@@ -377,12 +380,14 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
         ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
         n = ix.size
+        eps = rounding_margin(math.sqrt(args[8]), (xs, ys, zs))
+        xlo2, xhi2 = max(math.sqrt(args[7]) - eps, 0.0) ** 2, (math.sqrt(args[8]) + eps) ** 2
         # chunks of about 64k voxels: progress/cancel granularity of a few ms
         step = max(64, int(65536 // max(nz, 1)))
         for s in range(0, n, step):
             check(cancel)
             with KERNEL_LOCK:
-                _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, out)
+                _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, xlo2, xhi2, out)
             if progress is not None:
                 progress(min(1.0, (s + step) / n), "position workspace")
     if mirror:
