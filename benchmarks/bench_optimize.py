@@ -16,10 +16,15 @@ Timings on a shared machine are noisy: read the ratios. Usage:
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import statistics
 import time
 
 import numpy as np
+
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # measure this checkout
 
 from paraspace.kinematics.distributed import _open_client
 from paraspace.kinematics.optimize import OptimizeSettings, evaluate_population, optimize

@@ -27,8 +27,12 @@ from __future__ import annotations
 import argparse
 import multiprocessing
 import os
+import sys
 import statistics
 import time
+
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # measure this checkout
 
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
