@@ -50,7 +50,7 @@ from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_sear
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
-__all__ = ["run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
+__all__ = ["decide_chain", "run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP_BLOCK = 16
@@ -65,35 +65,36 @@ def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo,
 
 
 @njit(cache=True, inline="always")
-def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e, eps,
-                 hint):
-    """``(state, k)``: OK / FAIL / UNKNOWN for chain ``i`` over the ball of radius ``e`` around P
-    (module docstring) and a sample worth trying first in the block's children (``hint``: the
-    parent's); ``e = 0`` is the dense test at P itself.
+def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
+                 e_bound, e_relax, cone_relax, e_tight, can_ok, hint):
+    """``(state, k)`` for chain ``i`` around the point P: OK when some sample ``k`` passes with the
+    leg limits tightened by ``e_tight`` (cones by ``(1 + k) e_tight``); FAIL when every sample fails
+    with the limits relaxed by ``e_relax`` (cones by ``cone_relax``) or lies in a sub-arc that the
+    whole-arc bound rejects with the limits relaxed by ``e_bound``; UNKNOWN otherwise. ``k`` is a
+    sample to try first in the children (the passing one, else a relaxed-passing one, else ``hint``).
 
-    Samples are visited by sub-arc (``seg_k``: first and last sample of each, ``seg_arc``: its end
-    and bisector directions), starting with the hint's sub-arc; a sub-arc the whole-arc bound
-    rejects (limits relaxed by one more ``eps``) holds no sample that passes, so skipping it
-    changes no decision."""
+    ``cos_t, sin_t`` (3, n) are the arc samples, ``seg_k`` / ``seg_arc`` their sub-arcs
+    (:func:`sub_arcs`), visited outward from the hint's. ``can_ok = False`` skips the OK test. With
+    ``e_relax = e_tight = 0`` this is the exact test at P (one evaluation per sample)."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
-    lo_r = max(lmin - e, 0.0)
-    hi_r = lmax + e
-    lo_t = lmin + e
-    hi_t = lmax - e
-    can_ok = lo_t <= hi_t
-    lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
+    lo_r = max(lmin - e_relax, 0.0)
+    hi_r = lmax + e_relax
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
+    lo_t = lmin + e_tight
+    hi_t = lmax - e_tight
+    can_ok = can_ok and lo_t <= hi_t
+    lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
+    exact = e_relax == 0.0 and e_tight == 0.0 and cone_relax == 0.0
     if hint < 0 or hint >= n:
         hint = n // 2
-    # the hint first: it usually serves the whole block (for a single voxel, e = 0: the exact test)
+    # the hint first: it usually serves the whole block
     if can_ok and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb, rho_lo, rho_hi,
-                               lo_t2, hi_t2, jc[i], -e):
+                               lo_t2, hi_t2, jc[i], -e_tight):
         return OK, hint
-    # the bounds below reject only with one more eps of slack: they never contradict a sample test
-    lo_s = max(lo_r - eps, 0.0)
-    hi_s = hi_r + eps
-    if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_s, hi_s):
+    lo_b = max(lmin - e_bound, 0.0)
+    hi_b = lmax + e_bound
+    if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
         return FAIL, hint
     n_seg = seg_k.shape[0]
     first = 0
@@ -107,22 +108,19 @@ def _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             if off > n_seg:
                 break
             continue
-        if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo_s, hi_s):
+        if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo_b, hi_b):
             continue
         for k in range(seg_k[g, 0], seg_k[g, 1] + 1):
-            if e == 0.0:
-                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_r2, hi_r2, jc[i], 0.0):
-                    return OK, k
-                continue
             if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                            jc[i], e):
+                            jc[i], cone_relax):
+                if exact:
+                    return (OK, k) if can_ok else (UNKNOWN, k)
                 if some < 0:
                     some = k
                 if not can_ok:
                     return UNKNOWN, k
                 if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_t2, hi_t2, jc[i], -e):
+                                lo_t2, hi_t2, jc[i], -e_tight):
                     return OK, k
     if some >= 0:
         return UNKNOWN, some
@@ -175,8 +173,9 @@ def _classify_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, all_chains,
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            s, k = _chain_state(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
-                                lmin, lmax, jc, e, eps, hint[b, i])
+            # the bounds reject only with one more eps of slack: they never contradict a sample test
+            s, k = decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
+                                lmin, lmax, jc, e + eps, e, e, e, True, hint[b, i])
             state[b, i] = s
             hint[b, i] = k
             if s == FAIL and not all_chains:

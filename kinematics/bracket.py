@@ -23,6 +23,10 @@ apart (both stroke ends are samples, so every arc angle is within ``Delta_eta / 
   at ``(Pc, eta_k, rho)`` is within ``e`` of the one at ``(P, eta, rho)``: sample ``k`` would pass
   the relaxed test. (The whole-stroke bound is conservative over the continuous stroke, so its
   relaxation by ``delta`` alone is enough.)
+* **outside, per sub-arc**: the whole-stroke bound is conservative over any continuous part of the
+  stroke, so it also rejects a sub-arc between two samples (relaxed by ``delta`` alone): the samples
+  of a rejected sub-arc need no test, and a cube is outside when every sub-arc is rejected or every
+  sample of the others fails the relaxed test above.
 * a block is split while undecided; a single cube left undecided is a **boundary** cube.
 
 A cube is inside ``W`` when all three chains are inside, outside when one chain is outside.
@@ -37,8 +41,12 @@ shell of about one cube's thickness).
 children of half the edge, each classified by the same two tests (its own centre and
 half-diagonal); inside children add their volume to the inner bound, outside children remove theirs
 from the outer bound, boundary children are split again. Each level is as rigorous as the first
-and divides the gap by about two, at the cost of testing the boundary shell only. The arc slack
-``R_D Delta_eta / 2`` does not shrink with the cubes: it bounds what refinement can gain.
+and divides the gap by about two, at the cost of testing the boundary shell only. So that the arc
+slack ``R_D Delta_eta / 2`` does not stall the refinement, each level tests the arc at ``fine``
+samples per gap of the workspace's samples (all of which are kept), the fewest that make the slack at
+most half the cubes' half-diagonal (:func:`_arc`, at most :data:`MAX_FINE`): both tests stay as
+rigorous (any arc angle is a valid carriage pose for the inside test; the slack shrinks with the
+spacing for the outside test).
 """
 
 from __future__ import annotations
@@ -50,9 +58,10 @@ from typing import Any, Optional
 import numpy as np
 from numba import njit, prange
 
-from .blocks import FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre, rounding_margin
+from .blocks import (FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre, decide_chain,
+                     rounding_margin, sub_arcs)
 from .design import Design, ParameterError
-from .feasibility import _chain_excluded, _feasible_at, chain_points
+from .feasibility import ChainTables
 from .grid import GridSpec
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
@@ -62,6 +71,8 @@ __all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
 INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
 #: Halvings of the boundary cubes by default (each one divides the bracket's gap by about 2).
 REFINE = 2
+#: Most arc samples per gap of the workspace's samples in the outside test (:func:`_arc`).
+MAX_FINE = 16
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,39 +98,19 @@ class VolumeBracket:
 
 
 @njit(cache=True, inline="always")
-def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
-                u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
-    """OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or block) of centre
-    ``P`` and half-diagonal ``delta`` (module docstring)."""
-    n = cos_t.shape[1]
-    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    e0 = delta + eps
-    lo0 = max(lmin - e0, 0.0)
-    hi0 = lmax + e0
-    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo0 * lo0, hi0 * hi0):
-        return FAIL
-    e_out = delta + arc_slack + eps
-    lo_r = max(lmin - e_out, 0.0)
-    hi_r = lmax + e_out
-    lo_t = lmin + e0
-    hi_t = lmax - e0
-    can_in = lo_t <= hi_t and not below
-    some = False
-    for k in range(n):
-        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                        lo_r * lo_r, hi_r * hi_r, jc[i], delta + cone_slack + eps):
-            some = True
-            if not can_in:
-                break
-            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                            lo_t * lo_t, hi_t * hi_t, jc[i], -e0):
-                return OK
-    return UNKNOWN if some else FAIL
+def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint,
+                u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
+    """``(state, sample)``: OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or
+    block) of centre ``P`` and half-diagonal ``delta`` (module docstring), with the arc samples of
+    ``cos_t, sin_t`` (``arc_slack``/``cone_slack``: the joint motion over their half-spacing)."""
+    return decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
+                        delta + eps, delta + arc_slack + eps, delta + cone_slack + eps, delta + eps, not below,
+                        hint)
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
-                 u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
+def _cube_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
+                 u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
         px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
@@ -128,18 +119,20 @@ def _cube_kernel(b0, bn, state, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloo
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
-                             u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            st, k = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint[b, i],
+                                u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
             state[b, i] = st
+            hint[b, i] = k
             if st == FAIL:
                 break
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _subcube_kernel(centres, bits, size, eps, arc_slack, cone_slack, zfloor,
-                    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
+def _subcube_kernel(centres, bits, hint, size, eps, arc_slack, cone_slack, zfloor,
+                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
     """INSIDE / OUTSIDE / BOUNDARY of cubes of edge ``size`` centred at ``centres`` (N, 3); bit ``i``
-    of ``bits`` marks chain ``i`` as already inside (inherited from the parent cube; updated)."""
+    of ``bits`` marks chain ``i`` as already inside (inherited from the parent cube; updated);
+    ``hint`` (N, 3): the sample to try first per chain."""
     delta = 0.5 * size * math.sqrt(3.0)
     for c in prange(centres.shape[0]):
         px, py, pz = centres[c, 0], centres[c, 1], centres[c, 2]
@@ -148,8 +141,9 @@ def _subcube_kernel(centres, bits, size, eps, arc_slack, cone_slack, zfloor,
         for i in range(3):
             if (bits[c] >> i) & 1:
                 continue
-            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i,
-                             u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            st, k = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint[c, i],
+                                u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            hint[c, i] = k
             if st == FAIL:
                 cls = OUTSIDE
                 break
@@ -161,7 +155,7 @@ def _subcube_kernel(centres, bits, size, eps, arc_slack, cone_slack, zfloor,
 
 
 def _slacks(design: Design, grid: GridSpec, lmax: float, n_eta: int) -> tuple[float, float, float]:
-    """``(arc_slack, cone_slack, eps)`` of the outside test (module docstring)."""
+    """``(arc_slack, cone_slack, eps)`` of the outside test with ``n_eta`` arc samples (module docstring)."""
     lo, hi = design.eta_limits
     d_eta = math.radians(hi - lo) / (n_eta - 1) if n_eta > 1 else 0.0
     arc_slack = math.hypot(design.r, 0.5 * design.b) * 0.5 * d_eta
@@ -173,27 +167,59 @@ def _slacks(design: Design, grid: GridSpec, lmax: float, n_eta: int) -> tuple[fl
     return arc_slack, cone_slack, rounding_margin(lmax, (xs, ys, zs))
 
 
+@dataclasses.dataclass(frozen=True)
+class _Arc:
+    """The arc samples one level of the bracket tests with (``fine`` per gap of the workspace's
+    samples, so the arc slack is ``fine`` times smaller), their sub-arcs and slacks."""
+
+    cos_t: np.ndarray
+    sin_t: np.ndarray
+    seg_k: np.ndarray
+    seg_arc: np.ndarray
+    arc_slack: float
+    cone_slack: float
+    eps: float
+    fine: int
+
+
+def _arc(design: Design, grid: GridSpec, args: tuple, n_eta: int, delta: float) -> _Arc:
+    """Arc samples fine enough that their slack is at most half the cubes' half-diagonal ``delta``
+    (at most :data:`MAX_FINE` per gap of the workspace's samples, which are all kept)."""
+    lmax = math.sqrt(args[8])
+    arc_slack, _, _ = _slacks(design, grid, lmax, n_eta)
+    fine = 1 if n_eta <= 1 else int(min(MAX_FINE, max(1, math.ceil(2.0 * arc_slack / delta - 1e-9))))
+    n_f = (n_eta - 1) * fine + 1 if n_eta > 1 else 1
+    cos_t, sin_t = args[1], args[2]
+    if fine > 1:
+        tab = ChainTables(design, n_f)
+        cos_t, sin_t = tab.cos_t, tab.sin_t
+    seg_k, seg_arc = sub_arcs(cos_t, sin_t, 6 * fine)
+    a_s, c_s, eps = _slacks(design, grid, lmax, n_f)
+    return _Arc(cos_t, sin_t, seg_k, seg_arc, a_s, c_s, eps, fine)
+
+
 def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
                  progress: Optional[Reporter] = None, cancel: CancelToken = None,
                  chain_bits: Optional[np.ndarray] = None) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
     ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube."""
-    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
-    arc_slack, cone_slack, eps = _slacks(design, grid, lmax, n_eta)
+    fa = _arc(design, grid, args, n_eta, 0.5 * grid.h * math.sqrt(3.0))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
     out = np.zeros(grid.shape, np.uint8)
     b0, bn = _top_blocks(grid.shape, TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
+    hint = np.full((b0.shape[0], 3), fa.cos_t.shape[1] // 2, np.int64)
     level = 0
     while b0.shape[0]:
         check(cancel)
         for s in range(0, b0.shape[0], 65536):
             check(cancel)
             with KERNEL_LOCK:
-                _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], xs, ys, zs, float(grid.h),
-                             eps, arc_slack, cone_slack, float(z_floor), u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                             lmin, lmax, jc)
+                _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], hint[s:s + 65536], xs, ys, zs,
+                             float(grid.h), fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u, fa.cos_t,
+                             fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
         fail = np.any(state == FAIL, axis=1)
         inside = np.all(state == OK, axis=1)
         single = np.all(bn == 1, axis=1)
@@ -208,7 +234,7 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
             progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
         if done.all():
             break
-        b0, bn, state = _split(b0[~done], bn[~done], state[~done])
+        b0, bn, state, hint = _split(b0[~done], bn[~done], state[~done], hint[~done])
     return out
 
 
@@ -223,32 +249,39 @@ def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_f
     same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
     boundary children left)``; the bracket becomes ``[V_in + inside, V_out - outside]``. A child
     inherits the chains its parent proved inside (``chain_bits``) and tests only the others."""
-    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
-    arc_slack, cone_slack, eps = _slacks(design, grid, lmax, n_eta)
     idx = np.argwhere(cls == BOUNDARY)
     centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
     parent_bits = chain_bits[cls == BOUNDARY]
     size = float(grid.h)
     inside = outside = 0.0
     chunk = 1 << 18
+    parent_hint = np.full((centres.shape[0], 3), (max(n_eta, 1) - 1) // 2, np.int64)  # in workspace samples
+    fine_before = 1
     for level in range(levels):
         size *= 0.5
-        left, left_bits = [], []
+        fa = _arc(design, grid, args, n_eta, 0.5 * size * math.sqrt(3.0))
+        parent_hint = parent_hint * fa.fine // fine_before  # the same angles in this level's samples
+        fine_before = fa.fine
+        left, left_bits, left_hint = [], [], []
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
             kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
             bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
+            hint = np.ascontiguousarray(np.repeat(parent_hint[s:s + chunk // 8], 8, axis=0))
             out = np.empty(kids.shape[0], np.uint8)
             with KERNEL_LOCK:
-                _subcube_kernel(kids, bits, size, eps, arc_slack, cone_slack, float(z_floor), u, cos_t, sin_t, arc,
-                                hb, rho_lo, rho_hi, lmin, lmax, jc, out)
+                _subcube_kernel(kids, bits, hint, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
+                                fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out)
             inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
             outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
             left.append(kids[out == BOUNDARY])
             left_bits.append(bits[out == BOUNDARY])
+            left_hint.append(hint[out == BOUNDARY])
         centres = np.concatenate(left) if left else np.zeros((0, 3))
         parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
+        parent_hint = np.concatenate(left_hint) if left_hint else np.zeros((0, 3), np.int64)
         if progress is not None:
             progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
     return inside, outside, int(centres.shape[0])
