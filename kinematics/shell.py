@@ -232,7 +232,12 @@ def _block_mean(field: np.ndarray, k: int) -> np.ndarray:
     nb = [int(math.ceil(n / k)) + 2 for n in field.shape]
     big = np.zeros([b * k for b in nb], np.float32)
     big[k:k + field.shape[0], k:k + field.shape[1], k:k + field.shape[2]] = field
-    return big.reshape(nb[0], k, nb[1], k, nb[2], k).mean(axis=(1, 3, 5))
+    out = np.zeros(nb, np.float32)
+    for i in range(k):  # k^3 strided adds: about 10x faster than a mean over a 6-D reshape
+        for j in range(k):
+            for m in range(k):
+                out += big[i::k, j::k, m::k]
+    return out / np.float32(k ** 3)
 
 
 def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.Trimesh, int]:
@@ -391,7 +396,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None,
         lo, hi = (float(z.min()), float(z.max())) if color_range is None else map(float, color_range)
         u = (z - lo) / (hi - lo) if hi > lo else np.zeros_like(z)
         mesh.visual.vertex_colors = viridis(u)
-    meta["volume_error"] = float(abs(mesh.volume - target) / target)
+    meta["volume_error"] = float(abs(abs(_signed_volume(mesh)) - target) / target)
     mesh.metadata["paraspace"] = meta
     return mesh
 
@@ -447,9 +452,9 @@ def smooth_for_display(mesh: trimesh.Trimesh, iterations: int = 5) -> trimesh.Tr
     out = mesh.copy()
     if len(out.faces) == 0 or iterations <= 0:
         return out
-    v0 = float(out.volume)
+    v0 = _signed_volume(out)
     trimesh.smoothing.filter_taubin(out, lamb=0.5, nu=-0.53, iterations=int(iterations))
-    v1 = float(out.volume)
+    v1 = _signed_volume(out)
     if v0 > 0 and v1 > 0:
         c = out.vertices.mean(axis=0)
         out.vertices = c + (out.vertices - c) * (v0 / v1) ** (1.0 / 3.0)
