@@ -420,41 +420,44 @@ def column_gap_mask(occupancy: np.ndarray) -> np.ndarray:
 def _ball_dilate_kernel(m, w, r2, d1, d2, out):
     """``out = {v : min_{u in m} |u - v|^2 <= r2}`` (index units), separably: the squared distance to
     the nearest set voxel within the window ``|du_a| <= w`` along x, then y, then z (min-plus of
-    squared distances is separable); exact when ``w >= sqrt(r2)``."""
+    squared distances is separable); exact when ``w >= sqrt(r2)``. Each search runs outward from
+    the voxel and stops once the offset alone costs more than the best found (exact)."""
     nx, ny, nz = m.shape
     big = np.int32(1 << 30)
     for i in prange(nx):
         for j in range(ny):
             for k in range(nz):
                 best = big
-                for di in range(-w, w + 1):
-                    ii = i + di
-                    if 0 <= ii < nx and m[ii, j, k]:
-                        v = di * di
-                        if v < best:
-                            best = v
+                for di in range(w + 1):
+                    if (i + di < nx and m[i + di, j, k]) or (i - di >= 0 and m[i - di, j, k]):
+                        best = di * di
+                        break
                 d1[i, j, k] = best
     for i in prange(nx):
         for j in range(ny):
             for k in range(nz):
-                best = big
-                for dj in range(-w, w + 1):
-                    jj = j + dj
-                    if 0 <= jj < ny:
-                        v = d1[i, jj, k] + dj * dj
-                        if v < best:
-                            best = v
+                best = d1[i, j, k]
+                for dj in range(1, w + 1):
+                    c = dj * dj
+                    if c >= best:
+                        break
+                    if j + dj < ny and d1[i, j + dj, k] + c < best:
+                        best = d1[i, j + dj, k] + c
+                    if j - dj >= 0 and d1[i, j - dj, k] + c < best:
+                        best = d1[i, j - dj, k] + c
                 d2[i, j, k] = best
     for i in prange(nx):
         for j in range(ny):
             for k in range(nz):
-                best = big
-                for dk in range(-w, w + 1):
-                    kk = k + dk
-                    if 0 <= kk < nz:
-                        v = d2[i, j, kk] + dk * dk
-                        if v < best:
-                            best = v
+                best = d2[i, j, k]
+                for dk in range(1, w + 1):
+                    c = dk * dk
+                    if c >= best or c > r2:
+                        break
+                    if k + dk < nz and d2[i, j, k + dk] + c < best:
+                        best = d2[i, j, k + dk] + c
+                    if k - dk >= 0 and d2[i, j, k - dk] + c < best:
+                        best = d2[i, j, k - dk] + c
                 out[i, j, k] = best <= r2
 
 
