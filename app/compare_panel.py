@@ -1,8 +1,9 @@
 """The explorer's "Compare" tab: pin a design and compare it with the current one.
 
-* **Pin this design** keeps the current design's workspace as a ghost in the 3-D view (one
-  translucent orange surface beside the current shell's height colours) and its numbers in a
-  table: pinned | current | change. The pinned design travels in the link (``pin=...``).
+* **Pin this design** keeps the current design's workspace as a ghost in the 3-D view (a cage of
+  magenta height contours, :func:`ghost_contours`, readable through and beside the current shell's
+  height colours, over a faint magenta surface) and its numbers in a table: pinned | current |
+  change. The pinned design travels in the link (``pin=...``).
 * **Fig. 3 pairs**: one click pins the paper's first variant of a pair (``a = 10``, ``d_s = 10``,
   ``eta_s = 10``, ``l_s = 20``) and makes the second (``80``, ``80``, ``60``, ``80``) current, the
   other parameters at the paper's default design.
@@ -30,8 +31,11 @@ from .textsafe import md_text
 #: The paper's Fig. 3 pairs: parameter, first (pinned) and second (current) value.
 FIG3_PAIRS: tuple[tuple[str, float, float], ...] = (("a", 10.0, 80.0), ("d_s", 10.0, 80.0),
                                                     ("eta_s", 10.0, 60.0), ("l_s", 20.0, 80.0))
-GHOST_COLOR = (255, 140, 0, 255)
-GHOST_OPACITY = 0.5
+GHOST_COLOR = (214, 0, 147, 255)  # magenta: no other element of the view uses it
+GHOST_OPACITY = 0.25
+#: Horizontal contours of the ghost's cage, and their width in screen pixels.
+GHOST_LEVELS = 12
+GHOST_LINE_PX = 2.5
 
 #: Rows of the comparison table: (label, how to read it from a bundle, digits or None for text).
 ROWS: tuple[tuple[str, Callable[[Any], Any], Optional[int]], ...] = (
@@ -72,8 +76,22 @@ def comparison_table(pinned: Any, current: Any) -> str:
     return "\n".join(lines)
 
 
+def ghost_contours(mesh: Any, levels: int = GHOST_LEVELS) -> np.ndarray:
+    """The pinned shell's cross-sections by ``levels`` horizontal planes equally spaced strictly
+    inside its height range, as line segments (N, 2, 3): the ghost's cage."""
+    import trimesh
+
+    if mesh is None or len(mesh.faces) == 0:
+        return np.zeros((0, 2, 3))
+    z0, z1 = (float(v) for v in mesh.bounds[:, 2])
+    segs = [trimesh.intersections.mesh_plane(mesh, (0.0, 0.0, 1.0), (0.0, 0.0, z))
+            for z in np.linspace(z0, z1, levels + 2)[1:-1]]
+    segs = [np.asarray(g, dtype=float).reshape(-1, 2, 3) for g in segs if len(g)]
+    return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
+
+
 def ghost_glb(mesh: Any) -> bytes:
-    """The pinned shell as one translucent orange surface (a GLB)."""
+    """The pinned shell as one translucent magenta surface (a GLB)."""
     m = mesh.copy()
     m.visual.vertex_colors = np.tile(np.array(GHOST_COLOR, np.uint8), (len(m.vertices), 1))
     return glb_with_material(m.export(file_type="glb", include_normals=True), GHOST_OPACITY)
@@ -105,10 +123,11 @@ class ComparePanel:
         self.hooks = hooks
         self.pinned: Optional[Any] = None  # ShellBundle of the pinned design
         self.handle: Optional[Any] = None
+        self.cage: Optional[Any] = None
         self.job: Optional[Job] = None
         self.lock = threading.Lock()
-        gui.add_markdown("Pin a design to keep its workspace as an orange ghost and its numbers beside the "
-                         "current design's.")
+        gui.add_markdown("Pin a design to keep its workspace as a magenta ghost (height contours over a faint "
+                         "surface) and its numbers beside the current design's.")
         self.pin_button = gui.add_button("Pin this design", icon=viser.Icon.PIN)
         self.unpin_button = gui.add_button("Unpin", icon=viser.Icon.PINNED_OFF, disabled=True)
         self.show_ghost = gui.add_checkbox("show the pinned workspace", True)
@@ -190,7 +209,8 @@ class ComparePanel:
 
     def _remove_ghost(self) -> None:
         remove_node(self.handle)
-        self.handle = None
+        remove_node(self.cage)
+        self.handle = self.cage = None
 
     def _show_ghost(self) -> None:
         pinned = self.pinned
@@ -198,6 +218,10 @@ class ComparePanel:
         if pinned is None or not self.show_ghost.value or pinned.mesh is None or len(pinned.mesh.faces) == 0:
             return
         self.handle = self.scene.add_glb(self.NODE, ghost_glb(pinned.mesh), cast_shadow=False, receive_shadow=False)
+        cage = ghost_contours(pinned.mesh)
+        if len(cage):
+            self.cage = self.scene.add_line_segments(self.NODE + "_cage", cage.astype(np.float32), GHOST_COLOR[:3],
+                                                     thickness=GHOST_LINE_PX, thickness_units="screen")
 
     def refresh(self) -> None:
         """Redraw the table (the session calls it when the current design's measures arrive)."""

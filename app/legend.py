@@ -24,6 +24,7 @@ LEGEND_TEXT = (
     "**Legs:** blue = inside their stroke, orange = at a limit, red = out of range (a label names the leg)  \n"
     "**Platform:** green = the pose is in the workspace, red = outside (label above the platform)  \n"
     "**Axes:** x red, y green, z blue, from the base centre; grid cells r/5, sections r  \n"
+    "**Pinned design** (Compare tab): magenta height contours  \n"
     "**Units:** lengths in the paper's units (dimensionless, r = 100 by default), volumes in units³, "
     "angles in degrees"
 )

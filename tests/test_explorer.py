@@ -524,14 +524,14 @@ def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
     v10 = s.compare.pinned.result.volume
     v80 = s.bundle.result.volume
     assert s.compare.pinned.result.design.a == 10.0 and s.bundle.result.design.a == 80.0 and v10 != v80
-    assert s.compare.handle is not None  # the ghost is in the scene
+    assert s.compare.handle is not None and s.compare.cage is not None  # the ghost and its cage are in the scene
     wait_for(lambda: "pin=" in b.search, 5.0, "pin in the link")
     b2 = browsers(b.search.lstrip("?"))
     s2 = b2.session
     wait_for(lambda: s2.compare.pinned is not None, 30.0, "pin restored from the link")
     assert s2.compare.pinned.result.design.a == 10.0
     b2.click(s2.compare.unpin_button)
-    wait_for(lambda: s2.state.pin is None and s2.compare.handle is None, 5.0, "unpinned")
+    wait_for(lambda: s2.state.pin is None and s2.compare.handle is None and s2.compare.cage is None, 5.0, "unpinned")
     wait_for(lambda: "pin=" not in b2.search, 5.0, "pin gone from the link")
 
 
