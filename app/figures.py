@@ -617,9 +617,13 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
                                          line=dict(color=mk.color, dash="dash")), **at)
         if p.kind == "surface":
             scene = "scene" if i == 0 else f"scene{i + 1}"
-            fig.layout[scene].update(xaxis_title=_esc(_short_axis(p.x_title)), yaxis_title=_esc(_short_axis(p.y_title)),
-                                     zaxis=dict(title=_esc(_short_axis(p.z_title)), exponentformat="power"),
-                                     camera=dict(eye=dict(x=1.9, y=-1.9, z=1.2)), aspectmode="cube")
+            # a narrow panel: short titles, SI tick labels (2M, not 2x10^6, which got clipped), the camera close
+            small = dict(title_font_size=11, tickfont_size=10)
+            fig.layout[scene].update(xaxis=dict(title=_esc(_short_axis(p.x_title)), **small),
+                                     yaxis=dict(title=_esc(_short_axis(p.y_title)), **small),
+                                     zaxis=dict(title=_esc(_short_axis(p.z_title)), tickformat="~s", **small),
+                                     camera=dict(eye=dict(x=1.7, y=-1.7, z=1.0), center=dict(x=0.05, y=0, z=-0.1)),
+                                     aspectmode="manual", aspectratio=dict(x=1.0, y=1.0, z=0.7))
         else:
             compact = p.kind == "mask" and spec.cols > 1
             x_title = "" if compact and row < spec.rows else p.x_title
@@ -668,6 +672,15 @@ def to_plotly(spec: FigureSpec) -> "go.Figure":
         legend=dict(orientation="h", yanchor="top", y=-0.08 if spec.rows > 1 else -0.3, x=0, font=dict(size=11)),
         hoverlabel=dict(font_size=12), showlegend=True,
     )
+    if any(p.kind == "surface" for p in spec.panels):
+        # plotly clips a 3-D scene to its own rectangle: give the scenes the full width (no side
+        # margins) and keep room for the y titles of the flat panels inside their domains instead
+        fig.update_layout(margin=dict(l=4, r=4))
+        for i, p in enumerate(spec.panels):
+            if p.kind != "surface":
+                fig.layout[_axis_ref(sum(q.kind != "surface" for q in spec.panels[:i]), "xaxis")].domain = \
+                    (0.17, 0.8 if p.kind == "heatmap" else 0.98)
+        fig.update_traces(colorbar=dict(x=0.83, xanchor="left"), selector=dict(type="heatmap"))
     return fig
 
 
