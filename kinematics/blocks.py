@@ -50,7 +50,7 @@ from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_sear
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
-__all__ = ["decide_chain", "run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
+__all__ = ["decide_chain", "initial_windows", "run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP_BLOCK = 16
@@ -66,18 +66,29 @@ def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo,
 
 @njit(cache=True, inline="always")
 def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
-                 e_bound, e_relax, cone_relax, e_tight, can_ok, hint):
-    """``(state, k)`` for chain ``i`` around the point P: OK when some sample ``k`` passes with the
-    leg limits tightened by ``e_tight`` (cones by ``(1 + k) e_tight``); FAIL when every sample fails
-    with the limits relaxed by ``e_relax`` (cones by ``cone_relax``) or lies in a sub-arc that the
-    whole-arc bound rejects with the limits relaxed by ``e_bound``; UNKNOWN otherwise. ``k`` is a
-    sample to try first in the children (the passing one, else a relaxed-passing one, else ``hint``).
+                 e_bound, e_relax, cone_relax, e_tight, can_ok, win):
+    """OK / FAIL / UNKNOWN for chain ``i`` around the point P: OK when some sample passes with the leg
+    limits tightened by ``e_tight`` (cones by ``(1 + k) e_tight``); FAIL when every sample fails with
+    the limits relaxed by ``e_relax`` (cones by ``cone_relax``) or lies in a sub-arc that the
+    whole-arc bound rejects with the limits relaxed by ``e_bound``; UNKNOWN otherwise.
+
+    ``win = (hint, lo, hi)`` (updated in place for the children): only the samples ``lo..hi`` are
+    visited, the ``hint`` first. A caller passes the window its parent left: samples outside it
+    failed the parent's relaxed test, which covers every point of the children (their points are
+    the parent's), so they cannot pass. On UNKNOWN after a full visit, the window shrinks to the
+    samples that passed the relaxed test and the hint to one of them; on OK the hint is the
+    passing sample.
 
     ``cos_t, sin_t`` (3, n) are the arc samples, ``seg_k`` / ``seg_arc`` their sub-arcs
     (:func:`sub_arcs`), visited outward from the hint's. ``can_ok = False`` skips the OK test. With
     ``e_relax = e_tight = 0`` this is the exact test at P (one evaluation per sample)."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
+    klo = max(win[1], 0)
+    khi = min(win[2], n - 1)
+    hint = win[0]
+    if hint < klo or hint > khi:
+        hint = (klo + khi) // 2
     lo_r = max(lmin - e_relax, 0.0)
     hi_r = lmax + e_relax
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
@@ -86,45 +97,71 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     can_ok = can_ok and lo_t <= hi_t
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     exact = e_relax == 0.0 and e_tight == 0.0 and cone_relax == 0.0
-    if hint < 0 or hint >= n:
-        hint = n // 2
+    if klo > khi:
+        return FAIL
     # the hint first: it usually serves the whole block
     if can_ok and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb, rho_lo, rho_hi,
                                lo_t2, hi_t2, jc[i], -e_tight):
-        return OK, hint
+        win[0] = hint
+        return OK
     lo_b = max(lmin - e_bound, 0.0)
     hi_b = lmax + e_bound
-    if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
-        return FAIL, hint
+    narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]  # fewer samples than a sub-arc: no bound is worth it
+    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
+        return FAIL
     n_seg = seg_k.shape[0]
-    first = 0
-    while first < n_seg - 1 and seg_k[first, 1] < hint:
+    g_lo = 0
+    while g_lo < n_seg - 1 and seg_k[g_lo, 1] < klo:
+        g_lo += 1
+    g_hi = n_seg - 1
+    while g_hi > 0 and seg_k[g_hi, 0] > khi:
+        g_hi -= 1
+    first = g_lo
+    while first < g_hi and seg_k[first, 1] < hint:
         first += 1
-    some = -1
+    p_lo = n
+    p_hi = -1
     for step in range(2 * n_seg):
         off = (step + 1) // 2
         g = first + off if step % 2 == 1 else first - off
-        if g < 0 or g >= n_seg:
+        if g < g_lo or g > g_hi:
             if off > n_seg:
                 break
             continue
-        if not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo_b, hi_b):
+        if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi,
+                                            lo_b, hi_b):
             continue
-        for k in range(seg_k[g, 0], seg_k[g, 1] + 1):
+        for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):
             if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
                             jc[i], cone_relax):
                 if exact:
-                    return (OK, k) if can_ok else (UNKNOWN, k)
-                if some < 0:
-                    some = k
-                if not can_ok:
-                    return UNKNOWN, k
+                    win[0] = k
+                    return OK if can_ok else UNKNOWN
+                if not can_ok:  # nothing to gain from a full visit: keep the window
+                    win[0] = k
+                    return UNKNOWN
                 if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
                                 lo_t2, hi_t2, jc[i], -e_tight):
-                    return OK, k
-    if some >= 0:
-        return UNKNOWN, some
-    return FAIL, hint
+                    win[0] = k
+                    return OK
+                p_lo = min(p_lo, k)
+                p_hi = max(p_hi, k)
+    if p_hi >= 0:
+        win[0] = min(max(hint, p_lo), p_hi)
+        win[1] = p_lo
+        win[2] = p_hi
+        return UNKNOWN
+    return FAIL
+
+
+def initial_windows(nb: int, n_eta: int) -> np.ndarray:
+    """Sample windows ``(hint, lo, hi)`` of :func:`decide_chain` for ``nb`` blocks: every sample,
+    the middle one first. Shape (nb, 3, 3)."""
+    win = np.empty((nb, 3, 3), np.int64)
+    win[:, :, 0] = n_eta // 2
+    win[:, :, 1] = 0
+    win[:, :, 2] = n_eta - 1
+    return win
 
 
 def rounding_margin(lmax: float, axes: tuple[np.ndarray, ...]) -> float:
@@ -160,10 +197,10 @@ def block_centre(b0, bn, b, xs, ys, zs):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _classify_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, all_chains,
+def _classify_kernel(b0, bn, state, win, xs, ys, zs, h, eps, all_chains,
                      u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
-    """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3)); ``hint``
-    (nb, 3) holds the sample to try first and receives the one to hand to the children."""
+    """Decide the undecided chains of each block (in place in ``state``, shape (nb, 3)); ``win``
+    (nb, 3, 3) holds each chain's sample window (:func:`decide_chain`), updated for the children."""
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
         px, py, pz = block_centre(b0, bn, b, xs, ys, zs)
@@ -174,10 +211,9 @@ def _classify_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, all_chains,
             if state[b, i] != UNKNOWN:
                 continue
             # the bounds reject only with one more eps of slack: they never contradict a sample test
-            s, k = decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
-                                lmin, lmax, jc, e + eps, e, e, e, True, hint[b, i])
+            s = decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
+                             lmin, lmax, jc, e + eps, e, e, e, True, win[b, i])
             state[b, i] = s
-            hint[b, i] = k
             if s == FAIL and not all_chains:
                 break
 
@@ -219,10 +255,10 @@ def _split(b0: np.ndarray, bn: np.ndarray, *inherited: np.ndarray) -> tuple[np.n
 
 
 @njit(cache=True, nogil=True)
-def _advance(b0, bn, state, hint, all_chains, out):
+def _advance(b0, bn, state, win, all_chains, out):
     """One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
     undecided ones split in eight (as :func:`_split` does; each block's children consecutive), with the chain
-    states and hints they inherit."""
+    states and sample windows they inherit."""
     nb = b0.shape[0]
     keep = np.zeros(nb, np.bool_)
     n_kids = 0
@@ -254,7 +290,7 @@ def _advance(b0, bn, state, hint, all_chains, out):
     k0 = np.empty((n_kids, 3), np.int64)
     kn = np.empty((n_kids, 3), np.int64)
     ks = np.empty((n_kids, 3), np.int8)
-    kh = np.empty((n_kids, 3), np.int64)
+    kw = np.empty((n_kids, 3, 3), np.int64)
     m = 0
     for b in range(nb):
         if not keep[b]:
@@ -279,9 +315,10 @@ def _advance(b0, bn, state, hint, all_chains, out):
                     kn[m, a] = half
             for i in range(3):
                 ks[m, i] = state[b, i]
-                kh[m, i] = hint[b, i]
+                for j in range(3):
+                    kw[m, i, j] = win[b, i, j]
             m += 1
-    return k0, kn, ks, kh
+    return k0, kn, ks, kw
 
 
 def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, np.ndarray], h: float,
@@ -307,7 +344,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
     sub = (shape[0], ny_eval, shape[2])
     b0, bn = _top_blocks(sub, TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
-    hint = np.full((b0.shape[0], 3), cos_t.shape[1] // 2, np.int64)
+    win = initial_windows(b0.shape[0], cos_t.shape[1])
     seg_k, seg_arc = sub_arcs(cos_t, sin_t)
     level = 0
     n_levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
@@ -317,11 +354,11 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
         for s in range(0, b0.shape[0], step):
             check(cancel)
             with KERNEL_LOCK:
-                _classify_kernel(b0[s:s + step], bn[s:s + step], state[s:s + step], hint[s:s + step], xs, ys, zs,
+                _classify_kernel(b0[s:s + step], bn[s:s + step], state[s:s + step], win[s:s + step], xs, ys, zs,
                                  float(h), eps, bool(all_chains), u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo,
                                  rho_hi, lmin, lmax, jc)
         n_before = b0.shape[0]
-        b0, bn, state, hint = _advance(b0, bn, state, hint, bool(all_chains), out)
+        b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
         level += 1
         if progress is not None:
             progress(min(1.0, level / n_levels), f"position workspace: level {level}, {b0.shape[0]} blocks "

@@ -59,7 +59,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import (FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre, decide_chain,
-                     rounding_margin, sub_arcs)
+                     initial_windows, rounding_margin, sub_arcs)
 from .design import Design, ParameterError
 from .feasibility import ChainTables
 from .grid import GridSpec
@@ -98,18 +98,20 @@ class VolumeBracket:
 
 
 @njit(cache=True, inline="always")
-def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint,
+def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, win,
                 u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
-    """``(state, sample)``: OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or
-    block) of centre ``P`` and half-diagonal ``delta`` (module docstring), with the arc samples of
-    ``cos_t, sin_t`` (``arc_slack``/``cone_slack``: the joint motion over their half-spacing)."""
+    """OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or block) of centre
+    ``P`` and half-diagonal ``delta`` (module docstring), with the arc samples of ``cos_t, sin_t``
+    (``arc_slack``/``cone_slack``: the joint motion over their half-spacing) in the window ``win``
+    of :func:`kinematics.blocks.decide_chain` (a sample that failed the parent's outside test, with
+    its slack, holds no angle that serves any point of the parent, hence of this cube)."""
     return decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
                         delta + eps, delta + arc_slack + eps, delta + cone_slack + eps, delta + eps, not below,
-                        hint)
+                        win)
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _cube_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
+def _cube_kernel(b0, bn, state, win, xs, ys, zs, h, eps, arc_slack, cone_slack, zfloor,
                  u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
     for b in prange(b0.shape[0]):
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
@@ -119,20 +121,19 @@ def _cube_kernel(b0, bn, state, hint, xs, ys, zs, h, eps, arc_slack, cone_slack,
         for i in range(3):
             if state[b, i] != UNKNOWN:
                 continue
-            st, k = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint[b, i],
-                                u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, win[b, i],
+                             u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
             state[b, i] = st
-            hint[b, i] = k
             if st == FAIL:
                 break
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _subcube_kernel(centres, bits, hint, size, eps, arc_slack, cone_slack, zfloor,
+def _subcube_kernel(centres, bits, win, size, eps, arc_slack, cone_slack, zfloor,
                     u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
     """INSIDE / OUTSIDE / BOUNDARY of cubes of edge ``size`` centred at ``centres`` (N, 3); bit ``i``
     of ``bits`` marks chain ``i`` as already inside (inherited from the parent cube; updated);
-    ``hint`` (N, 3): the sample to try first per chain."""
+    ``win`` (N, 3, 3): each chain's sample window (updated)."""
     delta = 0.5 * size * math.sqrt(3.0)
     for c in prange(centres.shape[0]):
         px, py, pz = centres[c, 0], centres[c, 1], centres[c, 2]
@@ -141,9 +142,8 @@ def _subcube_kernel(centres, bits, hint, size, eps, arc_slack, cone_slack, zfloo
         for i in range(3):
             if (bits[c] >> i) & 1:
                 continue
-            st, k = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, hint[c, i],
-                                u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
-            hint[c, i] = k
+            st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, win[c, i],
+                             u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
             if st == FAIL:
                 cls = OUTSIDE
                 break
@@ -183,11 +183,15 @@ class _Arc:
 
 
 def _arc(design: Design, grid: GridSpec, args: tuple, n_eta: int, delta: float) -> _Arc:
-    """Arc samples fine enough that their slack is at most half the cubes' half-diagonal ``delta``
-    (at most :data:`MAX_FINE` per gap of the workspace's samples, which are all kept)."""
+    """Arc samples fine enough that their slack is at most half the cubes' half-diagonal ``delta``:
+    ``fine`` samples per gap of the workspace's samples (which are all kept), a power of two up to
+    :data:`MAX_FINE`."""
     lmax = math.sqrt(args[8])
     arc_slack, _, _ = _slacks(design, grid, lmax, n_eta)
-    fine = 1 if n_eta <= 1 else int(min(MAX_FINE, max(1, math.ceil(2.0 * arc_slack / delta - 1e-9))))
+    need = 2.0 * arc_slack / delta
+    fine = 1  # a power of two, so that one level's samples contain the previous level's
+    while n_eta > 1 and fine < need - 1e-9 and fine < MAX_FINE:
+        fine *= 2
     n_f = (n_eta - 1) * fine + 1 if n_eta > 1 else 1
     cos_t, sin_t = args[1], args[2]
     if fine > 1:
@@ -196,6 +200,19 @@ def _arc(design: Design, grid: GridSpec, args: tuple, n_eta: int, delta: float) 
     seg_k, seg_arc = sub_arcs(cos_t, sin_t, 6 * fine)
     a_s, c_s, eps = _slacks(design, grid, lmax, n_f)
     return _Arc(cos_t, sin_t, seg_k, seg_arc, a_s, c_s, eps, fine)
+
+
+def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
+    """Windows of :func:`kinematics.blocks.decide_chain` in samples ``r`` times finer (``n`` of
+    them): sample ``k`` becomes ``r k``, and a window keeps every new sample whose nearest old sample
+    was in it (the old outside test covered the angles within half an old spacing of a sample)."""
+    if r == 1:
+        return win
+    out = np.empty_like(win)
+    out[..., 0] = win[..., 0] * r
+    out[..., 1] = np.maximum(win[..., 1] * r - r // 2, 0)
+    out[..., 2] = np.minimum(win[..., 2] * r + r // 2, n - 1)
+    return out
 
 
 def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
@@ -210,14 +227,14 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
     out = np.zeros(grid.shape, np.uint8)
     b0, bn = _top_blocks(grid.shape, TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
-    hint = np.full((b0.shape[0], 3), fa.cos_t.shape[1] // 2, np.int64)
+    win = initial_windows(b0.shape[0], fa.cos_t.shape[1])
     level = 0
     while b0.shape[0]:
         check(cancel)
         for s in range(0, b0.shape[0], 65536):
             check(cancel)
             with KERNEL_LOCK:
-                _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], hint[s:s + 65536], xs, ys, zs,
+                _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], win[s:s + 65536], xs, ys, zs,
                              float(grid.h), fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u, fa.cos_t,
                              fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
         fail = np.any(state == FAIL, axis=1)
@@ -234,7 +251,7 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
             progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
         if done.all():
             break
-        b0, bn, state, hint = _split(b0[~done], bn[~done], state[~done], hint[~done])
+        b0, bn, state, win = _split(b0[~done], bn[~done], state[~done], win[~done])
     return out
 
 
@@ -257,31 +274,31 @@ def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_f
     size = float(grid.h)
     inside = outside = 0.0
     chunk = 1 << 18
-    parent_hint = np.full((centres.shape[0], 3), (max(n_eta, 1) - 1) // 2, np.int64)  # in workspace samples
+    parent_win = initial_windows(centres.shape[0], n_eta)  # in the workspace's samples
     fine_before = 1
     for level in range(levels):
         size *= 0.5
         fa = _arc(design, grid, args, n_eta, 0.5 * size * math.sqrt(3.0))
-        parent_hint = parent_hint * fa.fine // fine_before  # the same angles in this level's samples
+        parent_win = _rescale_windows(parent_win, fa.fine // fine_before, fa.cos_t.shape[1])
         fine_before = fa.fine
-        left, left_bits, left_hint = [], [], []
+        left, left_bits, left_win = [], [], []
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
             kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
             bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
-            hint = np.ascontiguousarray(np.repeat(parent_hint[s:s + chunk // 8], 8, axis=0))
+            win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
             out = np.empty(kids.shape[0], np.uint8)
             with KERNEL_LOCK:
-                _subcube_kernel(kids, bits, hint, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
+                _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
                                 fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out)
             inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
             outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
             left.append(kids[out == BOUNDARY])
             left_bits.append(bits[out == BOUNDARY])
-            left_hint.append(hint[out == BOUNDARY])
+            left_win.append(win[out == BOUNDARY])
         centres = np.concatenate(left) if left else np.zeros((0, 3))
         parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
-        parent_hint = np.concatenate(left_hint) if left_hint else np.zeros((0, 3), np.int64)
+        parent_win = np.concatenate(left_win) if left_win else np.zeros((0, 3, 3), np.int64)
         if progress is not None:
             progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
     return inside, outside, int(centres.shape[0])
