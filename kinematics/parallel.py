@@ -16,9 +16,33 @@ which costs a few microseconds per launch on an idle machine.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
+from typing import Iterator
 
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 KERNEL_LOCK = threading.Lock()
+
+
+#: Chunks per thread of a launch (dynamic scheduling, :func:`kernel_launch`).
+CHUNKS_PER_THREAD = 8
+
+
+@contextlib.contextmanager
+def kernel_launch(n_items: int) -> Iterator[None]:
+    """Hold :data:`KERNEL_LOCK` for one launch of a ``parallel=True`` kernel over ``n_items``
+    iterations, handed to the threads in chunks of about ``n_items / (CHUNKS_PER_THREAD threads)``
+    (numba's ``parallel_chunksize``: a thread that finishes a chunk takes the next one). With the
+    default equal split a thread sharing its core with another process holds the whole launch
+    back; with chunks the other thread takes over the rest of the work."""
+    import numba
+
+    chunk = max(1, -(-int(n_items) // (CHUNKS_PER_THREAD * max(1, numba.get_num_threads()))))
+    with KERNEL_LOCK:
+        previous = numba.set_parallel_chunksize(chunk)
+        try:
+            yield
+        finally:
+            numba.set_parallel_chunksize(previous)
