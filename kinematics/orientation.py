@@ -478,7 +478,7 @@ class OrientationResult:
         }
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=9)
 def _rotation_table(rotation: str, angle_range: float, angle_step: float) -> np.ndarray:
     """:func:`rotation_matrix` of every angle sample, (M, 3, 3), built once per scan setting
     (read-only; the same matrices as one call per angle)."""
