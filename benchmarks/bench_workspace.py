@@ -16,9 +16,10 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      axes, leg interference, diagnostics, the certified bracket at each refinement level with its
      gap), medians of alternating runs;
   6. one thread against two, idle and with a second process busy on one core, for numba's default
-     equal split (with the orientation scan's former pair-by-pair kernel) and for today's chunked
-     launches (kinematics/parallel.py) and line scan (kinematics/line_scan.py): medians of
-     alternating runs, the 1-thread/2-thread ratio of each and the 2-thread speed-up of today's code.
+     equal split (with the orientation scan's former pair-by-pair kernel), for chunked launches
+     (kinematics/parallel.py) with the line scan (kinematics/line_scan.py), and for today's default
+     (chunks, and one thread while other tasks fill every core): medians of alternating runs, the
+     1-thread/2-thread ratio of each and the 2-thread speed-up of today's default.
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
                                             [--options] [--threads]
@@ -128,25 +129,27 @@ def option_rows(design: Design, runs: int = 5) -> None:
               f"[{res.volume_inner:.5g}, {res.volume_outer:.5g}]")
 
 
-POLICIES = ("equal split", "chunks")
+POLICIES = ("equal split", "chunks", "chunks+load")
 
 
 @contextlib.contextmanager
 def _thread_policy(name: str):
     """``"equal split"``: numba's default one slice per thread, and the orientation scan's pair-by-pair
     kernel (kinematics.workspace.reachable_pairs) -- the state before kinematics.parallel's chunks and
-    kinematics.line_scan; ``"chunks"``: today's chunked launches and line scan."""
+    kinematics.line_scan; ``"chunks"``: chunked launches and the line scan, every thread always;
+    ``"chunks+load"``: today's default (and one thread while other tasks fill every core)."""
     from paraspace.kinematics import orientation, parallel
     from paraspace.kinematics.workspace import reachable_pairs
 
-    saved = parallel.DEFAULT_CHUNK, orientation.reachable_along
+    saved = parallel.DEFAULT_CHUNK, parallel.LOAD_RULE, orientation.reachable_along
+    parallel.LOAD_RULE = name == "chunks+load"
     if name == "equal split":
         parallel.DEFAULT_CHUNK = 0
         orientation.reachable_along = reachable_pairs
     try:
         yield
     finally:
-        parallel.DEFAULT_CHUNK, orientation.reachable_along = saved
+        parallel.DEFAULT_CHUNK, parallel.LOAD_RULE, orientation.reachable_along = saved
 
 
 def thread_rows(design: Design, runs: int = 7) -> None:

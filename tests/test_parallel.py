@@ -30,7 +30,8 @@ def test_lock_sets_and_restores_the_chunk_size() -> None:
     assert not KERNEL_LOCK.locked() and numba.get_parallel_chunksize() == before
 
 
-def test_kernel_launch_chunks_follow_the_size() -> None:
+def test_kernel_launch_chunks_follow_the_size(monkeypatch) -> None:
+    monkeypatch.setattr(parallel, "LOAD_RULE", False)  # the thread count the chunks are sized for
     threads = numba.get_num_threads()
     per = parallel.CHUNKS_PER_THREAD * threads
     for n, want in ((1, 1), (per, 1), (per + 1, 2), (100 * per, 100)):
@@ -76,3 +77,32 @@ def test_orientation_scan_independent_of_threads() -> None:
     for key, reg in ref.regions.items():
         assert np.array_equal(reg.feasible, one.regions[key].feasible), key
     assert (ref.ti1, ref.ti2) == (one.ti1, one.ti2)
+
+
+def test_one_thread_when_other_tasks_fill_the_cores(monkeypatch) -> None:
+    cores = parallel._CORES
+    for others, want in ((0, 4), (cores - 1, 4), (cores, 1), (cores + 5, 1), (None, 4)):
+        monkeypatch.setattr(parallel, "_other_runnable", lambda o=others: o)
+        assert parallel.launch_threads(4) == want, others
+    monkeypatch.setattr(parallel, "LOAD_RULE", False)
+    assert parallel.launch_threads(4) == 4
+    monkeypatch.setattr(parallel, "LOAD_RULE", True)
+    assert parallel.launch_threads(1) == 1
+
+
+def test_lock_lowers_and_restores_the_thread_count(monkeypatch) -> None:
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only")
+    monkeypatch.setattr(parallel, "_other_runnable", lambda: parallel._CORES)
+    numba.set_num_threads(2)
+    with KERNEL_LOCK:
+        assert numba.get_num_threads() == 1
+    assert numba.get_num_threads() == 2
+    monkeypatch.setattr(parallel, "_other_runnable", lambda: 0)
+    with KERNEL_LOCK:
+        assert numba.get_num_threads() == 2
+
+
+def test_other_runnable_reads_the_kernel_count() -> None:
+    n = parallel._other_runnable()
+    assert n is None or n >= 0
