@@ -18,11 +18,12 @@ core is busy with another process the thread on it holds the whole launch back (
 measured slower than 1 under load). Holding :data:`KERNEL_LOCK` therefore also hands the
 iterations out in chunks (numba's ``parallel_chunksize``, a per-thread setting restored on
 release): a thread that finishes a chunk takes the next one, so the thread on the free core does
-most of the work and 2 threads are not slower than 1. :data:`DEFAULT_CHUNK` iterations per chunk
+most of the work instead of waiting for the other. :data:`DEFAULT_CHUNK` iterations per chunk
 (every kernel's iteration costs at least one feasibility test, so the per-chunk cost of a fraction
-of a microsecond is negligible); :func:`kernel_launch` sizes the chunks from the launch's iteration count. The
-results do not depend on the chunking or the thread count: each iteration writes only its own
-outputs.
+of a microsecond is negligible); :func:`kernel_launch` sizes the chunks from the launch's
+iteration count. The results do not depend on the chunking or the thread count: each iteration
+writes only its own outputs. (Measured ratios: README, performance section; on the shared,
+never idle machine they are rough.)
 
 Busy machine: Linux schedules each login session as one group (``sched_autogroup``) and shares the
 CPU fairly between the groups, so when the other sessions already keep every core busy a second
@@ -49,8 +50,6 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 DEFAULT_CHUNK = 8
 #: Chunks per thread of a :func:`kernel_launch`.
 CHUNKS_PER_THREAD = 8
-
-
 #: Use one thread when the other runnable tasks fill every core (module docstring, "Busy machine").
 LOAD_RULE = True
 
