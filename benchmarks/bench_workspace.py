@@ -15,8 +15,11 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   5. the cost of each engine option relative to the plain model at h = 2 (joint cones with both
      axes, leg interference, diagnostics, the certified bracket at each refinement level with its
      gap), medians of alternating runs;
-  6. one thread against two, idle and with a second process busy on one core (numba's threads
-     sleep between launches: see kinematics/parallel.py).
+  6. one thread against two, idle and with a second process busy on one core, for numba's default
+     equal split (with the orientation scan's former pair-by-pair kernel), for chunked launches
+     (kinematics/parallel.py) with the line scan (kinematics/line_scan.py), and for today's default
+     (chunks, and one thread while other tasks fill every core): medians of alternating runs, the
+     1-thread/2-thread ratio of each and the 2-thread speed-up of today's default.
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
                                             [--options] [--threads]
@@ -25,19 +28,22 @@ Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no
 from __future__ import annotations
 
 import argparse
+import contextlib
 import multiprocessing
 import os
-import sys
+import pathlib
 import statistics
+import sys
 import time
 
+# this checkout, not a copy of paraspace installed in the environment (python benchmarks/x.py puts
+# benchmarks/ first on sys.path, not the repository root)
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # measure this checkout
-
-from paraspace.kinematics.design import Design
-from paraspace.kinematics.grid import GridSpec
-from paraspace.kinematics.reference import reference_reachable
-from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
+from paraspace.kinematics.design import Design  # noqa: E402
+from paraspace.kinematics.grid import GridSpec  # noqa: E402
+from paraspace.kinematics.reference import reference_reachable  # noqa: E402
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up  # noqa: E402
 
 BOX = ((-180.0, -180.0, 0.0), (180.0, 180.0, 165.0))
 
@@ -50,7 +56,20 @@ def best_of(n: int, fn):
     return best, out
 
 
-def _spin(stop) -> None:  # a second process busy on one core
+def _spin(stop) -> None:
+    """A second process busy on one core, in its own session like a program started from another
+    terminal: with Linux's ``sched_autogroup`` (on by default) each session is scheduled as one
+    group, and a busy child of the benchmark's own session would share our group's CPU time
+    thread by thread instead (a different, milder load). The new session gets the benchmark's
+    autogroup priority."""
+    try:
+        with open("/proc/self/autogroup") as fh:
+            nice = fh.read().split()[-1]
+        os.setsid()
+        with open("/proc/self/autogroup", "w") as fh:
+            fh.write(nice)
+    except (OSError, AttributeError, IndexError):
+        pass  # no autogroup: the plain child process is the load
     x = 0
     while not stop.is_set():
         x += 1
@@ -110,8 +129,32 @@ def option_rows(design: Design, runs: int = 5) -> None:
               f"[{res.volume_inner:.5g}, {res.volume_outer:.5g}]")
 
 
-def thread_rows(design: Design, runs: int = 5) -> None:
-    """Item 6 of the module docstring."""
+POLICIES = ("equal split", "chunks", "chunks+load")
+
+
+@contextlib.contextmanager
+def _thread_policy(name: str):
+    """``"equal split"``: numba's default one slice per thread, and the orientation scan's pair-by-pair
+    kernel (kinematics.workspace.reachable_pairs) -- the state before kinematics.parallel's chunks and
+    kinematics.line_scan; ``"chunks"``: chunked launches and the line scan, every thread always;
+    ``"chunks+load"``: today's default (and one thread while other tasks fill every core)."""
+    from paraspace.kinematics import orientation, parallel
+    from paraspace.kinematics.workspace import reachable_pairs
+
+    saved = parallel.DEFAULT_CHUNK, parallel.LOAD_RULE, orientation.reachable_along
+    parallel.LOAD_RULE = name == "chunks+load"
+    if name == "equal split":
+        parallel.DEFAULT_CHUNK = 0
+        orientation.reachable_along = reachable_pairs
+    try:
+        yield
+    finally:
+        parallel.DEFAULT_CHUNK, parallel.LOAD_RULE, orientation.reachable_along = saved
+
+
+def thread_rows(design: Design, runs: int = 7) -> None:
+    """Item 6 of the module docstring: medians of ``runs`` alternating runs of every (policy, threads)
+    configuration, so that drift in the machine's load hits all of them alike."""
     import numba
 
     from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
@@ -119,8 +162,12 @@ def thread_rows(design: Design, runs: int = 5) -> None:
     work = {"blocks h=2": lambda: compute_workspace(design, WorkspaceSettings(voxel=2.0)),
             "dense h=2": lambda: compute_workspace(design, WorkspaceSettings(voxel=2.0, method="dense")),
             "orientation indices": lambda: orientation_workspace(design, OrientationSettings())}
-    for f in work.values():
-        f()
+    policies = POLICIES
+    configs = [(p, n) for p in policies for n in (1, 2)]
+    for p in policies:
+        with _thread_policy(p):
+            for f in work.values():
+                f()  # compile
     for loaded in (False, True):
         stop = multiprocessing.Event()
         spinner = None
@@ -129,16 +176,23 @@ def thread_rows(design: Design, runs: int = 5) -> None:
             spinner.start()
             time.sleep(0.3)
         print(f"  {'with a second process busy on one core' if loaded else 'idle'} "
-              f"(OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}, layer {numba.threading_layer()}):")
+              f"(load average {os.getloadavg()[0]:.2f}, OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}, "
+              f"layer {numba.threading_layer()}):")
         for name, f in work.items():
-            row = []
-            for n in (1, 2):
-                numba.set_num_threads(n)
-                t, _ = _median_time(f, runs)
-                row.append(t)
+            times: dict = {c: [] for c in configs}
+            for _ in range(runs):
+                for p, n in configs:
+                    numba.set_num_threads(n)
+                    with _thread_policy(p):
+                        t = time.perf_counter()
+                        f()
+                        times[(p, n)].append(time.perf_counter() - t)
             numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-            print(f"    {name:<22} 1 thread {row[0] * 1e3:8.1f} ms   2 threads {row[1] * 1e3:8.1f} ms   "
-                  f"ratio {row[0] / row[1]:.2f}")
+            med = {c: statistics.median(v) for c, v in times.items()}
+            for p in policies:
+                print(f"    {name:<20} {p:<12} 1 thread {med[(p, 1)] * 1e3:8.1f} ms   2 threads "
+                      f"{med[(p, 2)] * 1e3:8.1f} ms   ratio {med[(p, 1)] / med[(p, 2)]:.2f}")
+            print(f"    {name:<20} 2 threads, today vs equal split: {med[('equal split', 2)] / med[POLICIES[-1], 2]:.2f}x")
         if spinner is not None:
             stop.set()
             spinner.join(2)

@@ -33,8 +33,9 @@ Sampling
 Positions ``s_k = k h_s`` (lattice through 0, step ``position_step``) inside the range; angles
 ``alpha_m = m h_a`` in ``[-A, A]`` (``A = angle_range``, ``h_a = angle_step``). A sample
 ``(s_k, alpha_m)`` is *feasible* when :func:`kinematics.workspace.reachable` accepts the pose
-(compiled, exact in ``d``, arc stroke sampled every ``eta_step``); all positions of a line are
-tested in one batch per angle.
+(compiled, exact in ``d``, arc stroke sampled every ``eta_step``); all the (position, angle) pairs of
+a line and rotation are tested in one parallel launch that walks along the line coarse to fine
+(:mod:`kinematics.line_scan`: the same answer as the pair-by-pair test, proof there).
 
 Definition of the Δ's of eq. (28) (our precise reading)
 --------------------------------------------------------
@@ -75,6 +76,7 @@ in degree x length.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from typing import Any, Optional
@@ -85,7 +87,8 @@ from .design import Design, ParameterError
 from .joints import Joints
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
-from .workspace import reachable, reachable_pairs  # noqa: F401 - reachable: the documented test
+from .line_scan import reachable_along
+from .workspace import reachable, reachable_pairs  # noqa: F401 - the documented test and its oracle
 
 #: Line keys and their unit direction (``None``: the z line, positions are heights).
 LINES: tuple[str, ...] = ("z", "y_prime", "x")
@@ -475,10 +478,21 @@ class OrientationResult:
         }
 
 
+@functools.lru_cache(maxsize=9)
+def _rotation_table(rotation: str, angle_range: float, angle_step: float) -> np.ndarray:
+    """:func:`rotation_matrix` of every angle sample, (M, 3, 3), built once per scan setting
+    (read-only; the same matrices as one call per angle)."""
+    ang = _lattice(-angle_range, angle_range, angle_step)
+    rots = np.stack([rotation_matrix(rotation, a) for a in ang]) if ang.size else np.zeros((0, 3, 3))
+    rots.setflags(write=False)
+    return rots
+
+
 def scan_line(design: Design, line: str, rotation: str, settings: OrientationSettings,
               progress: Optional[ProgressFn] = None, cancel: CancelToken = None) -> OrientationRegion:
     """Feasibility grid of one rotation along one line: every (position, angle) pair in one parallel
-    launch (:func:`kinematics.workspace.reachable_pairs`), in slices of angles for progress and
+    launch over the angles (:func:`kinematics.line_scan.reachable_along`, identical to
+    :func:`kinematics.workspace.reachable_pairs`), in slices of angles for progress and
     cancellation."""
     rep = Reporter(progress)
     pos = position_samples(design, line, settings)
@@ -486,12 +500,12 @@ def scan_line(design: Design, line: str, rotation: str, settings: OrientationSet
     pts = line_points(line, pos, settings.z0)
     feas = np.zeros((pos.size, ang.size), dtype=bool)
     if pos.size:
-        rots = np.stack([rotation_matrix(rotation, a) for a in ang])
+        rots = _rotation_table(rotation, settings.angle_range, settings.angle_step)
         step = max(1, min(ang.size, 4_000_000 // max(pos.size, 1)))
         for m in range(0, ang.size, step):
             check(cancel)
             rep(m / ang.size, f"orientation {LINE_SYMBOL[line]} line, {ROTATION_SYMBOL[rotation]}")
-            feas[:, m:m + step] = reachable_pairs(design, pts, rots[m:m + step], settings.eta_step,
+            feas[:, m:m + step] = reachable_along(design, pts, rots[m:m + step], settings.eta_step,
                                                   settings.joints)
     rep(1.0, "")
     return make_region(line, rotation, pos, ang, feas, position_step=settings.position_step,
