@@ -19,11 +19,12 @@ with timestamps taken *in the page* (``performance.now()``, sampled once per ani
 ``--trace DIR`` also records a Chrome trace and a JS CPU profile of the connect and of one more
 press, and prints where the renderer's main thread and the GPU process spend that time.
 ``--no-plots`` is a what-if: the explorer's plotly plots are replaced by stand-ins (plotly.js is
-then never sent), to measure what lazily created plots would save. Numbers only, no assertions.
+then never sent), to measure what lazily created plots would save; ``--no-preview-bracket``: the
+preview shell is published without waiting for its certified bracket. Numbers only, no assertions.
 
 Usage::
 
-    python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots]
+    python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots] [--no-preview-bracket]
 """
 
 from __future__ import annotations
@@ -169,6 +170,15 @@ def _time_server_steps() -> None:
     explorer.ClientSession.build = timed("build the GUI", explorer.ClientSession.build)  # type: ignore[method-assign]
 
 
+def _no_preview_bracket() -> None:
+    """The what-if of ``--no-preview-bracket``: the preview (h = 6) gets no certified bracket, as if
+    the explorer published the preview shell before bracketing it (the full result keeps its bracket)."""
+    from paraspace.app import explorer
+
+    bracket = explorer._bracket
+    explorer._bracket = lambda res: None if res.grid.h >= explorer.PREVIEW_VOXEL else bracket(res)  # type: ignore
+
+
 # ----- trace analysis (--trace) ---------------------------------------------------------------
 
 
@@ -208,7 +218,7 @@ def _summarise_trace(path: Path, marks: tuple[str, str], splits: dict[str, float
             names[(e["pid"], e["tid"])] = e["args"]["name"]
     mark_ts = collections.defaultdict(list)
     for e in events:
-        if e.get("name") in marks:
+        if e.get("name") in marks or e.get("name") == "probe:plotly":
             mark_ts[e["name"]].append(e["ts"])
     if not mark_ts.get(marks[0]) or not mark_ts.get(marks[1]):
         print(f"  {title}: marks {marks} not found in the trace")
@@ -234,6 +244,13 @@ def _summarise_trace(path: Path, marks: tuple[str, str], splits: dict[str, float
             gb, _ = _self_times(by_thread[g], ta, tb)
             line += f"; {names[g]} busy {gb / 1e3:.0f} ms"
         print(line)
+    for mark in ("probe:plotly",):  # the task that evaluated plotly.js (the mark is set at its end)
+        for ts in mark_ts.get(mark, []):
+            tasks = [e for e in by_thread[main] if e.get("ph") == "X" and e["ts"] <= ts <= e["ts"] + e.get("dur", 0)]
+            if tasks:
+                task = max(tasks, key=lambda e: e["dur"])
+                print(f"    the main-thread task that evaluated plotly.js: {task['dur'] / 1e3:.0f} ms, "
+                      f"{(task['ts'] - t0) / 1e3:.0f} ms after {marks[0]}")
     busy, self_t = _self_times(by_thread[main], t0, t1)
     print(f"    renderer main thread, largest self times (of {busy / 1e3:.0f} ms busy):")
     for name, us in self_t.most_common(12):
@@ -260,6 +277,16 @@ def _summarise_profile(profile: dict, title: str, top: int = 15) -> None:
         print(f"      {us / 1e3:8.1f} ms  {name}")
 
 
+def _start_profiling(browser: Any, page: Any, trace_path: Path) -> Any:
+    """Start a Chrome trace of ``page`` (to ``trace_path``) and a JS CPU profile; returns the CDP session."""
+    cdp = page.context.new_cdp_session(page)
+    browser.start_tracing(page=page, path=str(trace_path), screenshots=False, categories=TRACE_CATEGORIES)
+    cdp.send("Profiler.enable")
+    cdp.send("Profiler.setSamplingInterval", {"interval": 500})
+    cdp.send("Profiler.start")
+    return cdp
+
+
 # ----- the benchmark -----------------------------------------------------------------------------
 
 
@@ -272,9 +299,12 @@ def main() -> None:
     ap.add_argument("--trace", type=Path, default=None, help="write Chrome traces and CPU profiles here")
     ap.add_argument("--connects", type=int, default=3, help="page loads timed (each a new design)")
     ap.add_argument("--no-plots", action="store_true", help="what-if: no plotly plots (stand-ins)")
+    ap.add_argument("--no-preview-bracket", action="store_true", help="what-if: the preview is not bracketed")
     args = ap.parse_args()
     if args.no_plots:
         _no_plots()
+    if args.no_preview_bracket:
+        _no_preview_bracket()
     _time_server_steps()
     if args.trace is not None:
         args.trace.mkdir(parents=True, exist_ok=True)
@@ -285,6 +315,7 @@ def main() -> None:
         "connect -> first full shell drawn (s)", "  connect: page load event (s)", "  connect: plotly.js evaluated (s)",
         "  connect: server: read the page's location (s)", "  connect: server: build the GUI (s)",
         "  connect: server submits the first job (s)", "  connect: server sends the first full shell (s)",
+        "  connect: browser: first full shell sent -> drawn (s)",
         "mechanism: key -> moved (s)", "mechanism: key -> drawn (s)",
         "preview shell: key -> drawn (s)", "full shell: key -> drawn (s)",
         "  key -> server starts the job (s)", "  server: job start -> full shell sent (s)",
@@ -300,11 +331,8 @@ def main() -> None:
     try:
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=ARGS)
-            cdp: Any = None
-
             def connect(i: int) -> tuple[Any, Any]:
                 """Open a new page on a new design (uncached: a = 50 + i/2) and time its first full shell."""
-                nonlocal cdp
                 page = browser.new_page(viewport={"width": args.width, "height": args.height})
                 page.add_init_script(CONNECT_PROBE)
                 ws_bytes = [0]
@@ -315,12 +343,7 @@ def main() -> None:
                 page.on("websocket", on_ws)
                 traced = args.trace is not None and i == 0
                 if traced:
-                    cdp = page.context.new_cdp_session(page)
-                    browser.start_tracing(page=page, path=str(args.trace / "connect.json"), screenshots=False,
-                                          categories=TRACE_CATEGORIES)
-                    cdp.send("Profiler.enable")
-                    cdp.send("Profiler.setSamplingInterval", {"interval": 500})
-                    cdp.send("Profiler.start")
+                    cdp = _start_profiling(browser, page, args.trace / "connect.json")
                 before = set(exp.sessions)
                 t0 = time.perf_counter()
                 page.goto(exp.url + f"?voxel={args.voxel:g}&a={50 + 0.5 * i:g}")
@@ -329,7 +352,8 @@ def main() -> None:
                                        "?.length > 0 && document.body.innerText.includes('(full, h =')", timeout=90000)
                 page.evaluate("() => new Promise(r => requestAnimationFrame(() => {"
                               " performance.mark('probe:connected'); r(); }))")
-                rows["connect -> first full shell drawn (s)"].append(time.perf_counter() - t0)
+                t_drawn = time.perf_counter()
+                rows["connect -> first full shell drawn (s)"].append(t_drawn - t0)
                 session = next(s for cid, s in list(exp.sessions.items()) if cid not in before)
                 _wait(lambda: session.bundle is not None, 60, "the first full shell")
                 plotly_at = page.evaluate("() => window.__connect.plotly")  # ms after the page's time origin
@@ -343,6 +367,7 @@ def main() -> None:
                     rows["  connect: server submits the first job (s)"].append(first["workspace-submit"] - t0)
                 if "full-shown" in first:
                     rows["  connect: server sends the first full shell (s)"].append(first["full-shown"] - t0)
+                    rows["  connect: browser: first full shell sent -> drawn (s)"].append(t_drawn - first["full-shown"])
                 _idle(exp, session)  # first frames (shader compilation), measures and orientation maps done
                 sizes["connect: websocket bytes received (MB)"].append(ws_bytes[0] / 1e6)
                 if traced:
@@ -448,11 +473,9 @@ def main() -> None:
                 press_a()
                 _idle(exp, session)  # measures + orientation maps of this design finish before the next press
             if args.trace:  # one more press, traced and profiled (not in the table)
-                browser.start_tracing(page=page, path=str(args.trace / "press.json"), screenshots=False,
-                                      categories=TRACE_CATEGORIES)
-                cdp.send("Profiler.start")
                 kept = {id(v): len(v) for v in (*rows.values(), *sizes.values())}
                 kept_skipped = skipped_previews
+                cdp = _start_profiling(browser, page, args.trace / "press.json")
                 press_a(args.trace / "press.json")
                 page.evaluate("() => new Promise(r => setTimeout(r, 300))")
                 profile = cdp.send("Profiler.stop")["profile"]
@@ -470,7 +493,8 @@ def main() -> None:
         exp.stop()
 
     print(f"\nexplorer latency, headless Chromium (SwiftShader), viewport {args.width}x{args.height}, "
-          f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}")
+          f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}"
+          f"{', NO PREVIEW BRACKET (what-if)' if args.no_preview_bracket else ''}")
     print(f"{'':44s} {'median':>8s} {'min':>8s} {'max':>8s}")
     for name, vals in rows.items():
         print(f"{name:44s} {_stats(vals)}")
