@@ -45,17 +45,18 @@ from fastapi import FastAPI
 from ..jobs import JobManager
 from . import ik, jobs as jobs_routes, links, meta, optimize, orientation, sweep, workspace
 from .body_limit import BodyLimit
-from .context import API_PREFIX, API_VERSION, CLIENT_PREFIX, ApiContext, ApiResult
-from .errors import ERROR_RESPONSES, ApiError, FieldError, install_error_handlers
+from .context import API_PREFIX, API_VERSION, ApiContext
+from .errors import install_error_handlers
 from .limits import ApiLimits
-from .optimize import optimize_compute, optimize_limits_check
 from .tokens import decode_link_token, encode_link_token
-from .workspace import workspace_payload
+
+# Names of the former single module app/api.py, still importable from here.
+from .context import CLIENT_PREFIX, ApiResult  # noqa: E402,F401
+from .errors import ERROR_RESPONSES, ApiError, FieldError  # noqa: E402,F401
+from .optimize import optimize_compute, optimize_limits_check  # noqa: E402,F401
+from .workspace import workspace_payload as _workspace_payload  # noqa: E402,F401 (tests/test_bracket.py)
 
 __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode_link_token"]
-
-#: The former private name (tests/test_bracket.py imports it).
-_workspace_payload = workspace_payload
 
 #: The routers in the order their routes are matched and listed in the OpenAPI document.
 ROUTERS = (meta.router, ik.router, workspace.router, orientation.router, sweep.router, optimize.router,
