@@ -30,6 +30,10 @@ def test_fresh_install_exposes_only_the_paraspace_namespace(tmp_path):
     pkg = target / "paraspace"
     for sub in ("kinematics", "app"):
         assert (pkg / sub / "__init__.py").is_file(), sub
+    # every sub-package of the source (app/api/, ...) is installed too: pyproject lists them one by one
+    for init in sorted([*ROOT.glob("app/**/__init__.py"), *ROOT.glob("kinematics/**/__init__.py")]):
+        rel = init.relative_to(ROOT)
+        assert (pkg / rel).is_file(), f"{rel} is not installed: add its package to pyproject.toml"
     assert (pkg / "static" / "index.html").is_file()
     # the installed copy imports as itself (not from this checkout) and finds its own assets
     code = ("import paraspace, paraspace.kinematics as k, importlib.resources as r;"

@@ -1,0 +1,118 @@
+"""Routes of the position workspace: ``POST /workspace`` (a job), ``GET /workspace/{id}`` (its
+measures) and ``GET /workspace/{id}/shell.{fmt}`` (its boundary surface as a mesh file)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Literal, Optional
+
+from fastapi import Path, Query, Request
+from fastapi.responses import JSONResponse, Response
+from starlette.concurrency import run_in_threadpool
+
+from paraspace.kinematics.serialize import jsonable
+
+from ..jobs import Job
+from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
+from .errors import RANGES, ApiError, FieldError
+from .models import WorkspaceRequest
+
+router = api_router()
+RANGES[("query", "max_faces")] = "[100, 2000000]"
+
+
+@router.post("/workspace", status_code=202, summary="Start a position-workspace job",
+             responses={200: {"description": "finished within `wait`: the result is included"},
+                        202: {"description": "job accepted"}})
+async def workspace(req: WorkspaceRequest, request: Request, ctx: Ctx, wait: float = WAIT_QUERY) -> JSONResponse:
+    """Constant-orientation position workspace; the result has the workspace measures."""
+    job, cached = await run_in_threadpool(_start_workspace, ctx, req, request)
+    return await ctx.job_response(job, wait, cached)
+
+
+def _start_workspace(ctx: ApiContext, req: WorkspaceRequest, request: Request) -> tuple[Job, bool]:
+    from paraspace.kinematics.workspace import compute_workspace
+
+    design, settings = req.design.build(), req.settings.build()
+    key = (design.key(), settings.key())
+    cached = ctx.caches["workspace"].get(key) is not None
+    if not cached:
+        ctx.quota_check(request)  # refuse at once, before any pre-computation
+        with ctx.prechecks():
+            ctx.grid_check(design, settings)
+
+    def compute(progress: Any, cancel: Any) -> ApiResult:
+        res = compute_workspace(design, settings, progress, cancel)
+        return ApiResult(raw=res, payload=workspace_payload(res))
+
+    return ctx.submit(request, "workspace", key, compute), cached
+
+
+@router.get("/workspace/{job_id}", summary="Measures of a finished workspace job")
+def workspace_result(job_id: str, request: Request, ctx: Ctx) -> dict[str, Any]:
+    """409 while the job runs or when it failed or was cancelled."""
+    job = ctx.api_job(job_id, "workspace")
+    return jsonable({"job": job.to_dict(), **ctx.finished_result(job).payload})
+
+
+@router.get("/workspace/{job_id}/shell.{fmt}", summary="Boundary surface of a finished workspace",
+            response_class=Response,
+            responses={200: {"content": {"model/stl": {}, "application/octet-stream": {}}}})
+def workspace_shell(job_id: str, request: Request, ctx: Ctx,
+                    fmt: Literal["stl", "ply", "obj", "glb"] = Path(description="mesh format"),
+                    max_faces: Optional[int] = Query(None, ge=100, le=2_000_000,
+                                                     description="decimate to at most this many faces; "
+                                                                 "valid range [100, 2000000]")) -> Response:
+    """The workspace shell (marching cubes of the occupancy) as a mesh file download."""
+    limits = ctx.limits
+    if max_faces is not None and max_faces > limits.max_shell_faces:
+        raise FieldError("max_faces", f"max_faces = {max_faces} is invalid: valid range "
+                                      f"[100, {limits.max_shell_faces}]")
+    job = ctx.api_job(job_id, "workspace")
+    res = ctx.finished_result(job)
+    skey = (job_id, fmt, max_faces)
+    data = ctx.shells.get(skey)
+    if data is None:
+        from paraspace.kinematics.shell import export_shell
+        from paraspace.kinematics.shell import workspace_shell as make_shell
+
+        raw = res.raw
+        if raw is None:
+            raise ApiError(409, f"the voxel grid of job {job_id} was evicted from the result cache "
+                                f"(limit cache_bytes = {limits.cache_bytes}); submit the workspace "
+                                f"request again to export its shell")
+        if not raw.occupancy.any():
+            raise ApiError(409, "the workspace is empty: there is no shell to export")
+        with ctx.shell_builds:
+            mesh = make_shell(raw, max_faces=max_faces)
+            data = export_shell(mesh, fmt)
+        ctx.shells.put(skey, data)
+    media = {"stl": "model/stl", "ply": "application/octet-stream", "obj": "model/obj",
+             "glb": "model/gltf-binary"}[fmt]
+    return Response(content=data, media_type=media,
+                    headers={"Content-Disposition": f'attachment; filename="workspace-{job_id}.{fmt}"'})
+
+
+def workspace_payload(res: Any) -> dict[str, Any]:
+    """JSON summary of a WorkspaceResult with its measures."""
+    g = res.grid
+    payload: dict[str, Any] = {
+        "design": res.design.to_dict(),
+        "settings": jsonable(dataclasses.asdict(res.settings)),
+        "voxels": res.voxels,
+        "volume": res.volume,
+        "compute_seconds": res.compute_seconds,
+        "n_eta": res.n_eta,
+        "volume_inner": res.volume_inner,
+        "volume_outer": res.volume_outer,
+        "grid": {"origin": list(g.origin), "h": g.h, "shape": list(g.shape), "lo": list(g.lo), "hi": list(g.hi),
+                 "size": g.size},
+    }
+    try:
+        from paraspace.kinematics.measures import measure_workspace
+    except ImportError as e:  # pragma: no cover - measures is part of the core
+        payload["measures"] = None
+        payload["measures_error"] = f"measures unavailable: {e}"
+    else:
+        payload["measures"] = measure_workspace(res).to_dict()
+    return jsonable(payload)
