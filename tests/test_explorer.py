@@ -365,7 +365,7 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers, monkey
     worker is free for the new design (regression: with both workers busy drawing maps, the stale
     job ran to the end, held the new design's workspace in the queue, and its maps were shown).
     The maps are made to take 4 s (cancellable) so that both workers are surely busy with them."""
-    from paraspace.app import explorer as explorer_module
+    from paraspace.app import orientation_controller as explorer_module
     from paraspace.kinematics.progress import Cancelled
 
     real = explorer_module.orientation_workspace
@@ -429,8 +429,8 @@ def test_typed_value_outside_the_slider_waits_for_the_pause_and_its_link_restore
     s = b.session
     wait_idle(explorer, s)
     seen: list[float] = []
-    orig = s.apply_design
-    s.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
+    orig = s.design_controller.apply_design
+    s.design_controller.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
     b.set(s.panels.design["a"], 8.0)
     b.set(s.panels.design["a"], 80.0)
     wait_for(lambda: s.state.design.a == 80.0, 5.0, "a = 80 applied")
