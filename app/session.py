@@ -29,7 +29,6 @@ from .textsafe import plain_text
 from .urlstate import ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only
-    from .explorer import Explorer
     from .panels import Panels
     from .scene import ShellScene
     from .workspace_job import ShellBundle
@@ -64,14 +63,14 @@ class SessionContext:
     """State, handles and helpers of one browser, shared by its panel controllers (module docstring).
 
     Args:
-        explorer: the owning :class:`~app.explorer.Explorer` (shared job manager and caches).
+        explorer: the owning :class:`~app.explorer.Explorer` (shared job manager, caches, grid limit).
         client: the viser client.
         state: initial state (from the link).
         base_url: the page's URL without query (for the Share tab's link).
         messages: problems found in the link (shown on screen).
     """
 
-    def __init__(self, explorer: "Explorer", client: viser.ClientHandle, state: ExplorerState,
+    def __init__(self, explorer: Any, client: viser.ClientHandle, state: ExplorerState,
                  base_url: str, messages: list[str]) -> None:
         self.explorer = explorer
         self.client = client
