@@ -110,6 +110,8 @@ class PoseController:
             res = resolve(s)
             inside = bool(reachable(s.design, s.pose.position[None, :], (s.pose.psi, s.pose.theta, s.pose.phi),
                                     joints=s.joints)[0])
+            if ctx.closed:  # the browser left during the IK: no scene to move
+                return res
             with ctx.client.atomic():
                 if s.design != self.mechanism.design:
                     self.mechanism.set_design(s.design, s.pose, res.d, res.eta, res.leg_status)

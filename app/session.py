@@ -83,7 +83,7 @@ class SessionContext:
         self.state = state
         self.base_url = base_url
         self.url_messages = list(messages)
-        self.closed = False
+        self._closed = False
         self._tls = threading.local()
         self._last_update: dict[str, float] = {}
         # GUI and scene handles (set by ClientSession.build)
@@ -99,6 +99,22 @@ class SessionContext:
         self.design_error: Optional[str] = None
         self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
+
+    # ----- lifetime -----------------------------------------------------------------------------
+    @property
+    def closed(self) -> bool:
+        """The browser has left: the session was closed, or viser no longer lists the client as
+        connected. viser closes the connection before it runs the disconnect callbacks (which close
+        the session), so a job or timer that writes to the GUI in between must see it here: the
+        write would go nowhere (viser warns about it)."""
+        if self._closed:
+            return True
+        server = self.explorer.server
+        return server is None or self.client.client_id not in server.get_clients()
+
+    @closed.setter
+    def closed(self, value: bool) -> None:
+        self._closed = value
 
     # ----- state --------------------------------------------------------------------------------
     def update_state(self, **changes: Any) -> ExplorerState:

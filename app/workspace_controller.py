@@ -163,6 +163,8 @@ class WorkspaceController:
                 s = ctx.state
             with ctx.client.atomic():
                 size = ctx.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                if ctx.closed:  # the browser left while the shell was being encoded and sent
+                    return False
                 ctx.shell.set_stale(None)
                 zr = ctx.shell.z_range()
                 if zr is not None:
@@ -223,6 +225,8 @@ class WorkspaceController:
                 self.gen += 1  # late progress of the cancelled job must not touch the status
                 ctx.state = back
             self.show_controls(r)
+        if ctx.closed:
+            return
         ctx.shell.set_stale(None)
         zr = ctx.shell.z_range()
         if zr is not None:
