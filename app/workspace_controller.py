@@ -18,6 +18,7 @@ from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
 
 from .jobs import Job, LimitExceeded
+from .legend import colorbar_image
 from .limits import check_workspace_grid
 from .session import PROGRESS_INTERVAL, SessionContext
 from .textsafe import md_text
@@ -163,10 +164,12 @@ class WorkspaceController:
                 s = ctx.state
             with ctx.client.atomic():
                 size = ctx.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                zr = ctx.shell.z_range()
+                if zr is not None:
+                    colorbar_image(*zr)  # drawn now (cached), so the writes below follow the check at once
                 if ctx.closed:  # the browser left while the shell was being encoded and sent
                     return False
                 ctx.shell.set_stale(None)
-                zr = ctx.shell.z_range()
                 if zr is not None:
                     ctx.panels.legend.show_z_range(*zr)
             with ctx.lock:
