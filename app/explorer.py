@@ -159,11 +159,14 @@ class ClientSession:
         with ctx.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
             self.paper = PaperPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                     cache=self.explorer.paper_results, notify=notify)
+        jsbridge.show_panel(client)  # the GUI is complete: the page may show its panel (app/pagehook.py)
+        if ctx.closed:  # the browser left while its GUI was being built
+            return
         res = resolve(s)
         ctx.resolution = res
         with client.atomic():
             self.pose_controller.build_scene(res)
-            ctx.shell = ShellScene(client.scene)
+            ctx.shell = ShellScene(client.scene, is_closed=lambda: ctx.closed)
         for controller in (self.design_controller, self.pose_controller, self.view_controller,
                            self.workspace_controller, self.orientation_controller, self.studies_controller,
                            self.share_controller):
@@ -385,6 +388,7 @@ class Explorer:
                    if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT)
                    else f"{type(exc).__name__}: {exc}")
             try:
+                jsbridge.show_panel(client)
                 client.gui.add_markdown(f"**The explorer could not start this page:** {md_text(why)}. "
                                         "Reload to try again; the REST API may still answer.")
                 client.add_notification("The explorer could not start", plain_text(why, 300), color="red")
