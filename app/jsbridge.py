@@ -8,7 +8,9 @@ up), and the public ``client.local_storage`` reads a value back. Together they f
   localStorage and reads them back (one round trip, about 0.1 s on localhost);
 * :func:`replace_query` rewrites the address bar with ``history.replaceState`` (no reload);
 * :func:`copy_to_clipboard` tries ``navigator.clipboard`` (may be refused outside a secure context;
-  the explorer always shows the link in a text field as well).
+  the explorer always shows the link in a text field as well);
+* :func:`show_panel` lets the page show its control panel once the explorer's GUI is there (the
+  page keeps it hidden until then: :data:`paraspace.app.pagehook.PANEL_WAIT`).
 
 The message is queued on the **client's** connection only, never on the server-wide buffer (that
 one is persistent and would replay the script to every future browser). Pinned to viser 1.1.1;
@@ -89,3 +91,15 @@ def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.
         " function (e) { console.warn('clipboard:', e); put('refused'); }); }"
         " else { put('refused'); }"), timeout)
     return None if raw is None else raw == "ok"
+
+
+#: The class on the page's ``<html>`` element that hides viser's panel while the explorer's GUI is
+#: being built (set by the page itself: :data:`paraspace.app.pagehook.PANEL_WAIT`).
+PANEL_WAIT_CLASS = "paraspace-wait"
+
+
+def show_panel(client: viser.ClientHandle) -> None:
+    """Show the page's control panel (hidden until the explorer's GUI has arrived, so that viser's
+    own panel -- connection, "Save Canvas", scene tree -- never flashes before it). The script
+    arrives after the GUI messages queued before it."""
+    run_js(client, f"document.documentElement.classList.remove({json.dumps(PANEL_WAIT_CLASS)});")

@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import io
 from typing import Any
 
@@ -50,10 +51,12 @@ class LegendPanel:
         self.caption.content = caption
 
 
+@functools.lru_cache(maxsize=32)
 def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE,
                    label: str = "z (length units)") -> np.ndarray:
     """RGB image (H, W, 3) of the shell's colour map from ``lo`` to ``hi`` with five labelled ticks
-    (drawn with matplotlib's object API: safe in worker threads)."""
+    (drawn with matplotlib's object API: safe in worker threads). Cached (read-only arrays): the
+    shell on screen keeps its range while it is marked stale, and a returning design its own."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -77,7 +80,9 @@ def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE,
     buf = io.BytesIO()
     fig.savefig(buf, format="raw", dpi=100)
     rgba = np.frombuffer(buf.getvalue(), np.uint8).reshape(int(fig.bbox.height), int(fig.bbox.width), 4)
-    return np.ascontiguousarray(rgba[:, :, :3])
+    image = np.ascontiguousarray(rgba[:, :, :3])
+    image.setflags(write=False)
+    return image
 
 
 def build_legend_folder(gui: viser.GuiApi) -> LegendPanel:

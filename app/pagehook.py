@@ -20,7 +20,8 @@ passes untouched):
    refused keys (cut and quoted) and gives the same link without them;
 3. the page itself is served with a ``Content-Security-Policy`` whose ``connect-src 'self'`` keeps
    the page from opening a websocket (or fetch) to any other server, even if a future client
-   learned another way to be pointed elsewhere; its ``<title>`` says paraspace.
+   learned another way to be pointed elsewhere; its ``<title>`` says paraspace, and it hides
+   viser's own control panel until the explorer's GUI has arrived (:data:`PANEL_WAIT`).
 
 The refusal is decided by :func:`page_refusal`, a pure function of the request's path and query.
 """
@@ -37,6 +38,7 @@ import websockets
 from websockets.datastructures import Headers
 from websockets.http11 import Response
 
+from .jsbridge import PANEL_WAIT_CLASS
 from .urlstate import link_keys
 
 __all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install"]
@@ -48,8 +50,18 @@ MAX_REQUEST_LINE = 262144
 #: Sent with the page: the page may connect (websocket, fetch) only to the server it came from.
 CONTENT_SECURITY_POLICY = ("connect-src 'self' blob: data:; object-src 'none'; base-uri 'none'; "
                            "frame-ancestors 'self'; form-action 'none'")
+#: Longest time the page hides its control panel while waiting for the explorer's GUI, milliseconds.
+PANEL_WAIT_MS = 20_000
+#: Put into the page's head: until the explorer's GUI has arrived (the server then runs
+#: :func:`paraspace.app.jsbridge.show_panel`), viser's floating panel is hidden, so its own
+#: panel (connection, "Save Canvas", scene tree) does not flash before the explorer's; after
+#: :data:`PANEL_WAIT_MS` it is shown whatever happened.
+PANEL_WAIT = (
+    f'<style>html.{PANEL_WAIT_CLASS} [data-testid="floating-panel"]{{visibility:hidden}}</style>'
+    f'<script>document.documentElement.classList.add("{PANEL_WAIT_CLASS}");setTimeout(function(){{'
+    f'document.documentElement.classList.remove("{PANEL_WAIT_CLASS}");}}, {PANEL_WAIT_MS});</script>').encode()
 #: Replacements applied to viser's page (its HTML is otherwise served as is).
-PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = ((b"<title>Viser</title>", b"<title>paraspace</title>"),)
+PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = ((b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT),)
 
 _KNOWN = frozenset(link_keys())
 

@@ -2,7 +2,8 @@
 
 :func:`build_panels` creates the elements on a client's ``client.gui`` (so they belong to that
 browser only) from an :class:`~app.urlstate.ExplorerState` and returns them in a :class:`Panels`;
-:mod:`app.explorer` attaches the callbacks. Layout, top to bottom:
+the panel controllers (``app/*_controller.py``, wired by :mod:`app.explorer`) attach the callbacks.
+Layout, top to bottom:
 
 * URL messages (only when the opened link had bad fields);
 * "Workspace" status: progress bar, one status line, Stop;

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import struct
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 import trimesh
@@ -358,8 +358,9 @@ class ShellScene:
 
     NAME = "/workspace/shell"
 
-    def __init__(self, scene: viser.SceneApi) -> None:
+    def __init__(self, scene: viser.SceneApi, is_closed: Callable[[], bool] = lambda: False) -> None:
         self.scene = scene
+        self.is_closed = is_closed  # the browser left: an encoded shell is not sent
         self.handle: Optional[Any] = None
         self.source: Optional[trimesh.Trimesh] = None
         self.last_payload_bytes = 0
@@ -395,6 +396,8 @@ class ShellScene:
                 self.handle.visible = False
             self.last_payload_bytes = 0
             self.last_faces = 0
+            return 0
+        if self.is_closed():  # checked after the encoding, which takes a while
             return 0
         self.handle = self.scene.add_glb(self.NAME, glb, cast_shadow=False, receive_shadow=False)
         self.last_payload_bytes = len(glb)

@@ -269,3 +269,37 @@ def test_the_explorer_explains_itself(browser: Browser, explorer: Explorer) -> N
     time.sleep(1.0)
     screenshot_not_blank(page, SHOTS / "compare_a10_a80.png")
     page.context.close()
+
+
+def test_viser_panel_does_not_flash_before_the_explorer_gui(browser: Browser, explorer: Explorer) -> None:
+    """Issue 8 defect 10: until the explorer's GUI has arrived, viser's own panel (connection,
+    "Save Canvas", scene tree) must not be visible; once it has, the panel (with the explorer's
+    "Workspace" folder) is. The page is sampled from navigation on, every few tens of ms."""
+    ctx = browser.new_context(viewport={"width": 1400, "height": 900})
+    page = ctx.new_page()
+    probe = """() => {
+        const panel = document.querySelector('[data-testid="floating-panel"]');
+        const shown = el => !!el && getComputedStyle(el).visibility === 'visible' && el.getClientRects().length > 0;
+        const viserOwn = [...document.querySelectorAll('button')].find(b => b.innerText.includes('Save Canvas'));
+        const ours = panel && panel.textContent.includes('Workspace') && panel.textContent.includes('Numbers');
+        return {viser: shown(viserOwn), ours: !!ours, panel: shown(panel)};
+    }"""
+    try:
+        page.goto(explorer.url, wait_until="commit")
+        samples: list[dict] = []
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                samples.append(page.evaluate(probe))
+            except Exception:  # noqa: BLE001 - the page is still loading
+                time.sleep(0.02)
+                continue
+            if samples[-1]["ours"] and samples[-1]["panel"]:
+                break
+            time.sleep(0.02)
+        before_ours = [s for s in samples if not s["ours"]]
+        assert before_ours, "the page was not sampled before the explorer's GUI arrived"
+        assert not any(s["viser"] or s["panel"] for s in before_ours), "viser's panel was visible first"
+        assert samples[-1]["ours"] and samples[-1]["panel"], "the explorer's panel was never shown"
+    finally:
+        ctx.close()

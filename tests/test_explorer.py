@@ -14,8 +14,10 @@ import csv
 import itertools
 import io
 import json
+import threading
 import time
 import urllib.parse
+import warnings
 
 import numpy as np
 import pytest
@@ -365,7 +367,7 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers, monkey
     worker is free for the new design (regression: with both workers busy drawing maps, the stale
     job ran to the end, held the new design's workspace in the queue, and its maps were shown).
     The maps are made to take 4 s (cancellable) so that both workers are surely busy with them."""
-    from paraspace.app import explorer as explorer_module
+    from paraspace.app import orientation_controller as explorer_module
     from paraspace.kinematics.progress import Cancelled
 
     real = explorer_module.orientation_workspace
@@ -429,8 +431,8 @@ def test_typed_value_outside_the_slider_waits_for_the_pause_and_its_link_restore
     s = b.session
     wait_idle(explorer, s)
     seen: list[float] = []
-    orig = s.apply_design
-    s.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
+    orig = s.design_controller.apply_design
+    s.design_controller.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
     b.set(s.panels.design["a"], 8.0)
     b.set(s.panels.design["a"], 80.0)
     wait_for(lambda: s.state.design.a == 80.0, 5.0, "a = 80 applied")
@@ -630,3 +632,35 @@ def test_shell_coloured_by_the_binding_limit(explorer, browsers):
     pts = (mesh.vertices + 6.0 * mesh.vertex_normals)[np.array(labels) == "joint cones"][:200]
     masks = chain_masks_at(s.state.design, pts, (0.0, 0.0, 0.0), 0.5)
     assert np.all(masks == 7)
+
+
+def test_no_gui_writes_after_the_browser_left(explorer, monkeypatch):
+    """Issue 8 defect 10 (the test run's "closed connection" warnings): viser closes a connection
+    before it runs the disconnect callbacks (on its thread pool, where they may wait), so a job or
+    timer that fired in between wrote to the dead connection. Here the session's close is held back
+    while the address-bar update of the last change comes due: nothing may be written to the GUI of
+    the departed browser (viser warns about every such write), and the session knows it has left."""
+    from paraspace.app import share_controller
+
+    monkeypatch.setattr(share_controller, "URL_DEBOUNCE", 1.0)
+    b = FakeBrowser(explorer, "voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    gate = threading.Event()
+    close = s.close
+    s.close = lambda: (gate.wait(30.0), close())  # the disconnect callback, held back
+    try:
+        n = len(s.events)
+        b.set(s.panels.pose["x"], 7.0)  # IK only (no job); the address bar follows after the debounce
+        wait_for(lambda: s.state.pose.x == 7.0 and "mechanism" in [e for _, e in s.events[n:]], 5.0, "the pose")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            b.close()
+            wait_for(lambda: s.client.client_id not in explorer.server.get_clients(), 5.0, "viser dropped the client")
+            assert s.closed  # the session knows before its close() has run
+            time.sleep(1.5)  # the address-bar update comes due
+        dead = [str(w.message) for w in caught if "closed connection" in str(w.message)]
+        assert dead == [] and "x=7" not in (s.share_controller.last_query or "")
+    finally:
+        gate.set()
+    wait_for(lambda: s.client.client_id not in explorer.sessions, 5.0, "the session gone")

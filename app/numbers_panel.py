@@ -1,0 +1,126 @@
+"""The "Numbers" panel: what the session has on screen, as one block of markdown.
+
+At the end of the data path slider -> state -> job -> engine -> mesh -> scene, after the scene,
+every controller calls :meth:`NumbersPanel.render` when what it shows changed: the workspace's
+volume (preview or full), certified bracket, voids, hollowness, boundary and topology (from the
+workspace job), TI_1 / TI_2 (from the orientation maps), the pose verdict (from the IK) and a
+design that was not applied. :func:`numbers_markdown` builds the text from those values alone.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+import numpy as np
+
+from . import figures
+from .numfmt import significant
+from .session import SessionContext
+from .textsafe import md_text
+from .urlstate import ExplorerState
+
+
+def fmt(v: Optional[float], digits: int = 4) -> str:
+    """``v`` to ``digits`` significant digits (:func:`~app.numfmt.significant`), ``-`` for none or non-finite."""
+    if v is None:
+        return "-"
+    try:
+        if not np.isfinite(v):
+            return "-"
+    except TypeError:
+        return str(v)
+    return significant(float(v), digits)
+
+
+def joints_text(j: Any) -> str:
+    """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
+    parts = []
+    if j.theta_u is not None:
+        parts.append(f"theta_U {j.theta_u:g}°")
+    if j.theta_s is not None:
+        parts.append(f"theta_S {j.theta_s:g}°")
+    if parts:
+        parts[-1] += f" ({j.cone_axis} axes)"
+    if j.leg_diameter > 0:
+        parts.append(f"legs Ø {j.leg_diameter:g}" + (f" + clearance {j.clearance:g}" if j.clearance else ""))
+    return ", ".join(parts)
+
+
+def numbers_markdown(s: ExplorerState, info: dict[str, Any], res: Any, inside: Optional[bool], ori: Any,
+                     design_error: Optional[str]) -> str:
+    """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
+    :class:`~app.session.SessionContext`, empty before one), ``res`` the pose's IK, ``inside`` whether
+    the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of
+    ``s``'s design, z0 and joints)."""
+    lines: list[str] = []
+    if not s.joints.is_default:
+        lines.append(f"**Joints** {md_text(joints_text(s.joints))}  ")
+    if info:
+        m = info.get("measures")
+        kind = "preview" if info.get("preview") else "full"
+        lines.append(f"**Volume** {fmt(info['volume'], 4)} units³  ({kind}, h = {info['h']:g})")
+        br = info.get("bracket")
+        if br is not None and info["volume"] > 0:
+            lines.append(f"certified: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
+                         "(continuous workspace, units³)  ")
+        if info["volume"] == 0:
+            lines.append("**Empty workspace:** no platform position is reachable at this orientation "
+                         "(psi, theta, phi) with this design.")
+        elif m is not None:
+            lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
+            lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
+            if m.boundary_complete:
+                lines.append("**Boundary** complete: one closed surface standing on the base  ")
+            else:
+                lines.append(f"**Boundary** incomplete: {md_text(m.completeness_reason)}  ")
+            closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
+            frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
+                    f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
+            lines.append(f"**Topology** surface {closed}, {m.pieces} piece{'s' if m.pieces != 1 else ''}"
+                         f"{frag}, genus {m.stable_genus} (features > {2 * m.feature_radius:.3g}; "
+                         f"voxel-level: genus {m.genus}, {m.components} "
+                         f"component{'s' if m.components != 1 else ''})  ")
+        else:
+            lines.append("*measures: computing...*  ")
+        lines.append(f"**Compute** {info['seconds']:.2f} s workspace"
+                     + (f", {info['shell_seconds']:.2f} s shell" if info.get("shell_seconds") else ""))
+    else:
+        lines.append("*workspace: computing...*")
+    if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design and ori.settings.joints == s.joints:
+        sat = {x.index for x in figures.orientation_saturation(ori)}
+        flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
+        lines.append(f"**TI₁** {fmt(ori.ti1, 4)}{flag['TI_1']}  **TI₂** {fmt(ori.ti2, 4)}{flag['TI_2']} "
+                     f"deg·units  (z0 = {ori.settings.z0:g})")
+        if sat:
+            lines.append(f"⚠ {md_text(figures.saturation_warning(ori), 600)}")
+    else:
+        lines.append("**TI₁ / TI₂** *computing...*")
+    if res is not None:
+        where = "" if inside is None else (" · inside the workspace" if inside else " · outside the workspace")
+        if res.feasible:
+            lines.append(f"**Pose** reachable{where}")
+        else:
+            lines.append(f"**Pose** {md_text(res.message)}{where}")
+    if design_error:
+        lines.append(f"**Design not applied:** {md_text(design_error)}")
+    return "\n\n".join(lines)
+
+
+class NumbersPanel:
+    """Renders :func:`numbers_markdown` of a session into its "Numbers" markdown element."""
+
+    def __init__(self, ctx: SessionContext) -> None:
+        self.ctx = ctx
+
+    def render(self) -> None:
+        """Redraw the panel from what the session has on screen now."""
+        ctx = self.ctx
+        if ctx.closed:  # the browser left: its GUI handles lead nowhere
+            return
+        with ctx.lock:
+            info = dict(ctx.ws_info)
+            res = ctx.resolution
+            inside = ctx.in_workspace
+            ori = ctx.orientation
+            s = ctx.state
+        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error)

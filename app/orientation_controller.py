@@ -1,0 +1,144 @@
+"""The Plots tab's orientation maps (Fig. 3 e-g) and the indices TI_1 / TI_2 of the numbers panel.
+
+On the data path slider -> state -> job -> engine -> mesh -> scene this is a side branch after the
+workspace job: once a workspace is finished (``app/workspace_controller.py``), or when z0 moves,
+:meth:`OrientationController.submit` runs ``kinematics.orientation.orientation_workspace`` for the
+current design, z0 and joints as an ``"orientation"`` job and draws its figure
+(``app/figures.py``). Maps of a design that is no longer current are cancelled at once and never
+shown (:meth:`OrientationController.forget_stale`). Results are cached per (design, z0, joints).
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable, Optional
+
+from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+from . import figures
+from .jobs import Job, LimitExceeded
+from .numbers_panel import fmt
+from .session import PROGRESS_INTERVAL, SessionContext
+from .textsafe import md_text
+from .urlstate import ExplorerState
+
+
+class OrientationController:
+    """The orientation maps of one session (module docstring).
+
+    Args:
+        ctx: the session's shared state (the maps on screen go to ``ctx.orientation``).
+        numbers: the numbers panel (``render``), which shows TI_1 / TI_2.
+        exports: the plots' PNG/SVG downloads (:class:`~app.plot_exports.PlotExports`).
+        on_state_change: called after z0 changed the state (the link follows).
+    """
+
+    def __init__(self, ctx: SessionContext, *, numbers: Any, exports: Any,
+                 on_state_change: Callable[[], None]) -> None:
+        self.ctx = ctx
+        self.numbers = numbers
+        self.exports = exports
+        self.on_state_change = on_state_change
+        self.gen = 0
+        self.job: Optional[Job] = None
+        self.key: Optional[tuple] = None  # (design key, z0, joints key) of the maps being computed/shown
+
+    def wire(self) -> None:
+        """Attach z0 and the maps' download buttons."""
+        p, cb = self.ctx.panels, self.ctx.callback
+        p.z0.on_update(cb(self.on_z0))
+        p.orientation_png.on_click(cb(lambda: self.exports.download("orientation", "png")))
+        p.orientation_svg.on_click(cb(lambda: self.exports.download("orientation", "svg")))
+
+    def on_z0(self) -> None:
+        """The height of the orientation-map lines changed: recompute the maps."""
+        self.ctx.update_state(z0=float(self.ctx.panels.z0.value))
+        self.submit()
+        self.on_state_change()
+
+    @staticmethod
+    def _key(s: ExplorerState) -> tuple:
+        return (s.design.key(), s.z0, s.joints.key())
+
+    def forget_stale(self, s: ExplorerState) -> None:
+        """Maps of another design than ``s``'s are stale: never show them, and free the worker at once."""
+        ctx = self.ctx
+        with ctx.lock:
+            if self.key is None or self.key == self._key(s):
+                return
+            self.gen += 1
+            self.key = None
+            stale_job, self.job = self.job, None
+        ctx.cancel_job(stale_job)
+        with ctx.lock:
+            if not ctx.closed:
+                ctx.panels.orientation_status.content = "waiting for the new design's workspace..."
+
+    def submit(self) -> None:
+        """Recompute the orientation maps and TI_1/TI_2 for the current design and z0."""
+        ctx = self.ctx
+        with ctx.lock:
+            self.gen += 1
+            gen = self.gen
+            s = ctx.state
+            key = self._key(s)
+            self.key = key
+        cache = ctx.explorer.orientation_cache
+        hit = cache.get(key)
+        if hit is not None:
+            ctx.cancel_job(self.job)
+            self._publish(gen, *hit)
+            return
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            res = orientation_workspace(s.design, OrientationSettings(z0=s.z0, joints=s.joints),
+                                        progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
+            progress(0.9, "drawing...")
+            spec = figures.orientation_spec(res, s.z0)
+            cache.put(key, (res, spec))
+            return res, spec
+
+        def done(job: Job) -> None:
+            if job.status == "done":
+                self._publish(gen, *job.result)
+            elif job.status == "failed":
+                self._set_status(gen, f"**failed:** {md_text(job.error)}")
+
+        try:
+            job = ctx.jobs.submit(
+                fn, kind="orientation", client=ctx.job_client, supersede=True, on_done=done,
+                on_progress=lambda j: None if ctx.throttled("or-progress", 4 * PROGRESS_INTERVAL) else
+                self._set_status(gen, f"computing... {100 * j.progress:.0f} %"))
+        except (LimitExceeded, RuntimeError) as exc:
+            self._set_status(gen, f"not started: {md_text(exc)}")
+            return
+        with ctx.lock:
+            if gen == self.gen:
+                self.job = job
+        self._set_status(gen, "computing...")
+
+    def _set_status(self, gen: int, text: str) -> None:
+        with self.ctx.lock:
+            if gen != self.gen or self.ctx.closed:
+                return
+            self.ctx.panels.orientation_status.content = text
+
+    def _publish(self, gen: int, res: Any, spec: figures.FigureSpec) -> None:
+        fig = figures.to_plotly(spec)
+        warning = figures.saturation_warning(res)
+        ctx = self.ctx
+        with ctx.lock:
+            if gen != self.gen or ctx.closed:
+                return
+            ctx.orientation = res
+            self.exports.set("orientation", spec)
+            p = ctx.panels
+            p.orientation_plot.aspect = spec.aspect
+            p.orientation_plot.figure = fig
+            p.orientation_status.content = (
+                f"TI₁ = {fmt(res.ti1, 4)}, TI₂ = {fmt(res.ti2, 4)} deg·units (z0 = {res.settings.z0:g}; "
+                f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28)."
+                + (f"  \n⚠ {md_text(warning, 600)}" if warning else ""))
+        self.numbers.render()
+        ctx.event("orientation-shown")
+

@@ -1,0 +1,188 @@
+"""What one browser's explorer shares between its panel controllers: :class:`SessionContext`.
+
+Every browser (viser client) gets one context: its GUI and scene handles, the current
+:class:`~app.urlstate.ExplorerState` (the ``state`` of the data path slider -> state -> job ->
+engine -> mesh -> scene), the results on screen (shell, preview, IK, orientation maps), the locks
+that order concurrent callbacks, the session's view of the job manager (:class:`SessionJobs`) and
+the small helpers every controller uses (:meth:`SessionContext.programmatic`,
+:meth:`SessionContext.callback`, :meth:`SessionContext.notify`, :meth:`SessionContext.event`).
+
+It holds state, not behaviour: what a panel does lives in its controller (``app/*_controller.py``,
+``app/numbers_panel.py``), which reads and writes this context. Lock order: ``view_lock`` before
+``lock``; ``input_lock`` is taken only by GUI callbacks (never by job threads) and before ``lock``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional
+
+import viser
+
+from paraspace.kinematics.redundancy import Resolution
+
+from .jobs import Job, JobManager
+from .textsafe import plain_text
+from .urlstate import ExplorerState
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from .panels import Panels
+    from .scene import ShellScene
+    from .workspace_job import ShellBundle
+
+log = logging.getLogger(__name__)
+
+#: Smallest interval between two progress updates of one bar, seconds (see SessionContext.throttled).
+PROGRESS_INTERVAL = 0.25
+
+
+class SessionJobs:
+    """The job manager as one browser's session sees it: the same jobs, but progress and completion
+    callbacks are dropped once the browser has left (no GUI writes to a closed connection)."""
+
+    def __init__(self, jobs: JobManager, is_closed: Callable[[], bool]) -> None:
+        self._jobs = jobs
+        self._closed = is_closed
+
+    def submit(self, fn: Any, *, on_done: Optional[Callable[[Job], None]] = None,
+               on_progress: Optional[Callable[[Job], None]] = None, **kw: Any) -> Job:
+        def alive(cb: Optional[Callable[[Job], None]]) -> Optional[Callable[[Job], None]]:
+            if cb is None:
+                return None
+            return lambda job: None if self._closed() else cb(job)
+        return self._jobs.submit(fn, on_done=alive(on_done), on_progress=alive(on_progress), **kw)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._jobs, name)
+
+
+class SessionContext:
+    """State, handles and helpers of one browser, shared by its panel controllers (module docstring).
+
+    Args:
+        explorer: the owning :class:`~app.explorer.Explorer` (shared job manager, caches, grid limit).
+        client: the viser client.
+        state: initial state (from the link).
+        base_url: the page's URL without query (for the Share tab's link).
+        messages: problems found in the link (shown on screen).
+    """
+
+    def __init__(self, explorer: Any, client: viser.ClientHandle, state: ExplorerState,
+                 base_url: str, messages: list[str]) -> None:
+        self.explorer = explorer
+        self.client = client
+        self.job_client = f"viser-{client.client_id}"
+        self.jobs = SessionJobs(explorer.jobs, lambda: self.closed)
+        self.lock = threading.RLock()
+        self.view_lock = threading.Lock()
+        self.input_lock = threading.RLock()  # serialises design input (see DesignController.on_design_input)
+        self.mech_lock = threading.Lock()
+        self.state = state
+        self.base_url = base_url
+        self.url_messages = list(messages)
+        self._closed = False
+        self._tls = threading.local()
+        self._last_update: dict[str, float] = {}
+        # GUI and scene handles (set by ClientSession.build)
+        self.panels: "Panels"
+        self.shell: Optional["ShellScene"] = None
+        # what is on screen (written by the controllers, read by the numbers panel and the downloads)
+        self.bundle: Optional["ShellBundle"] = None  # full result on screen
+        self.preview: Optional["ShellBundle"] = None
+        self.ws_info: dict[str, Any] = {}  # the shell on screen: volume, h, preview?, seconds, measures...
+        self.resolution: Optional[Resolution] = None
+        self.in_workspace: Optional[bool] = None
+        self.orientation: Any = None  # kinematics.orientation.OrientationResult on screen
+        self.design_error: Optional[str] = None
+        self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
+        self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
+
+    # ----- lifetime -----------------------------------------------------------------------------
+    @property
+    def closed(self) -> bool:
+        """The browser has left: the session was closed, or viser no longer lists the client as
+        connected. viser closes the connection before it runs the disconnect callbacks (which close
+        the session), so a job or timer that writes to the GUI in between must see it here: the
+        write would go nowhere (viser warns about it)."""
+        if self._closed:
+            return True
+        server = self.explorer.server
+        return server is None or self.client.client_id not in server.get_clients()
+
+    @closed.setter
+    def closed(self, value: bool) -> None:
+        self._closed = value
+
+    # ----- state --------------------------------------------------------------------------------
+    def update_state(self, **changes: Any) -> ExplorerState:
+        """Replace fields of the current state (under ``lock``); returns the new state."""
+        with self.lock:
+            self.state = self.state.replace(**changes)
+            return self.state
+
+    # ----- callbacks ----------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def programmatic(self) -> Iterator[None]:
+        """GUI values assigned inside this block do not count as user input (same thread only)."""
+        self._tls.depth = getattr(self._tls, "depth", 0) + 1
+        try:
+            yield
+        finally:
+            self._tls.depth -= 1
+
+    def is_programmatic(self) -> bool:
+        """True inside :meth:`programmatic` on this thread."""
+        return getattr(self._tls, "depth", 0) > 0
+
+    def callback(self, fn: Callable[[], None]) -> Callable[[Any], None]:
+        """Wrap a handler: ignore programmatic changes and closed sessions; log failures."""
+        def handler(_event: Any = None) -> None:
+            if self.closed or self.is_programmatic():
+                return
+            try:
+                self._dismiss_link_messages()
+                fn()
+            except Exception:  # noqa: BLE001 - never kill viser's callback thread
+                log.exception("explorer callback failed")
+        return handler
+
+    def _dismiss_link_messages(self) -> None:
+        """The link's problems were read: the user's first change closes the note about them."""
+        if self.url_messages and self.panels.url_messages.visible:
+            self.panels.url_messages.visible = False
+
+    def throttled(self, what: str, interval: float) -> bool:
+        """True when a GUI update of kind ``what`` should be skipped (one per ``interval`` seconds).
+
+        Every GUI message makes the browser redraw; on software WebGL a redraw costs a few hundred
+        milliseconds, so progress updates are rate-limited.
+        """
+        now = time.perf_counter()
+        with self.lock:
+            if now - self._last_update.get(what, -1e9) < interval:
+                return True
+            self._last_update[what] = now
+            return False
+
+    # ----- jobs, messages, events -----------------------------------------------------------------
+    def cancel_job(self, job: Optional[Job]) -> None:
+        """Cancel ``job`` unless it is ``None`` or finished."""
+        if job is not None and not job.is_final:
+            self.explorer.jobs.cancel(job.id)
+
+    def event(self, what: str) -> None:
+        """Record ``what`` happened now (for tests and benchmarks; the last few hundred are kept)."""
+        self.events.append((time.perf_counter(), what))
+        if len(self.events) > 500:
+            del self.events[:250]
+
+    def notify(self, title: str, body: str, color: str = "red") -> None:
+        """A toast on this browser (``body`` shown as plain text)."""
+        try:
+            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,
+                                         color=color)  # type: ignore[arg-type]
+        except Exception:  # noqa: BLE001
+            log.debug("notification failed", exc_info=True)

@@ -1,0 +1,238 @@
+"""The "Workspace" status panel and the workspace job's life: submit, progress, publish, Stop.
+
+On the data path slider -> state -> job -> engine -> mesh -> scene this module is "state -> job"
+and "mesh -> scene": :meth:`WorkspaceController.submit` turns the current state into a
+``"workspace"`` job (``supersede=True``: the last slider value wins; the job itself is
+:func:`app.workspace_job.workspace_job`), and :meth:`WorkspaceController.publish` puts each shell
+it produces into the scene (:class:`~app.scene.ShellScene`). A generation counter makes sure a
+stale job can never overwrite a newer result, whatever the thread timing; while a new shell
+computes, the one on screen is marked stale. A finished workspace starts the orientation maps.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable, Optional
+
+from paraspace.kinematics.design import ParameterError
+from paraspace.kinematics.workspace import WorkspaceResult
+
+from .jobs import Job, LimitExceeded
+from .legend import colorbar_image
+from .limits import check_workspace_grid
+from .session import PROGRESS_INTERVAL, SessionContext
+from .textsafe import md_text
+from .workspace_job import ShellBundle, workspace_job, ws_key, ws_settings
+
+
+class WorkspaceController:
+    """Submit, progress, publish and Stop of one session's workspace job (module docstring).
+
+    Args:
+        ctx: the session's shared state.
+        orientation: starts the orientation maps once a workspace is finished (``submit``) and
+            forgets maps of another design (``forget_stale``).
+        numbers: the numbers panel (``render``).
+        view: frames the first shell (``set_camera``) and reports its size (``show_payload``).
+        on_measures: called after the full result's measures are shown (the Compare tab's table).
+        show_controls: puts a result's design, voxel, orientation and joints back into the controls
+            (Stop goes back to the shell on screen).
+        on_state_change: called after Stop changed the state (the mechanism and the link follow).
+    """
+
+    def __init__(self, ctx: SessionContext, *, orientation: Any, numbers: Any, view: Any,
+                 on_measures: Callable[[], None], show_controls: Callable[[WorkspaceResult], None],
+                 on_state_change: Callable[[], None]) -> None:
+        self.ctx = ctx
+        self.orientation = orientation
+        self.numbers = numbers
+        self.view = view
+        self.on_measures = on_measures
+        self.show_controls = show_controls
+        self.on_state_change = on_state_change
+        self.gen = 0
+        self.job: Optional[Job] = None
+        self._framed = False  # the camera has framed a shell once
+
+    def wire(self) -> None:
+        """Attach the Stop button."""
+        self.ctx.panels.stop.on_click(self.ctx.callback(self.stop))
+
+    # ----- submit ---------------------------------------------------------------------------------
+    def submit(self) -> None:
+        """(Re)compute the workspace for the current design/orientation/voxel; the last call wins."""
+        ctx = self.ctx
+        with ctx.lock:
+            self.gen += 1
+            gen = self.gen
+            s = ctx.state
+        self.orientation.forget_stale(s)
+        try:  # the same grid limit as the API, before any work is queued
+            check_workspace_grid(s.design, ws_settings(s, s.voxel), ctx.explorer.max_voxels)
+        except ParameterError as exc:
+            ctx.cancel_job(self.job)
+            self.set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
+            ctx.notify("Grid too large", str(exc), color="orange")
+            return
+        cache = ctx.explorer.shell_cache
+        hit = cache.get(ws_key(s, s.voxel))
+        if hit is not None and hit.measures is not None:
+            ctx.cancel_job(self.job)
+            self.publish(gen, hit, preview=False, seconds=hit.result.compute_seconds, from_cache=True)
+            self.publish_measures(gen, hit)
+            self.set_status(gen, f"full workspace h = {s.voxel:g} (cached)", 100.0, running=False)
+            self.orientation.submit()
+            return
+        ctx.event("workspace-submit")
+        fn = workspace_job(s, cache, show=lambda b, preview, seconds: self.publish(gen, b, preview, seconds),
+                           show_measures=lambda b, preview: self.publish_measures(gen, b, preview))
+        try:
+            job = ctx.jobs.submit(fn, kind="workspace", client=ctx.job_client, supersede=True,
+                                  on_progress=lambda j, g=gen: self._on_progress(g, j),
+                                  on_done=lambda j, g=gen: self._on_done(g, j))
+        except LimitExceeded as exc:
+            self.set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
+            return
+        except RuntimeError as exc:  # shut down
+            self.set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
+            return
+        with ctx.lock:
+            if gen == self.gen:
+                self.job = job
+        self._mark_stale()
+        self.set_status(gen, "queued...", 0.0, running=True)
+
+    def _mark_stale(self) -> None:
+        """The shell on screen belongs to an older state while a new one computes: say so on it and
+        in the legend (cleared when the new shell is shown)."""
+        ctx = self.ctx
+        with ctx.view_lock:
+            if ctx.closed or ctx.shell.source is None:
+                return
+            with ctx.client.atomic():
+                ctx.shell.set_stale("previous result - recomputing")
+                zr = ctx.shell.z_range()
+                if zr is not None:
+                    ctx.panels.legend.show_z_range(*zr, stale=True)
+
+    # ----- progress and status -------------------------------------------------------------------
+    def _on_progress(self, gen: int, job: Job) -> None:
+        if self.ctx.throttled("ws-progress", PROGRESS_INTERVAL):
+            return
+        self.set_status(gen, md_text(job.message), 100.0 * job.progress, running=True)
+
+    def _on_done(self, gen: int, job: Job) -> None:
+        ctx = self.ctx
+        if ctx.closed:
+            return
+        if job.status == "done":
+            b: ShellBundle = job.result
+            self.set_status(gen, f"full workspace h = {b.result.grid.h:g}: {b.result.compute_seconds:.2f} s "
+                                 f"+ shell {b.shell_seconds:.2f} s", 100.0, running=False)
+            with ctx.lock:
+                latest = gen == self.gen
+            if latest:
+                self.orientation.submit()
+        elif job.status == "failed":
+            self.set_status(gen, f"**failed:** {md_text(job.error)}", 0.0, running=False)
+        else:
+            with ctx.lock:
+                latest = gen == self.gen
+            if latest:  # stopped by the user (a superseded job is followed by a newer one)
+                self.set_status(gen, "stopped; the shell shows the last finished result", 0.0, running=False)
+
+    def set_status(self, gen: int, text: str, percent: float, running: bool) -> None:
+        """Status line, progress bar and Stop button, if ``gen`` is still the latest request."""
+        with self.ctx.lock:
+            if gen != self.gen or self.ctx.closed:
+                return
+            p = self.ctx.panels
+            p.status.content = text
+            p.progress.value = float(min(100.0, max(0.0, percent)))
+            p.progress.animated = running
+            p.stop.visible = running
+
+    # ----- publish --------------------------------------------------------------------------------
+    def publish(self, gen: int, bundle: ShellBundle, preview: bool, seconds: float,
+                from_cache: bool = False) -> bool:
+        """Show a shell if ``gen`` is still the latest request; returns whether it was shown."""
+        ctx = self.ctx
+        with ctx.view_lock:
+            with ctx.lock:
+                if gen != self.gen or ctx.closed:
+                    return False
+                s = ctx.state
+            with ctx.client.atomic():
+                size = ctx.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                zr = ctx.shell.z_range()
+                if zr is not None:
+                    colorbar_image(*zr)  # drawn now (cached), so the writes below follow the check at once
+                if ctx.closed:  # the browser left while the shell was being encoded and sent
+                    return False
+                ctx.shell.set_stale(None)
+                if zr is not None:
+                    ctx.panels.legend.show_z_range(*zr)
+            with ctx.lock:
+                if preview:
+                    ctx.preview = bundle
+                else:
+                    ctx.bundle = bundle
+                ctx.ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
+                               "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
+                               "measures": None, "gen": gen, "cached": from_cache}
+                first = not self._framed
+                self._framed = True
+            if first:  # the first shell: frame it (later shells keep the user's camera)
+                self.view.set_camera(s.view)
+            self.view.show_payload(size)
+            ctx.payloads["preview" if preview else "full"] = size
+        ctx.client.flush()
+        ctx.event("preview-shown" if preview else "full-shown")
+        self.numbers.render()
+        return True
+
+    def publish_measures(self, gen: int, bundle: ShellBundle, preview: bool = False) -> None:
+        """Show the measures of the shell on screen (if it is still ``bundle``'s kind and ``gen``)."""
+        ctx = self.ctx
+        with ctx.lock:
+            if gen != self.gen or ctx.closed:
+                return
+            if ctx.ws_info.get("preview", False) != preview:
+                return
+            ctx.ws_info["measures"] = bundle.measures
+            ctx.ws_info["bracket"] = bundle.bracket
+        self.numbers.render()
+        if not preview:
+            self.on_measures()
+        ctx.event("measures-preview" if preview else "measures-full")
+
+    # ----- Stop -----------------------------------------------------------------------------------
+    def stop(self) -> None:
+        """The Stop button: cancel the running workspace job and go back to the state of the shell on
+        screen (design, orientation, voxel, joints), so the controls, the numbers and the link all
+        describe a result that exists (issue 8 defect 10)."""
+        ctx = self.ctx
+        ctx.cancel_job(self.job)
+        shown = ctx.bundle
+        if shown is None:
+            return
+        r = shown.result
+        psi, theta, phi = r.settings.orientation
+        with ctx.input_lock:
+            with ctx.lock:
+                s = ctx.state
+                back = s.replace(design=r.design, voxel=float(r.settings.voxel), joints=r.settings.joints,
+                                 pose=dataclasses.replace(s.pose, psi=psi, theta=theta, phi=phi))
+                if back == s:
+                    return
+                self.gen += 1  # late progress of the cancelled job must not touch the status
+                ctx.state = back
+            self.show_controls(r)
+        if ctx.closed:
+            return
+        ctx.shell.set_stale(None)
+        zr = ctx.shell.z_range()
+        if zr is not None:
+            ctx.panels.legend.show_z_range(*zr)
+        self.set_status(self.gen, "stopped: back to the design on screen", 100.0, running=False)
+        self.on_state_change()

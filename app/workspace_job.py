@@ -1,0 +1,148 @@
+"""What the explorer's workspace job computes: engine -> measures -> display mesh (no GUI here).
+
+On the data path slider -> state -> job -> engine -> mesh -> scene this module is "job -> engine ->
+mesh": :func:`workspace_job` turns one :class:`~app.urlstate.ExplorerState` into a job function
+for the :class:`~app.jobs.JobManager` that computes a coarse preview (h = :data:`PREVIEW_VOXEL`)
+and then the full workspace (``kinematics.workspace.compute_workspace``), re-meshes each shell for
+display (:func:`make_shell`) and measures it; it hands each :class:`ShellBundle` to the callbacks
+it is given (``app/workspace_controller.py`` puts them on screen). Finished bundles go into the
+explorer's shared cache under :func:`ws_key` (results are immutable).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from typing import Any, Callable, Optional
+
+from paraspace.kinematics.progress import Cancelled
+from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
+
+from .urlstate import ExplorerState
+
+#: Voxel edge of the coarse preview shell.
+PREVIEW_VOXEL = 6.0
+#: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
+PREVIEW_FACES = 20_000
+FULL_FACES = 60_000
+#: Boundary refinements of the explorer's certified bracket (one: about 1 s at h = 2; the CLI and
+#: the API default to two).
+EXPLORER_BRACKET_REFINE = 1
+
+Progress = Callable[[float, str], None]
+JobFn = Callable[[Progress, threading.Event], Any]
+
+
+@dataclasses.dataclass
+class ShellBundle:
+    """A computed workspace and what is derived from it (immutable once built)."""
+
+    result: WorkspaceResult
+    mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
+    measures: Any = None  # kinematics.measures.WorkspaceMeasures
+    shell_seconds: float = 0.0
+    bracket: Any = None  # kinematics.bracket.VolumeBracket (certified volume_inner <= V <= volume_outer)
+
+
+def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
+    """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
+    (block re-mesh: fast and volume-preserving) and smoothed for display (no voxel terracing;
+    :func:`kinematics.shell.smooth_for_display`)."""
+    from paraspace.kinematics.shell import smooth_for_display, workspace_shell
+
+    return smooth_for_display(workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh"))
+
+
+def measure(result: WorkspaceResult) -> Any:
+    """The numbers panel's measures of ``result`` (:func:`kinematics.measures.measure_workspace`)."""
+    from paraspace.kinematics.measures import measure_workspace
+
+    return measure_workspace(result)
+
+
+def bracket(result: WorkspaceResult) -> Any:
+    """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
+    bracket does not model)."""
+    from paraspace.kinematics.bracket import bracket_of
+
+    if result.settings.joints.min_distance > 0.0:
+        return None
+    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE)
+
+
+def ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
+    """The engine settings of ``s`` at voxel edge ``voxel`` (its orientation and joint options)."""
+    return WorkspaceSettings(voxel=voxel, orientation=(s.pose.psi, s.pose.theta, s.pose.phi), joints=s.joints)
+
+
+def ws_key(s: ExplorerState, voxel: float) -> tuple:
+    """Cache key of the workspace of ``s`` at voxel edge ``voxel``."""
+    return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel), s.joints.key())
+
+
+def cached_bundle(cache: Any, state: ExplorerState) -> Optional[ShellBundle]:
+    """The measured bundle of ``state`` (at its own voxel edge) if the cache holds one."""
+    hit = cache.get(ws_key(state, state.voxel))
+    return hit if hit is not None and hit.measures is not None else None
+
+
+def compute_bundle(cache: Any, state: ExplorerState, progress: Progress, cancel: threading.Event) -> ShellBundle:
+    """Compute, mesh and measure the workspace of ``state`` in one go and cache it (the Compare
+    tab's pinned design)."""
+    res = compute_workspace(state.design, ws_settings(state, state.voxel), progress=progress, cancel=cancel)
+    bundle = ShellBundle(res, make_shell(res, FULL_FACES))
+    bundle.measures = measure(res)
+    cache.put(ws_key(state, state.voxel), bundle)
+    return bundle
+
+
+def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, bool, float], Any],
+                  show_measures: Callable[[ShellBundle, bool], None]) -> JobFn:
+    """The job function of the workspace of ``s``: when ``s.voxel`` is finer than the preview, the
+    preview shell (cached) is computed and shown first (``show(bundle, preview=True, seconds)``,
+    then ``show_measures(bundle, preview=True)``); then the full workspace, its shell, its measures
+    and certified bracket. Raises :class:`~kinematics.progress.Cancelled` once cancelled."""
+    design = s.design
+    voxel = s.voxel
+
+    def fn(progress: Progress, cancel: threading.Event) -> ShellBundle:
+        t0 = time.perf_counter()
+        full_key = ws_key(s, voxel)
+        if voxel < PREVIEW_VOXEL:
+            pkey = ws_key(s, PREVIEW_VOXEL)
+            pre = cache.get(pkey)
+            if pre is None:
+                res = compute_workspace(design, ws_settings(s, PREVIEW_VOXEL),
+                                        progress=lambda f, m: progress(0.12 * f, f"preview: {m}"), cancel=cancel)
+                t1 = time.perf_counter()
+                pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
+                pre.shell_seconds = time.perf_counter() - t1
+                pre.measures = measure(res)
+                pre.bracket = bracket(res)
+                cache.put(pkey, pre)
+            if cancel.is_set():
+                raise Cancelled()
+            show(pre, True, time.perf_counter() - t0)
+            show_measures(pre, True)
+            progress(0.15, f"full workspace h = {voxel:g}...")
+        res = compute_workspace(design, ws_settings(s, voxel),
+                                progress=lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"),
+                                cancel=cancel)
+        progress(0.78, "meshing the shell...")
+        t1 = time.perf_counter()
+        bundle = ShellBundle(res, make_shell(res, FULL_FACES))
+        bundle.shell_seconds = time.perf_counter() - t1
+        if cancel.is_set():
+            raise Cancelled()
+        show(bundle, False, time.perf_counter() - t0)
+        progress(0.9, "measuring (voids, genus, hollowness)...")
+        bundle.measures = measure(res)
+        bundle.bracket = bracket(res)
+        cache.put(full_key, bundle)
+        if cancel.is_set():
+            raise Cancelled()
+        show_measures(bundle, False)
+        return bundle
+
+    return fn
