@@ -106,6 +106,8 @@ class StudiesController:
 
     def _show_sweep(self, data: dict) -> None:
         p = self.ctx.panels
+        if self.ctx.closed:  # the browser left while the figure was being built
+            return
         with self.ctx.lock:
             self.sweep = data
             self.exports.set("sweep", data["spec"])

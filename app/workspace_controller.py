@@ -22,7 +22,7 @@ from .legend import colorbar_image
 from .limits import check_workspace_grid
 from .session import PROGRESS_INTERVAL, SessionContext
 from .textsafe import md_text
-from .workspace_job import ShellBundle, workspace_job, ws_key, ws_settings
+from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
 
 
 class WorkspaceController:
@@ -52,6 +52,7 @@ class WorkspaceController:
         self.on_state_change = on_state_change
         self.gen = 0
         self.job: Optional[Job] = None
+        self.bracket_job: Optional[Job] = None  # the certified bracket of the full result on screen
         self._framed = False  # the camera has framed a shell once
 
     def wire(self) -> None:
@@ -74,6 +75,7 @@ class WorkspaceController:
             self.set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
             ctx.notify("Grid too large", str(exc), color="orange")
             return
+        ctx.cancel_job(self.bracket_job)
         cache = ctx.explorer.shell_cache
         hit = cache.get(ws_key(s, s.voxel))
         if hit is not None and hit.measures is not None:
@@ -82,6 +84,8 @@ class WorkspaceController:
             self.publish_measures(gen, hit)
             self.set_status(gen, f"full workspace h = {s.voxel:g} (cached)", 100.0, running=False)
             self.orientation.submit()
+            if hit.bracket is None:
+                self._submit_bracket(gen, hit)
             return
         ctx.event("workspace-submit")
         fn = workspace_job(s, cache, show=lambda b, preview, seconds: self.publish(gen, b, preview, seconds),
@@ -101,6 +105,25 @@ class WorkspaceController:
                 self.job = job
         self._mark_stale()
         self.set_status(gen, "queued...", 0.0, running=True)
+
+    def _submit_bracket(self, gen: int, bundle: ShellBundle) -> None:
+        """Certify the volume of the full result on screen in a job of its own, off the shell's
+        critical path (cancelled by the next submit); the numbers panel shows it when it arrives."""
+        ctx = self.ctx
+
+        def done(job: Job) -> None:
+            if job.status == "done" and job.result is not None:
+                bundle.bracket = job.result
+                self.publish_measures(gen, bundle)
+
+        try:
+            job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel), kind="bracket",
+                                  client=ctx.job_client, supersede=True, on_done=done)
+        except (LimitExceeded, RuntimeError):  # a quota or shut down: the panel simply shows no bracket
+            return
+        with ctx.lock:
+            if gen == self.gen:
+                self.bracket_job = job
 
     def _mark_stale(self) -> None:
         """The shell on screen belongs to an older state while a new one computes: say so on it and
@@ -133,6 +156,7 @@ class WorkspaceController:
                 latest = gen == self.gen
             if latest:
                 self.orientation.submit()
+                self._submit_bracket(gen, b)
         elif job.status == "failed":
             self.set_status(gen, f"**failed:** {md_text(job.error)}", 0.0, running=False)
         else:

@@ -26,8 +26,8 @@ PREVIEW_VOXEL = 6.0
 #: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
-#: Boundary refinements of the explorer's certified bracket (one: about 1 s at h = 2; the CLI and
-#: the API default to two).
+#: Boundary refinements of the explorer's certified bracket (one: about 2 s of CPU at h = 2, after the
+#: shell and the measures are on screen; the CLI and the API default to two).
 EXPLORER_BRACKET_REFINE = 1
 
 Progress = Callable[[float, str], None]
@@ -61,14 +61,14 @@ def measure(result: WorkspaceResult) -> Any:
     return measure_workspace(result)
 
 
-def bracket(result: WorkspaceResult) -> Any:
+def bracket(result: WorkspaceResult, cancel: Optional[threading.Event] = None) -> Any:
     """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
-    bracket does not model)."""
+    bracket does not model). Raises :class:`~kinematics.progress.Cancelled` once ``cancel`` is set."""
     from paraspace.kinematics.bracket import bracket_of
 
     if result.settings.joints.min_distance > 0.0:
         return None
-    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE)
+    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, cancel=cancel)
 
 
 def ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
@@ -100,9 +100,12 @@ def compute_bundle(cache: Any, state: ExplorerState, progress: Progress, cancel:
 def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, bool, float], Any],
                   show_measures: Callable[[ShellBundle, bool], None]) -> JobFn:
     """The job function of the workspace of ``s``: when ``s.voxel`` is finer than the preview, the
-    preview shell (cached) is computed and shown first (``show(bundle, preview=True, seconds)``,
-    then ``show_measures(bundle, preview=True)``); then the full workspace, its shell, its measures
-    and certified bracket. Raises :class:`~kinematics.progress.Cancelled` once cancelled."""
+    preview shell (cached) is computed and shown first (``show(bundle, preview=True, seconds)``; no
+    measures: the full result follows at once); then the full workspace and its shell, shown as soon
+    as meshed, then its measures (``show_measures(bundle, preview=False)``). Everything before the
+    full shell is on its critical path, so nothing else runs there; the certified bracket is a job
+    of its own (:func:`bracket`, submitted by the controller). Raises
+    :class:`~kinematics.progress.Cancelled` once cancelled."""
     design = s.design
     voxel = s.voxel
 
@@ -118,13 +121,10 @@ def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, boo
                 t1 = time.perf_counter()
                 pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
                 pre.shell_seconds = time.perf_counter() - t1
-                pre.measures = measure(res)
-                pre.bracket = bracket(res)
                 cache.put(pkey, pre)
             if cancel.is_set():
                 raise Cancelled()
             show(pre, True, time.perf_counter() - t0)
-            show_measures(pre, True)
             progress(0.15, f"full workspace h = {voxel:g}...")
         res = compute_workspace(design, ws_settings(s, voxel),
                                 progress=lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"),
@@ -138,7 +138,6 @@ def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, boo
         show(bundle, False, time.perf_counter() - t0)
         progress(0.9, "measuring (voids, genus, hollowness)...")
         bundle.measures = measure(res)
-        bundle.bracket = bracket(res)
         cache.put(full_key, bundle)
         if cancel.is_set():
             raise Cancelled()
