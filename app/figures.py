@@ -40,7 +40,7 @@ __all__ = [
     "EXPORT_DPI", "EXPORT_FORMATS", "MEASURES", "PARAM_INFO", "Box", "Grid", "Mask", "Marker", "Panel", "Series",
     "FigureSpec", "LegendEntry", "Saturation", "axis_title", "measure_axis", "param_axis", "plottable_measures",
     "sweep_spec", "study_spec", "orientation_spec", "orientation_saturation", "saturation_warning",
-    "placeholder_spec", "to_plotly", "to_matplotlib", "export", "export_format",
+    "to_plotly", "to_matplotlib", "export", "export_format",
 ]
 
 #: Resolution of PNG exports (dots per inch).
@@ -470,11 +470,6 @@ def orientation_spec(result: Any, z0: Optional[float] = None) -> FigureSpec:
              f"TI₁ = {_fmt(result.ti1)}, TI₂ = {_fmt(result.ti2)} [deg·{LENGTH}]")
     return FigureSpec(title=title, panels=panels, rows=3, cols=3, legend=legend, warnings=[warn] if warn else [],
                       size=(10.0, 10.0), aspect=1.75, filename="paraspace_orientation")
-
-
-def placeholder_spec(text: str) -> FigureSpec:
-    """A figure with no data that shows ``text`` (before a computation has run)."""
-    return FigureSpec(title=text, panels=[], size=(6.0, 1.5), aspect=0.3, filename="paraspace_placeholder")
 
 
 # --------------------------------------------------------------------------------------------

@@ -26,6 +26,7 @@ from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 from . import figures
 from .dexterity_colour import COLOUR_MODES
 from .joints_panel import JointsControls, build_joints_folder
+from .lazy_plot import LazyPlot
 from .legend import LegendPanel, build_legend_folder
 from .urlstate import (
     CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS,
@@ -125,10 +126,11 @@ PLOT_CONFIG: dict[str, Any] = {"displaylogo": False, "responsive": True,
                                "modeBarButtonsToRemove": ["toImage", "lasso2d", "select2d"]}
 
 
-def _plot(gui: viser.GuiApi, text: str, visible: bool = True) -> Any:
-    """An interactive plotly plot (``app.figures``) showing ``text`` until it gets a figure."""
-    spec = figures.placeholder_spec(text)
-    return gui.add_plotly(figures.to_plotly(spec), config=PLOT_CONFIG, aspect=spec.aspect, visible=visible)
+def _plot(gui: viser.GuiApi, container: Any, text: str, visible: bool = True) -> LazyPlot:
+    """An interactive plotly plot (``app.figures``) in ``container``, created at its first figure
+    (:class:`~app.lazy_plot.LazyPlot`: plotly.js then loads after the first shell); ``text`` holds
+    its place until then."""
+    return LazyPlot(gui, container, text, config=PLOT_CONFIG, visible=visible)
 
 
 def _downloads(gui: viser.GuiApi, disabled: bool = True) -> tuple[Any, Any]:
@@ -212,16 +214,16 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         payload = gui.add_markdown("")
 
     with tabs.add_tab("Plots", viser.Icon.CHART_LINE):
-        with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True):
+        with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True) as orientation_folder:
             rng = SETTING_SLIDERS["z0"]
             z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
                                 hint="height of the x and y' lines")
             orientation_status = gui.add_markdown("*waiting for the workspace...*")
-            orientation_plot = _plot(gui, "the orientation maps appear here")
+            orientation_plot = _plot(gui, orientation_folder, "the orientation maps appear here")
             orientation_png, orientation_svg = _downloads(gui, disabled=False)
         study_voxel = gui.add_slider("study voxel h", min=2.0, max=10.0, step=1.0, initial_value=4.0,
                                      hint="voxel edge used by the parameter studies below")
-        with gui.add_folder("Volume vs parameter (Fig. 4)", expand_by_default=False):
+        with gui.add_folder("Volume vs parameter (Fig. 4)", expand_by_default=False) as sweep_folder:
             sweep_param = gui.add_dropdown("parameter", STUDY_PARAMS, initial_value="a")
             sweep_measure = gui.add_dropdown("measure", SWEEP_MEASURES, initial_value="volume",
                                              hint="the plotted measure; TI_1/TI_2 add the orientation maps of "
@@ -230,15 +232,15 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             sweep_run = gui.add_button("Run sweep", icon=viser.Icon.PLAYER_PLAY)
             sweep_stop = gui.add_button("Stop sweep", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             sweep_progress = gui.add_progress_bar(0.0, visible=False)
-            sweep_plot = _plot(gui, "", visible=False)
+            sweep_plot = _plot(gui, sweep_folder, "", visible=False)
             sweep_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
             sweep_png, sweep_svg = _downloads(gui)
-        with gui.add_folder("Volume over (a, d_s) (Fig. 5)", expand_by_default=False):
+        with gui.add_folder("Volume over (a, d_s) (Fig. 5)", expand_by_default=False) as surface_folder:
             surface_points = gui.add_slider("grid points per axis", min=3, max=15, step=1, initial_value=7)
             surface_run = gui.add_button("Run (a, d_s) study", icon=viser.Icon.PLAYER_PLAY)
             surface_stop = gui.add_button("Stop study", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             surface_progress = gui.add_progress_bar(0.0, visible=False)
-            surface_plot = _plot(gui, "", visible=False)
+            surface_plot = _plot(gui, surface_folder, "", visible=False)
             surface_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
             surface_png, surface_svg = _downloads(gui)
 

@@ -15,6 +15,7 @@ from typing import Any, Callable, Optional
 import viser
 
 from .jobs import Job, JobManager, LimitExceeded
+from .lazy_plot import LazyPlot
 from .textsafe import md_text
 
 
@@ -58,11 +59,11 @@ class TiltPanel:
         self.lock = threading.Lock()
         self.job: Optional[Job] = None
         self.report: Optional[Any] = None
-        with gui.add_folder("Tilt and torsion here", expand_by_default=False):
+        with gui.add_folder("Tilt and torsion here", expand_by_default=False) as folder:
             self.run = gui.add_button("Compute at the current position", icon=viser.Icon.COMPASS)
             self.text = gui.add_markdown("Bonev-Gosselin tilt (any azimuth, zero torsion) and torsion (zero tilt) "
                                          "reachable at the platform's position.")
-            self.plot = gui.add_plotly(tilt_polar_figure_placeholder(), aspect=1.0, visible=False)
+            self.plot = LazyPlot(gui, folder, aspect=1.0, visible=False)  # plotly.js only once there is a report
         self.run.on_click(lambda _e: self.start())
 
     def start(self) -> None:
@@ -100,9 +101,3 @@ class TiltPanel:
             self.job = job
         self.run.disabled = True
 
-
-def tilt_polar_figure_placeholder() -> Any:
-    """An empty polar figure (before the first computation)."""
-    import plotly.graph_objects as go
-
-    return go.Figure(go.Scatterpolar(r=[], theta=[]))
