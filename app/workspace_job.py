@@ -47,11 +47,13 @@ class ShellBundle:
 
 def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
     """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
-    (block re-mesh: fast and volume-preserving) and smoothed for display (no voxel terracing;
-    :func:`kinematics.shell.smooth_for_display`)."""
+    (block re-mesh), smoothed for display (no voxel terracing) and scaled to the voxel volume
+    (:func:`kinematics.shell.smooth_for_display`): the final scaling sets the volume, so the re-mesh
+    needs no volume-matching passes (1 % is enough; the exported meshes keep 1e-4)."""
     from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
-    return smooth_for_display(workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh"))
+    mesh = workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh", volume_rtol=1e-2)
+    return smooth_for_display(mesh, volume=result.volume)
 
 
 def measure(result: WorkspaceResult) -> Any:

@@ -306,3 +306,25 @@ def test_display_smoothing_removes_terracing_and_keeps_the_volume():
     # of 2^3 voxels here), and less than one voxel on average
     moved = np.linalg.norm(smooth.vertices - raw.vertices, axis=1)
     assert moved.max() < 2 * res.grid.h and moved.mean() < res.grid.h
+
+
+def test_explorer_display_shell_encloses_the_voxel_volume_and_stays_close_to_the_exact_shell():
+    """The explorer's display shell (one quick re-mesh, smoothed, scaled to the voxel volume) encloses
+    N h^3 exactly, is watertight, and lies within about a voxel of the full-resolution binary shell
+    (distance from each of its vertices to the nearest vertex of that shell, whose vertices are at
+    most h apart on its surface: scipy's k-d tree)."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+
+    from paraspace.app.workspace_job import FULL_FACES, make_shell
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.shell import workspace_shell
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    for design in (Design(), Design(a=10)):
+        res = compute_workspace(design, WorkspaceSettings(voxel=3.0))
+        shown = make_shell(res, FULL_FACES)
+        assert shown.is_watertight and abs(shown.volume - res.volume) <= 1e-9 * res.volume
+        exact = workspace_shell(res)  # binary field, no reduction: vertices on voxel edges
+        dist, _ = cKDTree(exact.vertices).query(shown.vertices)
+        assert float(np.median(dist)) < res.grid.h and float(dist.max()) < 3.0 * res.grid.h
