@@ -23,6 +23,10 @@ from .urlstate import ExplorerState
 
 #: Voxel edge of the coarse preview shell.
 PREVIEW_VOXEL = 6.0
+#: Full results at this voxel edge or coarser come in a few tenths of a second (h = 2: about 0.05 s
+#: of engine and 0.08 s of meshing on 2 idle cores), faster than a preview would help: the preview is
+#: shown first only below it, or with leg interference (about 3x slower) (:func:`wants_preview`).
+PREVIEW_BELOW = 2.0
 #: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
@@ -99,22 +103,28 @@ def compute_bundle(cache: Any, state: ExplorerState, progress: Progress, cancel:
     return bundle
 
 
+def wants_preview(s: ExplorerState, voxel: float) -> bool:
+    """Whether the job shows the coarse preview before the full workspace of ``s`` at ``voxel``
+    (:data:`PREVIEW_BELOW`)."""
+    return voxel < PREVIEW_VOXEL and (voxel < PREVIEW_BELOW or s.joints.min_distance > 0.0)
+
+
 def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, bool, float], Any],
                   show_measures: Callable[[ShellBundle, bool], None]) -> JobFn:
-    """The job function of the workspace of ``s``: when ``s.voxel`` is finer than the preview, the
-    preview shell (cached) is computed and shown first (``show(bundle, preview=True, seconds)``; no
-    measures: the full result follows at once); then the full workspace and its shell, shown as soon
-    as meshed, then its measures (``show_measures(bundle, preview=False)``). Everything before the
-    full shell is on its critical path, so nothing else runs there; the certified bracket is a job
-    of its own (:func:`bracket`, submitted by the controller). Raises
-    :class:`~kinematics.progress.Cancelled` once cancelled."""
+    """The job function of the workspace of ``s``: when the full result takes a while
+    (:func:`wants_preview`), the preview shell (cached) is computed and shown first
+    (``show(bundle, preview=True, seconds)``; no measures: the full result follows at once); then
+    the full workspace and its shell, shown as soon as meshed, then its measures
+    (``show_measures(bundle, preview=False)``). Everything before the full shell is on its critical
+    path, so nothing else runs there; the certified bracket is a job of its own (:func:`bracket`,
+    submitted by the controller). Raises :class:`~kinematics.progress.Cancelled` once cancelled."""
     design = s.design
     voxel = s.voxel
 
     def fn(progress: Progress, cancel: threading.Event) -> ShellBundle:
         t0 = time.perf_counter()
         full_key = ws_key(s, voxel)
-        if voxel < PREVIEW_VOXEL:
+        if wants_preview(s, voxel):
             pkey = ws_key(s, PREVIEW_VOXEL)
             pre = cache.get(pkey)
             if pre is None:
