@@ -19,12 +19,11 @@ with timestamps taken *in the page* (``performance.now()``, sampled once per ani
 ``--trace DIR`` also records a Chrome trace and a JS CPU profile of the connect and of one more
 press, and prints where the renderer's main thread and the GPU process spend that time.
 ``--no-plots`` is a what-if: the explorer's plotly plots are replaced by stand-ins (plotly.js is
-then never sent), to measure what lazily created plots would save; ``--no-preview-bracket``: the
-preview shell is published without waiting for its certified bracket. Numbers only, no assertions.
+then never sent), to measure what lazily created plots would save. Numbers only, no assertions.
 
 Usage::
 
-    python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots] [--no-preview-bracket]
+    python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots]
 """
 
 from __future__ import annotations
@@ -152,7 +151,7 @@ STEPS: list[tuple[str, float, float]] = []
 def _time_server_steps() -> None:
     """Time the explorer's server-side steps that its events do not split (measurement only: the
     same functions run, wrapped): measures + bracket of a result, and a shell's GLB export + send."""
-    from paraspace.app import explorer, jsbridge, scene
+    from paraspace.app import explorer, jsbridge, scene, workspace_controller, workspace_job
 
     def timed(what: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         def run(*a: Any, **k: Any) -> Any:
@@ -163,20 +162,12 @@ def _time_server_steps() -> None:
                 STEPS.append((what, t, time.perf_counter()))
         return run
 
-    explorer._measure = timed("measures", explorer._measure)  # type: ignore[assignment]
-    explorer._bracket = timed("bracket", explorer._bracket)  # type: ignore[assignment]
+    workspace_job.measure = timed("measures", workspace_job.measure)  # type: ignore[assignment]
+    # the bracket is a job of its own after the full shell (the controller imported the function by name)
+    workspace_controller.bracket = timed("bracket", workspace_controller.bracket)  # type: ignore[assignment]
     scene.ShellScene.show = timed("shell GLB export + send", scene.ShellScene.show)  # type: ignore[method-assign]
     jsbridge.read_location = timed("read the page's location", jsbridge.read_location)  # type: ignore[assignment]
     explorer.ClientSession.build = timed("build the GUI", explorer.ClientSession.build)  # type: ignore[method-assign]
-
-
-def _no_preview_bracket() -> None:
-    """The what-if of ``--no-preview-bracket``: the preview (h = 6) gets no certified bracket, as if
-    the explorer published the preview shell before bracketing it (the full result keeps its bracket)."""
-    from paraspace.app import explorer
-
-    bracket = explorer._bracket
-    explorer._bracket = lambda res: None if res.grid.h >= explorer.PREVIEW_VOXEL else bracket(res)  # type: ignore
 
 
 # ----- trace analysis (--trace) ---------------------------------------------------------------
@@ -299,12 +290,9 @@ def main() -> None:
     ap.add_argument("--trace", type=Path, default=None, help="write Chrome traces and CPU profiles here")
     ap.add_argument("--connects", type=int, default=3, help="page loads timed (each a new design)")
     ap.add_argument("--no-plots", action="store_true", help="what-if: no plotly plots (stand-ins)")
-    ap.add_argument("--no-preview-bracket", action="store_true", help="what-if: the preview is not bracketed")
     args = ap.parse_args()
     if args.no_plots:
         _no_plots()
-    if args.no_preview_bracket:
-        _no_preview_bracket()
     _time_server_steps()
     if args.trace is not None:
         args.trace.mkdir(parents=True, exist_ok=True)
@@ -494,7 +482,7 @@ def main() -> None:
 
     print(f"\nexplorer latency, headless Chromium (SwiftShader), viewport {args.width}x{args.height}, "
           f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}"
-          f"{', NO PREVIEW BRACKET (what-if)' if args.no_preview_bracket else ''}")
+          )
     print(f"{'':44s} {'median':>8s} {'min':>8s} {'max':>8s}")
     for name, vals in rows.items():
         print(f"{name:44s} {_stats(vals)}")
