@@ -21,7 +21,8 @@ consecutive points, split in halves while undecided:
   coordinate with the limits relaxed to ``[l_min - e, l_max + e]`` (the whole-stroke bound with
   relaxed limits first) the chain fails at every point of the run; if one sample admits one with
   the limits tightened to ``[l_min + e, l_max - e]`` the same carriage pose serves every point with
-  a margin, so the exact test succeeds there. A chain failing decides the whole run unreachable;
+  a margin, so the exact test succeeds there (:func:`kinematics.blocks.decide_chain`, which also
+  skips the sub-arcs the whole-stroke bound rejects). A chain failing decides the whole run unreachable;
   all chains succeeding decide it reachable; otherwise the run is halved and the halves inherit the
   chains already proven.
 * A single point is decided with the exact test itself: the whole-stroke bound, then the arc
@@ -42,8 +43,9 @@ from typing import Optional
 import numpy as np
 from numba import njit, prange
 
+from .blocks import FAIL, OK, UNKNOWN, decide_chain, sub_arcs
 from .design import Design
-from .feasibility import ChainTables, _chain_excluded, _feasible_at, chain_points, chain_search, default_n_eta
+from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .interference import interference_free
 from .joints import Joints, cone_table
@@ -55,45 +57,12 @@ __all__ = ["reachable_along", "TOP_RUN"]
 #: default orientation scan: 4 and 8 are the fastest (0.74 and 0.80 of 16's time, single thread).
 TOP_RUN = 4
 
-_UNKNOWN, _OK, _FAIL = 0, 1, 2
-
-
-@njit(cache=True, inline="always")
-def _run_state(b1x, b1y, b1z, b2x, b2y, b2z, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin, lmax, jc, e, start):
-    """(state, sample) of chain ``i`` over the ball of radius ``e`` around the run's centre (the
-    module docstring): FAIL, OK (with the serving sample) or UNKNOWN. Samples are visited outward
-    from ``start``; the state does not depend on the order."""
-    n = cos_t.shape[1]
-    lo_r = max(lmin - e, 0.0)
-    hi_r = lmax + e
-    lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
-    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_r2, hi_r2):
-        return _FAIL, start
-    lo_t = lmin + e
-    hi_t = lmax - e
-    can_ok = lo_t <= hi_t
-    lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
-    some = False
-    for step in range(2 * n):
-        off = (step + 1) // 2
-        k = start + off if step % 2 == 1 else start - off
-        if k < 0 or k >= n:
-            if off > n:
-                break
-            continue
-        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                        lo_r2, hi_r2, jc[i], e):
-            some = True
-            if not can_ok:
-                break
-            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                            lo_t2, hi_t2, jc[i], -e):
-                return _OK, k
-    return (_UNKNOWN if some else _FAIL), start
+_UNKNOWN, _OK, _FAIL = UNKNOWN, OK, FAIL
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _along_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs, eps, top_run, out):
+def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs, eps, top_run,
+                  out):
     """``out[m, p]``: reachability of ``points[p]`` at the rotation whose rotated platform points are
     ``us[m]`` (shape (M, 3, 2, 3)) and joint-cone table ``jcs[m]`` (M, 3, 2, 8)."""
     n_eta = cos_t.shape[1]
@@ -106,6 +75,7 @@ def _along_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
         start = np.empty(3, np.int64)
         for i in range(3):
             start[i] = n_eta // 2
+        win = np.empty(3, np.int64)  # decide_chain's (hint, lo, hi): every sample, from start
         first = 0
         stack = np.empty((64, 5), np.int64)  # (first point, points, state of chain 0, 1, 2)
         top = 0
@@ -163,15 +133,17 @@ def _along_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
                 si = s0 if i == 0 else (s1 if i == 1 else s2)
                 if si != _UNKNOWN:
                     continue
-                b1x, b1y, b1z, b2x, b2y, b2z = chain_points(cx, cy, cz, u, i)
-                si, k = _run_state(b1x, b1y, b1z, b2x, b2y, b2z, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                                   lmin, lmax, jc, e, start[i])
+                win[0] = start[i]
+                win[1] = 0
+                win[2] = n_eta - 1
+                si = decide_chain(cx, cy, cz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
+                                  lmin, lmax, jc, e + eps, e, e, e, True, win)
                 if si == _FAIL:
                     fail = True
                     first = i
                     break
                 if si == _OK:
-                    start[i] = k
+                    start[i] = win[0]
                 else:
                     all_ok = False
                 if i == 0:
@@ -219,9 +191,10 @@ def reachable_along(design: Design, points: np.ndarray, rotations: np.ndarray, e
     out = np.zeros((rots.shape[0], pts.shape[0]), np.bool_)
     if out.size:
         scale = max(1.0, design.l_max, design.r, float(np.abs(pts).max()) + float(np.abs(local).max()))
+        seg_k, seg_arc = sub_arcs(tab.cos_t, tab.sin_t)
         with kernel_launch(rots.shape[0]):
-            _along_kernel(pts, us, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                          tab.lmax2, jcs, 1e-9 * scale, TOP_RUN, out)
+            _along_kernel(pts, us, tab.cos_t, tab.sin_t, tab.arc, seg_k, seg_arc, tab.hb, tab.rho_lo, tab.rho_hi,
+                          tab.lmin2, tab.lmax2, jcs, 1e-9 * scale, TOP_RUN, out)
     res = np.ascontiguousarray(out.T)
     if res.size and jn.min_distance > 0.0 and res.any():
         res &= interference_free(design, jn, pts, rots, n_eta, where=res)
