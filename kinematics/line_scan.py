@@ -48,8 +48,9 @@ from .design import Design
 from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .interference import interference_free
-from .joints import Joints, cone_table
+from .joints import Joints
 from .parallel import kernel_launch
+from .workspace import rotation_tables
 
 __all__ = ["reachable_along", "TOP_RUN"]
 
@@ -181,13 +182,8 @@ def reachable_along(design: Design, points: np.ndarray, rotations: np.ndarray, e
     n_eta = default_n_eta(design, eta_step)
     tab = ChainTables(design, n_eta)
     local = platform_points_local(design)
-    us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", local, rots))  # (M, 3, 2, 3): R u for each R
     jn = joints or Joints()
-    if jn.has_cones:  # the S cones' axes turn with each rotation
-        jcs = np.ascontiguousarray(np.stack([cone_table(design, jn, r) for r in rots])) if rots.shape[0] else \
-            np.zeros((0, 3, 2, 8))
-    else:  # no cone: one table serves every rotation
-        jcs = np.ascontiguousarray(np.broadcast_to(cone_table(design, jn, np.eye(3)), (rots.shape[0], 3, 2, 8)))
+    us, jcs = rotation_tables(design, rots, jn)
     out = np.zeros((rots.shape[0], pts.shape[0]), np.bool_)
     if out.size:
         scale = max(1.0, design.l_max, design.r, float(np.abs(pts).max()) + float(np.abs(local).max()))

@@ -275,6 +275,20 @@ def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
     return ok
 
 
+def rotation_tables(design: Design, rotations: np.ndarray, joints: Joints) -> tuple[np.ndarray, np.ndarray]:
+    """Per rotation ``R`` of ``rotations`` (M, 3, 3): the rotated platform points ``R u`` (M, 3, 2, 3)
+    and the joint-cone table (M, 3, 2, 8) of :func:`kinematics.joints.cone_table` (one table for all
+    when there is no cone: the S cones' axes are the only part that turns)."""
+    rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+    us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", platform_points_local(design), rots))
+    if joints.has_cones:
+        jcs = np.ascontiguousarray(np.stack([cone_table(design, joints, r) for r in rots])) if rots.shape[0] else \
+            np.zeros((0, 3, 2, 8))
+    else:
+        jcs = np.ascontiguousarray(np.broadcast_to(cone_table(design, joints, np.eye(3)), (rots.shape[0], 3, 2, 8)))
+    return us, jcs
+
+
 def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
                     eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
     """Whether each point is reachable at each orientation: bool array (N, M) for ``points`` (N, 3)
@@ -284,14 +298,8 @@ def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
     rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     n_eta = default_n_eta(design, eta_step)
     u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = _kernel_args(design, np.eye(3), n_eta)
-    local = platform_points_local(design)
-    us = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", local, rots))  # (M, 3, 2, 3): R u for each R
     jn = joints or Joints()
-    if jn.has_cones:  # the S cones' axes turn with each rotation
-        jcs = np.ascontiguousarray(np.stack([cone_table(design, jn, r) for r in rots])) if rots.shape[0] else \
-            np.zeros((0, 3, 2, 8))
-    else:  # no cone: one table serves every rotation (no per-rotation work on the orientation scans)
-        jcs = np.ascontiguousarray(np.broadcast_to(cone_table(design, jn, np.eye(3)), (rots.shape[0], 3, 2, 8)))
+    us, jcs = rotation_tables(design, rots, jn)
     out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
     if out.size:
         with KERNEL_LOCK:
