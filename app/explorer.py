@@ -59,18 +59,17 @@ from .paper_panel import PaperPanel
 from .plot_exports import PlotExports
 from .pose_controller import PoseController, resolve
 from .scene import ShellScene
-from .session import SessionContext, SessionJobs
+from .session import SessionContext
 from .share_controller import ShareController
 from .studies_controller import StudiesController
 from .textsafe import md_text, plain_text
 from .tilt_panel import TiltPanel
 from .urlstate import ExplorerState, panel_pairs, parse_query
-from .view_controller import PANEL_SHARE, ViewController, camera_framing
+from .view_controller import ViewController
 from .workspace_controller import WorkspaceController
-from .workspace_job import ShellBundle, cached_bundle, compute_bundle, make_shell
+from .workspace_job import cached_bundle, compute_bundle
 
-__all__ = ["ClientSession", "Explorer", "PANEL_SHARE", "SessionJobs", "ShellBundle", "camera_framing", "main",
-           "make_shell"]
+__all__ = ["ClientSession", "Explorer", "main"]
 
 log = logging.getLogger(__name__)
 

@@ -46,7 +46,7 @@ from typing import Optional
 import numpy as np
 from numba import njit, prange
 
-from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_search
+from .feasibility import _chain_excluded, _feasible_at, chain_points
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 

@@ -58,8 +58,6 @@ __all__ = ["reachable_along", "TOP_RUN"]
 #: default orientation scan: 4 and 8 are the fastest (0.74 and 0.80 of 16's time, single thread).
 TOP_RUN = 4
 
-_UNKNOWN, _OK, _FAIL = UNKNOWN, OK, FAIL
-
 
 @njit(parallel=True, cache=True, nogil=True)
 def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs, eps, top_run,
@@ -86,9 +84,9 @@ def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho
                 nb = min(top_run, n_p - nxt)
                 stack[0, 0] = nxt
                 stack[0, 1] = nb
-                stack[0, 2] = _UNKNOWN
-                stack[0, 3] = _UNKNOWN
-                stack[0, 4] = _UNKNOWN
+                stack[0, 2] = UNKNOWN
+                stack[0, 3] = UNKNOWN
+                stack[0, 4] = UNKNOWN
                 top = 1
                 nxt += nb
             top -= 1
@@ -102,7 +100,7 @@ def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho
                 for kk in range(3):
                     i = (first + kk) % 3
                     si = s0 if i == 0 else (s1 if i == 1 else s2)
-                    if si == _OK:
+                    if si == OK:
                         continue
                     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(points[a, 0], points[a, 1], points[a, 2], u, i)
                     k = -1
@@ -132,18 +130,18 @@ def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho
             for kk in range(3):
                 i = (first + kk) % 3
                 si = s0 if i == 0 else (s1 if i == 1 else s2)
-                if si != _UNKNOWN:
+                if si != UNKNOWN:
                     continue
                 win[0] = start[i]
                 win[1] = 0
                 win[2] = n_eta - 1
                 si = decide_chain(cx, cy, cz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi,
                                   lmin, lmax, jc, e + eps, e, e, e, True, win)
-                if si == _FAIL:
+                if si == FAIL:
                     fail = True
                     first = i
                     break
-                if si == _OK:
+                if si == OK:
                     start[i] = win[0]
                 else:
                     all_ok = False

@@ -379,12 +379,12 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
     args = _kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
-    out = np.zeros(grid.shape, np.uint8)
     mirror = _use_mirror(design, settings, grid)
     ny_eval = (ny + 1) // 2 if mirror else ny
     if settings.method == "blocks":
         out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
     else:
+        out = np.zeros(grid.shape, np.uint8)
         ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
         ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
         n = ix.size

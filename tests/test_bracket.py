@@ -61,7 +61,7 @@ def test_cli_and_api_report_the_bracket():
                          capture_output=True, text=True, timeout=300, check=True)
     doc = json.loads(out.stdout)
     assert doc["volume_inner"] <= doc["volume"] <= doc["volume_outer"]
-    from paraspace.app.api import _workspace_payload
+    from paraspace.app.api.workspace import workspace_payload as _workspace_payload
 
     r = compute_workspace(Design(), WorkspaceSettings(voxel=8.0, bracket=True))
     payload = _workspace_payload(r)

@@ -489,7 +489,7 @@ def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, mon
 def test_camera_framing_shows_the_whole_box_beside_the_panel(preset, aspect):
     """Issue 8 defect 5: every corner of the workspace's box projects inside the view and left of
     the control panel (its share of the width on the right), and the box fills a good part of it."""
-    from paraspace.app.explorer import PANEL_SHARE, camera_framing
+    from paraspace.app.view_controller import PANEL_SHARE, camera_framing
 
     lo, hi = np.array([-150.0, -140.0, 0.0]), np.array([150.0, 140.0, 170.0])
     fov = np.radians(50.0)

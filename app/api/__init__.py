@@ -50,12 +50,6 @@ from .errors import install_error_handlers
 from .limits import ApiLimits
 from .tokens import decode_link_token, encode_link_token
 
-# Names of the former single module app/api.py, still importable from here.
-from .context import CLIENT_PREFIX, ApiResult  # noqa: E402,F401
-from .errors import ERROR_RESPONSES, ApiError, FieldError  # noqa: E402,F401
-from .optimize import optimize_compute, optimize_limits_check  # noqa: E402,F401
-from .workspace import workspace_payload as _workspace_payload  # noqa: E402,F401 (tests/test_bracket.py)
-
 __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode_link_token"]
 
 #: The routers in the order their routes are matched and listed in the OpenAPI document.
