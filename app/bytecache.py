@@ -14,14 +14,15 @@ import collections
 import dataclasses
 import sys
 import threading
-from typing import Any, Callable, Hashable, Optional
+from collections.abc import Callable, Hashable
+from typing import Any
 
 import numpy as np
 
 __all__ = ["nbytes", "ByteLRU"]
 
 
-def nbytes(obj: Any, _seen: Optional[set[int]] = None) -> int:
+def nbytes(obj: Any, _seen: set[int] | None = None) -> int:
     """Approximate bytes held by ``obj`` and what it references (each object counted once).
 
     Counts numpy array buffers (``nbytes``), ``bytes``/``bytearray`` lengths, strings, and
@@ -64,7 +65,7 @@ class ByteLRU:
         size: how to measure a value (default :func:`nbytes`).
     """
 
-    def __init__(self, max_bytes: int, on_evict: Optional[Callable[[Any], None]] = None,
+    def __init__(self, max_bytes: int, on_evict: Callable[[Any], None] | None = None,
                  size: Callable[[Any], int] = nbytes) -> None:
         if max_bytes < 0:
             raise ValueError(f"max_bytes = {max_bytes!r} is invalid: valid range >= 0")
@@ -72,7 +73,7 @@ class ByteLRU:
         self._on_evict = on_evict
         self._size = size
         self._lock = threading.Lock()
-        self._data: "collections.OrderedDict[Hashable, tuple[Any, int]]" = collections.OrderedDict()
+        self._data: collections.OrderedDict[Hashable, tuple[Any, int]] = collections.OrderedDict()
         self._total = 0
 
     def get(self, key: Hashable) -> Any:

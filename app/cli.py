@@ -31,7 +31,8 @@ import json
 import math
 import os
 import sys
-from typing import Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
@@ -45,7 +46,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"paraspace: error: {message}\n")
 
 
-def _floats(field: str, text: str, count: Optional[int] = None) -> list[float]:
+def _floats(field: str, text: str, count: int | None = None) -> list[float]:
     try:
         vals = [float(v) for v in text.split(",") if v.strip() != ""]
     except ValueError:
@@ -393,7 +394,7 @@ def _sweep_orientation(ns: argparse.Namespace) -> Any:
     return OrientationSettings(z0=z0)
 
 
-def _with_value(row: dict, param: str, param2: Optional[str]) -> dict:
+def _with_value(row: dict, param: str, param2: str | None) -> dict:
     out = dict(row)
     if "value" not in out and param in out.get("design", {}):
         out["value"] = out["design"][param]
@@ -415,8 +416,8 @@ def rows_to_csv(rows: Sequence[dict]) -> str:
     return buf.getvalue()
 
 
-def plot_sweep(rows: Sequence[dict], param: str, param2: Optional[str], path: str, measure: str = "volume",
-               design: Optional[Design] = None, voxel: Optional[float] = None) -> None:
+def plot_sweep(rows: Sequence[dict], param: str, param2: str | None, path: str, measure: str = "volume",
+               design: Design | None = None, voxel: float | None = None) -> None:
     """``measure`` against one parameter (paper Fig. 4) or over two (Fig. 5: a 3-D surface and a heat
     map whose cells are centred on the samples), written to ``path`` (.png at 200 dpi, .svg or .pdf)
     with :mod:`paraspace.app.figures`, the explorer's plotting module. ``design`` (the design the
@@ -490,7 +491,7 @@ def cmd_serve(ns: argparse.Namespace) -> int:
 # ----- optimize (issue 11) -------------------------------------------------------------------
 
 
-def _bounds_arg(text: Optional[str]) -> dict[str, tuple[float, float]]:
+def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
     """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}``."""
     out: dict[str, tuple[float, float]] = {}
     if not text:
@@ -716,7 +717,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     ns = parser.parse_args(argv)
     try:

@@ -28,7 +28,8 @@ import dataclasses
 import html
 import io
 import math
-from typing import TYPE_CHECKING, Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -123,8 +124,8 @@ class Marker:
 
     name: str
     x: float
-    y: Optional[float] = None
-    z: Optional[float] = None
+    y: float | None = None
+    z: float | None = None
     color: str = CURRENT_COLOR
     symbol: str = "diamond"  # "diamond" | "star" | "circle"
     vline: bool = False  # also a vertical line at x across the panel
@@ -175,13 +176,13 @@ class Panel:
     y_title: str
     z_title: str = ""
     series: list[Series] = dataclasses.field(default_factory=list)
-    grid: Optional[Grid] = None
-    mask: Optional[Mask] = None
+    grid: Grid | None = None
+    mask: Mask | None = None
     boxes: list[Box] = dataclasses.field(default_factory=list)
     markers: list[Marker] = dataclasses.field(default_factory=list)
     notes: list[str] = dataclasses.field(default_factory=list)  # short texts written in the panel
-    x_range: Optional[tuple[float, float]] = None
-    y_range: Optional[tuple[float, float]] = None
+    x_range: tuple[float, float] | None = None
+    y_range: tuple[float, float] | None = None
     hover: str = ""  # plotly hover template (value names and units)
     short_title: str = ""  # the title in a narrow interactive panel ("\n": line break); default ``title``
 
@@ -249,7 +250,7 @@ def _num(v: Any) -> float:
     return float(v) if _is_number(v) and math.isfinite(float(v)) else math.nan
 
 
-def _fmt(v: Optional[float]) -> str:
+def _fmt(v: float | None) -> str:
     if v is None or not math.isfinite(v):
         return "?"
     from .numfmt import significant
@@ -257,7 +258,7 @@ def _fmt(v: Optional[float]) -> str:
     return significant(v, 4)
 
 
-def _voxel_note(voxel: Optional[float]) -> str:
+def _voxel_note(voxel: float | None) -> str:
     return f" (voxel h = {voxel:g})" if voxel else ""
 
 
@@ -265,8 +266,8 @@ def _voxel_note(voxel: Optional[float]) -> str:
 # the figures
 
 
-def sweep_spec(rows: Sequence[dict], param: str, measure: str = "volume", *, current: Optional[float] = None,
-               current_value: Optional[float] = None, voxel: Optional[float] = None) -> FigureSpec:
+def sweep_spec(rows: Sequence[dict], param: str, measure: str = "volume", *, current: float | None = None,
+               current_value: float | None = None, voxel: float | None = None) -> FigureSpec:
     """Paper Fig. 4: ``measure`` against ``param`` from sweep rows (``{"value": v, measure: m}``).
 
     ``current`` (the current design's value of ``param``) is marked by a vertical line, and by a
@@ -293,8 +294,8 @@ def sweep_spec(rows: Sequence[dict], param: str, measure: str = "volume", *, cur
 
 def study_spec(values_x: Sequence[float], values_y: Sequence[float], grid: Sequence[Sequence[Any]], *,
                param_x: str = "a", param_y: str = "d_s", measure: str = "volume",
-               current: Optional[tuple[float, float]] = None, current_value: Optional[float] = None,
-               voxel: Optional[float] = None, panels: Sequence[str] = ("surface", "heatmap")) -> FigureSpec:
+               current: tuple[float, float] | None = None, current_value: float | None = None,
+               voxel: float | None = None, panels: Sequence[str] = ("surface", "heatmap")) -> FigureSpec:
     """Paper Fig. 5: ``grid[iy][ix]`` (the measure at ``(values_x[ix], values_y[iy])``) as a 3-D
     surface and a heat map (``panels`` picks which, in order). Heat-map cells are centred on the
     samples. The grid's maximum gets a star; ``current`` (the current design's ``(x, y)``) a red
@@ -392,7 +393,7 @@ def _crop_rows(inside: np.ndarray, pos: np.ndarray, lo: float, hi: float) -> sli
     return slice(int(keep[0]), int(keep[-1]) + 1)
 
 
-def orientation_spec(result: Any, z0: Optional[float] = None) -> FigureSpec:
+def orientation_spec(result: Any, z0: float | None = None) -> FigureSpec:
     """Paper Fig. 3(e)-(g) from an :class:`~kinematics.orientation.OrientationResult`: one panel per
     (line, rotation) -- rows the z, y' and x lines, columns φ, τ, ψ -- each showing the feasible
     samples in the rotation's colour, the region's Δ box (eq. (28)) dashed, and a saturated Δ box in
@@ -500,7 +501,7 @@ def _axis_ref(i: int, axis: str) -> str:
     return axis if i == 0 else f"{axis}{i + 1}"
 
 
-def to_plotly(spec: FigureSpec) -> "go.Figure":
+def to_plotly(spec: FigureSpec) -> go.Figure:
     """The interactive plotly figure of ``spec`` (hover read-outs, zoom; offline)."""
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
@@ -687,7 +688,7 @@ def _mpl_marker(symbol: str) -> str:
     return {"diamond": "D", "star": "*", "circle": "o"}.get(symbol, "o")
 
 
-def to_matplotlib(spec: FigureSpec) -> "Figure":
+def to_matplotlib(spec: FigureSpec) -> Figure:
     """The static matplotlib figure of ``spec`` (same content as :func:`to_plotly`)."""
     import matplotlib
 

@@ -52,7 +52,8 @@ import logging
 import secrets
 import threading
 import time
-from typing import Any, Callable, Hashable, Literal, Optional
+from collections.abc import Callable, Hashable
+from typing import Any, Literal
 
 from paraspace.kinematics.progress import Cancelled
 
@@ -108,8 +109,8 @@ class Job:
             until then).
     """
 
-    def __init__(self, manager: "JobManager", job_id: str, kind: str, client: str,
-                 key: Optional[Hashable], max_seconds: float) -> None:
+    def __init__(self, manager: JobManager, job_id: str, kind: str, client: str,
+                 key: Hashable | None, max_seconds: float) -> None:
         self._manager = manager
         self.id = job_id
         self.kind = kind
@@ -122,16 +123,16 @@ class Job:
         self.result: Any = None
         self.result_dropped = False  # the history's byte budget dropped the result (see JobManager)
         self._summarize: Any = None  # callable, None (drop), or False (already summarised)
-        self.error: Optional[str] = None
+        self.error: str | None = None
         self.created = time.time()
-        self.started: Optional[float] = None
-        self.finished: Optional[float] = None
+        self.started: float | None = None
+        self.finished: float | None = None
         self.cancel_token = threading.Event()
         self._cancel_requested = False
         self._timed_out = False
         self._done_event = threading.Event()
-        self._callbacks: list[Callable[["Job"], None]] = []
-        self._progress_hooks: list[Callable[["Job"], None]] = []
+        self._callbacks: list[Callable[[Job], None]] = []
+        self._progress_hooks: list[Callable[[Job], None]] = []
         self._t_start = 0.0  # perf_counter at start (watchdog)
 
     # ----- public ------------------------------------------------------------------------
@@ -145,7 +146,7 @@ class Job:
         """Whether the job reached a final status."""
         return self.status in FINAL_STATUSES
 
-    def wait(self, timeout: Optional[float] = None) -> bool:
+    def wait(self, timeout: float | None = None) -> bool:
         """Block until the job is final; returns whether it is (False on timeout)."""
         return self._done_event.wait(timeout)
 
@@ -194,7 +195,7 @@ class JobManager:
 
     def __init__(self, max_workers: int = 2, max_jobs_total: int = 16, max_jobs_per_client: int = 4,
                  max_seconds: float = 300.0, history: int = 256, history_bytes: int = 64 << 20,
-                 max_running_per_client: Optional[int] = None) -> None:
+                 max_running_per_client: int | None = None) -> None:
         for name, val in (("max_workers", max_workers), ("max_jobs_total", max_jobs_total),
                           ("max_jobs_per_client", max_jobs_per_client), ("history", history)):
             if not isinstance(val, int) or val < 1:
@@ -212,12 +213,12 @@ class JobManager:
         if self.max_running_per_client < 1:
             raise ValueError(f"max_running_per_client = {max_running_per_client!r} is invalid: valid range >= 1")
         self._lock = threading.RLock()
-        self._jobs: "collections.OrderedDict[str, Job]" = collections.OrderedDict()
+        self._jobs: collections.OrderedDict[str, Job] = collections.OrderedDict()
         self._unfinished: dict[str, Job] = {}
         self._queue: list[tuple[Job, JobFn]] = []
-        self._running: "collections.Counter[str]" = collections.Counter()  # worker occupancy per client
-        self._running_kind: "collections.Counter[tuple[str, str]]" = collections.Counter()  # per (client, kind)
-        self._kept: "collections.OrderedDict[str, int]" = collections.OrderedDict()  # job id -> result bytes
+        self._running: collections.Counter[str] = collections.Counter()  # worker occupancy per client
+        self._running_kind: collections.Counter[tuple[str, str]] = collections.Counter()  # per (client, kind)
+        self._kept: collections.OrderedDict[str, int] = collections.OrderedDict()  # job id -> result bytes
         self._kept_total = 0
         self._closed = False
         self._wake = threading.Condition(self._lock)
@@ -230,11 +231,11 @@ class JobManager:
         self._watchdog.start()
 
     # ----- submission ----------------------------------------------------------------------
-    def submit(self, fn: JobFn, *, kind: str, client: str = "local", key: Optional[Hashable] = None,
-               supersede: bool = False, on_done: Optional[Callable[[Job], None]] = None,
-               on_progress: Optional[Callable[[Job], None]] = None,
-               max_seconds: Optional[float] = None,
-               summarize: Optional[Callable[[Any], Any]] = None) -> Job:
+    def submit(self, fn: JobFn, *, kind: str, client: str = "local", key: Hashable | None = None,
+               supersede: bool = False, on_done: Callable[[Job], None] | None = None,
+               on_progress: Callable[[Job], None] | None = None,
+               max_seconds: float | None = None,
+               summarize: Callable[[Any], Any] | None = None) -> Job:
         """Queue ``fn(progress, cancel)`` and return its :class:`Job` at once.
 
         Args:
@@ -327,7 +328,7 @@ class JobManager:
         with self._lock:
             return self._jobs[job_id]
 
-    def active(self, client: Optional[str] = None) -> list[Job]:
+    def active(self, client: str | None = None) -> list[Job]:
         """Unfinished jobs (queued or running), oldest first, optionally of one client."""
         with self._lock:
             jobs = list(self._unfinished.values())
@@ -384,7 +385,7 @@ class JobManager:
                     w.join()
 
     # ----- internals -------------------------------------------------------------------------
-    def _supersede_locked(self, kind: str, client: str, keep: Optional[Job]) -> list[Job]:
+    def _supersede_locked(self, kind: str, client: str, keep: Job | None) -> list[Job]:
         out: list[Job] = []
         for job in list(self._unfinished.values()):
             if job is not keep and job.client == client and job.kind == kind and not job._cancel_requested:
@@ -402,7 +403,7 @@ class JobManager:
         return []
 
     def _finalize_locked(self, job: Job, status: JobStatus, message: str,
-                         result: Any = None, error: Optional[str] = None) -> bool:
+                         result: Any = None, error: str | None = None) -> bool:
         if job.is_final:
             return False
         job.status = status
@@ -507,7 +508,7 @@ class JobManager:
                     log.exception("on_progress hook of job %s raised", job.id)
         return progress
 
-    def _pick_locked(self) -> Optional[tuple[Job, JobFn]]:
+    def _pick_locked(self) -> tuple[Job, JobFn] | None:
         """The next queued job to run: among jobs whose (client, kind) is under
         ``max_running_per_client``, the one whose client has the fewest running jobs, then the
         oldest submission. Drops finalized entries."""
@@ -563,7 +564,7 @@ class JobManager:
             self._wake.notify_all()
         status: JobStatus
         result: Any = None
-        error: Optional[str] = None
+        error: str | None = None
         try:
             result = fn(self._make_progress(job), job.cancel_token)
             status, message = "done", "done"

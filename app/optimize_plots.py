@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import csv
 import io
-from typing import Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 __all__ = ["front_rows", "front_csv", "front_png", "front_figure", "objective_labels"]
 
@@ -26,7 +27,7 @@ def objective_labels(result: dict) -> list[str]:
     return list(result["settings"]["objectives"])
 
 
-def _value(entry: dict, label: str) -> Optional[float]:
+def _value(entry: dict, label: str) -> float | None:
     v = entry["measures"].get(label.lstrip("-"))
     return None if v is None else float(v)
 
@@ -62,7 +63,7 @@ def _design_text(entry: dict, params: Sequence[str]) -> str:
     return ", ".join(f"{p}={entry['design'][p]:g}" for p in params)
 
 
-def front_png(result: dict, path: str, *, highlight: Optional[dict] = None) -> None:
+def front_png(result: dict, path: str, *, highlight: dict | None = None) -> None:
     """Write a PNG of the front (see module docstring). ``highlight``: an extra point
     ``{"label": str, "measures": {...}}`` drawn as a star (e.g. the paper's design)."""
     import matplotlib
@@ -112,7 +113,7 @@ def front_png(result: dict, path: str, *, highlight: Optional[dict] = None) -> N
     plt.close(fig)
 
 
-def front_figure(result: dict, *, selected: Optional[int] = None) -> Any:
+def front_figure(result: dict, *, selected: int | None = None) -> Any:
     """An interactive plotly figure of the front (scatter for 2 objectives, parallel coordinates
     for 3 or more, best-per-generation for 1); hover shows each design's free parameters and its
     index in the front (the index the explorer's design list uses). ``selected`` is ringed."""

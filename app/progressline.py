@@ -11,15 +11,16 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import Callable, Optional, TextIO
+from collections.abc import Callable
+from typing import TextIO
 
 __all__ = ["progress_line"]
 
 WIDTH = 24
 
 
-def progress_line(label: str, stream: Optional[TextIO] = None, *,
-                  force: bool = False) -> tuple[Optional[Callable[[float, str], None]], Callable[[], None]]:
+def progress_line(label: str, stream: TextIO | None = None, *,
+                  force: bool = False) -> tuple[Callable[[float, str], None] | None, Callable[[], None]]:
     """``(progress, close)`` for a task named ``label``; ``progress`` is ``None`` (nothing drawn)
     unless ``stream`` (default stderr) is a terminal or ``force`` is set."""
     out = sys.stderr if stream is None else stream

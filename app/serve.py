@@ -19,9 +19,8 @@ import socket
 import sys
 import threading
 import time
-from typing import Any, Optional
-
 import urllib.parse
+from typing import Any
 
 import uvicorn
 from uvicorn.protocols.http.h11_impl import H11Protocol
@@ -98,7 +97,7 @@ class _TimedH11(H11Protocol):
             self._head_timer.cancel()
             self._head_timer = None
 
-    def connection_lost(self, exc: Optional[Exception]) -> None:
+    def connection_lost(self, exc: Exception | None) -> None:
         if getattr(self, "_head_timer", None) is not None:
             self._head_timer.cancel()
             self._head_timer = None
@@ -106,7 +105,7 @@ class _TimedH11(H11Protocol):
 
 
 def start_api(app: Any, host: str = "127.0.0.1", port: int = 8081, *, log_level: str = "warning",
-              timeout: float = 20.0, trusted_proxy: Optional[str] = None,
+              timeout: float = 20.0, trusted_proxy: str | None = None,
               header_timeout: float = HEADER_TIMEOUT) -> ApiServer:
     """Start uvicorn for ``app`` in a daemon thread and wait until it accepts connections.
 
@@ -168,7 +167,7 @@ class Running:
         return self.api.url
 
     @property
-    def explorer_url(self) -> Optional[str]:
+    def explorer_url(self) -> str | None:
         """URL of the viser explorer (``None`` when it was not started)."""
         if self.explorer is None:
             return None
@@ -223,8 +222,8 @@ def check_public_url(url: str) -> str:
 
 def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, block: bool = True,
           explorer: bool = True, limits: ApiLimits = ApiLimits(), max_workers: int = 2,
-          quiet: bool = False, public_url: Optional[str] = None,
-          trusted_proxy: Optional[str] = None) -> Running:
+          quiet: bool = False, public_url: str | None = None,
+          trusted_proxy: str | None = None) -> Running:
     """Start the explorer on ``port`` and the API on ``api_port`` (both on ``host``).
 
     Args:

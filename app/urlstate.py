@@ -38,7 +38,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import urllib.parse
-from typing import Any, Literal, Optional
+from typing import Any, Literal
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
@@ -123,7 +123,7 @@ def encode_pin(design: Design) -> str:
     return ",".join([format_number(getattr(design, k)) for k in DESIGN_KEYS] + [design.eta_range])
 
 
-def parse_pin(raw: str) -> tuple[Optional[Design], Optional[str]]:
+def parse_pin(raw: str) -> tuple[Design | None, str | None]:
     """:func:`encode_pin` read back, or ``(None, message)`` naming what is wrong (the same ranges as
     the design fields)."""
     parts = [p.strip() for p in raw.split(",")]
@@ -142,7 +142,7 @@ def parse_pin(raw: str) -> tuple[Optional[Design], Optional[str]]:
         return None, f"pin: {exc}"
 
 
-def check_field(key: str, value: float) -> Optional[str]:
+def check_field(key: str, value: float) -> str | None:
     """The one message for a numeric field outside its accepted range (``None`` when valid)."""
     rng = {**DESIGN_RANGES, **POSE_RANGES, **SETTING_RANGES}[key]
     if not (math.isfinite(value) and rng.lo <= value <= rng.hi):
@@ -200,9 +200,9 @@ class ExplorerState:
     cut_keep: CutKeep = "below"
     opacity: float = 0.6
     joints: Joints = dataclasses.field(default_factory=Joints)
-    pin: Optional[Design] = None
+    pin: Design | None = None
 
-    def replace(self, **changes: Any) -> "ExplorerState":
+    def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
         return dataclasses.replace(self, **changes)
 
@@ -221,7 +221,7 @@ def format_number(value: float) -> str:
     return text
 
 
-def _parse_fields(keys, values: dict[str, str], ranges: dict[str, "Range"], messages: list[str]) -> dict[str, float]:
+def _parse_fields(keys, values: dict[str, str], ranges: dict[str, Range], messages: list[str]) -> dict[str, float]:
     """:func:`_parse_number` for every ``key`` present in ``values``; bad ones add a message."""
     out: dict[str, float] = {}
     for key in keys:
@@ -235,7 +235,7 @@ def _parse_fields(keys, values: dict[str, str], ranges: dict[str, "Range"], mess
 
 
 def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
-                  range_text: Optional[str] = None) -> tuple[Optional[float], Optional[str]]:
+                  range_text: str | None = None) -> tuple[float | None, str | None]:
     """Parse one number and check it lies in ``rng``; returns (value, None) or (None, message)."""
     valid = range_text or rng.text(unit)
     try:
@@ -249,7 +249,7 @@ def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
     return (0.0 if v == 0.0 else v), None
 
 
-def _parse_choice(key: str, raw: str, options: tuple[str, ...]) -> tuple[Optional[str], Optional[str]]:
+def _parse_choice(key: str, raw: str, options: tuple[str, ...]) -> tuple[str | None, str | None]:
     if raw in options:
         return raw, None
     return None, f"{key} = {_quote(raw)} is invalid; valid values: {', '.join(options)}"

@@ -34,8 +34,9 @@ import json
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable, Optional
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
@@ -151,7 +152,8 @@ STEPS: list[tuple[str, float, float]] = []
 def _time_server_steps() -> None:
     """Time the explorer's server-side steps that its events do not split (measurement only: the
     same functions run, wrapped): measures + bracket of a result, and a shell's GLB export + send."""
-    from paraspace.app import explorer, jsbridge, scene, workspace_controller, workspace_job
+    from paraspace.app.explorer import jsbridge, scene, workspace_controller, workspace_job
+    from paraspace.app.explorer import server as explorer
 
     def timed(what: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         def run(*a: Any, **k: Any) -> Any:
@@ -398,7 +400,7 @@ def main() -> None:
 
             page.get_by_role("tab", name="Design").click()
 
-            def press_a(trace_to: Optional[Path] = None) -> None:
+            def press_a(trace_to: Path | None = None) -> None:
                 nonlocal skipped_previews
                 n = page.evaluate("() => window.__probe.shell.length")
                 t_press = time.perf_counter()

@@ -13,10 +13,9 @@ Usage: python benchmarks/optimize_readme_figure.py [--out docs/optimize_front.pn
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
-import json
-
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # measure this checkout
 

@@ -41,7 +41,6 @@ surface (``h^-2``), not the volume (``h^-3``).
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -322,7 +321,7 @@ def _advance(b0, bn, state, win, all_chains, out):
 
 
 def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, np.ndarray], h: float,
-               args: tuple, ny_eval: int, all_chains: bool, progress: Optional[Reporter] = None,
+               args: tuple, ny_eval: int, all_chains: bool, progress: Reporter | None = None,
                cancel: CancelToken = None) -> np.ndarray:
     """Per-voxel chain masks on the grid's columns ``y < ny_eval`` (the rest is left 0 for the
     caller's mirror step), decided coarse to fine (see the module docstring).

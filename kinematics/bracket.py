@@ -53,13 +53,25 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
 
-from .blocks import (FAIL, OK, TOP_BLOCK, UNKNOWN, _fill_kernel, _split, _top_blocks, block_centre, decide_chain,
-                     initial_windows, rounding_margin, sub_arcs)
+from .blocks import (
+    FAIL,
+    OK,
+    TOP_BLOCK,
+    UNKNOWN,
+    _fill_kernel,
+    _split,
+    _top_blocks,
+    block_centre,
+    decide_chain,
+    initial_windows,
+    rounding_margin,
+    sub_arcs,
+)
 from .design import Design, ParameterError
 from .feasibility import ChainTables
 from .grid import GridSpec
@@ -216,8 +228,8 @@ def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
 
 
 def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
-                 progress: Optional[Reporter] = None, cancel: CancelToken = None,
-                 chain_bits: Optional[np.ndarray] = None) -> np.ndarray:
+                 progress: Reporter | None = None, cancel: CancelToken = None,
+                 chain_bits: np.ndarray | None = None) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
     ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube."""
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
@@ -260,7 +272,7 @@ _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) f
 
 
 def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float, cls: np.ndarray,
-                    chain_bits: np.ndarray, levels: int, progress: Optional[Reporter] = None,
+                    chain_bits: np.ndarray, levels: int, progress: Reporter | None = None,
                     cancel: CancelToken = None) -> tuple[float, float, int]:
     """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
     same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
@@ -305,7 +317,7 @@ def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_f
 
 
 def volume_bracket(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float = 0.0,
-                   progress: Optional[Reporter] = None, cancel: CancelToken = None,
+                   progress: Reporter | None = None, cancel: CancelToken = None,
                    refine: int = REFINE) -> VolumeBracket:
     """The certified bracket of the continuous workspace volume over ``grid`` (module docstring):
     cubes of the grid, then ``refine`` halvings of the boundary cubes (:func:`refine_boundary`)."""
@@ -320,8 +332,8 @@ def volume_bracket(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_fl
                          cubes_boundary=n_b, voxel=grid.h, refine=refine, boundary_left=left)
 
 
-def bracket_of(result: "object", progress: Optional[Reporter] = None, cancel: CancelToken = None,
-               refine: Optional[int] = None) -> VolumeBracket:
+def bracket_of(result: object, progress: Reporter | None = None, cancel: CancelToken = None,
+               refine: int | None = None) -> VolumeBracket:
     """:func:`volume_bracket` on the grid, orientation, arc samples and joint cones of a computed
     ``kinematics.workspace.WorkspaceResult`` (``refine``: default the settings' ``bracket_refine``).
 

@@ -146,7 +146,7 @@ class Design:
         """``L = a / 2`` used to make the Jacobian dimensionally homogeneous (paper, eq. (26))."""
         return 0.5 * self.a
 
-    def replace(self, **changes: Any) -> "Design":
+    def replace(self, **changes: Any) -> Design:
         """A copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
 
@@ -155,7 +155,7 @@ class Design:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "Design":
+    def from_dict(cls, data: dict[str, Any]) -> Design:
         """Build from a dict, rejecting unknown keys with a :class:`ParameterError`."""
         known = {f.name for f in dataclasses.fields(cls)}
         for key in data:

@@ -51,7 +51,7 @@ import dataclasses
 import itertools
 import math
 import time
-from typing import Optional, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numba import njit, prange
@@ -418,7 +418,7 @@ def check_kappa_min(kappa_min: float) -> float:
 
 
 def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved", *,
-                    n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: Optional[ProgressFn] = None,
+                    n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: ProgressFn | None = None,
                     cancel: CancelToken = None) -> DexterityField:
     """``1/kappa`` at every reachable voxel centre of ``result`` (at its orientation), the GCI and
     the well-conditioned workspace ``1/kappa >= kappa_min`` (module docstring)."""

@@ -44,7 +44,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Optional
 
 import numpy as np
 
@@ -147,8 +146,8 @@ class DexterousResult:
 
 def total_orientation_workspace(design: Design, tilt: float, torsion: float, step: float = 5.0,
                                 settings: WorkspaceSettings = WorkspaceSettings(),
-                                position: Optional[WorkspaceResult] = None,
-                                progress: Optional[ProgressFn] = None,
+                                position: WorkspaceResult | None = None,
+                                progress: ProgressFn | None = None,
                                 cancel: CancelToken = None) -> DexterousResult:
     """The total-orientation workspace for ``tilt`` (degrees, ``[0, 90]``) and ``torsion``
     (``[0, 180]``) with the sample set of :func:`orientation_samples` (module docstring).

@@ -24,14 +24,13 @@ a designer can read ("the surface is set by l_max (71 %) ...": lengthen the legs
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional
 
 import numpy as np
 from scipy import ndimage as ndi
 
 from .geometry import platform_points
-from .joints import Joints
 from .inverse import leg_margin
+from .joints import Joints
 from .redundancy import _best_carriage, _chain_margins
 from .rotation import euler_zyx_deg
 from .workspace import WorkspaceResult, chain_masks_at
@@ -87,8 +86,8 @@ def _violated_limit(design, B: np.ndarray, chain: int) -> str:
     return "l_max" if lengths[worst] > design.l_max else "l_min"
 
 
-def limit_binding(result: WorkspaceResult, *, voxels: Optional[np.ndarray] = None,
-                  max_samples: Optional[int] = 1500, seed: int = 0) -> LimitBinding:
+def limit_binding(result: WorkspaceResult, *, voxels: np.ndarray | None = None,
+                  max_samples: int | None = 1500, seed: int = 0) -> LimitBinding:
     """Which limit binds at the workspace surface, per chain (module docstring).
 
     Args:

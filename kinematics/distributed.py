@@ -28,10 +28,11 @@ import logging
 import math
 import os
 import time
-from typing import Any, Callable, Mapping, Optional, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 from .design import PARAMS, Design, ParameterError
-from .progress import CancelToken, Cancelled, ProgressFn, is_cancelled
+from .progress import Cancelled, CancelToken, ProgressFn, is_cancelled
 from .workspace import WorkspaceSettings
 
 __all__ = ["sweep_grid", "grid_designs", "WORKER_ENV"]
@@ -91,7 +92,7 @@ def _one_line(exc: BaseException) -> str:
     return text if len(text) <= 500 else text[:497] + "..."
 
 
-def _open_client(scheduler: Optional[str], n_workers: Optional[int], connect_timeout: float) -> tuple[Any, Any]:
+def _open_client(scheduler: str | None, n_workers: int | None, connect_timeout: float) -> tuple[Any, Any]:
     """``(client, cluster_or_None)``; the cluster is ours to close when we started it."""
     from distributed import Client, LocalCluster
 
@@ -116,7 +117,7 @@ def _open_client(scheduler: Optional[str], n_workers: Optional[int], connect_tim
     return client, cluster
 
 
-def _cluster_trouble(client: Any, timeout: float = 3.0) -> Optional[str]:
+def _cluster_trouble(client: Any, timeout: float = 3.0) -> str | None:
     """``None`` while the scheduler answers and has at least one worker, else why not."""
     import concurrent.futures
 
@@ -156,9 +157,9 @@ def _close_quietly(client: Any, cluster: Any) -> None:
 
 
 def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
-               orientation: Any = None, scheduler: Optional[str] = None, n_workers: Optional[int] = None,
-               progress: Optional[ProgressFn] = None, cancel: CancelToken = None, retries: int = 1,
-               evaluate: Optional[Callable[..., dict]] = None, connect_timeout: float = 10.0,
+               orientation: Any = None, scheduler: str | None = None, n_workers: int | None = None,
+               progress: ProgressFn | None = None, cancel: CancelToken = None, retries: int = 1,
+               evaluate: Callable[..., dict] | None = None, connect_timeout: float = 10.0,
                lost_after: float = 10.0) -> list[dict]:
     """Evaluate every design of the Cartesian product of ``params`` on a Dask cluster.
 
@@ -206,7 +207,7 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
     if evaluate is None:
         from .sweep import evaluate_design as evaluate
     n = len(designs)
-    rows: list[Optional[dict]] = [None] * n
+    rows: list[dict | None] = [None] * n
     if progress is not None:
         progress(0.0, f"starting {'cluster' if scheduler is None else 'client'} for {n} points")
     if is_cancelled(cancel):
@@ -224,7 +225,7 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
         done = failed = 0
         pending = set(f.key for f in futures)
         alive_at = last_check = time.monotonic()
-        lost: Optional[str] = None
+        lost: str | None = None
         while pending:
             if is_cancelled(cancel):
                 client.cancel([f for f in futures if f.key in pending])

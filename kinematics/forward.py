@@ -9,7 +9,7 @@ guess (by default the platform centred above the base at a height estimated from
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -46,7 +46,7 @@ def _to_pose(v: np.ndarray) -> Pose:
 
 
 def forward_kinematics(design: Design, lengths: Sequence[float], d: Sequence[float], eta_deg: Sequence[float],
-                       initial: Optional[Pose] = None, tol: float = 1e-10, max_iter: int = 50) -> ForwardResult:
+                       initial: Pose | None = None, tol: float = 1e-10, max_iter: int = 50) -> ForwardResult:
     """Newton solve of ``l_i^j(pose) = lengths`` for the pose (see module docstring).
 
     Args:

@@ -18,7 +18,7 @@ class GridSpec:
     shape: tuple[int, int, int]
 
     @classmethod
-    def from_bounds(cls, lo: tuple[float, float, float], hi: tuple[float, float, float], h: float) -> "GridSpec":
+    def from_bounds(cls, lo: tuple[float, float, float], hi: tuple[float, float, float], h: float) -> GridSpec:
         """Cover the box ``[lo, hi]`` with voxels of edge ``h``; centres are ``lo + (i + 1/2) h``.
 
         The count per axis is ``ceil((hi - lo)/h - 1e-9)``, so the grid spans at least the box.

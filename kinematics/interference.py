@@ -29,7 +29,6 @@ witnesses (about 15 segment distances per pose).
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -195,7 +194,7 @@ def _clear_kernel(points, us, jcs, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2,
 
 
 def interference_free(design: Design, joints: Joints, points: np.ndarray, rotations: np.ndarray, n_eta: int,
-                      where: Optional[np.ndarray] = None) -> np.ndarray:
+                      where: np.ndarray | None = None) -> np.ndarray:
     """Whether each (point, rotation) pose has a carriage configuration found by the witness search
     (module docstring) in which all legs clear each other: bool array (N, M). Poses where ``where``
     is False are skipped (False in the result)."""
@@ -218,7 +217,7 @@ def interference_free(design: Design, joints: Joints, points: np.ndarray, rotati
 
 
 def clear_configuration(design: Design, joints: Joints, position, rotation: np.ndarray,
-                        n_eta: int) -> Optional[tuple[np.ndarray, np.ndarray]]:
+                        n_eta: int) -> tuple[np.ndarray, np.ndarray] | None:
     """The carriage configuration ``(d, eta_deg)`` (each shape (3,)) that the witness search of the
     module docstring finds for one platform pose, or ``None`` when it finds none (also when a chain
     fails the stroke or cone limits). With ``leg_diameter = 0`` every witness clears."""

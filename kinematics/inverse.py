@@ -3,7 +3,7 @@ carriage values, and the state of each leg against its limits."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

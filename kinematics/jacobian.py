@@ -22,7 +22,7 @@ Velocity relation (eq. (21)): ``J_x xdot = J_q qdot`` with ``x = [P_o, Theta]``,
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

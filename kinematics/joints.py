@@ -117,7 +117,7 @@ class Joints:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any] | None) -> "Joints":
+    def from_dict(cls, data: dict[str, Any] | None) -> Joints:
         """Build from a dict, rejecting unknown keys with a :class:`ParameterError`."""
         data = dict(data or {})
         known = {f.name for f in dataclasses.fields(cls)}

@@ -38,7 +38,6 @@ at about one arc sample per chain; one parallel launch over the rotations (dynam
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -170,7 +169,7 @@ def _along_kernel(points, us, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho
 
 
 def reachable_along(design: Design, points: np.ndarray, rotations: np.ndarray, eta_step: float = 0.5,
-                    joints: Optional[Joints] = None) -> np.ndarray:
+                    joints: Joints | None = None) -> np.ndarray:
     """Whether each point is reachable at each orientation: bool array (N, M) for ``points`` (N, 3)
     and rotation matrices ``rotations`` (M, 3, 3), identical to
     :func:`kinematics.workspace.reachable_pairs` (module docstring); fast when consecutive points

@@ -197,7 +197,6 @@ h = 2 and 0.8 s at h = 1.5 on two cores (shared), 0.3 s at h = 3, 0.03 s at h = 
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -222,7 +221,7 @@ class WorkspaceMeasures:
     volume: float
     voxels: int
     voxel_size: float
-    bounds: Optional[dict]
+    bounds: dict | None
     extents: list[float]
     components: int
     voids: int
@@ -235,7 +234,7 @@ class WorkspaceMeasures:
     euler_characteristic: int
     box_contact_fraction: float
     boundary_complete: bool
-    chain_binding: Optional[dict]
+    chain_binding: dict | None
     # --- supplementary fields (beyond the shared contract) ---------------------------------
     connectivity: int = 1
     hollowness_mode: str = "hull"
@@ -248,7 +247,7 @@ class WorkspaceMeasures:
     filled_components: int = 0
     touched_faces: list[str] = dataclasses.field(default_factory=list)
     clipped_faces: list[str] = dataclasses.field(default_factory=list)
-    floor_face: Optional[str] = None
+    floor_face: str | None = None
     hull_volume: float = 0.0
     solidity: float = 0.0
     # --- measures that do not change with the voxel size (module docstring, "Stable measures") --
@@ -386,7 +385,7 @@ def hull_mask(occupancy: np.ndarray) -> np.ndarray:
     return out
 
 
-def hollow_mask(occupancy: np.ndarray, mode: str = "hull", hull: Optional[np.ndarray] = None) -> np.ndarray:
+def hollow_mask(occupancy: np.ndarray, mode: str = "hull", hull: np.ndarray | None = None) -> np.ndarray:
     """The set ``U`` of the hollowness definition (see the module docstring).
 
     Args:
@@ -512,7 +511,7 @@ def _ratio(a: float, b: float) -> float:
     return float(a / (a + b)) if a + b > 0 else 0.0
 
 
-def chain_binding(chain_mask: np.ndarray, h: float, occupancy: Optional[np.ndarray] = None) -> dict:
+def chain_binding(chain_mask: np.ndarray, h: float, occupancy: np.ndarray | None = None) -> dict:
     """Which chain limits the workspace (definitions in the module docstring, ``chain_binding``).
 
     Args:
@@ -586,7 +585,7 @@ def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True
 def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollowness: str = "hull",
                       floor_closes: bool = True, completeness: str = "sealed",
                       open_cavity_tolerance: float = 0.02, piece_fraction: float = 0.01,
-                      feature_radius: Optional[float] = None,
+                      feature_radius: float | None = None,
                       feature_radius_extent: float = 0.02) -> WorkspaceMeasures:
     """Compute every measure of the module docstring for one workspace.
 

@@ -56,13 +56,14 @@ import dataclasses
 import math
 import re
 import time
-from typing import Any, Callable, Mapping, Optional, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings
-from .progress import CancelToken, Cancelled, ProgressFn, check, is_cancelled
+from .progress import Cancelled, CancelToken, ProgressFn, check, is_cancelled
 from .serialize import jsonable
 from .workspace import WorkspaceSettings
 
@@ -96,12 +97,12 @@ class Measure:
 
     name: str
     description: str
-    key: Optional[str] = None
-    derive: Optional[Callable[[dict], Any]] = None
+    key: str | None = None
+    derive: Callable[[dict], Any] | None = None
     flag: bool = False
     needs_orientation: bool = False
 
-    def value(self, row: Mapping[str, Any]) -> Optional[float]:
+    def value(self, row: Mapping[str, Any]) -> float | None:
         """The measure of an evaluated row (``None`` when the row lacks it or it is not finite)."""
         raw = self.derive(dict(row)) if self.derive is not None else row.get(self.key or self.name)
         if raw is None:
@@ -134,8 +135,8 @@ def _l_max(row: dict) -> float:
     return float(d["l_min"]) + float(d["l_s"])
 
 
-def _extent(axis: int) -> Callable[[dict], Optional[float]]:
-    def f(row: dict) -> Optional[float]:
+def _extent(axis: int) -> Callable[[dict], float | None]:
+    def f(row: dict) -> float | None:
         ext = row.get("extents")
         return None if not ext else float(ext[axis])
     return f
@@ -235,13 +236,13 @@ class Constraint:
 
     measure: str
     op: str = "true"
-    bound: Optional[float] = None
+    bound: float | None = None
 
     @property
     def label(self) -> str:
         return self.measure if self.op == "true" else f"{self.measure}{self.op}{self.bound:g}"
 
-    def violation(self, value: Optional[float]) -> float:
+    def violation(self, value: float | None) -> float:
         """pymoo's inequality value (feasible when ``<= 0``); 1 for a missing value."""
         if value is None:
             return 1.0
@@ -321,7 +322,7 @@ class OptimizeSettings:
     constraints: Any = ()
     design: Design = dataclasses.field(default_factory=Design)
     workspace: WorkspaceSettings = dataclasses.field(default_factory=lambda: WorkspaceSettings(voxel=4.0))
-    orientation: Optional[OrientationSettings] = None
+    orientation: OrientationSettings | None = None
     population: int = 16
     generations: int = 12
     seed: int = 1
@@ -405,7 +406,7 @@ class OptimizeSettings:
         return any(MEASURES[n].needs_orientation for n in names)
 
     @property
-    def orientation_used(self) -> Optional[OrientationSettings]:
+    def orientation_used(self) -> OrientationSettings | None:
         """The orientation settings evaluations run with (``None`` when no measure needs them)."""
         if not self.needs_orientation:
             return None
@@ -467,10 +468,10 @@ def _one_line(exc: BaseException) -> str:
 
 
 def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, *,
-                        orientation: Optional[OrientationSettings] = None, cache: Any = None,
-                        client: Any = None, evaluate: Optional[Callable[..., dict]] = None, retries: int = 1,
+                        orientation: OrientationSettings | None = None, cache: Any = None,
+                        client: Any = None, evaluate: Callable[..., dict] | None = None, retries: int = 1,
                         cancel: CancelToken = None,
-                        on_point: Optional[Callable[[int, int], None]] = None) -> tuple[list[dict], int]:
+                        on_point: Callable[[int, int], None] | None = None) -> tuple[list[dict], int]:
     """Evaluate a batch of designs with the sweep unit of work, each distinct design at most once.
 
     Cached designs (``cache``: a :class:`~kinematics.sweep.ResultCache`) are taken from the cache;
@@ -693,10 +694,10 @@ def _algorithm(settings: OptimizeSettings) -> Any:
     return NSGA3(ref_dirs=ref_dirs, pop_size=pop, eliminate_duplicates=True)
 
 
-def optimize(settings: OptimizeSettings, *, scheduler: Optional[str] = None, workers: Optional[int] = None,
-             client: Any = None, cache: Any = None, progress: Optional[ProgressFn] = None,
-             cancel: CancelToken = None, on_generation: Optional[Callable[[dict], None]] = None,
-             evaluate: Optional[Callable[..., dict]] = None, retries: int = 1,
+def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, workers: int | None = None,
+             client: Any = None, cache: Any = None, progress: ProgressFn | None = None,
+             cancel: CancelToken = None, on_generation: Callable[[dict], None] | None = None,
+             evaluate: Callable[..., dict] | None = None, retries: int = 1,
              connect_timeout: float = 10.0) -> OptimizeResult:
     """Pareto front of ``settings.objectives`` over ``settings.params`` (see module docstring).
 
@@ -790,8 +791,8 @@ def optimize(settings: OptimizeSettings, *, scheduler: Optional[str] = None, wor
             gen += 1
             pop = algorithm.ask()
             X = pop.get("X")
-            designs: list[Optional[Design]] = []
-            rows: list[Optional[dict]] = []
+            designs: list[Design | None] = []
+            rows: list[dict | None] = []
             for x in X:
                 try:
                     designs.append(settings.design_at(x))

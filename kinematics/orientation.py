@@ -79,15 +79,15 @@ import dataclasses
 import functools
 import math
 import time
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
 from .design import Design, ParameterError
 from .joints import Joints
+from .line_scan import reachable_along
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
-from .line_scan import reachable_along
 from .workspace import reachable, reachable_pairs  # noqa: F401 - the documented test and its oracle
 
 #: Line keys and their unit direction (``None``: the z line, positions are heights).
@@ -152,8 +152,8 @@ class OrientationSettings:
     position_delta: str = "per_region"
     eta_step: float = 0.5
     z_min: float = 0.0
-    z_max: Optional[float] = None
-    s_max: Optional[float] = None
+    z_max: float | None = None
+    s_max: float | None = None
     joints: Joints = Joints()
 
     def __post_init__(self) -> None:
@@ -293,11 +293,11 @@ class OrientationRegion:
     delta_angle: float
     delta_position: float
     area: float
-    selected: Optional[np.ndarray] = None
+    selected: np.ndarray | None = None
     position_range: tuple[float, float] = (0.0, 0.0)
     angle_range: tuple[float, float] = (0.0, 0.0)
-    angle_interval: Optional[tuple[float, float]] = None
-    position_interval: Optional[tuple[float, float]] = None
+    angle_interval: tuple[float, float] | None = None
+    position_interval: tuple[float, float] | None = None
 
     @property
     def symbol(self) -> str:
@@ -344,8 +344,8 @@ class OrientationRegion:
 
 def make_region(line: str, rotation: str, positions: np.ndarray, angles: np.ndarray, feasible: np.ndarray,
                 *, position_step: float, angle_step: float,
-                position_range: Optional[tuple[float, float]] = None,
-                angle_range: Optional[tuple[float, float]] = None, region: str = "all") -> OrientationRegion:
+                position_range: tuple[float, float] | None = None,
+                angle_range: tuple[float, float] | None = None, region: str = "all") -> OrientationRegion:
     """Build a region and its Δ's from a feasibility grid (eqs. (D1)-(D3) of the module docstring).
 
     ``position_range``/``angle_range`` are the scanned box the cells are clipped to (default: the
@@ -431,7 +431,7 @@ class OrientationResult:
     ti2: float
     compute_seconds: float
     deltas: dict[str, float] = dataclasses.field(default_factory=dict)
-    design: Optional[Design] = None
+    design: Design | None = None
 
     @property
     def saturated(self) -> dict[str, bool]:
@@ -489,7 +489,7 @@ def _rotation_table(rotation: str, angle_range: float, angle_step: float) -> np.
 
 
 def scan_line(design: Design, line: str, rotation: str, settings: OrientationSettings,
-              progress: Optional[ProgressFn] = None, cancel: CancelToken = None) -> OrientationRegion:
+              progress: ProgressFn | None = None, cancel: CancelToken = None) -> OrientationRegion:
     """Feasibility grid of one rotation along one line: every (position, angle) pair in one parallel
     launch over the angles (:func:`kinematics.line_scan.reachable_along`, identical to
     :func:`kinematics.workspace.reachable_pairs`), in slices of angles for progress and
@@ -514,7 +514,7 @@ def scan_line(design: Design, line: str, rotation: str, settings: OrientationSet
 
 
 def orientation_workspace(design: Design, settings: OrientationSettings = OrientationSettings(),
-                          progress: Optional[ProgressFn] = None, cancel: CancelToken = None) -> OrientationResult:
+                          progress: ProgressFn | None = None, cancel: CancelToken = None) -> OrientationResult:
     """Orientation workspace along the z, y' and x lines and the indices TI_1, TI_2 of eq. (28).
 
     See the module docstring for the lines, the rotations and the definition (D1)-(D3) of the Δ's.

@@ -20,7 +20,7 @@ paper); ``paraspace paper --json`` prints this dictionary.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Optional
+from typing import Any
 
 from .design import Design
 from .joints import Joints
@@ -53,7 +53,7 @@ def _closest(rows: list[dict], key: str, target: float) -> str:
     return min(rows, key=lambda r: abs(r[key] - target))["convention"]
 
 
-def paper_comparison(voxel: float = 4.0, progress: Optional[ProgressFn] = None,
+def paper_comparison(voxel: float = 4.0, progress: ProgressFn | None = None,
                      cancel: CancelToken = None) -> dict[str, Any]:
     """The comparison of the module docstring (JSON-serialisable). ``voxel`` is the edge of every
     workspace computed (h = 4: about 10 s on two cores, most of it the orientation scans)."""

@@ -42,7 +42,8 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
-from typing import Any, Iterator, Optional
+from collections.abc import Iterator
+from typing import Any
 
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
@@ -56,7 +57,7 @@ LOAD_RULE = True
 _CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def _other_runnable() -> Optional[int]:
+def _other_runnable() -> int | None:
     """Runnable tasks on the machine other than the calling thread (``/proc/loadavg``'s 4th field
     counts the running and runnable tasks, the caller included); ``None`` where unavailable."""
     try:
@@ -104,7 +105,7 @@ class _KernelLock:
     def locked(self) -> bool:
         return self._lock.locked()
 
-    def __enter__(self) -> "_KernelLock":
+    def __enter__(self) -> _KernelLock:
         import numba
 
         self._lock.acquire()

@@ -52,7 +52,7 @@ class Pose:
         return np.array([getattr(self, f) for f in POSE_FIELDS])
 
     @classmethod
-    def from_array(cls, values: Any) -> "Pose":
+    def from_array(cls, values: Any) -> Pose:
         """From ``[x, y, z, psi, theta, phi]``; raises :class:`ParameterError` on a wrong length."""
         vals = list(values)
         if len(vals) != 6:

@@ -8,7 +8,8 @@ chunks of work and raises :class:`Cancelled` when asked to stop.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional, Protocol, Union
+from collections.abc import Callable
+from typing import Any, Protocol, Union
 
 
 class Cancelled(Exception):
@@ -41,7 +42,7 @@ def check(cancel: CancelToken) -> None:
 class Reporter:
     """Maps the progress of a sub-task onto ``[start, stop]`` of a parent's progress."""
 
-    def __init__(self, progress: Optional[ProgressFn], start: float = 0.0, stop: float = 1.0) -> None:
+    def __init__(self, progress: ProgressFn | None, start: float = 0.0, stop: float = 1.0) -> None:
         self.progress, self.start, self.stop = progress, start, stop
 
     def __call__(self, fraction: float, message: str = "") -> None:
@@ -49,7 +50,7 @@ class Reporter:
             f = min(1.0, max(0.0, float(fraction)))
             self.progress(self.start + (self.stop - self.start) * f, message)
 
-    def sub(self, start: float, stop: float) -> "Reporter":
+    def sub(self, start: float, stop: float) -> Reporter:
         span = self.stop - self.start
         return Reporter(self.progress, self.start + span * start, self.start + span * stop)
 

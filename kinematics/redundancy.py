@@ -32,7 +32,7 @@ engine's one-sided sampling error misses (never the reverse).
 from __future__ import annotations
 
 import dataclasses
-from typing import Optional, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -40,9 +40,9 @@ from .design import Design
 from .feasibility import ChainTables, chain_search, default_n_eta, feasible_rho
 from .geometry import GAMMA, LEG_SIGN, base_points, platform_points
 from .interference import clear_configuration, segment_distance
-from .joints import Joints, cone_angles, cone_table
 from .inverse import check_carriage, leg_lengths, leg_margin, leg_states
 from .jacobian import jacobians
+from .joints import Joints, cone_angles, cone_table
 from .pose import Pose
 
 
@@ -73,12 +73,12 @@ class Resolution:
     eta: np.ndarray  # (3,) degrees
     lengths: np.ndarray  # (3, 2)
     leg_status: list[list[str]]
-    condition_number: Optional[float]
+    condition_number: float | None
     message: str
     mode: str  # "auto" or "manual"
     joints: Joints = dataclasses.field(default_factory=Joints)
-    cone_angles: Optional[np.ndarray] = None  # (3, 2, 2) degrees at the U and S joints (joint options)
-    min_leg_distance: Optional[float] = None  # smallest distance between two legs' axes (interference)
+    cone_angles: np.ndarray | None = None  # (3, 2, 2) degrees at the U and S joints (joint options)
+    min_leg_distance: float | None = None  # smallest distance between two legs' axes (interference)
 
     @property
     def q(self) -> np.ndarray:
@@ -196,7 +196,7 @@ def _pair_distance(dp: np.ndarray, b: np.ndarray) -> float:
 
 
 def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: str,
-              joints: Optional[Joints] = None) -> Resolution:
+              joints: Joints | None = None) -> Resolution:
     joints = joints or Joints()
     lengths = leg_lengths(design, pose, d, eta)
     status = leg_states(design, lengths)
@@ -237,7 +237,7 @@ def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: 
                       cone_angles=angles, min_leg_distance=gap)
 
 
-def resolve_redundancy(design: Design, pose: Pose, joints: Optional[Joints] = None,
+def resolve_redundancy(design: Design, pose: Pose, joints: Joints | None = None,
                        eta_step: float = 0.5) -> Resolution:
     """Redundancy resolution (module docstring): best carriage values per chain, leg lengths, leg
     states, the condition number of ``J`` (eq. (26)) there, and a one-line verdict. ``joints`` and
@@ -262,7 +262,7 @@ def resolve_redundancy(design: Design, pose: Pose, joints: Optional[Joints] = No
 
 
 def inverse_kinematics(design: Design, pose: Pose, d: Sequence[float], eta_deg: Sequence[float],
-                       joints: Optional[Joints] = None) -> Resolution:
+                       joints: Joints | None = None) -> Resolution:
     """IK with hand-set carriage values (validated against the strokes): leg lengths and states
     (and, with ``joints``, the cone angles and leg clearances)."""
     dd, ee = check_carriage(design, d, eta_deg)

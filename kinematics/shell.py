@@ -74,7 +74,6 @@ from __future__ import annotations
 
 import io
 import math
-from typing import Optional
 
 import numpy as np
 import trimesh
@@ -281,7 +280,7 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
 
 
 def _remesh_blocks(field: np.ndarray, pad: int, origin, h: float, max_faces: int, target: float,
-                   meta: dict, rtol: float = _VOLUME_RTOL) -> Optional[trimesh.Trimesh]:
+                   meta: dict, rtol: float = _VOLUME_RTOL) -> trimesh.Trimesh | None:
     """Coarsest-first-fitting block re-mesh: marching cubes on the ``k^3`` block means of the field
     (``k = 2, 3, ...``) at the volume-preserving level, for the smallest ``k`` whose closed mesh
     fits ``max_faces``. The block means keep sub-voxel information, so the surface is smooth and its
@@ -323,9 +322,9 @@ def _reduce(mesh: trimesh.Trimesh, field: np.ndarray, pad: int, origin, h: float
     return fallback
 
 
-def workspace_shell(result: WorkspaceResult, *, max_faces: Optional[int] = None, smooth_sigma: float = 0.0,
+def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, smooth_sigma: float = 0.0,
                     color_by_z: bool = True, preserve_volume: bool = True,
-                    color_range: Optional[tuple[float, float]] = None,
+                    color_range: tuple[float, float] | None = None,
                     reduction: str = "quadric", volume_rtol: float = _VOLUME_RTOL) -> trimesh.Trimesh:
     """The closed, outward-oriented boundary mesh of the workspace (module docstring, steps 1-5).
 
@@ -446,7 +445,7 @@ def shell_volume_error(result: WorkspaceResult, mesh: trimesh.Trimesh) -> float:
 
 
 def smooth_for_display(mesh: trimesh.Trimesh, iterations: int = 5,
-                       volume: Optional[float] = None) -> trimesh.Trimesh:
+                       volume: float | None = None) -> trimesh.Trimesh:
     """A copy of ``mesh`` without voxel terracing, for display only (our definition):
     ``iterations`` passes of Taubin's lambda|mu smoothing (lambda = 0.5, mu = -0.53, which does not
     shrink the surface the way Laplacian smoothing does), then a uniform scaling about the centroid

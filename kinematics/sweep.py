@@ -26,14 +26,15 @@ import pathlib
 import tempfile
 import threading
 import time
-from typing import Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from .serialize import jsonable
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
 from .progress import CancelToken, ProgressFn, Reporter, check
+from .serialize import jsonable
 from .workspace import WorkspaceSettings, compute_workspace
 
 #: Bump when the meaning of a cached result changes without a change of the kinematics sources.
@@ -45,7 +46,7 @@ CACHE_SCHEMA = "sweep-1"
 
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
-                    orientation: Optional[OrientationSettings] = None, cancel: CancelToken = None) -> dict:
+                    orientation: OrientationSettings | None = None, cancel: CancelToken = None) -> dict:
     """Measures of one design: the position workspace (``compute_workspace`` + ``measure_workspace``)
     and, when ``orientation`` is given, the indices TI_1, TI_2 of eq. (28).
 
@@ -102,8 +103,8 @@ def _canon(obj: Any) -> Any:
     return str(obj)
 
 
-def cache_key(design: Design, settings: WorkspaceSettings, orientation: Optional[OrientationSettings] = None,
-              version: Optional[str] = None) -> str:
+def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
+              version: str | None = None) -> str:
     """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields
     and the code version."""
     payload = {
@@ -123,8 +124,8 @@ class ResultCache:
     Values are deep-copied in and out, so callers may mutate what they get.
     """
 
-    def __init__(self, max_entries: int = 256, directory: Optional[str | os.PathLike] = None,
-                 version: Optional[str] = None) -> None:
+    def __init__(self, max_entries: int = 256, directory: str | os.PathLike | None = None,
+                 version: str | None = None) -> None:
         if not isinstance(max_entries, int) or isinstance(max_entries, bool) or max_entries < 0:
             raise ParameterError("max_entries", max_entries, "an integer >= 0")
         self.max_entries = max_entries
@@ -132,17 +133,17 @@ class ResultCache:
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
         self.version = version
-        self._mem: "collections.OrderedDict[str, dict]" = collections.OrderedDict()
+        self._mem: collections.OrderedDict[str, dict] = collections.OrderedDict()
         self._lock = threading.RLock()
         self.hits = 0
         self.misses = 0
 
     def key(self, design: Design, settings: WorkspaceSettings,
-            orientation: Optional[OrientationSettings] = None) -> str:
+            orientation: OrientationSettings | None = None) -> str:
         """:func:`cache_key` with this cache's version."""
         return cache_key(design, settings, orientation, self.version)
 
-    def _path(self, key: str) -> Optional[pathlib.Path]:
+    def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"
 
     def _remember(self, key: str, value: dict) -> None:
@@ -153,7 +154,7 @@ class ResultCache:
         while len(self._mem) > self.max_entries:
             self._mem.popitem(last=False)
 
-    def get(self, key: str) -> Optional[dict]:
+    def get(self, key: str) -> dict | None:
         """The cached value (a copy), or ``None``."""
         with self._lock:
             if key in self._mem:
@@ -224,8 +225,8 @@ def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design
     return [design.replace(**{param: v}) for v in vals]
 
 
-def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: Optional[OrientationSettings],
-                     cancel: CancelToken, cache: Optional[ResultCache]) -> dict:
+def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None,
+                     cancel: CancelToken, cache: ResultCache | None) -> dict:
     key = cache.key(design, settings, orientation) if cache is not None else None
     if cache is not None:
         hit = cache.get(key)  # type: ignore[arg-type]
@@ -238,8 +239,8 @@ def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: O
 
 
 def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
-             orientation: Optional[OrientationSettings] = None, progress: Optional[ProgressFn] = None,
-             cancel: CancelToken = None, cache: Optional[ResultCache] = None) -> list[dict]:
+             orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
+             cancel: CancelToken = None, cache: ResultCache | None = None) -> list[dict]:
     """Measures against one design parameter (paper Fig. 4): ``design`` with ``param`` set to each of
     ``values``, the other fields fixed.
 
@@ -265,9 +266,9 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
 
 
 def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
-             settings: WorkspaceSettings, *, orientation: Optional[OrientationSettings] = None,
-             progress: Optional[ProgressFn] = None, cancel: CancelToken = None,
-             cache: Optional[ResultCache] = None) -> dict:
+             settings: WorkspaceSettings, *, orientation: OrientationSettings | None = None,
+             progress: ProgressFn | None = None, cancel: CancelToken = None,
+             cache: ResultCache | None = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
     Returns:

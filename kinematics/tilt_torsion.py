@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Optional, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -160,15 +160,15 @@ class TiltTorsionReport:
     position: list[float]
     reachable: bool  # the zero orientation is reachable there
     azimuths: list[float]
-    max_tilt: list[Optional[float]]  # per azimuth, at zero torsion (None where unreachable)
+    max_tilt: list[float | None]  # per azimuth, at zero torsion (None where unreachable)
     tilt_saturated: list[bool]  # the tilt scan reached tilt_limit
-    torsion_min: Optional[float]  # at zero tilt
-    torsion_max: Optional[float]
+    torsion_min: float | None  # at zero tilt
+    torsion_max: float | None
     torsion_saturated: list[bool]  # [negative side, positive side] reached torsion_limit
     settings: TiltTorsionSettings
 
     @property
-    def min_max_tilt(self) -> Optional[float]:
+    def min_max_tilt(self) -> float | None:
         """The tilt reachable in every direction (at zero torsion): ``min_phi theta_max(phi)``."""
         vals = [v for v in self.max_tilt if v is not None]
         return min(vals) if vals and len(vals) == len(self.max_tilt) else None
@@ -185,7 +185,7 @@ class TiltTorsionReport:
 
 def tilt_torsion_at(design: Design, position: Sequence[float],
                     settings: TiltTorsionSettings = TiltTorsionSettings(),
-                    joints: Optional[Joints] = None) -> TiltTorsionReport:
+                    joints: Joints | None = None) -> TiltTorsionReport:
     """The T&T report at ``position`` (module docstring): ``theta_max`` per azimuth at zero torsion
     and the torsion range at zero tilt (with the joint cones and leg interference of ``joints``)."""
     p = np.asarray(position, float).reshape(1, 3)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Optional
 
 import numpy as np
 from numba import njit, prange
@@ -75,7 +74,7 @@ class WorkspaceSettings:
     voxel: float = 2.0
     orientation: tuple[float, float, float] = (0.0, 0.0, 0.0)
     eta_step: float = 0.5
-    bounds: Optional[tuple[tuple[float, float, float], tuple[float, float, float]]] = None
+    bounds: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
     z_floor: float = 0.0
     symmetry: bool = True
     diagnostics: bool = False
@@ -124,11 +123,11 @@ class WorkspaceResult:
     settings: WorkspaceSettings
     grid: GridSpec
     occupancy: np.ndarray  # bool, grid.shape
-    chain_mask: Optional[np.ndarray]  # uint8 bitmask per voxel (bit i: chain i feasible) if diagnostics
+    chain_mask: np.ndarray | None  # uint8 bitmask per voxel (bit i: chain i feasible) if diagnostics
     compute_seconds: float
     n_eta: int
-    volume_inner: Optional[float] = None  # certified bracket (settings.bracket), units^3
-    volume_outer: Optional[float] = None
+    volume_inner: float | None = None  # certified bracket (settings.bracket), units^3
+    volume_outer: float | None = None
     bracket_seconds: float = 0.0
 
     @property
@@ -232,7 +231,7 @@ def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
 _MIRROR_BITS = np.array([(v & 1) | (((v >> 2) & 1) << 1) | (((v >> 1) & 1) << 2) for v in range(256)], np.uint8)
 
 
-def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Optional[Joints] = None) -> tuple:
+def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Joints | None = None) -> tuple:
     """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
     tab = ChainTables(design, n_eta)
     o = np.asarray(orientation_deg, dtype=float)
@@ -243,7 +242,7 @@ def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Optional[J
 
 
 def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
-                   eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
+                   eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
     """Bitmask of the chains that can reach each point (bit ``i`` for chain ``i``) at one orientation.
 
     Args:
@@ -261,7 +260,7 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
 
 
 def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
-              eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
+              eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
     """Whether each point is reachable at one orientation (bool array (N,)).
 
     ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
@@ -290,7 +289,7 @@ def rotation_tables(design: Design, rotations: np.ndarray, joints: Joints) -> tu
 
 
 def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
-                    eta_step: float = 0.5, joints: Optional[Joints] = None) -> np.ndarray:
+                    eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
     """Whether each point is reachable at each orientation: bool array (N, M) for ``points`` (N, 3)
     and rotation matrices ``rotations`` (M, 3, 3), in one parallel launch (the same test as
     :func:`reachable`, column by column)."""
@@ -329,7 +328,7 @@ def reach_box(design: Design, orientation: tuple[float, float, float] = (0.0, 0.
     return (-m, -m, zlo), (m, m, max(zhi, zlo + 1e-6))
 
 
-def _symmetric_box(lo, hi, h: float, z_floor: Optional[float] = None):
+def _symmetric_box(lo, hi, h: float, z_floor: float | None = None):
     """Snap a box outward to multiples of h, symmetric in x and y about 0. The bottom never goes
     below ``z_floor`` when the box itself starts at or above it (a floor off the grid's multiples,
     e.g. 20 with h = 3, starts the grid at the floor instead of a layer of voxels below it)."""
@@ -374,7 +373,7 @@ def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> 
 
 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
-              progress: Optional[Reporter], cancel: CancelToken, all_chains: bool = False):
+              progress: Reporter | None, cancel: CancelToken, all_chains: bool = False):
     n_eta = default_n_eta(design, settings.eta_step)
     args = _kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
@@ -414,7 +413,7 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
 
 
 def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSettings(),
-                      progress: Optional[ProgressFn] = None, cancel: CancelToken = None) -> WorkspaceResult:
+                      progress: ProgressFn | None = None, cancel: CancelToken = None) -> WorkspaceResult:
     """Compute the constant-orientation position workspace (see the module docstring).
 
     ``compute_seconds`` is the engine time (excluding compilation, which happens on first use;

@@ -16,7 +16,8 @@ import json
 import re
 import threading
 import time
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import msgspec
 import viser
@@ -111,7 +112,7 @@ class FakeBrowser:
         self.set(handle, True)
 
     def download(self, filename: str, timeout: float = 20.0) -> bytes:
-        def done() -> Optional[bytes]:
+        def done() -> bytes | None:
             with self.lock:
                 for d in self.downloads.values():
                     if d["filename"] == filename and len(d["parts"]) == d["count"]:

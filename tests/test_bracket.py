@@ -98,12 +98,11 @@ def test_bracket_agrees_with_an_independent_interval_oracle():
     """codac's interval arithmetic classifies the same cubes (a quarter of the h = 16 grid) on its own:
     no cube is proven inside by one tool and outside by the other, codac confirms most of our
     decided cubes, and the two certified brackets of that region overlap (both enclose the truth)."""
+    import importlib.util
     import json
     import pathlib
     import subprocess
     import sys
-
-    import importlib.util
 
     if importlib.util.find_spec("codac") is None:  # never import it here (see above)
         pytest.skip("codac is not installed")

@@ -17,7 +17,8 @@ import re
 import tempfile
 import time
 import urllib.parse
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -27,12 +28,12 @@ if not os.path.exists(CHROMIUM):
     pytest.skip(f"{CHROMIUM} is missing (install Debian's chromium package to run the browser tests)",
                 allow_module_level=True)
 
+from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 
 from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
 from paraspace.app.numfmt import significant  # noqa: E402
 from paraspace.app.urlstate import parse_query  # noqa: E402
-from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 

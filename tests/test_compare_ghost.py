@@ -1,11 +1,11 @@
-"""The Compare tab's ghost cage (app.compare_panel.ghost_contours) against closed-form sections."""
+"""The Compare tab's ghost cage (app.explorer.compare_panel.ghost_contours) against closed-form sections."""
 
 from __future__ import annotations
 
 import numpy as np
 import trimesh
 
-from paraspace.app.compare_panel import ghost_contours
+from paraspace.app.explorer.compare_panel import ghost_contours
 
 
 def _lengths(segs: np.ndarray) -> np.ndarray:

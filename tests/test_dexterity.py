@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from paraspace.kinematics.design import Design, ParameterError
-from paraspace.kinematics.dexterity import (carriage_samples, dexterity_at, dexterity_field, resolved_carriages)
+from paraspace.kinematics.dexterity import carriage_samples, dexterity_at, dexterity_field, resolved_carriages
 from paraspace.kinematics.inverse import leg_lengths, leg_margin
 from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.redundancy import resolve_redundancy

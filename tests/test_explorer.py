@@ -11,8 +11,8 @@ server-side session.
 from __future__ import annotations
 
 import csv
-import itertools
 import io
+import itertools
 import json
 import threading
 import time
@@ -21,6 +21,7 @@ import warnings
 
 import numpy as np
 import pytest
+from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.explorer import Explorer
 from paraspace.app.urlstate import parse_query
@@ -28,8 +29,6 @@ from paraspace.kinematics.design import Design
 from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
-
-from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 
 @pytest.fixture(scope="module")
@@ -367,7 +366,7 @@ def test_design_change_cancels_stale_orientation_maps(explorer, browsers, monkey
     worker is free for the new design (regression: with both workers busy drawing maps, the stale
     job ran to the end, held the new design's workspace in the queue, and its maps were shown).
     The maps are made to take 4 s (cancellable) so that both workers are surely busy with them."""
-    from paraspace.app import orientation_controller as explorer_module
+    from paraspace.app.explorer import orientation_controller as explorer_module
     from paraspace.kinematics.progress import Cancelled
 
     real = explorer_module.orientation_workspace
@@ -471,7 +470,7 @@ def test_joints_group_changes_the_workspace_and_travels_in_the_link(explorer, br
 
 
 def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, monkeypatch):
-    from paraspace.app import paper_panel
+    from paraspace.app.explorer import paper_panel
 
     monkeypatch.setattr(paper_panel, "PAPER_VOXEL", 10.0)
     b = browsers("voxel=6")
@@ -489,7 +488,7 @@ def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, mon
 def test_camera_framing_shows_the_whole_box_beside_the_panel(preset, aspect):
     """Issue 8 defect 5: every corner of the workspace's box projects inside the view and left of
     the control panel (its share of the width on the right), and the box fills a good part of it."""
-    from paraspace.app.view_controller import PANEL_SHARE, camera_framing
+    from paraspace.app.explorer.view_controller import PANEL_SHARE, camera_framing
 
     lo, hi = np.array([-150.0, -140.0, 0.0]), np.array([150.0, 140.0, 170.0])
     fov = np.radians(50.0)
@@ -552,7 +551,7 @@ def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):
 
 
 def test_total_orientation_workspace_shown_on_request(explorer, browsers):
-    from paraspace.app.dexterous_panel import DEXTEROUS_VOXEL
+    from paraspace.app.explorer.dexterous_panel import DEXTEROUS_VOXEL
     from paraspace.kinematics.dexterous import total_orientation_workspace
 
     b = browsers("voxel=6")
@@ -572,7 +571,7 @@ def test_total_orientation_workspace_shown_on_request(explorer, browsers):
 
 def test_shell_coloured_by_dexterity(explorer, browsers):
     """Issue 9: the shell coloured by 1/kappa; the colours are the field's at the vertices."""
-    from paraspace.app.dexterity_colour import DEXTERITY_VOXEL
+    from paraspace.app.explorer.dexterity_colour import DEXTERITY_VOXEL
     from paraspace.kinematics.dexterity import dexterity_field
     from paraspace.kinematics.shell import viridis
 
@@ -588,7 +587,7 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
     # the containing cell's when finite, else the value of one of the finite cells nearest to it
     from scipy.spatial import cKDTree
 
-    from paraspace.app.dexterity_colour import field_values_at
+    from paraspace.app.explorer.dexterity_colour import field_values_at
 
     f = dex.inverse_condition
     vals = field_values_at(f, res.grid.origin, res.grid.h, shown.vertices)
@@ -614,7 +613,7 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
 def test_shell_coloured_by_the_binding_limit(explorer, browsers):
     """Issue 9: the shell coloured by the limit that binds; checked against the definition: at the
     points just outside, relaxing the named limit makes the failing chains feasible."""
-    from paraspace.app.dexterity_colour import LIMIT_COLOURS, binding_labels
+    from paraspace.app.explorer.dexterity_colour import LIMIT_COLOURS, binding_labels
     from paraspace.kinematics.workspace import chain_masks_at
 
     b = browsers("voxel=6&theta_u=40&theta_s=40")
@@ -640,7 +639,7 @@ def test_no_gui_writes_after_the_browser_left(explorer, monkeypatch):
     timer that fired in between wrote to the dead connection. Here the session's close is held back
     while the address-bar update of the last change comes due: nothing may be written to the GUI of
     the departed browser (viser warns about every such write), and the session knows it has left."""
-    from paraspace.app import share_controller
+    from paraspace.app.explorer import share_controller
 
     monkeypatch.setattr(share_controller, "URL_DEBOUNCE", 1.0)
     b = FakeBrowser(explorer, "voxel=6")

@@ -9,19 +9,22 @@ colour, and a Δ equal to the whole scan is flagged.
 from __future__ import annotations
 
 import dataclasses
-import io
 import struct
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
-import zlib
 
 import numpy as np
 import pytest
 
 from paraspace.app import figures
-from paraspace.kinematics.orientation import ROTATIONS, make_region, tilt_indices, OrientationResult, \
-    OrientationSettings
+from paraspace.kinematics.orientation import (
+    ROTATIONS,
+    OrientationResult,
+    OrientationSettings,
+    make_region,
+    tilt_indices,
+)
 
 UNITS = ("[units]", "[units³]", "[deg]", "[deg·units]", "[ratio 0-1]", "[count]")
 

@@ -51,8 +51,13 @@ def test_schemathesis_contract(server):
     response schemas, and bad input refused (schemathesis' conformance checks)."""
     import schemathesis
     from schemathesis import GenerationMode
-    from schemathesis.checks import (content_type_conformance, negative_data_rejection, not_a_server_error,
-                                     response_schema_conformance, status_code_conformance)
+    from schemathesis.checks import (
+        content_type_conformance,
+        negative_data_rejection,
+        not_a_server_error,
+        response_schema_conformance,
+        status_code_conformance,
+    )
 
     checks = [not_a_server_error, status_code_conformance, content_type_conformance,
               response_schema_conformance, negative_data_rejection]

@@ -1,4 +1,4 @@
-"""app.lazy_plot.LazyPlot: no plotly element (hence no plotly.js in the page) before the first figure;
+"""app.explorer.lazy_plot.LazyPlot: no plotly element (hence no plotly.js in the page) before the first figure;
 then one, at the placeholder's place in its folder, with the aspect and visibility set before."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import plotly.graph_objects as go
 import viser
 
-from paraspace.app.lazy_plot import LazyPlot
+from paraspace.app.explorer.lazy_plot import LazyPlot
 
 
 def test_created_at_the_first_figure_in_place():

@@ -11,7 +11,13 @@ from paraspace.kinematics.design import Design
 from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.line_scan import reachable_along
 from paraspace.kinematics.orientation import (
-    LINES, ROTATIONS, OrientationSettings, angle_samples, line_points, orientation_workspace, position_samples,
+    LINES,
+    ROTATIONS,
+    OrientationSettings,
+    angle_samples,
+    line_points,
+    orientation_workspace,
+    position_samples,
     rotation_matrix,
 )
 from paraspace.kinematics.workspace import reachable_pairs

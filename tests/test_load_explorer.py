@@ -27,10 +27,12 @@ import os
 import statistics
 import threading
 import time
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import httpx
 import pytest
+from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.api import API_PREFIX, create_api
 from paraspace.app.explorer import ClientSession, Explorer
@@ -41,8 +43,6 @@ from paraspace.app.urlstate import parse_query
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
-
-from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",

@@ -8,7 +8,7 @@ from scipy.linalg import expm
 
 from paraspace.kinematics.design import PARAMS, Design, ParameterError
 from paraspace.kinematics.geometry import base_points, platform_points, platform_points_local
-from paraspace.kinematics.jacobian import jacobians, skew
+from paraspace.kinematics.jacobian import skew
 from paraspace.kinematics.mobility import mobility, topology
 from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.rotation import Y_PRIME_AXIS, axis_angle, euler_rate_matrix, euler_zyx, euler_zyx_from_matrix

@@ -12,8 +12,17 @@ import numpy as np
 import pytest
 
 from paraspace.kinematics.design import Design, ParameterError
-from paraspace.kinematics.optimize import (MEASURES, Constraint, Measure, OptimizeSettings, non_dominated,
-                                           normalised_hypervolume, optimize, parse_constraint, parse_objectives)
+from paraspace.kinematics.optimize import (
+    MEASURES,
+    Constraint,
+    Measure,
+    OptimizeSettings,
+    non_dominated,
+    normalised_hypervolume,
+    optimize,
+    parse_constraint,
+    parse_objectives,
+)
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.sweep import ResultCache, evaluate_design, sweep_1d, sweep_2d
 from paraspace.kinematics.workspace import WorkspaceSettings, reach_box

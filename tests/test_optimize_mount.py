@@ -4,12 +4,11 @@ differ from the defaults), a run's front design loads into the session's design 
 from __future__ import annotations
 
 import pytest
-
 from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.explorer import Explorer
-from paraspace.app.optimize_panel import URL_KEYS
-from paraspace.app.pagehook import page_refusal
+from paraspace.app.explorer.optimize_panel import URL_KEYS
+from paraspace.app.explorer.pagehook import page_refusal
 from paraspace.app.urlstate import OPT_KEYS, parse_query
 
 

@@ -9,8 +9,8 @@ import time
 import pytest
 import viser
 
+from paraspace.app.explorer.optimize_panel import URL_KEYS, OptimizePanel, ResultStore
 from paraspace.app.jobs import JobManager
-from paraspace.app.optimize_panel import URL_KEYS, OptimizePanel, ResultStore
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.optimize import OptimizeSettings, optimize
 from paraspace.kinematics.workspace import WorkspaceSettings

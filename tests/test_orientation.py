@@ -13,8 +13,17 @@ from scipy.linalg import expm
 from paraspace.kinematics import Cancelled, Design, ParameterError, reachable
 from paraspace.kinematics.geometry import base_points, platform_points
 from paraspace.kinematics.orientation import (
-    LINES, ROTATIONS, OrientationRegion, OrientationResult, OrientationSettings, line_points, make_region,
-    orientation_workspace, rotation_matrix, select_region, tilt_indices,
+    LINES,
+    ROTATIONS,
+    OrientationRegion,
+    OrientationResult,
+    OrientationSettings,
+    line_points,
+    make_region,
+    orientation_workspace,
+    rotation_matrix,
+    select_region,
+    tilt_indices,
 )
 from paraspace.kinematics.rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
 

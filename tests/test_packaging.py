@@ -58,6 +58,7 @@ def test_public_api_reexports_the_core():
 
 def test_version_is_stated_once_and_reported_by_the_cli():
     import importlib.metadata
+
     import tomllib
 
     declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]

@@ -149,7 +149,7 @@ def test_numbers_are_strict(api):
 def test_a_lost_cluster_ends_the_sweep_with_the_points_done(monkeypatch, capsys):
     """12.8 / 13.7: every worker gone -> the sweep returns within a bounded time, the missing points
     are reported failed, and the CLI exits non-zero saying how many."""
-    from distributed import Client, LocalCluster
+    from distributed import LocalCluster
 
     from paraspace.kinematics.design import Design
     from paraspace.kinematics.distributed import sweep_grid

@@ -2,7 +2,7 @@
 
 * :func:`paraspace.app.textsafe.md_text` is checked with an independent CommonMark renderer
   (markdown-it-py, HTML enabled like viser's markdown panel): no payload becomes an element.
-* :func:`paraspace.app.pagehook.page_refusal` and the gate on the real explorer's HTTP port:
+* :func:`paraspace.app.explorer.pagehook.page_refusal` and the gate on the real explorer's HTTP port:
   only the explorer's own keys reach the page, plain-text refusals, CSP on the page.
 * In a real Chromium: links carrying HTML/script payloads in every field run no script, open no
   dialog and add no element of theirs; a ``websocket=`` link never connects to a stand-in server
@@ -19,13 +19,13 @@ import time
 import urllib.error
 import urllib.parse
 import urllib.request
-from typing import Iterator
+from collections.abc import Iterator
 
 import pytest
 from markdown_it import MarkdownIt
 
 from paraspace.app.explorer import Explorer
-from paraspace.app.pagehook import CONTENT_SECURITY_POLICY, MAX_QUERY_CHARS, page_refusal
+from paraspace.app.explorer.pagehook import CONTENT_SECURITY_POLICY, MAX_QUERY_CHARS, page_refusal
 from paraspace.app.textsafe import md_text, plain_text
 from paraspace.app.urlstate import known_keys
 
@@ -165,9 +165,8 @@ class StandIn:
 @pytest.mark.browser
 @pytest.mark.slow
 def test_links_with_payloads_run_no_script_and_never_leave_the_server(explorer: Explorer) -> None:
-    from playwright.sync_api import sync_playwright
-
     from explorer_client import wait_for
+    from playwright.sync_api import sync_playwright
 
     stand_in = StandIn()
     args = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",

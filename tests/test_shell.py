@@ -316,7 +316,7 @@ def test_explorer_display_shell_encloses_the_voxel_volume_and_stays_close_to_the
     import numpy as np
     from scipy.spatial import cKDTree
 
-    from paraspace.app.workspace_job import FULL_FACES, make_shell
+    from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
     from paraspace.kinematics.design import Design
     from paraspace.kinematics.shell import workspace_shell
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace

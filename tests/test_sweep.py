@@ -8,11 +8,15 @@ import threading
 
 import pytest
 
-from paraspace.kinematics import Cancelled, Design, ParameterError, WorkspaceSettings, compute_workspace
-from paraspace.kinematics import sweep
+from paraspace.kinematics import Cancelled, Design, ParameterError, WorkspaceSettings, compute_workspace, sweep
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.sweep import (
-    ResultCache, cache_key, evaluate_design, study_values, sweep_1d, sweep_2d,
+    ResultCache,
+    cache_key,
+    evaluate_design,
+    study_values,
+    sweep_1d,
+    sweep_2d,
 )
 
 COARSE = WorkspaceSettings(voxel=8.0)

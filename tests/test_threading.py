@@ -3,10 +3,10 @@ missing, e.g. in slim containers), which aborts the process on concurrent parall
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import os
 import pathlib
+import subprocess
+import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 

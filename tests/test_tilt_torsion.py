@@ -9,8 +9,7 @@ from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.redundancy import resolve_redundancy
 from paraspace.kinematics.rotation import euler_zyx_from_matrix
-from paraspace.kinematics.tilt_torsion import (TiltTorsionSettings, tilt_torsion_at, tt_angles, tt_rotation,
-                                               tt_rotations)
+from paraspace.kinematics.tilt_torsion import TiltTorsionSettings, tilt_torsion_at, tt_angles, tt_rotation, tt_rotations
 from paraspace.kinematics.workspace import reachable_pairs
 
 DESIGN = Design()

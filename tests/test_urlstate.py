@@ -9,8 +9,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from paraspace.app.urlstate import (
-    CAMERA_PRESETS, CUT_KEEPS, DEFAULT_STATE, DESIGN_RANGES, POSE_RANGES, SETTING_RANGES, check_field,
-    ExplorerState, encode_query, known_keys, parse_query,
+    CAMERA_PRESETS,
+    CUT_KEEPS,
+    DEFAULT_STATE,
+    DESIGN_RANGES,
+    POSE_RANGES,
+    SETTING_RANGES,
+    ExplorerState,
+    check_field,
+    encode_query,
+    known_keys,
+    parse_query,
 )
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design
 from paraspace.kinematics.pose import Pose

@@ -43,7 +43,8 @@ from typing import Optional
 from fastapi import FastAPI
 
 from ..jobs import JobManager
-from . import ik, jobs as jobs_routes, links, meta, optimize, orientation, sweep, workspace
+from . import ik, links, meta, optimize, orientation, sweep, workspace
+from . import jobs as jobs_routes
 from .body_limit import BodyLimit
 from .context import API_PREFIX, API_VERSION, ApiContext
 from .errors import install_error_handlers
@@ -57,8 +58,8 @@ ROUTERS = (meta.router, ik.router, workspace.router, orientation.router, sweep.r
            jobs_routes.router, links.router, links.short_links, meta.site)
 
 
-def create_api(jobs: JobManager, *, explorer_url: Optional[str] = None,
-               limits: ApiLimits = ApiLimits(), api_url: Optional[str] = None) -> FastAPI:
+def create_api(jobs: JobManager, *, explorer_url: str | None = None,
+               limits: ApiLimits = ApiLimits(), api_url: str | None = None) -> FastAPI:
     """Build the FastAPI application.
 
     Args:

@@ -13,7 +13,8 @@ import contextlib
 import dataclasses
 import threading
 import time
-from typing import Annotated, Any, Callable, Hashable, Optional
+from collections.abc import Callable, Hashable
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request
 from fastapi.responses import JSONResponse
@@ -75,8 +76,8 @@ class ApiContext:
         sweep_cache: the design-point cache shared by sweeps and optimisations (or ``None``).
     """
 
-    def __init__(self, jobs: JobManager, limits: ApiLimits, explorer_url: Optional[str],
-                 api_url: Optional[str]) -> None:
+    def __init__(self, jobs: JobManager, limits: ApiLimits, explorer_url: str | None,
+                 api_url: str | None) -> None:
         self.jobs, self.limits, self.explorer_url, self.api_url = jobs, limits, explorer_url, api_url
         # The workspace cache owns the voxel grids: an evicted result drops its grid (its measures stay),
         # so memory is bounded by cache_bytes however many jobs the history remembers (the job history
@@ -111,8 +112,8 @@ class ApiContext:
         """Unfinished, uncancelled jobs submitted through the API."""
         return [j for j in self.jobs.active() if j.client.startswith(CLIENT_PREFIX) and not j.cancel_token.is_set()]
 
-    def quota_check(self, request: Optional[Request], client: Optional[str] = None,
-                    live: Optional[list[Job]] = None) -> None:
+    def quota_check(self, request: Request | None, client: str | None = None,
+                    live: list[Job] | None = None) -> None:
         """429 at once when the caller or the server is at its job limit (nothing computed yet)."""
         limits = self.limits
         client = client or self.client_of(request)  # type: ignore[arg-type]
@@ -136,7 +137,7 @@ class ApiContext:
             self._precheck_slots.release()
 
     def grid_check(self, design: Design, settings: Any, *, analytic: bool = False,
-                   point: Optional[int] = None) -> None:
+                   point: int | None = None) -> None:
         """413 with the grid rule's message (app/limits.py) when the grid is over max_voxels."""
         try:
             check_workspace_grid(design, settings, self.limits.max_voxels, analytic=analytic)
@@ -204,7 +205,7 @@ class ApiContext:
         return JSONResponse(status_code=202, content=jsonable(body),
                             headers={"Location": f"{API_PREFIX}/jobs/{job.id}"})
 
-    def api_job(self, job_id: str, kind: Optional[str] = None) -> Job:
+    def api_job(self, job_id: str, kind: str | None = None) -> Job:
         """The API job ``job_id`` (of ``kind`` when given); 404 when unknown or not the API's."""
         try:
             job = self.jobs.get(job_id)

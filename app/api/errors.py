@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import errno
 import logging
-from typing import Any, Callable, Optional, Union
+from collections.abc import Callable
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -38,7 +39,7 @@ class FieldError(Exception):
 class ApiError(Exception):
     """An HTTP error with a plain-text ``detail`` (413, 404, 409, 429, ...)."""
 
-    def __init__(self, status: int, detail: str, headers: Optional[dict[str, str]] = None) -> None:
+    def __init__(self, status: int, detail: str, headers: dict[str, str] | None = None) -> None:
         self.status, self.detail, self.headers = status, detail, headers
         super().__init__(detail)
 
@@ -116,11 +117,11 @@ class FieldProblem(BaseModel):
 class ErrorOut(BaseModel):
     """Every error answer: ``detail`` is a sentence, or (422) one entry per bad field."""
 
-    detail: Union[str, list[FieldProblem]]
+    detail: str | list[FieldProblem]
 
 
 #: What any endpoint may answer besides its success codes (declared in the OpenAPI document).
-ERROR_RESPONSES: dict[Union[int, str], dict[str, Any]] = {
+ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorOut, "description": text} for code, text in (
         (404, "unknown job, or short links disabled"),
         (408, "request body not received in time"),
@@ -133,7 +134,7 @@ ERROR_RESPONSES: dict[Union[int, str], dict[str, Any]] = {
     )}
 
 
-def error_json(status: int, detail: Any, headers: Optional[dict[str, str]] = None) -> JSONResponse:
+def error_json(status: int, detail: Any, headers: dict[str, str] | None = None) -> JSONResponse:
     """The one shape of every error answer: ``{"detail": detail}`` with ``status``."""
     return JSONResponse(status_code=status, content={"detail": detail}, headers=headers)
 

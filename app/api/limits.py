@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Optional
+from typing import Any
 
 from ..limits import MAX_VOXELS
 
@@ -45,7 +45,7 @@ class ApiLimits:
     max_job_seconds: float = 300.0
     max_body_bytes: int = 262_144
     max_shell_faces: int = 2_000_000
-    client_header: Optional[str] = None
+    client_header: str | None = None
     cache_bytes: int = 256 << 20
     shell_cache_bytes: int = 128 << 20
     # --- optimisation (issue 11) ---

@@ -6,7 +6,7 @@ the request's Host header, which a client controls."""
 from __future__ import annotations
 
 import zlib
-from typing import Any, Optional
+from typing import Any
 
 from fastapi import APIRouter, Path, Request
 from fastapi.responses import RedirectResponse
@@ -32,7 +32,7 @@ def _checked_query(query: str) -> str:
     return query
 
 
-def _explorer_base(ctx: ApiContext) -> Optional[str]:
+def _explorer_base(ctx: ApiContext) -> str | None:
     """The explorer URL from the configuration (``serve --public-url``)."""
     return ctx.explorer_url.rstrip("/") if ctx.explorer_url else None
 

@@ -8,7 +8,7 @@ and its range; each model's ``build()`` makes the core object (``Design``, ``Pos
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal, Optional
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, Strict
 
@@ -17,6 +17,7 @@ from paraspace.kinematics.joints import JOINT_RANGES, Joints
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 
 from .errors import RANGES, FieldError, call_core
+
 
 def _rng_text(lo: float, hi: float, unit: str = "", lo_open: bool = False) -> str:
     text = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
@@ -113,8 +114,8 @@ class JointsIn(BaseModel):
     """Passive-joint cones and leg interference (``kinematics.joints``); defaults: the paper's model."""
 
     model_config = _MODEL
-    theta_u: Optional[float] = _joint_field("theta_u", None, "half-angle of every U joint's cone, degrees", True)
-    theta_s: Optional[float] = _joint_field("theta_s", None, "half-angle of every S joint's cone, degrees", True)
+    theta_u: float | None = _joint_field("theta_u", None, "half-angle of every U joint's cone, degrees", True)
+    theta_s: float | None = _joint_field("theta_s", None, "half-angle of every S joint's cone, degrees", True)
     cone_axis: Literal["normal", "home"] = Field("normal", description="cone axes: base/platform normal or the "
                                                  "legs' home directions")
     leg_diameter: float = _joint_field("leg_diameter", 0.0, "legs are capsules of this diameter (0: no interference)")
@@ -132,7 +133,7 @@ class WorkspaceSettingsIn(BaseModel):
     voxel: float = _num("settings", "voxel", 2.0, 0.25, 100.0, "voxel edge h")
     orientation: AnglesIn = Field(default_factory=AnglesIn, description="constant platform orientation")
     eta_step: float = _num("settings", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
-    bounds: Optional[BoundsIn] = Field(None, description="explicit box; null derives it from the design")
+    bounds: BoundsIn | None = Field(None, description="explicit box; null derives it from the design")
     z_floor: float = _num("settings", "z_floor", 0.0, -1e4, 1e4, "lowest platform height of derived bounds")
     symmetry: bool = Field(True, description="use the y -> -y mirror symmetry when it holds exactly")
     diagnostics: bool = Field(False, description="evaluate every chain at every voxel (slower)")
@@ -178,9 +179,9 @@ class OrientationSettingsIn(BaseModel):
                                   "from the φ region (the literal eq. (28))")
     eta_step: float = _num("orientation", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
     z_min: float = _num("orientation", "z_min", 0.0, -1e4, 1e4, "lower end of the z line")
-    z_max: Optional[float] = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
+    z_max: float | None = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
                                    description="upper end of the z line; null: l_max; valid range [z_min, 10000]")
-    s_max: Optional[float] = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
+    s_max: float | None = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
                                    description="half-length of the x and y' lines; null: derived; valid range [0, 10000]")
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
@@ -203,9 +204,9 @@ class IkRequest(BaseModel):
     model_config = _MODEL
     design: DesignIn = Field(default_factory=DesignIn)
     pose: PoseIn = Field(default_factory=PoseIn)
-    d: Optional[list[Num]] = Field(None, min_length=3, max_length=3,
+    d: list[Num] | None = Field(None, min_length=3, max_length=3,
                                      description="carriage strokes d_1..d_3, each in [0, d_s]")
-    eta: Optional[list[Num]] = Field(None, min_length=3, max_length=3,
+    eta: list[Num] | None = Field(None, min_length=3, max_length=3,
                                        description="arc positions eta_1..eta_3 in degrees, within the arc stroke")
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
@@ -234,9 +235,9 @@ class SweepAxis(BaseModel):
 
     model_config = _MODEL
     param: ParamName = Field(description="design parameter to vary")
-    values: Optional[list[Num]] = Field(None, min_length=1, max_length=10_000,
+    values: list[Num] | None = Field(None, min_length=1, max_length=10_000,
                                           description="values (each within the parameter's model range)")
-    n: Optional[int] = Field(None, ge=1, le=10_000, description="number of values over the slider range")
+    n: int | None = Field(None, ge=1, le=10_000, description="number of values over the slider range")
 
 
 RANGES[("x", "n")] = RANGES[("y", "n")] = "[1, 10000]"
@@ -250,8 +251,8 @@ class SweepRequest(BaseModel):
     design: DesignIn = Field(default_factory=DesignIn)
     settings: WorkspaceSettingsIn = Field(default_factory=lambda: WorkspaceSettingsIn(voxel=4.0))
     x: SweepAxis
-    y: Optional[SweepAxis] = None
-    orientation: Optional[OrientationSettingsIn] = None
+    y: SweepAxis | None = None
+    orientation: OrientationSettingsIn | None = None
 
 
 class OptimizeRequest(BaseModel):
@@ -276,7 +277,7 @@ class OptimizeRequest(BaseModel):
     step: float = Field(0.01, ge=1e-6, le=10.0, allow_inf_nan=False,
                         description="parameter resolution; valid range [1e-06, 10]")
     algorithm: Literal["auto", "nsga2", "nsga3", "agemoea"] = Field("auto")
-    orientation: Optional[OrientationSettingsIn] = Field(
+    orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed)")
 
     def build(self) -> Any:

@@ -4,7 +4,7 @@ measures) and ``GET /workspace/{id}/shell.{fmt}`` (its boundary surface as a mes
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Literal, Optional
+from typing import Any, Literal
 
 from fastapi import Path, Query, Request
 from fastapi.responses import JSONResponse, Response
@@ -60,7 +60,7 @@ def workspace_result(job_id: str, request: Request, ctx: Ctx) -> dict[str, Any]:
             responses={200: {"content": {"model/stl": {}, "application/octet-stream": {}}}})
 def workspace_shell(job_id: str, request: Request, ctx: Ctx,
                     fmt: Literal["stl", "ply", "obj", "glb"] = Path(description="mesh format"),
-                    max_faces: Optional[int] = Query(None, ge=100, le=2_000_000,
+                    max_faces: int | None = Query(None, ge=100, le=2_000_000,
                                                      description="decimate to at most this many faces; "
                                                                  "valid range [100, 2000000]")) -> Response:
     """The workspace shell (marching cubes of the occupancy) as a mesh file download."""

@@ -20,18 +20,26 @@ from typing import Any
 import viser
 
 import paraspace
-
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
 
-from . import figures
+from .. import figures
+from ..urlstate import (
+    CAMERA_PRESETS,
+    CUT_KEEPS,
+    D_KEYS,
+    DESIGN_KEYS,
+    DESIGN_RANGES,
+    DESIGN_SLIDERS,
+    ETA_KEYS,
+    POSE_KEYS,
+    POSE_SLIDERS,
+    SETTING_SLIDERS,
+    ExplorerState,
+)
 from .dexterity_colour import COLOUR_MODES
 from .joints_panel import JointsControls, build_joints_folder
 from .lazy_plot import LazyPlot
 from .legend import LegendPanel, build_legend_folder
-from .urlstate import (
-    CAMERA_PRESETS, CUT_KEEPS, D_KEYS, DESIGN_KEYS, DESIGN_RANGES, DESIGN_SLIDERS, ETA_KEYS, POSE_KEYS,
-    POSE_SLIDERS, SETTING_SLIDERS, ExplorerState,
-)
 
 POSE_HINTS: dict[str, str] = {
     "x": "platform centre P, x", "y": "platform centre P, y", "z": "platform centre P, height",

@@ -18,15 +18,16 @@ import contextlib
 import logging
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
 
 import viser
 
 from paraspace.kinematics.redundancy import Resolution
 
-from .jobs import Job, JobManager
-from .textsafe import plain_text
-from .urlstate import ExplorerState
+from ..jobs import Job, JobManager
+from ..textsafe import plain_text
+from ..urlstate import ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from .panels import Panels
@@ -47,9 +48,9 @@ class SessionJobs:
         self._jobs = jobs
         self._closed = is_closed
 
-    def submit(self, fn: Any, *, on_done: Optional[Callable[[Job], None]] = None,
-               on_progress: Optional[Callable[[Job], None]] = None, **kw: Any) -> Job:
-        def alive(cb: Optional[Callable[[Job], None]]) -> Optional[Callable[[Job], None]]:
+    def submit(self, fn: Any, *, on_done: Callable[[Job], None] | None = None,
+               on_progress: Callable[[Job], None] | None = None, **kw: Any) -> Job:
+        def alive(cb: Callable[[Job], None] | None) -> Callable[[Job], None] | None:
             if cb is None:
                 return None
             return lambda job: None if self._closed() else cb(job)
@@ -87,16 +88,16 @@ class SessionContext:
         self._tls = threading.local()
         self._last_update: dict[str, float] = {}
         # GUI and scene handles (set by ClientSession.build)
-        self.panels: "Panels"
-        self.shell: Optional["ShellScene"] = None
+        self.panels: Panels
+        self.shell: ShellScene | None = None
         # what is on screen (written by the controllers, read by the numbers panel and the downloads)
-        self.bundle: Optional["ShellBundle"] = None  # full result on screen
-        self.preview: Optional["ShellBundle"] = None
+        self.bundle: ShellBundle | None = None  # full result on screen
+        self.preview: ShellBundle | None = None
         self.ws_info: dict[str, Any] = {}  # the shell on screen: volume, h, preview?, seconds, measures...
-        self.resolution: Optional[Resolution] = None
-        self.in_workspace: Optional[bool] = None
+        self.resolution: Resolution | None = None
+        self.in_workspace: bool | None = None
         self.orientation: Any = None  # kinematics.orientation.OrientationResult on screen
-        self.design_error: Optional[str] = None
+        self.design_error: str | None = None
         self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
 
@@ -168,7 +169,7 @@ class SessionContext:
             return False
 
     # ----- jobs, messages, events -----------------------------------------------------------------
-    def cancel_job(self, job: Optional[Job]) -> None:
+    def cancel_job(self, job: Job | None) -> None:
         """Cancel ``job`` unless it is ``None`` or finished."""
         if job is not None and not job.is_final:
             self.explorer.jobs.cancel(job.id)

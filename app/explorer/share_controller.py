@@ -14,16 +14,16 @@ import dataclasses
 import json
 import threading
 import urllib.parse
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
+from ..textsafe import md_text
+from ..urlstate import encode_query
 from . import jsbridge
 from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
 from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
 from .session import SessionContext
-from .textsafe import md_text
-from .urlstate import encode_query
 
 #: Debounce of the address-bar update, seconds.
 URL_DEBOUNCE = 0.25
@@ -49,8 +49,8 @@ class ShareController:
     def __init__(self, ctx: SessionContext) -> None:
         self.ctx = ctx
         self.optimize: Any = None  # app.optimize_panel.OptimizePanel
-        self.last_query: Optional[str] = None
-        self._timer: Optional[threading.Timer] = None
+        self.last_query: str | None = None
+        self._timer: threading.Timer | None = None
 
     def wire(self) -> None:
         """Attach the Share tab's buttons."""

@@ -32,14 +32,14 @@ import gzip
 import logging
 import threading
 import urllib.parse
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
-import websockets
 from websockets.datastructures import Headers
 from websockets.http11 import Response
 
+from ..urlstate import link_keys
 from .jsbridge import PANEL_WAIT_CLASS
-from .urlstate import link_keys
 
 __all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install"]
 
@@ -70,7 +70,7 @@ def _quote(key: str) -> str:
     return repr(key if len(key) <= 40 else key[:39] + "…")
 
 
-def page_refusal(path: str, query: str) -> Optional[tuple[int, str]]:
+def page_refusal(path: str, query: str) -> tuple[int, str] | None:
     """``None`` if a page request for ``path?query`` may be served, else ``(status, text)``.
 
     The rule: the query is at most :data:`MAX_QUERY_CHARS` characters and every key (decoded the
@@ -132,8 +132,8 @@ class _PageEditor:
 _EDITOR = _PageEditor()
 
 
-def _guarded(inner: Callable[[Any, Any], Optional[Response]]) -> Callable[[Any, Any], Optional[Response]]:
-    def process_request(connection: Any, request: Any) -> Optional[Response]:
+def _guarded(inner: Callable[[Any, Any], Response | None]) -> Callable[[Any, Any], Response | None]:
+    def process_request(connection: Any, request: Any) -> Response | None:
         if str(request.headers.get("Upgrade", "")).lower() == "websocket":
             return inner(connection, request)
         path, _, query = request.path.partition("?")
@@ -192,9 +192,8 @@ def install() -> None:
     through its own module-global name ``websockets``; that name (only in viser's module) is
     replaced by a delegate whose ``serve`` wraps the hook with the gate above.
     """
-    from viser.infra import _infra  # private: viser is pinned to 1.1.1
-
     import websockets.http11
+    from viser.infra import _infra  # private: viser is pinned to 1.1.1
 
     with _install_lock:
         if isinstance(_infra.websockets, _Delegate):

@@ -11,7 +11,8 @@ changed, which asks the workspace controller for a new workspace.
 from __future__ import annotations
 
 import logging
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -20,11 +21,11 @@ from paraspace.kinematics.pose import Pose
 from paraspace.kinematics.redundancy import Resolution, inverse_kinematics, resolve_redundancy
 from paraspace.kinematics.workspace import reachable
 
-from .numfmt import fixed
+from ..numfmt import fixed
+from ..urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
 from .panels import slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene
 from .session import SessionContext
-from .urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
 
 log = logging.getLogger(__name__)
 

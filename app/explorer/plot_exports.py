@@ -8,9 +8,9 @@ download button sends that spec as a static file (:func:`app.figures.export`, PN
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any
 
-from . import figures
+from .. import figures
 from .session import SessionContext
 
 
@@ -19,7 +19,7 @@ class PlotExports:
 
     def __init__(self, ctx: SessionContext) -> None:
         self.ctx = ctx
-        self.specs: dict[str, Optional[figures.FigureSpec]] = {}
+        self.specs: dict[str, figures.FigureSpec | None] = {}
         self._files: dict[tuple[str, str], tuple[Any, bytes]] = {}  # (plot, format) -> file of the plot on screen
 
     def set(self, which: str, spec: figures.FigureSpec) -> None:

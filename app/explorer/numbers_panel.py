@@ -9,18 +9,18 @@ design that was not applied. :func:`numbers_markdown` builds the text from those
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
-from . import figures
-from .numfmt import significant
+from .. import figures
+from ..numfmt import significant
+from ..textsafe import md_text
+from ..urlstate import ExplorerState
 from .session import SessionContext
-from .textsafe import md_text
-from .urlstate import ExplorerState
 
 
-def fmt(v: Optional[float], digits: int = 4) -> str:
+def fmt(v: float | None, digits: int = 4) -> str:
     """``v`` to ``digits`` significant digits (:func:`~app.numfmt.significant`), ``-`` for none or non-finite."""
     if v is None:
         return "-"
@@ -46,8 +46,8 @@ def joints_text(j: Any) -> str:
     return ", ".join(parts)
 
 
-def numbers_markdown(s: ExplorerState, info: dict[str, Any], res: Any, inside: Optional[bool], ori: Any,
-                     design_error: Optional[str]) -> str:
+def numbers_markdown(s: ExplorerState, info: dict[str, Any], res: Any, inside: bool | None, ori: Any,
+                     design_error: str | None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
     :class:`~app.session.SessionContext`, empty before one), ``res`` the pose's IK, ``inside`` whether
     the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of

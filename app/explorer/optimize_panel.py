@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import collections
 import threading
-from typing import Any, Callable, Mapping, MutableMapping, Optional
+from collections.abc import Callable, Mapping, MutableMapping
+from typing import Any
 
 import viser
 
@@ -32,8 +33,8 @@ from paraspace.kinematics.optimize import DEFAULT_PARAMS, OptimizeSettings, opti
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.workspace import WorkspaceSettings
 
-from .jobs import Job, JobManager, LimitExceeded
-from .optimize_plots import front_figure
+from ..jobs import Job, JobManager, LimitExceeded
+from ..optimize_plots import front_figure
 
 __all__ = ["OptimizePanel", "URL_KEYS", "MAX_EVALUATIONS", "MIN_VOXEL", "PANEL_ORIENTATION", "ResultStore"]
 
@@ -55,7 +56,7 @@ class ResultStore:
 
     def __init__(self, size: int = 16) -> None:
         self.size = size
-        self._d: "collections.OrderedDict[Any, dict]" = collections.OrderedDict()
+        self._d: collections.OrderedDict[Any, dict] = collections.OrderedDict()
         self._lock = threading.Lock()
 
     def get(self, key: Any, default: Any = None) -> Any:
@@ -88,15 +89,15 @@ class OptimizePanel:
 
     def __init__(self, gui: Any, jobs: JobManager, *, get_design: Callable[[], Design],
                  load_design: Callable[[Design], None], client: str = "local", cache: Any = None,
-                 results: Optional[MutableMapping[Any, dict]] = None,
-                 on_settings_change: Optional[Callable[[dict[str, str]], None]] = None) -> None:
+                 results: MutableMapping[Any, dict] | None = None,
+                 on_settings_change: Callable[[dict[str, str]], None] | None = None) -> None:
         self.gui, self.jobs, self.client = gui, jobs, client
         self.get_design, self.load_design = get_design, load_design
         self.cache = cache
         self.results: Any = results if results is not None else ResultStore()
         self.on_settings_change = on_settings_change
-        self.result: Optional[dict] = None
-        self.job: Optional[Job] = None
+        self.result: dict | None = None
+        self.job: Job | None = None
         self._lock = threading.Lock()
         self._gen = 0
         self._applying = False
@@ -209,7 +210,7 @@ class OptimizePanel:
         self._show(hit, cached=True)
         return True
 
-    def run(self) -> Optional[Job]:
+    def run(self) -> Job | None:
         """Start the run as a job (or show the held result of the same settings)."""
         try:
             s = self.settings()
@@ -286,7 +287,7 @@ class OptimizePanel:
                              + (" (held result, not recomputed)" if cached else ""))
         self.result = result  # last: a reader that sees the result sees the plot and the list
 
-    def selected_index(self) -> Optional[int]:
+    def selected_index(self) -> int | None:
         """Index in the front of the dropdown's design (``None`` without a front)."""
         if not self.result or not self.result["front"]:
             return None
@@ -303,7 +304,7 @@ class OptimizePanel:
         if i is not None and self.plot is not None and self.result is not None:
             self.plot.figure = front_figure(self.result, selected=i)
 
-    def load_selected(self) -> Optional[Design]:
+    def load_selected(self) -> Design | None:
         """Load the selected front design into the host (``load_design``); returns it."""
         i = self.selected_index()
         if i is None or self.result is None or i >= len(self.result["front"]):

@@ -12,12 +12,13 @@ from __future__ import annotations
 import csv
 import io
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from paraspace.kinematics.orientation import OrientationSettings
 
-from . import figures
-from .jobs import Job, LimitExceeded
+from .. import figures
+from ..jobs import Job, LimitExceeded
 from .session import PROGRESS_INTERVAL, SessionContext
 from .workspace_job import ws_settings
 
@@ -33,10 +34,10 @@ class StudiesController:
     def __init__(self, ctx: SessionContext, *, exports: Any) -> None:
         self.ctx = ctx
         self.exports = exports
-        self.sweep_job: Optional[Job] = None
-        self.sweep: Optional[dict] = None  # the last sweep on screen
-        self.surface_job: Optional[Job] = None
-        self.surface: Optional[dict] = None  # the last (a, d_s) study on screen
+        self.sweep_job: Job | None = None
+        self.sweep: dict | None = None  # the last sweep on screen
+        self.surface_job: Job | None = None
+        self.surface: dict | None = None  # the last (a, d_s) study on screen
 
     def wire(self) -> None:
         """Attach the two studies' buttons and the sweep's measure menu."""
@@ -173,7 +174,7 @@ class StudiesController:
 
         self.surface_job = self._start(fn, "surface", p.surface_progress, p.surface_stop, p.surface_run, done)
 
-    def _start(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any, done: Callable[[Job], None]) -> Optional[Job]:
+    def _start(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any, done: Callable[[Job], None]) -> Job | None:
         ctx = self.ctx
 
         def on_progress(job: Job) -> None:

@@ -12,16 +12,17 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
 from paraspace.kinematics.workspace import compute_workspace
 
+from ..jobs import Job, LimitExceeded
+from ..urlstate import ExplorerState
 from .dexterity_colour import COLOUR_MODES, DEXTERITY_VOXEL, LIMIT_COLOURS, binding_labels, field_colours
-from .jobs import Job, LimitExceeded
 from .session import SessionContext
-from .urlstate import ExplorerState
 from .workspace_job import ShellBundle, ws_settings
 
 #: Directions (from the target to the camera) of the camera presets.

@@ -10,13 +10,14 @@ dictionary is what ``paraspace paper --json`` prints.
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import viser
 
-from .jobs import Job, JobManager, LimitExceeded
-from .numfmt import significant
-from .textsafe import md_text
+from ..jobs import Job, JobManager, LimitExceeded
+from ..numfmt import significant
+from ..textsafe import md_text
 
 #: Voxel edge of the comparison (the CLI's default).
 PAPER_VOXEL = 4.0
@@ -55,7 +56,7 @@ class PaperPanel:
         self.client = client
         self.cache = cache  # shared by every browser of the server: {voxel: result}
         self.notify = notify
-        self.job: Optional[Job] = None
+        self.job: Job | None = None
         self.lock = threading.Lock()
         gui.add_markdown("The paper's reported numbers (V, TI₁, TI₂) and the claims of its Sec. III for the "
                          "eight design variants, beside ours under each convention. The same as "

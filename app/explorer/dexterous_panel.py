@@ -10,15 +10,16 @@ and its share of the position workspace; *Hide* removes it. The computation is c
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import viser
 
-from .jobs import Job, JobManager, LimitExceeded
-from .numfmt import significant
+from ..jobs import Job, JobManager, LimitExceeded
+from ..numfmt import significant
+from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
-from .textsafe import md_text
 
 #: Voxel edge of the total-orientation workspace (coarser than the shell: it costs a workspace
 #: test per sampled orientation per voxel).
@@ -39,9 +40,9 @@ class DexterousPanel:
         self.get_input = get_input  # -> (design, joints)
         self.notify = notify
         self.lock = threading.Lock()
-        self.job: Optional[Job] = None
-        self.handle: Optional[Any] = None
-        self.result: Optional[Any] = None
+        self.job: Job | None = None
+        self.handle: Any | None = None
+        self.result: Any | None = None
         with gui.add_folder("Total-orientation workspace", expand_by_default=False):
             self.tilt = gui.add_slider("tilt T (deg)", min=0.0, max=45.0, step=1.0, initial_value=15.0,
                                        hint="every tilt up to T, in every azimuth")

@@ -12,7 +12,8 @@ It answers the attributes the controllers and tests use on a plot handle: ``figu
 from __future__ import annotations
 
 import threading
-from typing import Any, Mapping, Optional
+from collections.abc import Mapping
+from typing import Any
 
 import viser
 
@@ -21,7 +22,7 @@ class LazyPlot:
     """A placeholder for ``gui.add_plotly`` inside ``container`` (module docstring); construct it
     inside ``with container:``, like any element of the panel."""
 
-    def __init__(self, gui: viser.GuiApi, container: Any, text: str = "", *, config: Optional[Mapping[str, Any]] = None,
+    def __init__(self, gui: viser.GuiApi, container: Any, text: str = "", *, config: Mapping[str, Any] | None = None,
                  aspect: float = 1.0, visible: bool = True) -> None:
         self._gui = gui
         self._container = container
@@ -29,7 +30,7 @@ class LazyPlot:
         self._aspect = float(aspect)
         self._visible = bool(visible)
         self._figure: Any = None
-        self._handle: Optional[Any] = None
+        self._handle: Any | None = None
         self._lock = threading.Lock()
         # built inside ``with container:`` (as every element of a panel): the placeholder goes there
         self._placeholder = gui.add_markdown(f"*{text}*" if text else "", visible=self._visible and bool(text))

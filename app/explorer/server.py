@@ -37,20 +37,23 @@ import errno
 import logging
 import threading
 import time
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import viser
 
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.workspace import warm_up
 
+from ..bytecache import ByteLRU
+from ..jobs import JobManager
+from ..limits import MAX_VOXELS
+from ..textsafe import md_text, plain_text
+from ..urlstate import ExplorerState, panel_pairs, parse_query
 from . import jsbridge, pagehook
-from .bytecache import ByteLRU
 from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
-from .jobs import JobManager
-from .limits import MAX_VOXELS
 from .numbers_panel import NumbersPanel
 from .optimize_panel import OptimizePanel, ResultStore
 from .orientation_controller import OrientationController
@@ -62,9 +65,7 @@ from .scene import ShellScene
 from .session import SessionContext
 from .share_controller import ShareController
 from .studies_controller import StudiesController
-from .textsafe import md_text, plain_text
 from .tilt_panel import TiltPanel
-from .urlstate import ExplorerState, panel_pairs, parse_query
 from .view_controller import ViewController
 from .workspace_controller import WorkspaceController
 from .workspace_job import cached_bundle, compute_bundle
@@ -85,7 +86,7 @@ def _shared(name: str, doc: str) -> Any:
 
 def _forward(controller: str, fn: Callable) -> Callable:
     """A session method that calls ``fn`` (a controller method) on the session's ``controller``."""
-    def method(self: "ClientSession", *args: Any, **kw: Any) -> Any:
+    def method(self: ClientSession, *args: Any, **kw: Any) -> Any:
         return getattr(getattr(self, controller), fn.__name__)(*args, **kw)
     method.__name__ = fn.__name__
     method.__doc__ = fn.__doc__
@@ -106,13 +107,13 @@ class ClientSession:
         optimize_query: the link's ``opt_*`` entries (the Optimize panel's settings).
     """
 
-    def __init__(self, explorer: "Explorer", client: viser.ClientHandle, state: ExplorerState,
-                 base_url: str, messages: list[str], optimize_query: Optional[dict[str, str]] = None) -> None:
+    def __init__(self, explorer: Explorer, client: viser.ClientHandle, state: ExplorerState,
+                 base_url: str, messages: list[str], optimize_query: dict[str, str] | None = None) -> None:
         self.explorer = explorer
         self.client = client
         self.ctx = ctx = SessionContext(explorer, client, state, base_url, messages)
         self.optimize_query = dict(optimize_query or {})
-        self.optimize: Optional[OptimizePanel] = None
+        self.optimize: OptimizePanel | None = None
         self.ready = threading.Event()  # set when the GUI is built and wired
         self.numbers = NumbersPanel(ctx)
         self.share_controller = ShareController(ctx)
@@ -193,7 +194,7 @@ class ClientSession:
         if self.optimize_query:
             ctx.url_messages += self.optimize.apply_query(self.optimize_query)
 
-    def _set_pin(self, design: Optional[Design]) -> None:
+    def _set_pin(self, design: Design | None) -> None:
         """The Compare tab pinned ``design`` (or none): it goes into the state and the link."""
         self.ctx.update_state(pin=design)
         self.share_controller.schedule_url()
@@ -250,11 +251,11 @@ class ClientSession:
         return self.workspace_controller.job
 
     @property
-    def _sweep(self) -> Optional[dict]:
+    def _sweep(self) -> dict | None:
         return self.studies_controller.sweep
 
     @property
-    def _surface(self) -> Optional[dict]:
+    def _surface(self) -> dict | None:
         return self.studies_controller.surface
 
     # ----- what the session does (its controllers) ------------------------------------------------
@@ -297,14 +298,14 @@ class Explorer:
         jobs: the shared :class:`~app.jobs.JobManager` (a private one with 2 workers if ``None``).
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: Optional[JobManager] = None,
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: JobManager | None = None,
                  max_voxels: int = MAX_VOXELS) -> None:
         self.host = host
         self.max_voxels = max_voxels  # the API's grid limit (app/limits.py), whatever a link asks for
         self._requested_port = port
         self.jobs = jobs if jobs is not None else JobManager(max_workers=2)
         self._own_jobs = jobs is None
-        self.server: Optional[viser.ViserServer] = None
+        self.server: viser.ViserServer | None = None
         self.sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
         # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see app/bytecache.py
@@ -331,7 +332,7 @@ class Explorer:
         host = self.host if self.host not in ("0.0.0.0", "::") else "127.0.0.1"
         return f"http://{host}:{self.port}/"
 
-    def start(self) -> "Explorer":
+    def start(self) -> Explorer:
         """Start the viser server (returns at once; the numba kernels warm up in the background)."""
         if self.server is not None:
             return self
@@ -402,7 +403,7 @@ class Explorer:
         if session is not None:
             session.close()
 
-    def session(self, client_id: int) -> Optional[ClientSession]:
+    def session(self, client_id: int) -> ClientSession | None:
         """The session of a connected client (``None`` if unknown)."""
         with self._sessions_lock:
             return self.sessions.get(client_id)

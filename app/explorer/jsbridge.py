@@ -21,7 +21,6 @@ viser internals is :mod:`paraspace.app.pagehook`, the gate on the page request.)
 from __future__ import annotations
 
 import json
-from typing import Optional
 
 import viser
 from viser import _messages
@@ -36,7 +35,7 @@ def run_js(client: viser.ClientHandle, source: str) -> None:
     client._websock_connection.queue_message(_messages.RunJavascriptMessage(source=wrapped))  # noqa: SLF001
 
 
-def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: float) -> Optional[str]:
+def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: float) -> str | None:
     """Run ``source`` (which stores its answer under the JS variable ``k``'s localStorage key) and
     read the answer back; ``None`` if the browser did not answer within ``timeout`` seconds."""
     run_js(client, f"var k = {json.dumps(VISER_STORAGE_PREFIX + key)};" + source)
@@ -51,7 +50,7 @@ def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: floa
     return raw
 
 
-def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> Optional[tuple[str, str]]:
+def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> tuple[str, str] | None:
     """The page's ``(location.search, origin + pathname)``, or ``None`` if the browser did not answer.
 
     Blocks for one round trip: call it from a thread-pool callback (a ``def`` callback), never from
@@ -79,7 +78,7 @@ def replace_query(client: viser.ClientHandle, query: str) -> None:
     ))
 
 
-def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.0) -> Optional[bool]:
+def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.0) -> bool | None:
     """Try to put ``text`` on the clipboard of this client's browser and report what happened:
     ``True`` copied, ``False`` refused by the browser (e.g. not a secure context, no permission),
     ``None`` no answer within ``timeout`` seconds. Blocks for one round trip (a ``def`` callback)."""

@@ -16,17 +16,18 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import viser
 
 from paraspace.kinematics.design import Design
 
-from .jobs import Job, JobManager, LimitExceeded
-from .numfmt import significant
+from ..jobs import Job, JobManager, LimitExceeded
+from ..numfmt import significant
+from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
-from .textsafe import md_text
 
 #: The paper's Fig. 3 pairs: parameter, first (pinned) and second (current) value.
 FIG3_PAIRS: tuple[tuple[str, float, float], ...] = (("a", 10.0, 80.0), ("d_s", 10.0, 80.0),
@@ -38,7 +39,7 @@ GHOST_LEVELS = 12
 GHOST_LINE_PX = 2.5
 
 #: Rows of the comparison table: (label, how to read it from a bundle, digits or None for text).
-ROWS: tuple[tuple[str, Callable[[Any], Any], Optional[int]], ...] = (
+ROWS: tuple[tuple[str, Callable[[Any], Any], int | None], ...] = (
     ("volume V (units³)", lambda b: b.result.volume, 4),
     ("hollowness", lambda b: b.measures.hollowness, 3),
     ("void ratio", lambda b: b.measures.void_ratio, 3),
@@ -102,10 +103,10 @@ class CompareHooks:
     """What the panel needs from its session (kept narrow: state in, state out)."""
 
     get_state: Callable[[], Any]  # -> ExplorerState
-    set_pin: Callable[[Optional[Design]], None]  # stores the pin in the state and the link
-    bundle_for: Callable[[Any], Optional[Any]]  # state -> cached ShellBundle with measures, or None
+    set_pin: Callable[[Design | None], None]  # stores the pin in the state and the link
+    bundle_for: Callable[[Any], Any | None]  # state -> cached ShellBundle with measures, or None
     compute_bundle: Callable[[Any, Callable[[float, str], None], threading.Event], Any]  # state -> bundle
-    current_bundle: Callable[[], Optional[Any]]
+    current_bundle: Callable[[], Any | None]
     load_design: Callable[[Design], None]
     notify: Callable[[str, str], None]
 
@@ -121,10 +122,10 @@ class ComparePanel:
         self.jobs = jobs
         self.client = client
         self.hooks = hooks
-        self.pinned: Optional[Any] = None  # ShellBundle of the pinned design
-        self.handle: Optional[Any] = None
-        self.cage: Optional[Any] = None
-        self.job: Optional[Job] = None
+        self.pinned: Any | None = None  # ShellBundle of the pinned design
+        self.handle: Any | None = None
+        self.cage: Any | None = None
+        self.job: Job | None = None
         self.lock = threading.Lock()
         gui.add_markdown("Pin a design to keep its workspace as a magenta ghost (height contours over a faint "
                          "surface) and its numbers beside the current design's.")
@@ -146,7 +147,7 @@ class ComparePanel:
         self.hooks.set_pin(design)
         self.restore(design)
 
-    def restore(self, design: Optional[Design]) -> None:
+    def restore(self, design: Design | None) -> None:
         """Show the pin of a state (from a link or after :meth:`pin`): cached, or computed in the background."""
         if design is None:
             self.unpin()

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import json
 import struct
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -287,7 +288,7 @@ class MechanismScene:
 # workspace shell
 
 
-def remove_node(handle: Optional[Any]) -> None:
+def remove_node(handle: Any | None) -> None:
     """Remove a scene node if there is one (quietly: its browser may have left)."""
     if handle is not None:
         try:
@@ -325,7 +326,7 @@ def glb_with_material(glb: bytes, opacity: float) -> bytes:
     return out
 
 
-def _z_color_lookup(mesh: trimesh.Trimesh) -> Optional[tuple[np.ndarray, np.ndarray]]:
+def _z_color_lookup(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray] | None:
     """(sorted z, RGBA colors) of the mesh's vertices, when it has vertex colors."""
     if mesh.visual.kind != "vertex" or len(mesh.vertices) == 0:
         return None
@@ -361,14 +362,14 @@ class ShellScene:
     def __init__(self, scene: viser.SceneApi, is_closed: Callable[[], bool] = lambda: False) -> None:
         self.scene = scene
         self.is_closed = is_closed  # the browser left: an encoded shell is not sent
-        self.handle: Optional[Any] = None
-        self.source: Optional[trimesh.Trimesh] = None
+        self.handle: Any | None = None
+        self.source: trimesh.Trimesh | None = None
         self.last_payload_bytes = 0
         self.last_faces = 0
         self.stale_label = scene.add_label("/workspace/stale_label", "", position=(0.0, 0.0, 0.0), visible=False,
                                            font_size_mode="screen", font_screen_scale=1.0)
 
-    def show(self, mesh: Optional[trimesh.Trimesh], opacity: float, cut: bool, cut_z: float, keep: str) -> int:
+    def show(self, mesh: trimesh.Trimesh | None, opacity: float, cut: bool, cut_z: float, keep: str) -> int:
         """Replace the shell (``None`` removes it); returns the GLB payload size in bytes."""
         self.source = mesh
         return self.refresh(opacity, cut, cut_z, keep)
@@ -404,7 +405,7 @@ class ShellScene:
         self.last_faces = int(len(shown.faces))
         return len(glb)
 
-    def set_stale(self, text: Optional[str]) -> None:
+    def set_stale(self, text: str | None) -> None:
         """Mark the shown shell as belonging to a previous design (``text`` over its top) or clear it."""
         mesh = self.source
         if not text or mesh is None or len(mesh.vertices) == 0:
@@ -415,7 +416,7 @@ class ShellScene:
         self.stale_label.position = (float(top[0]), float(top[1]), float(top[2]) + 10.0)
         self.stale_label.visible = True
 
-    def z_range(self) -> Optional[tuple[float, float]]:
+    def z_range(self) -> tuple[float, float] | None:
         """The z range that the shell's colours span (``None`` without a shell)."""
         mesh = self.source
         if mesh is None or len(mesh.vertices) == 0:

@@ -11,16 +11,17 @@ shown (:meth:`OrientationController.forget_stale`). Results are cached per (desi
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
 
-from . import figures
-from .jobs import Job, LimitExceeded
+from .. import figures
+from ..jobs import Job, LimitExceeded
+from ..textsafe import md_text
+from ..urlstate import ExplorerState
 from .numbers_panel import fmt
 from .session import PROGRESS_INTERVAL, SessionContext
-from .textsafe import md_text
-from .urlstate import ExplorerState
 
 
 class OrientationController:
@@ -40,8 +41,8 @@ class OrientationController:
         self.exports = exports
         self.on_state_change = on_state_change
         self.gen = 0
-        self.job: Optional[Job] = None
-        self.key: Optional[tuple] = None  # (design key, z0, joints key) of the maps being computed/shown
+        self.job: Job | None = None
+        self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
 
     def wire(self) -> None:
         """Attach z0 and the maps' download buttons."""

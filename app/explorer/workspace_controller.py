@@ -12,16 +12,17 @@ computes, the one on screen is marked stale. A finished workspace starts the ori
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
 
-from .jobs import Job, LimitExceeded
+from ..jobs import Job, LimitExceeded
+from ..limits import check_workspace_grid
+from ..textsafe import md_text
 from .legend import colorbar_image
-from .limits import check_workspace_grid
 from .session import PROGRESS_INTERVAL, SessionContext
-from .textsafe import md_text
 from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
 
 
@@ -51,8 +52,8 @@ class WorkspaceController:
         self.show_controls = show_controls
         self.on_state_change = on_state_change
         self.gen = 0
-        self.job: Optional[Job] = None
-        self.bracket_job: Optional[Job] = None  # the certified bracket of the full result on screen
+        self.job: Job | None = None
+        self.bracket_job: Job | None = None  # the certified bracket of the full result on screen
         self._framed = False  # the camera has framed a shell once
 
     def wire(self) -> None:

@@ -12,15 +12,16 @@ so "80" never computes "8" first; an invalid design is refused with its field an
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
 
+from ..textsafe import md_text
+from ..urlstate import D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS
 from .panels import slider_span
 from .session import SessionContext
-from .textsafe import md_text
-from .urlstate import D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS
 
 #: Seconds of quiet after which a value typed outside a slider's range is applied (see on_design_input).
 TYPING_PAUSE = 0.8
@@ -44,7 +45,7 @@ class DesignController:
         self.update_mechanism = update_mechanism
         self.submit_workspace = submit_workspace
         self.on_state_change = on_state_change
-        self._timer: Optional[threading.Timer] = None  # pending typed design value
+        self._timer: threading.Timer | None = None  # pending typed design value
 
     def wire(self) -> None:
         """Attach the Design tab's controls."""

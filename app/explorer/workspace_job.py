@@ -14,12 +14,13 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
-from .urlstate import ExplorerState
+from ..urlstate import ExplorerState
 
 #: Voxel edge of the coarse preview shell.
 PREVIEW_VOXEL = 6.0
@@ -67,7 +68,7 @@ def measure(result: WorkspaceResult) -> Any:
     return measure_workspace(result)
 
 
-def bracket(result: WorkspaceResult, cancel: Optional[threading.Event] = None) -> Any:
+def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> Any:
     """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
     bracket does not model). Raises :class:`~kinematics.progress.Cancelled` once ``cancel`` is set."""
     from paraspace.kinematics.bracket import bracket_of
@@ -87,7 +88,7 @@ def ws_key(s: ExplorerState, voxel: float) -> tuple:
     return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel), s.joints.key())
 
 
-def cached_bundle(cache: Any, state: ExplorerState) -> Optional[ShellBundle]:
+def cached_bundle(cache: Any, state: ExplorerState) -> ShellBundle | None:
     """The measured bundle of ``state`` (at its own voxel edge) if the cache holds one."""
     hit = cache.get(ws_key(state, state.voxel))
     return hit if hit is not None and hit.measures is not None else None

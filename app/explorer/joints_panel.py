@@ -11,7 +11,7 @@ platform), the cone axes, the legs' diameter (0 = no interference test) and the 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Optional
+from typing import Any
 
 import viser
 
@@ -43,7 +43,7 @@ class JointsControls:
         """Every input handle (for wiring ``on_update``)."""
         return (self.u_on, self.u_angle, self.s_on, self.s_angle, self.axis, self.diameter, self.clearance)
 
-    def read(self) -> tuple[Optional[Joints], Optional[str]]:
+    def read(self) -> tuple[Joints | None, str | None]:
         """``(joints, None)`` from the controls, or ``(None, message)`` naming the bad field."""
         try:
             joints = Joints(theta_u=float(self.u_angle.value) if self.u_on.value else None,

@@ -10,13 +10,14 @@ torsion limited by the scan (90° / 180°) is said so.
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 import viser
 
-from .jobs import Job, JobManager, LimitExceeded
+from ..jobs import Job, JobManager, LimitExceeded
+from ..textsafe import md_text
 from .lazy_plot import LazyPlot
-from .textsafe import md_text
 
 
 def tilt_polar_figure(report: Any) -> Any:
@@ -57,8 +58,8 @@ class TiltPanel:
         self.get_input = get_input  # -> (design, position (3,), joints)
         self.notify = notify
         self.lock = threading.Lock()
-        self.job: Optional[Job] = None
-        self.report: Optional[Any] = None
+        self.job: Job | None = None
+        self.report: Any | None = None
         with gui.add_folder("Tilt and torsion here", expand_by_default=False) as folder:
             self.run = gui.add_button("Compute at the current position", icon=viser.Icon.COMPASS)
             self.text = gui.add_markdown("Bonev-Gosselin tilt (any azimuth, zero torsion) and torsion (zero tilt) "
