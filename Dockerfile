@@ -21,7 +21,7 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 RUN mkdir -p /opt/paraspace && printf '%s\n' \
         annotated-doc==0.0.7 annotated-types==0.8.0 anyio==4.16.0 certifi==2026.10.18 \
         charset-normalizer==3.5.2 click==8.5.1 cloudpickle==3.1.2 contourpy==1.3.3 cycler==0.12.1 \
-        dask==2026.8.0 distributed==2026.8.0 fast-simplification==0.2.0 fastapi==0.165.0 \
+        dask==2026.8.0 distributed==2026.8.0 fast-simplification==0.2.0 fastapi==0.165.0 fastapi-offline==1.7.7 \
         fonttools==4.68.0 fsspec==2026.9.0 h11==0.16.0 idna==3.20 imageio==2.38.1 \
         importlib-metadata==10.2.0 jinja2==3.1.6 kiwisolver==1.5.1 lazy-importer==0.1.0 \
         lazy-loader==0.6 llvmlite==0.50.0 locket==1.0.0 markdown-it-py==4.3.0 markupsafe==3.0.4 \

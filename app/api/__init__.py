@@ -41,6 +41,7 @@ from __future__ import annotations
 from typing import Optional
 
 from fastapi import FastAPI
+from fastapi_offline import FastAPIOffline
 
 from ..jobs import JobManager
 from . import ik, links, meta, optimize, orientation, sweep, workspace
@@ -70,7 +71,9 @@ def create_api(jobs: JobManager, *, explorer_url: str | None = None,
         api_url: this API's base URL as clients reach it, for the absolute short links
             (``None``: ``short_url`` is the path alone). Links never use the request's Host header.
     """
-    app = FastAPI(
+    # The interactive docs at /docs load Swagger UI's script and style from this server (the
+    # fastapi-offline package ships them), never from a CDN: they render without internet.
+    app = FastAPIOffline(
         title="paraspace API",
         version=API_VERSION,
         description=("Workspace, orientation capability, parameter studies and inverse kinematics of the "
@@ -80,6 +83,7 @@ def create_api(jobs: JobManager, *, explorer_url: str | None = None,
         docs_url="/docs",
         openapi_url="/openapi.json",
         redoc_url=None,
+        static_url="/docs-assets",
     )
     ctx = ApiContext(jobs, limits, explorer_url, api_url)
     app.state.api = ctx  # what the routers receive (context.Ctx)
