@@ -714,6 +714,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--trusted-proxy", dest="trusted_proxy", metavar="IP[,IP]",
                    help="believe X-Forwarded-For only from these proxy addresses (default: never)")
     v.set_defaults(func=cmd_serve)
+
+    from .mechanism_cli import add_mechanism_parser
+    add_mechanism_parser(sub)
     return p
 
 
@@ -725,15 +728,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ParameterError as err:
         sys.stderr.write(f"paraspace: error: {err}\n")
         return 2
+    except BrokenPipeError:  # e.g. `paraspace orientation | head` (before OSError, its base class)
+        sys.stderr.close()
+        return 0
     except OSError as err:  # a file we were asked to write or read (--export, --csv, --plot, ...)
         where = f" {err.filename!r}" if getattr(err, "filename", None) else ""
         sys.stderr.write(f"paraspace: error: cannot use the file{where}: {err.strerror or err}\n")
         return 2
     except KeyboardInterrupt:
         return 130
-    except BrokenPipeError:  # e.g. `paraspace orientation | head`
-        sys.stderr.close()
-        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
