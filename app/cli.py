@@ -483,8 +483,10 @@ def cmd_serve(ns: argparse.Namespace) -> int:
         from paraspace.app.serve import check_public_url
 
         public_url = check_public_url(ns.public_url)
+    from paraspace.app.hostcheck import parse_allowed_hosts
+
     serve(host=ns.host, port=ns.port, api_port=ns.api_port, block=True, public_url=public_url,
-          trusted_proxy=ns.trusted_proxy)
+          trusted_proxy=ns.trusted_proxy, allowed_hosts=parse_allowed_hosts(ns.allowed_host))
     return 0
 
 
@@ -705,7 +707,12 @@ def build_parser() -> argparse.ArgumentParser:
     k.set_defaults(func=cmd_ik)
 
     v = sub.add_parser("serve", help="run the browser explorer and the REST API")
-    v.add_argument("--host", default="127.0.0.1")
+    v.add_argument("--host", default="127.0.0.1",
+                   help="interface to bind (default 127.0.0.1: this machine only; 0.0.0.0: every interface, "
+                        "e.g. in a container)")
+    v.add_argument("--allowed-host", dest="allowed_host", metavar="NAME[,NAME]",
+                   help="host names a request may carry in its Host header besides localhost, 127.0.0.1, ::1, "
+                        "the bound address and --public-url's host ('*': any; protects against DNS rebinding)")
     v.add_argument("--port", type=int, default=8080, help="explorer port (default 8080)")
     v.add_argument("--api-port", dest="api_port", type=int, default=8081, help="REST API port (default 8081)")
     v.add_argument("--public-url", dest="public_url", metavar="URL",

@@ -28,6 +28,7 @@ from uvicorn.protocols.http.h11_impl import H11Protocol
 from paraspace.kinematics.design import ParameterError
 
 from .api import ApiLimits, create_api
+from .hostcheck import HostPolicy
 from .jobs import JobManager
 
 __all__ = ["ApiServer", "Running", "serve", "start_api", "free_port"]
@@ -223,7 +224,7 @@ def check_public_url(url: str) -> str:
 def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, block: bool = True,
           explorer: bool = True, limits: ApiLimits = ApiLimits(), max_workers: int = 2,
           quiet: bool = False, public_url: str | None = None,
-          trusted_proxy: str | None = None) -> Running:
+          trusted_proxy: str | None = None, allowed_hosts: tuple[str, ...] = ()) -> Running:
     """Start the explorer on ``port`` and the API on ``api_port`` (both on ``host``).
 
     Args:
@@ -240,6 +241,9 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
             landing page point there. Default: ``http://{host}:{port}/`` (loopback for a wildcard
             bind). The request's Host header is never used to build a link.
         trusted_proxy: see :func:`start_api`.
+        allowed_hosts: host names accepted in a request's ``Host`` header besides the loopback
+            names, the bind address and ``public_url``'s host (``"*"``: any host); see
+            :mod:`paraspace.app.hostcheck`.
 
     Returns:
         The :class:`Running` servers (already stopped when ``block`` is true).
@@ -252,11 +256,15 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
                       max_seconds=max(limits.max_job_seconds, 1.0))
     exp = None
     try:
+        if public_url:
+            public_url = check_public_url(public_url)
         if explorer:
             from .explorer import Explorer
 
             exp = Explorer(host, port, jobs)
             exp.start()
+            exp.set_hosts(HostPolicy.for_server(host, explorer_port=exp.port, public_url=public_url,
+                                                allowed_hosts=allowed_hosts))
         # Links are built from configuration only, never from a request's Host header.
         if exp is None:
             explorer_url = None
@@ -269,7 +277,9 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
         api_url = f"http://{_bracket(_url_host(host))}:{api_port}"
         if public_url:  # behind a proxy the API's public address is the proxy's business: relative links
             api_url = None
-        app = create_api(jobs, explorer_url=explorer_url, limits=limits, api_url=api_url)
+        hosts = HostPolicy.for_server(host, explorer_port=exp.port if exp is not None else None,
+                                      public_url=public_url, allowed_hosts=allowed_hosts)
+        app = create_api(jobs, explorer_url=explorer_url, limits=limits, api_url=api_url, hosts=hosts)
         try:
             api = start_api(app, host, api_port, trusted_proxy=trusted_proxy)
         except RuntimeError as e:

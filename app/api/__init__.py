@@ -43,12 +43,14 @@ from typing import Optional
 from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
 
+from ..hostcheck import HostPolicy
 from ..jobs import JobManager
 from . import ik, links, meta, optimize, orientation, sweep, workspace
 from . import jobs as jobs_routes
 from .body_limit import BodyLimit
 from .context import API_PREFIX, API_VERSION, ApiContext
 from .errors import install_error_handlers
+from .host_guard import HostGuard
 from .limits import ApiLimits
 from .tokens import decode_link_token, encode_link_token
 
@@ -60,7 +62,8 @@ ROUTERS = (meta.router, ik.router, workspace.router, orientation.router, sweep.r
 
 
 def create_api(jobs: JobManager, *, explorer_url: str | None = None,
-               limits: ApiLimits = ApiLimits(), api_url: str | None = None) -> FastAPI:
+               limits: ApiLimits = ApiLimits(), api_url: str | None = None,
+               hosts: HostPolicy | None = None) -> FastAPI:
     """Build the FastAPI application.
 
     Args:
@@ -70,6 +73,8 @@ def create_api(jobs: JobManager, *, explorer_url: str | None = None,
         limits: resource limits (see :class:`ApiLimits`).
         api_url: this API's base URL as clients reach it, for the absolute short links
             (``None``: ``short_url`` is the path alone). Links never use the request's Host header.
+        hosts: the allowed hosts and origins (:mod:`paraspace.app.hostcheck`; default: loopback
+            names only, no explorer origin). Every other request gets 403.
     """
     # The interactive docs at /docs load Swagger UI's script and style from this server (the
     # fastapi-offline package ships them), never from a CDN: they render without internet.
@@ -93,6 +98,7 @@ def create_api(jobs: JobManager, *, explorer_url: str | None = None,
     app.state.caches = ctx.caches
     install_error_handlers(app)
     app.add_middleware(BodyLimit, max_bytes=limits.max_body_bytes)
+    app.add_middleware(HostGuard, policy=hosts or HostPolicy())  # added last: runs first
     for router in ROUTERS:
         app.include_router(router)
     return app

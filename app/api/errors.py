@@ -123,6 +123,7 @@ class ErrorOut(BaseModel):
 #: What any endpoint may answer besides its success codes (declared in the OpenAPI document).
 ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorOut, "description": text} for code, text in (
+        (403, "the request's Host or Origin is not allowed (DNS rebinding, cross-site pages)"),
         (404, "unknown job, or short links disabled"),
         (408, "request body not received in time"),
         (409, "the job has no result (yet)"),

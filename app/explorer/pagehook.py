@@ -23,6 +23,11 @@ passes untouched):
    learned another way to be pointed elsewhere; its ``<title>`` says paraspace, and it hides
    viser's own control panel until the explorer's GUI has arrived (:data:`PANEL_WAIT`).
 
+Before all of this, every request (page or websocket upgrade) must pass the host and origin rules
+of :mod:`paraspace.app.hostcheck` (DNS rebinding, cross-site websockets): a refused one gets a
+plain-text 403. The rules are set per listening port by the explorer (:func:`set_policy`); a port
+without one gets the loopback-only default.
+
 The refusal is decided by :func:`page_refusal`, a pure function of the request's path and query.
 """
 
@@ -38,10 +43,12 @@ from typing import Any
 from websockets.datastructures import Headers
 from websockets.http11 import Response
 
+from ..hostcheck import HostPolicy
 from ..urlstate import link_keys
 from .jsbridge import PANEL_WAIT_CLASS
 
-__all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install"]
+__all__ = ["MAX_QUERY_CHARS", "MAX_REQUEST_LINE", "CONTENT_SECURITY_POLICY", "page_refusal", "install",
+           "set_policy", "clear_policy"]
 
 #: Longest query string of a page request (a full explorer link is about 300 characters).
 MAX_QUERY_CHARS = 4096
@@ -97,8 +104,30 @@ def page_refusal(path: str, query: str) -> tuple[int, str] | None:
                  f"The same link without them (on this server): {clean}\n")
 
 
+_policies: dict[int, HostPolicy] = {}
+_DEFAULT_POLICY = HostPolicy()
+
+
+def set_policy(port: int, policy: HostPolicy) -> None:
+    """The host and origin rules of the explorer listening on ``port``."""
+    _policies[int(port)] = policy
+
+
+def clear_policy(port: int) -> None:
+    """Forget the rules of ``port`` (its explorer stopped)."""
+    _policies.pop(int(port), None)
+
+
+def _policy_of(connection: Any) -> HostPolicy:
+    try:
+        port = int(connection.local_address[1])
+    except (AttributeError, IndexError, TypeError, ValueError):
+        return _DEFAULT_POLICY
+    return _policies.get(port, _DEFAULT_POLICY)
+
+
 def _text_response(status: int, text: str) -> Response:
-    reason = {400: "Bad Request", 414: "URI Too Long"}.get(status, "Error")
+    reason = {400: "Bad Request", 403: "Forbidden", 414: "URI Too Long"}.get(status, "Error")
     body = text.encode("utf-8")
     return Response(status, reason, Headers({
         "Content-Type": "text/plain; charset=utf-8", "Content-Length": str(len(body)),
@@ -134,6 +163,9 @@ _EDITOR = _PageEditor()
 
 def _guarded(inner: Callable[[Any, Any], Response | None]) -> Callable[[Any, Any], Response | None]:
     def process_request(connection: Any, request: Any) -> Response | None:
+        why = _policy_of(connection).refusal(request.headers.get("Host"), request.headers.get("Origin"))
+        if why is not None:
+            return _text_response(403, f"paraspace explorer: {why}\n")
         if str(request.headers.get("Upgrade", "")).lower() == "websocket":
             return inner(connection, request)
         path, _, query = request.path.partition("?")

@@ -46,6 +46,7 @@ from paraspace.kinematics.design import Design
 from paraspace.kinematics.workspace import warm_up
 
 from ..bytecache import ByteLRU
+from ..hostcheck import HostPolicy
 from ..jobs import JobManager
 from ..limits import MAX_VOXELS
 from ..textsafe import md_text, plain_text
@@ -296,11 +297,14 @@ class Explorer:
         host: interface to bind (default: localhost only).
         port: port (viser moves to the next free one when busy; read :attr:`port`). 0: any free port.
         jobs: the shared :class:`~app.jobs.JobManager` (a private one with 2 workers if ``None``).
+        hosts: the host and origin rules of every request (:mod:`paraspace.app.hostcheck`;
+            default: the loopback names and ``host``, the page's own origin only).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = 8080, jobs: JobManager | None = None,
-                 max_voxels: int = MAX_VOXELS) -> None:
+                 max_voxels: int = MAX_VOXELS, hosts: HostPolicy | None = None) -> None:
         self.host = host
+        self.hosts = hosts  # allowed hosts and origins (app/hostcheck.py); None: the bind address's
         self.max_voxels = max_voxels  # the API's grid limit (app/limits.py), whatever a link asks for
         self._requested_port = port
         self.jobs = jobs if jobs is not None else JobManager(max_workers=2)
@@ -348,7 +352,14 @@ class Explorer:
         server.on_client_connect(self._on_connect)
         server.on_client_disconnect(self._on_disconnect)
         self.server = server
+        pagehook.set_policy(self.port, self.hosts or HostPolicy.for_server(self.host, explorer_port=self.port))
         return self
+
+    def set_hosts(self, hosts: HostPolicy) -> None:
+        """Apply other host and origin rules (:mod:`paraspace.app.hostcheck`) to this explorer's port."""
+        self.hosts = hosts
+        if self.server is not None:
+            pagehook.set_policy(self.port, hosts)
 
     def _warm_up(self) -> None:
         try:
@@ -367,6 +378,7 @@ class Explorer:
         for s in sessions:
             s.close()
         if self.server is not None:
+            pagehook.clear_policy(self.port)
             self.server.stop()
             self.server = None
         if self._own_jobs:
