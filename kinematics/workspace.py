@@ -32,12 +32,14 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import rounding_margin, run_blocks
+from .bracket import volume_bracket
 from .design import Design, ParameterError
-from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
+from .feasibility import _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .grid import GridSpec
 from .interference import interference_free
 from .joints import Joints, cone_table
+from .kernel_args import kernel_args
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
@@ -231,16 +233,6 @@ def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
 _MIRROR_BITS = np.array([(v & 1) | (((v >> 2) & 1) << 1) | (((v >> 1) & 1) << 2) for v in range(256)], np.uint8)
 
 
-def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Joints | None = None) -> tuple:
-    """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
-    tab = ChainTables(design, n_eta)
-    o = np.asarray(orientation_deg, dtype=float)
-    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
-    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
-    jc = cone_table(design, joints or Joints(), rot)
-    return (u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc)
-
-
 def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
                    eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
     """Bitmask of the chains that can reach each point (bit ``i`` for chain ``i``) at one orientation.
@@ -253,7 +245,7 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
     """
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     out = np.zeros(pts.shape[0], np.uint8)
-    args = _kernel_args(design, orientation, default_n_eta(design, eta_step), joints)
+    args = kernel_args(design, orientation, default_n_eta(design, eta_step), joints)
     with KERNEL_LOCK:
         _points_kernel(pts, *args, out)
     return out
@@ -296,7 +288,7 @@ def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     n_eta = default_n_eta(design, eta_step)
-    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = _kernel_args(design, np.eye(3), n_eta)
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
     jn = joints or Joints()
     us, jcs = rotation_tables(design, rots, jn)
     out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
@@ -375,7 +367,7 @@ def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
               progress: Reporter | None, cancel: CancelToken, all_chains: bool = False):
     n_eta = default_n_eta(design, settings.eta_step)
-    args = _kernel_args(design, settings.orientation, n_eta, settings.joints)
+    args = kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     mirror = _use_mirror(design, settings, grid)
@@ -456,10 +448,9 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                              chain_mask=mask if settings.diagnostics else None,
                              compute_seconds=seconds, n_eta=n_eta)
     if settings.bracket:
-        from .bracket import volume_bracket
 
         t1 = time.perf_counter()
-        br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta, settings.joints),
+        br = volume_bracket(design, grid, kernel_args(design, settings.orientation, n_eta, settings.joints),
                             n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine)
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
