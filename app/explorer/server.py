@@ -37,7 +37,6 @@ import errno
 import logging
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import viser
@@ -84,19 +83,11 @@ def _shared(name: str, doc: str) -> Any:
     return property(lambda self: getattr(self.ctx, name), doc=doc)
 
 
-def _forward(controller: str, fn: Callable) -> Callable:
-    """A session method that calls ``fn`` (a controller method) on the session's ``controller``."""
-    def method(self: ClientSession, *args: Any, **kw: Any) -> Any:
-        return getattr(getattr(self, controller), fn.__name__)(*args, **kw)
-    method.__name__ = fn.__name__
-    method.__doc__ = fn.__doc__
-    return method
-
-
 class ClientSession:
     """One browser's explorer: builds its panels and scene, its controllers around one shared
     :class:`~app.session.SessionContext`, wires them, and closes them (module docstring). The
-    attributes and methods below forward to the context and the controllers.
+    attributes below read the context; what the session does is done through its controllers
+    (``design_controller``, ``pose_controller``, ``workspace_controller``, ...).
 
     Args:
         explorer: the owning :class:`Explorer` (shared job manager and caches).
@@ -230,7 +221,6 @@ class ClientSession:
     job_client = _shared("job_client", "This session's client name in the job manager.")
     lock = _shared("lock", "The session's state lock.")
     url_messages = _shared("url_messages", "Problems of the link the page was opened with.")
-    _ws_info = _shared("ws_info", "The shell on screen: volume, h, preview?, seconds, measures.")
 
     @property
     def mechanism(self) -> Any:
@@ -241,48 +231,6 @@ class ClientSession:
     def gizmo(self) -> Any:
         """The drag gizmo on the platform."""
         return self.pose_controller.gizmo
-
-    @property
-    def _ws_gen(self) -> int:
-        return self.workspace_controller.gen
-
-    @property
-    def _ws_job(self) -> Any:
-        return self.workspace_controller.job
-
-    @property
-    def _sweep(self) -> dict | None:
-        return self.studies_controller.sweep
-
-    @property
-    def _surface(self) -> dict | None:
-        return self.studies_controller.surface
-
-    # ----- what the session does (its controllers) ------------------------------------------------
-    apply_design = _forward("design_controller", DesignController.apply_design)
-    load_design = _forward("design_controller", DesignController.load_design)
-    reset_design = _forward("design_controller", DesignController.reset_design)
-    update_mechanism = _forward("pose_controller", PoseController.update_mechanism)
-    submit_workspace = _forward("workspace_controller", WorkspaceController.submit)
-    stop_workspace = _forward("workspace_controller", WorkspaceController.stop)
-    submit_orientation = _forward("orientation_controller", OrientationController.submit)
-    set_camera = _forward("view_controller", ViewController.set_camera)
-    fit_view = _forward("view_controller", ViewController.fit_view)
-    recolour_shell = _forward("view_controller", ViewController.recolour_shell)
-    refresh_shell = _forward("view_controller", ViewController.refresh_shell)
-    run_sweep = _forward("studies_controller", StudiesController.run_sweep)
-    run_surface = _forward("studies_controller", StudiesController.run_surface)
-    download_plot = _forward("exports", PlotExports.download)
-    download_sweep_csv = _forward("studies_controller", StudiesController.download_sweep_csv)
-    download_surface_csv = _forward("studies_controller", StudiesController.download_surface_csv)
-    download_shell = _forward("share_controller", ShareController.download_shell)
-    download_measures = _forward("share_controller", ShareController.download_measures)
-    measures_document = _forward("share_controller", ShareController.measures_document)
-    query = _forward("share_controller", ShareController.query)
-    link = _forward("share_controller", ShareController.link)
-    schedule_url = _forward("share_controller", ShareController.schedule_url)
-    copy_link = _forward("share_controller", ShareController.copy_link)
-    programmatic = _forward("ctx", SessionContext.programmatic)
 
 
 # --------------------------------------------------------------------------------------------

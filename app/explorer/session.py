@@ -15,6 +15,7 @@ It holds state, not behaviour: what a panel does lives in its controller (``app/
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import threading
 import time
@@ -23,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
+from paraspace.kinematics.bracket import VolumeBracket
+from paraspace.kinematics.measures import WorkspaceMeasures
 from paraspace.kinematics.redundancy import Resolution
 
 from ..jobs import Job, JobManager
@@ -38,6 +41,33 @@ log = logging.getLogger(__name__)
 
 #: Smallest interval between two progress updates of one bar, seconds (see SessionContext.throttled).
 PROGRESS_INTERVAL = 0.25
+
+
+@dataclasses.dataclass(frozen=True)
+class ShellInfo:
+    """The shell on screen, as the numbers panel shows it.
+
+    Attributes:
+        volume: the workspace volume, units³ (voxel count times ``h³``).
+        h: the voxel edge of the grid it was computed on.
+        preview: a coarse preview (``True``) or the full result.
+        seconds: the workspace computation time, s.
+        shell_seconds: the display shell's construction time, s.
+        gen: the workspace controller's generation that published it (a newer one supersedes it).
+        cached: it came from the shared result cache.
+        measures: its measures, ``None`` until they are computed.
+        bracket: its certified volume bracket, ``None`` unless asked for and computed.
+    """
+
+    volume: float
+    h: float
+    preview: bool
+    seconds: float
+    shell_seconds: float
+    gen: int
+    cached: bool
+    measures: WorkspaceMeasures | None = None
+    bracket: VolumeBracket | None = None
 
 
 class SessionJobs:
@@ -93,7 +123,7 @@ class SessionContext:
         # what is on screen (written by the controllers, read by the numbers panel and the downloads)
         self.bundle: ShellBundle | None = None  # full result on screen
         self.preview: ShellBundle | None = None
-        self.ws_info: dict[str, Any] = {}  # the shell on screen: volume, h, preview?, seconds, measures...
+        self.ws_info: ShellInfo | None = None  # the shell on screen (None before one)
         self.resolution: Resolution | None = None
         self.in_workspace: bool | None = None
         self.orientation: Any = None  # kinematics.orientation.OrientationResult on screen

@@ -22,7 +22,7 @@ from ..jobs import Job, LimitExceeded
 from ..limits import check_workspace_grid
 from ..textsafe import md_text
 from .legend import colorbar_image
-from .session import PROGRESS_INTERVAL, SessionContext
+from .session import PROGRESS_INTERVAL, SessionContext, ShellInfo
 from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
 
 
@@ -202,9 +202,9 @@ class WorkspaceController:
                     ctx.preview = bundle
                 else:
                     ctx.bundle = bundle
-                ctx.ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
-                               "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
-                               "measures": None, "gen": gen, "cached": from_cache}
+                ctx.ws_info = ShellInfo(volume=bundle.result.volume, h=bundle.result.grid.h, preview=preview,
+                                        seconds=bundle.result.compute_seconds, shell_seconds=bundle.shell_seconds,
+                                        gen=gen, cached=from_cache)
                 first = not self._framed
                 self._framed = True
             if first:  # the first shell: frame it (later shells keep the user's camera)
@@ -222,10 +222,9 @@ class WorkspaceController:
         with ctx.lock:
             if gen != self.gen or ctx.closed:
                 return
-            if ctx.ws_info.get("preview", False) != preview:
+            if ctx.ws_info is None or ctx.ws_info.preview != preview:
                 return
-            ctx.ws_info["measures"] = bundle.measures
-            ctx.ws_info["bracket"] = bundle.bracket
+            ctx.ws_info = dataclasses.replace(ctx.ws_info, measures=bundle.measures, bracket=bundle.bracket)
         self.numbers.render()
         if not preview:
             self.on_measures()
