@@ -75,7 +75,8 @@ def _design(ns: argparse.Namespace) -> Design:
         try:
             values[name] = float(raw)
         except (TypeError, ValueError):
-            raise ParameterError(name, raw, f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
+            raise ParameterError(name, raw,
+                                 f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
     return Design(**values, eta_range=ns.eta_range)
 
 
@@ -199,7 +200,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     else:
         print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
         if ns.bracket:
-            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}  (continuous workspace)")
+            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
+                  "  (continuous workspace)")
         for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
             if key in out:
                 print(f"{key:<15} {out[key]}")
@@ -620,7 +622,8 @@ def _add_optimize_parser(sub: Any) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="paraspace", description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
+    p = _Parser(prog="paraspace",
+                description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
     p.add_argument("--version", action="version", version=f"paraspace {paraspace.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 

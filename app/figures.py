@@ -512,8 +512,8 @@ def to_plotly(spec: FigureSpec) -> go.Figure:
                           xaxis=dict(visible=False), yaxis=dict(visible=False), height=120,
                           margin=dict(l=10, r=10, t=40, b=10), plot_bgcolor="white")
         return fig
-    types = [[{"type": "scene" if p.kind == "surface" else "xy"} for p in spec.panels[r * spec.cols:(r + 1) * spec.cols]]
-             for r in range(spec.rows)]
+    types = [[{"type": "scene" if p.kind == "surface" else "xy"}
+              for p in spec.panels[r * spec.cols:(r + 1) * spec.cols]] for r in range(spec.rows)]
     multi = len(spec.panels) > 1
     fig = make_subplots(rows=spec.rows, cols=spec.cols, specs=types,
                         subplot_titles=[_lines(p.short_title or p.title) for p in spec.panels] if multi else None,

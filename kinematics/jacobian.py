@@ -22,9 +22,9 @@ Velocity relation (eq. (21)): ``J_x xdot = J_q qdot`` with ``x = [P_o, Theta]``,
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .design import Design
 from .geometry import GAMMA, LEG_SIGN, base_points, platform_points, platform_points_local
@@ -51,7 +51,7 @@ class Jacobians:
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in dataclasses.asdict(self).items()}
 
 
-def jacobians(design: Design, pose: Pose, d: Sequence[float], eta_deg: Sequence[float]) -> Jacobians:
+def jacobians(design: Design, pose: Pose, d: ArrayLike, eta_deg: ArrayLike) -> Jacobians:
     """Eqs. (22)-(26) at pose ``pose`` with carriage values ``d`` and ``eta`` (degrees)."""
     rot = pose.rotation
     B = platform_points(design, pose.position, rot)

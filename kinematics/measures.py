@@ -197,6 +197,7 @@ h = 2 and 0.8 s at h = 1.5 on two cores (shared), 0.3 s at h = 3, 0.03 s at h = 
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -636,8 +637,9 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         floor_face = "z-"
     clipped = [f for f in touched if not (floor_closes and f == floor_face)]
     binding = (chain_binding(result.chain_mask, h, occ) if result.chain_mask is not None else None)
-    options = dict(connectivity=connectivity, hollowness_mode=hollowness, completeness_mode=completeness,
-                   floor_face=floor_face, piece_fraction=float(piece_fraction))
+    options: dict[str, Any] = dict(connectivity=connectivity, hollowness_mode=hollowness,
+                                   completeness_mode=completeness, floor_face=floor_face,
+                                   piece_fraction=float(piece_fraction))
 
     if n == 0:
         return WorkspaceMeasures(
@@ -647,7 +649,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
             boundary_complete=False, chain_binding=binding, completeness_reason="empty workspace",
             **options)
 
-    any_x, any_y, any_z = occ.any(axis=(1, 2)), occ.any(axis=(0, 2)), occ.any(axis=(0, 1))
+    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
     for a, m in enumerate((any_x, any_y, any_z)):
         lo_i = int(np.argmax(m))
@@ -658,9 +660,9 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
     # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
-    lo_i = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
-    hi_i = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    occ = occ[lo_i[0]:hi_i[0], lo_i[1]:hi_i[1], 0:hi_i[2]]
+    lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
+    hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
+    occ = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
 
     # topology
     labels, components = ndi.label(occ, structure=_structure(connectivity))

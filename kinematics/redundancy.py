@@ -217,7 +217,7 @@ def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: 
         angles = cone_angles(design, joints, pose.rotation, b, dp, eta)
         for col, name, lim in ((0, "U", joints.theta_u), (1, "S", joints.theta_s)):
             if lim is not None and angles[:, :, col].max() > lim + 1e-7:
-                i, j = np.unravel_index(int(np.argmax(angles[:, :, col])), (3, 2))
+                i, j = (int(k) for k in np.unravel_index(int(np.argmax(angles[:, :, col])), (3, 2)))
                 joint_problem = joint_problem or (f"chain {i + 1}, leg {j + 1}: {name} joint at "
                                                   f"{angles[i, j, col]:.1f}° > theta_{name} = {lim:g}°")
         if joints.min_distance > 0.0:

@@ -64,7 +64,8 @@ Construction (:func:`workspace_shell`)
 
 The mesh's ``metadata["paraspace"]`` records ``h``, ``level``, ``smooth_sigma``, ``faces_marching``
 (before reduction; ``None`` when the block re-mesh skipped the full-resolution mesh because it has
-more mixed cells than ``max_faces``, so it could not fit anyway), ``reduction``, ``dropped_components``, ``voxel_volume`` and ``volume_error``.
+more mixed cells than ``max_faces``, so it could not fit anyway), ``reduction``, ``dropped_components``,
+``voxel_volume`` and ``volume_error``.
 
 An empty workspace gives an empty ``Trimesh``; :func:`export_shell` refuses it with a
 ``ValueError``.
@@ -74,6 +75,7 @@ from __future__ import annotations
 
 import io
 import math
+from typing import Any, cast
 
 import numpy as np
 import trimesh
@@ -265,7 +267,8 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
         verts, faces = fast_simplification.simplify(verts, faces, target_count=max_faces, agg=agg)
     out = _sub(verts, faces)
     parts = out.split(only_watertight=False)
-    good = sorted((p for p in parts if abs(_signed_volume(p)) > 1e-6 * h ** 3), key=lambda p: len(p.faces), reverse=True)
+    good = sorted((p for p in parts if abs(_signed_volume(p)) > 1e-6 * h ** 3), key=lambda p: len(p.faces),
+                  reverse=True)
     kept, total = [], 0
     for part in good:
         if total + len(part.faces) <= max_faces:
@@ -273,7 +276,7 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
             total += len(part.faces)
     dropped += len(parts) - len(kept)
     if len(kept) != len(parts):
-        out = trimesh.util.concatenate(kept) if kept else trimesh.Trimesh()
+        out = cast(trimesh.Trimesh, trimesh.util.concatenate(kept)) if kept else trimesh.Trimesh()
     if len(out.vertices):
         _separate_coincident(out, h)
     return out, dropped
@@ -360,7 +363,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
     grid = result.grid
     h = float(grid.h)
     occ = np.asarray(result.occupancy, dtype=bool)
-    meta = {"h": h, "smooth_sigma": float(smooth_sigma), "level": None, "faces_marching": 0,
+    meta: dict[str, Any] = {"h": h, "smooth_sigma": float(smooth_sigma), "level": None, "faces_marching": 0,
             "voxel_volume": float(occ.sum()) * h ** 3, "volume_error": 0.0, "dropped_components": 0,
             "reduction": "none"}
     if not occ.any():
@@ -369,6 +372,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
         return empty
 
     pad = 1 if smooth_sigma == 0 else int(math.ceil(3.0 * smooth_sigma)) + 1
+    mesh: trimesh.Trimesh | None
     field = np.pad(occ.astype(np.float32), pad)
     target = meta["voxel_volume"]
     if smooth_sigma > 0:
@@ -398,7 +402,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
         z = mesh.vertices[:, 2]
         lo, hi = (float(z.min()), float(z.max())) if color_range is None else map(float, color_range)
         u = (z - lo) / (hi - lo) if hi > lo else np.zeros_like(z)
-        mesh.visual.vertex_colors = viridis(u)
+        mesh.visual.vertex_colors = viridis(u)  # type: ignore[union-attr]
     meta["volume_error"] = float(abs(abs(_signed_volume(mesh)) - target) / target)
     mesh.metadata["paraspace"] = meta
     return mesh
@@ -431,7 +435,7 @@ def load_shell(data: bytes, fmt: str) -> trimesh.Trimesh:
     if key not in SHELL_FORMATS:
         raise ValueError(f"fmt = {fmt!r} is invalid: valid formats {', '.join(SHELL_FORMATS)}")
     # STL stores a triangle soup: merge coincident vertices to recover the connectivity
-    return trimesh.load(io.BytesIO(data), file_type=key, force="mesh", process=key == "stl")
+    return cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=key, force="mesh", process=key == "stl"))
 
 
 def shell_volume_error(result: WorkspaceResult, mesh: trimesh.Trimesh) -> float:

@@ -7,10 +7,10 @@ The chains are independent, so the workspace is the intersection of three per-ch
 
 Engines (``WorkspaceSettings.method``): ``"blocks"`` (default) decides blocks of voxels coarse
 to fine and is voxel-identical to ``"dense"`` (see :mod:`kinematics.blocks` for the proof), which
-is kept as the tests' oracle. Dense engine: a compiled kernel walks each vertical column of voxels (columns in parallel over the
-cores) and, per chain, (1) rejects with the conservative whole-stroke bound, then (2) searches the
-arc samples outward from the sample that worked for the previous voxel of the column (a warm
-start that makes reachable voxels cost about one sample per chain). The chain that failed last
+is kept as the tests' oracle. Dense engine: a compiled kernel walks each vertical column of voxels
+(columns in parallel over the cores) and, per chain, (1) rejects with the conservative whole-stroke
+bound, then (2) searches the arc samples outward from the sample that worked for the previous voxel
+of the column (a warm start that makes reachable voxels cost about one sample per chain). The chain that failed last
 is tested first. Work is issued in chunks of columns so progress is reported and cancellation is
 honoured between chunks. With zero rotation and the centered arc range the mechanism is
 symmetric under the mirror ``y -> -y`` (chain 1 onto itself, chains 2 and 3 swapped), and only
@@ -376,8 +376,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
     else:
         out = np.zeros(grid.shape, np.uint8)
-        ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
-        ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
+        gx, gy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
+        ix, iy = gx.ravel().astype(np.int64), gy.ravel().astype(np.int64)
         n = ix.size
         eps = rounding_margin(math.sqrt(args[8]), (xs, ys, zs))
         xlo2, xhi2 = max(math.sqrt(args[7]) - eps, 0.0) ** 2, (math.sqrt(args[8]) + eps) ** 2

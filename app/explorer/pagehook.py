@@ -148,7 +148,8 @@ def _guarded(inner: Callable[[Any, Any], Response | None]) -> Callable[[Any, Any
             body = _EDITOR.edited(resp.body, gz)
             headers = Headers(resp.headers)  # a multidict: assignment appends, so delete first
             # websockets closes the connection after any plain HTTP answer: say so (keep-alive clients)
-            for name, value in (("Content-Length", str(len(body))), ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
+            for name, value in (("Content-Length", str(len(body))),
+                                ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
                                 ("X-Content-Type-Options", "nosniff"), ("Referrer-Policy", "no-referrer"),
                                 ("Connection", "close")):
                 if name in headers:

@@ -33,8 +33,9 @@ def tilt_polar_figure(report: Any) -> Any:
                                   line={"color": "#1f77b4"}, marker={"size": 4}))
     every = report.min_max_tilt
     if every is not None:
-        fig.add_trace(go.Scatterpolar(r=[every] * len(az), theta=az, mode="lines", name=f"every direction: {every:.1f}°",
-                                      line={"color": "#d62728", "dash": "dash"}, hoverinfo="skip"))
+        fig.add_trace(go.Scatterpolar(r=[every] * len(az), theta=az, mode="lines",
+                                      name=f"every direction: {every:.1f}°", line={"color": "#d62728", "dash": "dash"},
+                                      hoverinfo="skip"))
     tmin, tmax = report.torsion_min, report.torsion_max
     tors = "not reachable" if tmin is None else f"{tmin:.1f}° .. {tmax:.1f}°"
     sat = " (scan limit)" if any(report.torsion_saturated) else ""
@@ -88,7 +89,8 @@ class TiltPanel:
                 self.plot.visible = True
                 every = rep.min_max_tilt
                 self.text.content = md_text(
-                    f"tilt in every direction: {every:.1f} deg; torsion {rep.torsion_min:.1f} .. {rep.torsion_max:.1f} deg"
+                    f"tilt in every direction: {every:.1f} deg; "
+                    f"torsion {rep.torsion_min:.1f} .. {rep.torsion_max:.1f} deg"
                     if every is not None else "tilt: not reachable in some directions")
             elif job.status == "failed":
                 self.notify("Tilt and torsion failed", str(job.error))
