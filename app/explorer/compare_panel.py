@@ -28,6 +28,7 @@ from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
+from .session import SessionJobs
 
 #: The paper's Fig. 3 pairs: parameter, first (pinned) and second (current) value.
 FIG3_PAIRS: tuple[tuple[str, float, float], ...] = (("a", 10.0, 80.0), ("d_s", 10.0, 80.0),
@@ -116,7 +117,7 @@ class ComparePanel:
 
     NODE = "/workspace/pinned"
 
-    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager, client: str,
+    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager | SessionJobs, client: str,
                  hooks: CompareHooks) -> None:
         self.scene = scene
         self.jobs = jobs

@@ -20,6 +20,7 @@ from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
+from .session import SessionJobs
 
 #: Voxel edge of the total-orientation workspace (coarser than the shell: it costs a workspace
 #: test per sampled orientation per voxel).
@@ -32,7 +33,7 @@ class DexterousPanel:
 
     NODE = "/workspace/total_orientation"
 
-    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager, *, client: str,
+    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager | SessionJobs, *, client: str,
                  get_input: Callable[[], tuple[Any, Any]], notify: Callable[[str, str], None]) -> None:
         self.scene = scene
         self.jobs = jobs

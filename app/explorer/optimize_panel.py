@@ -35,6 +35,7 @@ from paraspace.kinematics.workspace import WorkspaceSettings
 
 from ..jobs import Job, JobManager, LimitExceeded
 from ..optimize_plots import front_figure
+from .session import SessionJobs
 
 __all__ = ["OptimizePanel", "URL_KEYS", "MAX_EVALUATIONS", "MIN_VOXEL", "PANEL_ORIENTATION", "ResultStore"]
 
@@ -87,9 +88,9 @@ def _design_label(i: int, entry: dict, params: list[str], labels: list[str]) -> 
 class OptimizePanel:
     """See the module docstring."""
 
-    def __init__(self, gui: Any, jobs: JobManager, *, get_design: Callable[[], Design],
+    def __init__(self, gui: Any, jobs: JobManager | SessionJobs, *, get_design: Callable[[], Design],
                  load_design: Callable[[Design], None], client: str = "local", cache: Any = None,
-                 results: MutableMapping[Any, dict] | None = None,
+                 results: MutableMapping[Any, dict] | ResultStore | None = None,
                  on_settings_change: Callable[[dict[str, str]], None] | None = None) -> None:
         self.gui, self.jobs, self.client = gui, jobs, client
         self.get_design, self.load_design = get_design, load_design

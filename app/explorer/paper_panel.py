@@ -18,6 +18,7 @@ import viser
 from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
+from .session import SessionJobs
 
 #: Voxel edge of the comparison (the CLI's default).
 PAPER_VOXEL = 4.0
@@ -50,7 +51,7 @@ def comparison_markdown(out: dict[str, Any]) -> str:
 class PaperPanel:
     """The Paper tab of one browser (module docstring)."""
 
-    def __init__(self, gui: viser.GuiApi, jobs: JobManager, *, client: str, cache: dict,
+    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str, cache: dict,
                  notify: Callable[[str, str], None]) -> None:
         self.jobs = jobs
         self.client = client
@@ -84,7 +85,7 @@ class PaperPanel:
             return paper_comparison(PAPER_VOXEL, progress, cancel)
 
         def on_progress(job: Job) -> None:
-            self.progress.value = 100.0 * float(job.progress)
+            self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (viser's stub says read-only)
 
         def done(job: Job) -> None:
             self.stop.visible = False
@@ -107,7 +108,7 @@ class PaperPanel:
         self.run.disabled = True
         self.stop.visible = True
         self.progress.visible = True
-        self.progress.value = 0.0
+        self.progress.value = 0.0  # type: ignore[misc]  # settable (viser's stub says read-only)
 
     def cancel(self) -> None:
         """The Stop button."""

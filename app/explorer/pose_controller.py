@@ -83,10 +83,11 @@ class PoseController:
         s = ctx.state
         scene = ctx.client.scene
         self.mechanism = MechanismScene(scene, s.design, s.pose, res.d, res.eta, res.leg_status)
+        lim_x, lim_y, lim_z = ((POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi) for k in ("x", "y", "z"))
         self.gizmo = scene.add_transform_controls(
             "/gizmo", scale=max(25.0, 0.9 * s.design.a), position=s.pose.position,
             wxyz=self.mechanism.platform.wxyz, depth_test=False, opacity=0.8,
-            translation_limits=tuple((POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi) for k in ("x", "y", "z")))
+            translation_limits=(lim_x, lim_y, lim_z))
 
     def wire(self) -> None:
         """Attach the Pose tab's controls and the gizmo."""
@@ -213,7 +214,7 @@ class PoseController:
                 eta = tuple(float(np.clip(round(v, 2), lo, hi)) + 0.0 for v in res.eta)
             else:
                 d, eta = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-            ctx.state = s.replace(carriages=mode, d=d, eta=eta)  # type: ignore[arg-type]
+            ctx.state = s.replace(carriages=mode, d=d, eta=eta)
         with ctx.programmatic():
             for i in range(3):
                 p.d[i].value = d[i]
@@ -232,6 +233,6 @@ class PoseController:
                 return
             d = tuple(float(h.value) for h in p.d)
             eta = tuple(float(h.value) for h in p.eta)
-            ctx.state = ctx.state.replace(d=d, eta=eta)  # type: ignore[arg-type]
+            ctx.state = ctx.state.replace(d=d, eta=eta)
         self.update_mechanism()
         self.on_state_change()

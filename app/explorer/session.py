@@ -213,7 +213,7 @@ class SessionContext:
     def notify(self, title: str, body: str, color: str = "red") -> None:
         """A toast on this browser (``body`` shown as plain text)."""
         try:
-            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,
-                                         color=color)  # type: ignore[arg-type]
+            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,  # type: ignore[call-overload]
+                                         color=color)
         except Exception:  # noqa: BLE001
             log.debug("notification failed", exc_info=True)

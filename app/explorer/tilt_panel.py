@@ -18,6 +18,7 @@ import viser
 from ..jobs import Job, JobManager, LimitExceeded
 from ..textsafe import md_text
 from .lazy_plot import LazyPlot
+from .session import SessionJobs
 
 
 def tilt_polar_figure(report: Any) -> Any:
@@ -52,7 +53,7 @@ def tilt_polar_figure(report: Any) -> Any:
 class TiltPanel:
     """The button and the polar plot (module docstring)."""
 
-    def __init__(self, gui: viser.GuiApi, jobs: JobManager, *, client: str,
+    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str,
                  get_input: Callable[[], tuple[Any, Any, Any]], notify: Callable[[str, str], None]) -> None:
         self.jobs = jobs
         self.client = client

@@ -12,6 +12,7 @@ computes, the one on screen is marked stale. A finished workspace starts the ori
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -93,8 +94,8 @@ class WorkspaceController:
                            show_measures=lambda b, preview: self.publish_measures(gen, b, preview))
         try:
             job = ctx.jobs.submit(fn, kind="workspace", client=ctx.job_client, supersede=True,
-                                  on_progress=lambda j, g=gen: self._on_progress(g, j),
-                                  on_done=lambda j, g=gen: self._on_done(g, j))
+                                  on_progress=functools.partial(self._on_progress, gen),
+                                  on_done=functools.partial(self._on_done, gen))
         except LimitExceeded as exc:
             self.set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
             return
@@ -130,12 +131,14 @@ class WorkspaceController:
         """The shell on screen belongs to an older state while a new one computes: say so on it and
         in the legend (cleared when the new shell is shown)."""
         ctx = self.ctx
+        shell = ctx.shell
+        assert shell is not None  # built before the controllers are wired
         with ctx.view_lock:
-            if ctx.closed or ctx.shell.source is None:
+            if ctx.closed or shell.source is None:
                 return
             with ctx.client.atomic():
-                ctx.shell.set_stale("previous result - recomputing")
-                zr = ctx.shell.z_range()
+                shell.set_stale("previous result - recomputing")
+                zr = shell.z_range()
                 if zr is not None:
                     ctx.panels.legend.show_z_range(*zr, stale=True)
 
@@ -187,14 +190,16 @@ class WorkspaceController:
                 if gen != self.gen or ctx.closed:
                     return False
                 s = ctx.state
+            shell = ctx.shell
+            assert shell is not None  # built before the controllers are wired
             with ctx.client.atomic():
-                size = ctx.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
-                zr = ctx.shell.z_range()
+                size = shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                zr = shell.z_range()
                 if zr is not None:
                     colorbar_image(*zr)  # drawn now (cached), so the writes below follow the check at once
                 if ctx.closed:  # the browser left while the shell was being encoded and sent
                     return False
-                ctx.shell.set_stale(None)
+                shell.set_stale(None)
                 if zr is not None:
                     ctx.panels.legend.show_z_range(*zr)
             with ctx.lock:
@@ -254,6 +259,7 @@ class WorkspaceController:
             self.show_controls(r)
         if ctx.closed:
             return
+        assert ctx.shell is not None  # built before the controllers are wired
         ctx.shell.set_stale(None)
         zr = ctx.shell.z_range()
         if zr is not None:
