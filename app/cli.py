@@ -555,11 +555,11 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
         raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
     warm_up()
 
-    def progress(fraction: float, message: str) -> None:
-        if ns.progress and message.startswith("generation") and "evaluations" in message:
-            sys.stderr.write(f"[{100 * fraction:5.1f}%] {message}\n")
-
-    result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+    progress, done = progress_line("optimize", force=ns.progress)
+    try:
+        result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+    finally:
+        done()
     from paraspace.app.optimize_plots import front_csv, front_png
 
     if ns.csv:
@@ -615,7 +615,8 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")
     z.add_argument("--csv", metavar="FILE", help="the front, one design per row")
     z.add_argument("--plot", metavar="FILE.png", help="a picture of the front")
-    z.add_argument("--progress", action="store_true", help="one line per generation on stderr")
+    z.add_argument("--progress", action="store_true",
+                   help="show the progress bar on stderr even when it is not a terminal")
     z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
     z.set_defaults(func=cmd_optimize)

@@ -15,7 +15,6 @@ Note (paper): Sec. III-E is titled "Combined effect of a and l_s" but Fig. 5 and
 
 from __future__ import annotations
 
-import collections
 import copy
 import dataclasses
 import functools
@@ -31,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .bytecache import ByteLRU
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -118,22 +118,25 @@ def cache_key(design: Design, settings: WorkspaceSettings, orientation: Orientat
 
 
 class ResultCache:
-    """Thread-safe cache of :func:`evaluate_design` results: an in-memory LRU of at most
-    ``max_entries`` entries, backed by an optional directory of JSON files (one per key).
+    """Thread-safe cache of :func:`evaluate_design` results: an in-memory
+    :class:`~kinematics.bytecache.ByteLRU` of at most ``max_entries`` entries and ``max_bytes``
+    bytes, backed by an optional directory of JSON files (one per key).
 
     Values are deep-copied in and out, so callers may mutate what they get.
     """
 
     def __init__(self, max_entries: int = 256, directory: str | os.PathLike | None = None,
-                 version: str | None = None) -> None:
+                 version: str | None = None, *, max_bytes: int = 64 << 20) -> None:
         if not isinstance(max_entries, int) or isinstance(max_entries, bool) or max_entries < 0:
             raise ParameterError("max_entries", max_entries, "an integer >= 0")
+        if not isinstance(max_bytes, int) or isinstance(max_bytes, bool) or max_bytes < 0:
+            raise ParameterError("max_bytes", max_bytes, "an integer >= 0")
         self.max_entries = max_entries
         self.directory = None if directory is None else pathlib.Path(directory)
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
         self.version = version
-        self._mem: collections.OrderedDict[str, dict] = collections.OrderedDict()
+        self._mem = ByteLRU(max_bytes, max_entries=max_entries)
         self._lock = threading.RLock()
         self.hits = 0
         self.misses = 0
@@ -146,21 +149,13 @@ class ResultCache:
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"
 
-    def _remember(self, key: str, value: dict) -> None:
-        if self.max_entries == 0:
-            return
-        self._mem[key] = value
-        self._mem.move_to_end(key)
-        while len(self._mem) > self.max_entries:
-            self._mem.popitem(last=False)
-
     def get(self, key: str) -> dict | None:
         """The cached value (a copy), or ``None``."""
         with self._lock:
-            if key in self._mem:
-                self._mem.move_to_end(key)
+            hit = self._mem.get(key)
+            if hit is not None:
                 self.hits += 1
-                return copy.deepcopy(self._mem[key])
+                return copy.deepcopy(hit)
             path = self._path(key)
             if path is not None and path.is_file():
                 try:
@@ -168,7 +163,7 @@ class ResultCache:
                 except (OSError, ValueError, KeyError, TypeError):
                     value = None
                 if isinstance(value, dict):
-                    self._remember(key, value)
+                    self._mem.put(key, value)
                     self.hits += 1
                     return copy.deepcopy(value)
             self.misses += 1
@@ -178,7 +173,7 @@ class ResultCache:
         """Store a copy of ``value`` (JSON-serializable) in memory and, if configured, on disk."""
         value = copy.deepcopy(value)
         with self._lock:
-            self._remember(key, value)
+            self._mem.put(key, value)
             path = self._path(key)
             if path is not None:
                 fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=str(path.parent))

@@ -20,10 +20,10 @@ from fastapi import APIRouter, Depends, Query, Request
 from fastapi.responses import JSONResponse
 
 import paraspace
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.serialize import jsonable
 
-from ..bytecache import ByteLRU
 from ..jobs import Job, JobManager, LimitExceeded
 from ..limits import check_workspace_grid
 from .errors import ERROR_RESPONSES, RANGES, ApiError

@@ -15,6 +15,8 @@ from typing import Any
 
 import viser
 
+from paraspace.kinematics.bytecache import ByteLRU
+
 from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
@@ -51,11 +53,11 @@ def comparison_markdown(out: dict[str, Any]) -> str:
 class PaperPanel:
     """The Paper tab of one browser (module docstring)."""
 
-    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str, cache: dict,
+    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str, cache: ByteLRU,
                  notify: Callable[[str, str], None]) -> None:
         self.jobs = jobs
         self.client = client
-        self.cache = cache  # shared by every browser of the server: {voxel: result}
+        self.cache = cache  # shared by every browser of the server: voxel -> result
         self.notify = notify
         self.job: Job | None = None
         self.lock = threading.Lock()
@@ -92,7 +94,7 @@ class PaperPanel:
             self.progress.visible = False
             self.run.disabled = False
             if job.status == "done":
-                self.cache[PAPER_VOXEL] = job.result
+                self.cache.put(PAPER_VOXEL, job.result)
                 self.result.content = comparison_markdown(job.result)
             elif job.status == "failed":
                 self.notify("Paper comparison failed", str(job.error))

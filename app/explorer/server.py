@@ -41,10 +41,10 @@ from typing import Any
 
 import viser
 
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.workspace import warm_up
 
-from ..bytecache import ByteLRU
 from ..jobs import JobManager
 from ..limits import MAX_VOXELS
 from ..textsafe import md_text, plain_text
@@ -54,7 +54,7 @@ from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
 from .numbers_panel import NumbersPanel
-from .optimize_panel import OptimizePanel, ResultStore
+from .optimize_panel import OptimizePanel
 from .orientation_controller import OrientationController
 from .panels import build_panels
 from .paper_panel import PaperPanel
@@ -256,14 +256,15 @@ class Explorer:
         self.server: viser.ViserServer | None = None
         self.sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
-        # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see app/bytecache.py
+        # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see kinematics/bytecache.py
         self.shell_cache = ByteLRU(256 << 20)
         self.orientation_cache = ByteLRU(64 << 20)
         from paraspace.kinematics.sweep import ResultCache
 
         self.study_cache = ResultCache(max_entries=1024)
-        self.optimize_results = ResultStore(16)  # finished Optimize runs by settings (a shared link reopens them)
-        self.paper_results: dict = {}  # the Paper tab's comparison, by voxel (a few kB)
+        # finished Optimize runs by settings (a shared link reopens them)
+        self.optimize_results = ByteLRU(16 << 20, max_entries=16)
+        self.paper_results = ByteLRU(1 << 20)  # the Paper tab's comparison, by voxel (a few kB)
         self.warm = threading.Event()
         self.connect_seconds: list[float] = []
 
