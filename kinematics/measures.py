@@ -590,28 +590,51 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
                       feature_radius_extent: float = 0.02) -> WorkspaceMeasures:
     """Compute every measure of the module docstring for one workspace.
 
-    Args:
-        result: a computed workspace (its ``grid``, ``occupancy``, ``settings.z_floor`` and, if
-            present, ``chain_mask`` are used).
-        connectivity: 1 (6-adjacency of the reachable set, 26 for the complement; default) or 3
-            (26-adjacency, 6 for the complement).
-        hollowness: ``"hull"`` (default) or ``"shadow"``: which definition ``hollowness`` uses.
-        floor_closes: whether a surface ending on the floor plane ``z = settings.z_floor`` counts
-            as closed (default) rather than clipped.
-        completeness: ``"sealed"`` (default) or ``"topological"``: which definition
-            ``boundary_complete`` uses.
-        open_cavity_tolerance: largest ``open_cavity_ratio`` a ``"sealed"``-complete workspace may
-            have.
-        piece_fraction: smallest volume fraction of ``V`` a component must hold to count as a
-            piece (default 0.01); smaller components are fragments.
-        feature_radius: radius ``r`` (length units, not voxels) of the ball of ``stable_genus``'s
-            open-close filter; ``None`` (default) takes ``feature_radius_extent`` times the
-            largest extent of the workspace.
-        feature_radius_extent: the fraction of the largest extent used when ``feature_radius`` is
-            ``None`` (default 0.02).
+    Parameters
+    ----------
+    result : WorkspaceResult
+        A computed workspace (its ``grid``, ``occupancy``, ``settings.z_floor`` and, if present,
+        ``chain_mask`` are used).
+    connectivity : int, optional
+        1 (6-adjacency of the reachable set, 26 for the complement; default) or 3 (26-adjacency, 6
+        for the complement).
+    hollowness : str, optional
+        ``"hull"`` (default) or ``"shadow"``: which definition ``hollowness`` uses.
+    floor_closes : bool, optional
+        Whether a surface ending on the floor plane ``z = settings.z_floor`` counts as closed
+        (default) rather than clipped.
+    completeness : str, optional
+        ``"sealed"`` (default) or ``"topological"``: which definition ``boundary_complete`` uses.
+    open_cavity_tolerance : float, optional
+        Largest ``open_cavity_ratio`` a ``"sealed"``-complete workspace may have.
+    piece_fraction : float, optional
+        Smallest volume fraction of ``V`` a component must hold to count as a piece (default
+        0.01); smaller components are fragments.
+    feature_radius : float, optional
+        Radius ``r`` (length units, not voxels) of the ball of ``stable_genus``'s open-close
+        filter; ``None`` (default) takes ``feature_radius_extent`` times the largest extent of the
+        workspace.
+    feature_radius_extent : float, optional
+        The fraction of the largest extent used when ``feature_radius`` is ``None`` (default 0.02).
 
-    Raises:
-        ValueError: invalid ``connectivity``, ``hollowness`` or ``completeness``.
+    Returns
+    -------
+    WorkspaceMeasures
+        Volume, extents, components, voids, hollowness, genus, boundary closure and completeness,
+        and the other measures of the module docstring.
+
+    Raises
+    ------
+    ValueError
+        Invalid ``connectivity``, ``hollowness`` or ``completeness``.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> m = ps.measure_workspace(res)
+    >>> m.voids, m.genus, m.boundary_closed
+    (0, 0, True)
     """
     dual_connectivity(connectivity)  # validates
     if not 0.0 <= piece_fraction <= 1.0:

@@ -331,28 +331,48 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
                     reduction: str = "quadric", volume_rtol: float = _VOLUME_RTOL) -> trimesh.Trimesh:
     """The closed, outward-oriented boundary mesh of the workspace (module docstring, steps 1-5).
 
-    Args:
-        result: a computed workspace.
-        max_faces: reduce to at most this many faces (``None``: no reduction); at least 4.
-        reduction: how to meet ``max_faces``: ``"quadric"`` decimates the full-resolution mesh
-            (keeps sharp detail); ``"remesh"`` re-meshes block means of the field (about 4x faster
-            at h = 2 for the default design, smoother, volume preserved; for display). Both fall
-            back to the closed coarse re-mesh of step 4.
-        smooth_sigma: Gaussian smoothing of the occupancy field, in voxels (0: binary field).
-        color_by_z: viridis vertex colours by height.
-        preserve_volume: with ``smooth_sigma > 0``, choose the iso-level so that the mesh volume
-            equals the voxel volume (otherwise level 1/2).
-        color_range: ``(z_low, z_high)`` mapped to the ends of the colormap (default: the mesh's
-            z range).
-        volume_rtol: relative volume error at which the block re-mesh stops adjusting its level
-            (default 1e-4; a display mesh that :func:`smooth_for_display` rescales to the voxel
-            volume can take 1e-2 and save marching-cubes passes).
+    Parameters
+    ----------
+    result : WorkspaceResult
+        A computed workspace.
+    max_faces : int, optional
+        Reduce to at most this many faces (``None``: no reduction); at least 4.
+    smooth_sigma : float, optional
+        Gaussian smoothing of the occupancy field, in voxels (0: binary field).
+    color_by_z : bool, optional
+        Viridis vertex colours by height.
+    preserve_volume : bool, optional
+        With ``smooth_sigma > 0``, choose the iso-level so that the mesh volume equals the voxel
+        volume (otherwise level 1/2).
+    color_range : tuple of 2 floats, optional
+        ``(z_low, z_high)`` mapped to the ends of the colormap (default: the mesh's z range).
+    reduction : str, optional
+        How to meet ``max_faces``: ``"quadric"`` decimates the full-resolution mesh (keeps sharp
+        detail); ``"remesh"`` re-meshes block means of the field (about 4x faster at h = 2 for the
+        default design, smoother, volume preserved; for display). Both fall back to the closed
+        coarse re-mesh of step 4.
+    volume_rtol : float, optional
+        Relative volume error at which the block re-mesh stops adjusting its level (default 1e-4;
+        a display mesh that :func:`smooth_for_display` rescales to the voxel volume can take 1e-2
+        and save marching-cubes passes).
 
-    Returns:
-        A ``trimesh.Trimesh`` in world units (empty when the workspace is empty).
+    Returns
+    -------
+    trimesh.Trimesh
+        In world units (empty when the workspace is empty).
 
-    Raises:
-        ValueError: ``max_faces < 4`` or ``smooth_sigma`` negative or not finite.
+    Raises
+    ------
+    ValueError
+        ``max_faces < 4`` or ``smooth_sigma`` negative or not finite.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> mesh = ps.workspace_shell(res, max_faces=2000)
+    >>> mesh.is_watertight, len(mesh.faces) <= 2000
+    (True, True)
     """
     if max_faces is not None and (int(max_faces) != max_faces or max_faces < 4):
         raise ValueError(f"max_faces = {max_faces!r} is invalid: valid range integers >= 4 (or None)")
@@ -409,11 +429,32 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
 
 
 def export_shell(mesh: trimesh.Trimesh, fmt: str) -> bytes:
-    """The mesh as a file in format ``fmt`` (``stl`` binary, ``ply`` binary with vertex colours,
-    ``obj`` text with vertex colours, ``glb`` binary glTF with ``COLOR_0``).
+    """The mesh as a file.
 
-    Raises:
-        ValueError: unknown format (the message names the valid ones) or an empty mesh.
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        A shell of :func:`workspace_shell`.
+    fmt : str
+        ``"stl"`` (binary), ``"ply"`` (binary with vertex colours), ``"obj"`` (text with vertex
+        colours) or ``"glb"`` (binary glTF with ``COLOR_0``).
+
+    Returns
+    -------
+    bytes
+        The file's content.
+
+    Raises
+    ------
+    ValueError
+        Unknown format (the message names the valid ones) or an empty mesh.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> ps.export_shell(ps.workspace_shell(res), "glb")[:4]
+    b'glTF'
     """
     key = str(fmt).lower().lstrip(".")
     if key not in SHELL_FORMATS:

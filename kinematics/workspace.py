@@ -253,9 +253,32 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
 
 def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
               eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
-    """Whether each point is reachable at one orientation (bool array (N,)).
+    """Whether each point is reachable at one orientation.
 
-    ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    points : array_like, shape (N, 3)
+        Platform-centre positions.
+    orientation : tuple of 3 floats or array_like, shape (3, 3), optional
+        ``(psi, theta, phi)`` in degrees (eq. (2)) or a rotation matrix; default the home orientation.
+    eta_step : float, optional
+        Largest spacing of the arc samples, degrees.
+    joints : Joints, optional
+        Joint cones and leg interference (default: none).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+        ``True`` where every chain reaches the point, the test of :func:`compute_workspace`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import paraspace as ps
+    >>> ps.reachable(ps.Design(), np.array([[0.0, 0.0, 130.0], [0.0, 0.0, 1000.0]]))
+    array([ True, False])
     """
     ok = chain_masks_at(design, points, orientation, eta_step, joints) == ALL_CHAINS
     if joints is not None and joints.min_distance > 0.0 and ok.any():
@@ -408,11 +431,40 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                       progress: ProgressFn | None = None, cancel: CancelToken = None) -> WorkspaceResult:
     """Compute the constant-orientation position workspace (see the module docstring).
 
-    ``compute_seconds`` is the engine time (excluding compilation, which happens on first use;
-    call :func:`warm_up` to trigger it early).
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    settings : WorkspaceSettings, optional
+        Voxel edge ``h``, platform orientation, arc sampling, bounds, engine and options (default:
+        ``h = 2`` at the home orientation).
+    progress : callable, optional
+        ``progress(fraction, message)``, called as the computation advances.
+    cancel : threading.Event or callable, optional
+        Checked between chunks of work: when it is set the computation stops.
 
-    Raises:
-        Cancelled: when ``cancel`` is set.
+    Returns
+    -------
+    WorkspaceResult
+        The grid, the occupancy of its voxels, ``voxels`` and ``volume`` (``voxels * h**3``), and
+        ``compute_seconds``: the engine time, excluding compilation (which happens on first use;
+        call :func:`warm_up` to trigger it early).
+
+    Raises
+    ------
+    ParameterError
+        Invalid settings (the message names the field and its valid range).
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> res.voxels, res.grid.h
+    (10016, 8.0)
+    >>> res.volume == res.voxels * 8.0 ** 3
+    True
     """
     rep = Reporter(progress)
     t0 = time.perf_counter()
