@@ -17,6 +17,6 @@ fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q ".[test]"
-.venv/bin/python -m ruff check kinematics app paraspace
+.venv/bin/python -m ruff check kinematics app paraspace examples
 .venv/bin/python -m mypy
 exec .venv/bin/python -m pytest -ra "$@"
