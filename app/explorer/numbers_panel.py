@@ -9,7 +9,7 @@ design that was not applied. :func:`numbers_markdown` builds the text from those
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +18,11 @@ from ..numfmt import significant
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
 from .session import SessionContext, ShellInfo
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.orientation import OrientationResult
+    from paraspace.kinematics.redundancy import Resolution
 
 
 def fmt(v: float | None, digits: int = 4) -> str:
@@ -32,7 +37,7 @@ def fmt(v: float | None, digits: int = 4) -> str:
     return significant(float(v), digits)
 
 
-def joints_text(j: Any) -> str:
+def joints_text(j: Joints) -> str:
     """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
     parts = []
     if j.theta_u is not None:
@@ -46,7 +51,8 @@ def joints_text(j: Any) -> str:
     return ", ".join(parts)
 
 
-def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Any, inside: bool | None, ori: Any,
+def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
+                     ori: OrientationResult | None,
                      design_error: str | None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
     :class:`~app.session.SessionContext`, ``None`` before one), ``res`` the pose's IK, ``inside`` whether

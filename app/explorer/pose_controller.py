@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import viser
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.pose import Pose
@@ -75,7 +76,7 @@ class PoseController:
         self.submit_workspace = submit_workspace
         self.on_state_change = on_state_change
         self.mechanism: MechanismScene
-        self.gizmo: Any
+        self.gizmo: viser.TransformControlsHandle
 
     def build_scene(self, res: Resolution) -> None:
         """Draw the mechanism at ``res`` and the drag gizmo (the caller holds ``client.atomic()``)."""

@@ -60,7 +60,7 @@ from .panels import build_panels
 from .paper_panel import PaperPanel
 from .plot_exports import PlotExports
 from .pose_controller import PoseController, resolve
-from .scene import ShellScene
+from .scene import MechanismScene, ShellScene
 from .session import SessionContext
 from .share_controller import ShareController
 from .studies_controller import StudiesController
@@ -223,12 +223,12 @@ class ClientSession:
     url_messages = _shared("url_messages", "Problems of the link the page was opened with.")
 
     @property
-    def mechanism(self) -> Any:
+    def mechanism(self) -> MechanismScene:
         """The mechanism in the scene (:class:`~app.scene.MechanismScene`)."""
         return self.pose_controller.mechanism
 
     @property
-    def gizmo(self) -> Any:
+    def gizmo(self) -> viser.TransformControlsHandle:
         """The drag gizmo on the platform."""
         return self.pose_controller.gizmo
 

@@ -20,12 +20,10 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import viser
 
-from paraspace.kinematics.bracket import VolumeBracket
-from paraspace.kinematics.measures import WorkspaceMeasures
 from paraspace.kinematics.redundancy import Resolution
 
 from ..jobs import Job, JobManager
@@ -33,6 +31,12 @@ from ..textsafe import plain_text
 from ..urlstate import ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.bracket import VolumeBracket
+    from paraspace.kinematics.bytecache import ByteLRU
+    from paraspace.kinematics.measures import WorkspaceMeasures
+    from paraspace.kinematics.orientation import OrientationResult
+    from paraspace.kinematics.sweep import ResultCache
+
     from .panels import Panels
     from .scene import ShellScene
     from .workspace_job import ShellBundle
@@ -41,6 +45,17 @@ log = logging.getLogger(__name__)
 
 #: Smallest interval between two progress updates of one bar, seconds (see SessionContext.throttled).
 PROGRESS_INTERVAL = 0.25
+
+
+class ExplorerServices(Protocol):
+    """What a browser's session uses of the server that owns it (:class:`~app.explorer.Explorer`)."""
+
+    jobs: JobManager
+    server: viser.ViserServer | None
+    max_voxels: int
+    shell_cache: ByteLRU
+    orientation_cache: ByteLRU
+    study_cache: ResultCache
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,7 +116,7 @@ class SessionContext:
         messages: problems found in the link (shown on screen).
     """
 
-    def __init__(self, explorer: Any, client: viser.ClientHandle, state: ExplorerState,
+    def __init__(self, explorer: ExplorerServices, client: viser.ClientHandle, state: ExplorerState,
                  base_url: str, messages: list[str]) -> None:
         self.explorer = explorer
         self.client = client
@@ -126,7 +141,7 @@ class SessionContext:
         self.ws_info: ShellInfo | None = None  # the shell on screen (None before one)
         self.resolution: Resolution | None = None
         self.in_workspace: bool | None = None
-        self.orientation: Any = None  # kinematics.orientation.OrientationResult on screen
+        self.orientation: OrientationResult | None = None  # the orientation maps on screen
         self.design_error: str | None = None
         self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks

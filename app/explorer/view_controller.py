@@ -206,7 +206,7 @@ class ViewController:
             labels = binding_labels(s.design, bundle.result.settings, mesh.vertices, mesh.vertex_normals,
                                     bundle.result.grid.h)
             out = mesh.copy()
-            out.visual.vertex_colors = np.array([LIMIT_COLOURS[x] + (255,) for x in labels], np.uint8)
+            out.visual.vertex_colors = np.array([LIMIT_COLOURS[x] + (255,) for x in labels], np.uint8)  # type: ignore[union-attr]
             counts = {k: labels.count(k) for k in LIMIT_COLOURS if labels.count(k)}
             return out, counts
 
