@@ -59,12 +59,14 @@ def _relative_imports(path: pathlib.Path, package: tuple[str, ...]) -> set[tuple
 
 
 def _module_graph(folder: str) -> dict[str, set[str]]:
-    """Module -> the sibling modules it imports, for the flat package ``folder``."""
+    """Module -> the sibling modules it imports, for the flat package ``folder`` (``"app/explorer"``)."""
+    package = tuple(folder.split("/"))
     names = {p.stem for p in (ROOT / folder).glob("*.py")}
     graph: dict[str, set[str]] = {}
     for name in names:
-        deps = _relative_imports(ROOT / folder / f"{name}.py", (folder,))
-        graph[name] = {d[1] for d in deps if len(d) >= 2 and d[0] == folder and d[1] in names} - {name}
+        deps = _relative_imports(ROOT / folder / f"{name}.py", package)
+        n = len(package)
+        graph[name] = {d[n] for d in deps if len(d) > n and d[:n] == package and d[n] in names} - {name}
     return graph
 
 
@@ -112,6 +114,12 @@ def test_no_import_circle_in_the_core():
     graph = _module_graph("kinematics")
     assert "bracket" in graph and "workspace" in graph["dexterous"]  # the graph sees the modules
     assert _cycles(graph) == [], "import circle in kinematics/"
+
+
+def test_no_import_circle_in_the_explorer():
+    graph = _module_graph("app/explorer")
+    assert "session" in graph["server"]  # the graph sees the modules
+    assert _cycles(graph) == [], "import circle in app/explorer/"
 
 
 def test_only_the_server_start_up_imports_the_explorer():
