@@ -20,7 +20,8 @@ from .. import figures
 from ..jobs import Job, LimitExceeded
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
-from .numbers_panel import fmt
+from .numbers_panel import NumbersPanel, fmt
+from .plot_exports import PlotExports
 from .session import PROGRESS_INTERVAL, SessionContext
 
 
@@ -34,7 +35,7 @@ class OrientationController:
         on_state_change: called after z0 changed the state (the link follows).
     """
 
-    def __init__(self, ctx: SessionContext, *, numbers: Any, exports: Any,
+    def __init__(self, ctx: SessionContext, *, numbers: NumbersPanel, exports: PlotExports,
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.numbers = numbers

@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Callable
-from typing import Any
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
@@ -23,7 +22,10 @@ from ..jobs import Job, LimitExceeded
 from ..limits import check_workspace_grid
 from ..textsafe import md_text
 from .legend import colorbar_image
+from .numbers_panel import NumbersPanel
+from .orientation_controller import OrientationController
 from .session import PROGRESS_INTERVAL, SessionContext, ShellInfo
+from .view_controller import ViewController
 from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
 
 
@@ -42,7 +44,8 @@ class WorkspaceController:
         on_state_change: called after Stop changed the state (the mechanism and the link follow).
     """
 
-    def __init__(self, ctx: SessionContext, *, orientation: Any, numbers: Any, view: Any,
+    def __init__(self, ctx: SessionContext, *, orientation: OrientationController, numbers: NumbersPanel,
+                 view: ViewController,
                  on_measures: Callable[[], None], show_controls: Callable[[WorkspaceResult], None],
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
