@@ -535,7 +535,7 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     except (TypeError, ValueError):
         raise ParameterError("angle-step", f"{ns.angle_step}/{ns.position_step}", "numbers") from None
     return OptimizeSettings(
-        params=[p.strip() for p in ns.params.split(",")], bounds=_bounds_arg(ns.bounds),
+        params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns)),
         orientation=OrientationSettings(angle_step=angle_step, position_step=position_step),

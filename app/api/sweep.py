@@ -48,6 +48,7 @@ def _start_sweep(ctx: ApiContext, req: SweepRequest, request: Request) -> tuple[
                                    f"n valid range [1, 10000]")
         spec = PARAMS[ax.param]
         if ax.values is None:
+            assert ax.n is not None  # exactly one of values and n (checked above)
             vs = [float(v) for v in sw.study_values(ax.param, ax.n)]
         else:
             vs = [float(v) for v in ax.values]
