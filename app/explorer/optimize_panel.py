@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import viser
 
@@ -37,6 +37,9 @@ from paraspace.kinematics.workspace import WorkspaceSettings
 from ..jobs import Job, JobManager, LimitExceeded
 from ..optimize_plots import front_figure
 from .session import SessionJobs
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.sweep import ResultCache
 
 __all__ = ["OptimizePanel", "URL_KEYS", "MAX_EVALUATIONS", "MIN_VOXEL", "PANEL_ORIENTATION"]
 
@@ -63,7 +66,7 @@ class OptimizePanel:
     """See the module docstring."""
 
     def __init__(self, gui: Any, jobs: JobManager | SessionJobs, *, get_design: Callable[[], Design],
-                 load_design: Callable[[Design], None], client: str = "local", cache: Any = None,
+                 load_design: Callable[[Design], None], client: str = "local", cache: ResultCache | None = None,
                  results: ByteLRU | None = None,
                  on_settings_change: Callable[[dict[str, str]], None] | None = None) -> None:
         self.gui, self.jobs, self.client = gui, jobs, client

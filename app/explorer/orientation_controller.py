@@ -14,7 +14,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+from paraspace.kinematics.orientation import OrientationResult, OrientationSettings, orientation_workspace
 
 from .. import figures
 from ..jobs import Job, LimitExceeded
@@ -125,7 +125,7 @@ class OrientationController:
                 return
             self.ctx.panels.orientation_status.content = text
 
-    def _publish(self, gen: int, res: Any, spec: figures.FigureSpec) -> None:
+    def _publish(self, gen: int, res: OrientationResult, spec: figures.FigureSpec) -> None:
         fig = figures.to_plotly(spec)
         warning = figures.saturation_warning(res)
         ctx = self.ctx

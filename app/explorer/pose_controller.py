@@ -24,6 +24,7 @@ from paraspace.kinematics.workspace import reachable
 
 from ..numfmt import fixed
 from ..urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
+from .numbers_panel import NumbersPanel
 from .panels import slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene
 from .session import SessionContext
@@ -69,7 +70,7 @@ class PoseController:
         on_state_change: called after the pose or the carriages changed the state (the link follows).
     """
 
-    def __init__(self, ctx: SessionContext, *, numbers: Any, submit_workspace: Callable[[], None],
+    def __init__(self, ctx: SessionContext, *, numbers: NumbersPanel, submit_workspace: Callable[[], None],
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.numbers = numbers
