@@ -32,7 +32,7 @@ import math
 import os
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
@@ -42,7 +42,7 @@ from .progressline import progress_line
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, status 2
+    def error(self, message: str) -> NoReturn:  # one line, status 2
         self.exit(2, f"paraspace: error: {message}\n")
 
 
@@ -75,7 +75,8 @@ def _design(ns: argparse.Namespace) -> Design:
         try:
             values[name] = float(raw)
         except (TypeError, ValueError):
-            raise ParameterError(name, raw, f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
+            raise ParameterError(name, raw,
+                                 f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
     return Design(**values, eta_range=ns.eta_range)
 
 
@@ -199,7 +200,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     else:
         print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
         if ns.bracket:
-            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}  (continuous workspace)")
+            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
+                  "  (continuous workspace)")
         for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
             if key in out:
                 print(f"{key:<15} {out[key]}")
@@ -535,7 +537,7 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     except (TypeError, ValueError):
         raise ParameterError("angle-step", f"{ns.angle_step}/{ns.position_step}", "numbers") from None
     return OptimizeSettings(
-        params=[p.strip() for p in ns.params.split(",")], bounds=_bounds_arg(ns.bounds),
+        params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns)),
         orientation=OrientationSettings(angle_step=angle_step, position_step=position_step),
@@ -555,11 +557,11 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
         raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
     warm_up()
 
-    def progress(fraction: float, message: str) -> None:
-        if ns.progress and message.startswith("generation") and "evaluations" in message:
-            sys.stderr.write(f"[{100 * fraction:5.1f}%] {message}\n")
-
-    result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+    progress, done = progress_line("optimize", force=ns.progress)
+    try:
+        result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+    finally:
+        done()
     from paraspace.app.optimize_plots import front_csv, front_png
 
     if ns.csv:
@@ -615,14 +617,16 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")
     z.add_argument("--csv", metavar="FILE", help="the front, one design per row")
     z.add_argument("--plot", metavar="FILE.png", help="a picture of the front")
-    z.add_argument("--progress", action="store_true", help="one line per generation on stderr")
+    z.add_argument("--progress", action="store_true",
+                   help="show the progress bar on stderr even when it is not a terminal")
     z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
     z.set_defaults(func=cmd_optimize)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="paraspace", description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
+    p = _Parser(prog="paraspace",
+                description="Workspace explorer of the 3-(arc-P, P, 2-(UPS)) redundant parallel mechanism")
     p.add_argument("--version", action="version", version=f"paraspace {paraspace.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 

@@ -512,8 +512,8 @@ def to_plotly(spec: FigureSpec) -> go.Figure:
                           xaxis=dict(visible=False), yaxis=dict(visible=False), height=120,
                           margin=dict(l=10, r=10, t=40, b=10), plot_bgcolor="white")
         return fig
-    types = [[{"type": "scene" if p.kind == "surface" else "xy"} for p in spec.panels[r * spec.cols:(r + 1) * spec.cols]]
-             for r in range(spec.rows)]
+    types = [[{"type": "scene" if p.kind == "surface" else "xy"}
+              for p in spec.panels[r * spec.cols:(r + 1) * spec.cols]] for r in range(spec.rows)]
     multi = len(spec.panels) > 1
     fig = make_subplots(rows=spec.rows, cols=spec.cols, specs=types,
                         subplot_titles=[_lines(p.short_title or p.title) for p in spec.panels] if multi else None,
@@ -569,11 +569,11 @@ def to_plotly(spec: FigureSpec) -> go.Figure:
                         fig.add_shape(type="rect", y0=a, y1=b, x0=0, x1=1, xref=f"{_axis_ref(xy_index, 'x')} domain",
                                       yref=_axis_ref(xy_index, "y"), fillcolor=OUTSIDE_COLOR, line_width=0,
                                       layer="below")
-        for b in p.boxes:
-            fig.add_shape(type="rect", x0=b.x0, x1=b.x1, y0=b.y0, y1=b.y1,
+        for box in p.boxes:
+            fig.add_shape(type="rect", x0=box.x0, x1=box.x1, y0=box.y0, y1=box.y1,
                           xref=_axis_ref(xy_index, "x"), yref=_axis_ref(xy_index, "y"),
-                          line=dict(color=SATURATED_COLOR if b.saturated else BOX_COLOR,
-                                    width=3 if b.saturated else 1.5, dash="dashdot" if b.saturated else "dash"))
+                          line=dict(color=SATURATED_COLOR if box.saturated else BOX_COLOR,
+                                    width=3 if box.saturated else 1.5, dash="dashdot" if box.saturated else "dash"))
         for note in p.notes:
             fig.add_annotation(text=_esc(note), x=0.5, y=0.02, xref=f"{_axis_ref(xy_index, 'x')} domain",
                                yref=f"{_axis_ref(xy_index, 'y')} domain", showarrow=False, yanchor="bottom",
@@ -629,8 +629,8 @@ def to_plotly(spec: FigureSpec) -> go.Figure:
                              zeroline=False, ticks="outside", mirror=True, showline=True, linecolor="#888888",
                              exponentformat="power")
             if compact:
-                m = p.mask
-                ticks = [m.scan[0], 0.0, m.scan[1]] if m is not None and m.scan[0] < 0 < m.scan[1] else None
+                pm = p.mask
+                ticks = [pm.scan[0], 0.0, pm.scan[1]] if pm is not None and pm.scan[0] < 0 < pm.scan[1] else None
                 fig.update_xaxes(tickfont_size=9, nticks=4, title_standoff=2, tickvals=ticks, row=row, col=col,
                                  showticklabels=row == spec.rows)  # one shared angle scale per column
                 fig.update_yaxes(tickfont_size=9, nticks=5, title_standoff=2, row=row, col=col)
@@ -749,12 +749,12 @@ def to_matplotlib(spec: FigureSpec) -> Figure:
             m = p.mask
             from matplotlib.colors import ListedColormap, to_rgba
 
-            a, s = np.asarray(m.x, float), np.asarray(m.y, float)
-            if a.size and s.size:
-                ha = (a[1] - a[0]) / 2 if a.size > 1 else 0.5
-                hs = (s[1] - s[0]) / 2 if s.size > 1 else 0.5
+            av, sv = np.asarray(m.x, float), np.asarray(m.y, float)
+            if av.size and sv.size:
+                ha = (av[1] - av[0]) / 2 if av.size > 1 else 0.5
+                hs = (sv[1] - sv[0]) / 2 if sv.size > 1 else 0.5
                 ax.imshow(m.inside.astype(np.uint8), origin="lower", aspect="auto", interpolation="nearest",
-                          extent=(a[0] - ha, a[-1] + ha, s[0] - hs, s[-1] + hs), vmin=0, vmax=1,
+                          extent=(av[0] - ha, av[-1] + ha, sv[0] - hs, sv[-1] + hs), vmin=0, vmax=1,
                           cmap=ListedColormap([(0, 0, 0, 0), to_rgba(m.color, 1.0)]))
             if p.x_range is not None:
                 ax.axvspan(p.x_range[0], m.scan[0], color=OUTSIDE_COLOR, lw=0, zorder=0)

@@ -29,7 +29,7 @@ Semantics:
   second identical computation (``on_done`` is attached to it).
 * **History.** Finished jobs are kept for polling, the most recent ``history`` of them; their
   results together are bounded by ``history_bytes`` (estimated with
-  :func:`paraspace.app.bytecache.nbytes`): the oldest finished jobs lose their result first (the job
+  :func:`paraspace.kinematics.bytecache.nbytes`): the oldest finished jobs lose their result first (the job
   stays, with ``result_dropped = True``), so a page that closed leaves no grid behind.
 * **Fair queueing.** Workers take the queued job of the client with the fewest running jobs (then
   the oldest), and one client never runs more than ``max_running_per_client`` jobs *of one kind*
@@ -55,9 +55,8 @@ import time
 from collections.abc import Callable, Hashable
 from typing import Any, Literal
 
+from paraspace.kinematics.bytecache import nbytes
 from paraspace.kinematics.progress import Cancelled
-
-from .bytecache import nbytes
 
 __all__ = ["Job", "JobManager", "LimitExceeded", "JobStatus", "ProgressFn", "FINAL_STATUSES"]
 

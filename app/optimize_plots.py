@@ -83,7 +83,8 @@ def front_png(result: dict, path: str, *, highlight: dict | None = None) -> None
     elif len(labels) == 2:
         xs = [_value(e, labels[1]) for e in front]
         ys = [_value(e, labels[0]) for e in front]
-        ax.plot(xs, ys, "o", color="tab:blue", label=f"Pareto front ({len(front)} designs)")
+        ax.plot(xs, ys, "o", color="tab:blue",  # type: ignore[arg-type]  # None plots as a gap
+                label=f"Pareto front ({len(front)} designs)")
         if highlight is not None:
             ax.plot([highlight["measures"][labels[1].lstrip("-")]], [highlight["measures"][labels[0].lstrip("-")]],
                     "*", color="tab:red", markersize=14, label=highlight.get("label", "design"))

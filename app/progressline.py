@@ -1,22 +1,26 @@
-"""Progress of long command-line work, as one updating line on stderr.
+"""Progress of long command-line work: one tqdm bar on stderr, for every command.
 
 :func:`progress_line` returns a ``progress(fraction, message)`` callback (the core's
-``kinematics.progress`` convention) that redraws ``\\r[####......]  42 %  message`` on stderr, at
-most every 0.1 s, and a ``close()`` that ends the line. It draws only when stderr is a terminal:
-piped or redirected stderr, and therefore CI logs, stay clean, and stdout (where ``--json``
-writes) is never touched.
+``kinematics.progress`` convention) that moves a tqdm bar ``label [#####.....]  42 %, message`` on
+stderr (redrawn at most every 0.1 s), and a ``close()`` that clears it. It draws only when stderr is
+a terminal, or when asked to (``force``, e.g. ``paraspace optimize --progress``): piped or
+redirected stderr, and therefore CI logs, stay clean, and stdout (where ``--json`` writes) is never
+touched.
 """
 
 from __future__ import annotations
 
 import sys
-import time
 from collections.abc import Callable
 from typing import TextIO
+
+from tqdm import tqdm
 
 __all__ = ["progress_line"]
 
 WIDTH = 24
+#: per mille: the bar counts 0..1000 so that fractions of a percent still move it
+_STEPS = 1000
 
 
 def progress_line(label: str, stream: TextIO | None = None, *,
@@ -27,23 +31,20 @@ def progress_line(label: str, stream: TextIO | None = None, *,
     isatty = getattr(out, "isatty", None)
     if not force and not (callable(isatty) and isatty()):
         return None, lambda: None
-    state = {"last": 0.0, "drawn": False}
+    bars: list[tqdm] = []  # created at the first report, so that the first report is drawn
 
     def progress(fraction: float, message: str = "") -> None:
-        now = time.monotonic()
-        if now - state["last"] < 0.1 and fraction < 1.0:
+        n = round(min(1.0, max(0.0, float(fraction))) * _STEPS)
+        if not bars:
+            bars.append(tqdm(total=_STEPS, initial=n, desc=label, postfix=message[:60], file=out, leave=False,
+                             mininterval=0.1, ascii=" #",
+                             bar_format="{desc} [{bar:" + str(WIDTH) + "}] {percentage:3.0f} %{postfix}"))
             return
-        state["last"] = now
-        f = min(1.0, max(0.0, float(fraction)))
-        bar = "#" * int(round(f * WIDTH))
-        text = f"\r{label} [{bar:<{WIDTH}}] {100 * f:3.0f} %  {message[:60]:<60}"
-        out.write(text)
-        out.flush()
-        state["drawn"] = True
+        bars[0].set_postfix_str(message[:60], refresh=False)
+        bars[0].update(n - bars[0].n)
 
     def close() -> None:
-        if state["drawn"]:
-            out.write("\r" + " " * (len(label) + WIDTH + 72) + "\r")
-            out.flush()
+        if bars:
+            bars[0].close()
 
     return progress, close

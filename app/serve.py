@@ -12,6 +12,7 @@ cancelled, the servers close their ports.
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import logging
 import signal
@@ -83,8 +84,9 @@ class _TimedH11(H11Protocol):
     are read against a deadline by the API's body-limit middleware.)"""
 
     header_timeout = HEADER_TIMEOUT
+    _head_timer: asyncio.TimerHandle | None
 
-    def connection_made(self, transport: Any) -> None:  # type: ignore[override]
+    def connection_made(self, transport: Any) -> None:
         super().connection_made(transport)
         self._head_timer = self.loop.call_later(self.header_timeout, self._head_deadline)
 
@@ -94,13 +96,15 @@ class _TimedH11(H11Protocol):
 
     def handle_events(self) -> None:
         super().handle_events()
-        if self.cycle is not None and getattr(self, "_head_timer", None) is not None:
-            self._head_timer.cancel()
+        timer = getattr(self, "_head_timer", None)
+        if self.cycle is not None and timer is not None:
+            timer.cancel()
             self._head_timer = None
 
     def connection_lost(self, exc: Exception | None) -> None:
-        if getattr(self, "_head_timer", None) is not None:
-            self._head_timer.cancel()
+        timer = getattr(self, "_head_timer", None)
+        if timer is not None:
+            timer.cancel()
             self._head_timer = None
         super().connection_lost(exc)
 
@@ -274,7 +278,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
             explorer_url = f"http://{_bracket(_url_host(host))}:{int(exp.port)}/"
         if api_port == 0:
             api_port = free_port(_url_host(host))
-        api_url = f"http://{_bracket(_url_host(host))}:{api_port}"
+        api_url: str | None = f"http://{_bracket(_url_host(host))}:{api_port}"
         if public_url:  # behind a proxy the API's public address is the proxy's business: relative links
             api_url = None
         hosts = HostPolicy.for_server(host, explorer_port=exp.port if exp is not None else None,

@@ -328,7 +328,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
 
     Args:
         shape: grid shape; ``axes``: its voxel-centre coordinates; ``h``: the voxel edge.
-        args: the kernel constants of :func:`kinematics.workspace._kernel_args`.
+        args: the kernel constants of :func:`kinematics.kernel_args.kernel_args`.
         ny_eval: number of y columns to compute (all of them without the mirror).
         all_chains: decide every chain (diagnostics: identical per-chain bits to the dense engine);
             otherwise a voxel's mask is exact only in whether it equals 7.

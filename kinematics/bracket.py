@@ -75,6 +75,7 @@ from .blocks import (
 from .design import Design, ParameterError
 from .feasibility import ChainTables
 from .grid import GridSpec
+from .kernel_args import KernelArgs, kernel_args
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, Reporter, check
 
@@ -194,7 +195,7 @@ class _Arc:
     fine: int
 
 
-def _arc(design: Design, grid: GridSpec, args: tuple, n_eta: int, delta: float) -> _Arc:
+def _arc(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, delta: float) -> _Arc:
     """Arc samples fine enough that their slack is at most half the cubes' half-diagonal ``delta``:
     ``fine`` samples per gap of the workspace's samples (which are all kept), a power of two up to
     :data:`MAX_FINE`."""
@@ -227,7 +228,7 @@ def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
     return out
 
 
-def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float,
+def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float,
                  progress: Reporter | None = None, cancel: CancelToken = None,
                  chain_bits: np.ndarray | None = None) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
@@ -271,7 +272,7 @@ def cube_classes(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floo
 _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) for dz in (-0.5, 0.5)])
 
 
-def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float, cls: np.ndarray,
+def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float, cls: np.ndarray,
                     chain_bits: np.ndarray, levels: int, progress: Reporter | None = None,
                     cancel: CancelToken = None) -> tuple[float, float, int]:
     """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
@@ -316,7 +317,7 @@ def refine_boundary(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_f
     return inside, outside, int(centres.shape[0])
 
 
-def volume_bracket(design: Design, grid: GridSpec, args: tuple, n_eta: int, z_floor: float = 0.0,
+def volume_bracket(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float = 0.0,
                    progress: Reporter | None = None, cancel: CancelToken = None,
                    refine: int = REFINE) -> VolumeBracket:
     """The certified bracket of the continuous workspace volume over ``grid`` (module docstring):
@@ -340,11 +341,9 @@ def bracket_of(result: object, progress: Reporter | None = None, cancel: CancelT
     Raises:
         ParameterError: with leg interference (the bracket does not model it).
     """
-    from .workspace import _kernel_args
-
     r: Any = result
     if r.settings.joints.min_distance > 0.0:
         raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
-    args = _kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
+    args = kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
     return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel,
                           refine=r.settings.bracket_refine if refine is None else refine)

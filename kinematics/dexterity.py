@@ -398,7 +398,9 @@ class DexterityField:
 
     def summary(self) -> dict:
         """The scalar results as a JSON-ready dict."""
-        f = (lambda v: None if not math.isfinite(v) else float(v))
+        def f(v: float) -> float | None:
+            return None if not math.isfinite(v) else float(v)
+
         return {"gci": f(self.gci), "kappa_min": self.kappa_min,
                 "well_conditioned_volume": float(self.well_conditioned_volume),
                 "well_conditioned_fraction": f(self.well_conditioned_volume / self.volume) if self.volume else None,

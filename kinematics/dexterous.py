@@ -97,7 +97,7 @@ def orientation_samples(tilt: float, torsion: float, step: float = 5.0) -> np.nd
         sig[n // 2] = 0.0
     else:
         sig = np.zeros(1)
-    rings = [(0.0, np.zeros(1))]
+    rings: list[tuple[float, np.ndarray]] = [(0.0, np.zeros(1))]
     if tilt > 0:
         m = _pow2(tilt, step, 1)
         for r in range(1, m + 1):
@@ -158,7 +158,8 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     """
     samples = orientation_samples(tilt, torsion, step)
     if any(abs(a) > 0 for a in settings.orientation):
-        raise ParameterError("orientation", settings.orientation, "(0, 0, 0): T&T angles are about the home orientation")
+        raise ParameterError("orientation", settings.orientation,
+                             "(0, 0, 0): T&T angles are about the home orientation")
     rep = Reporter(progress)
     if position is None:
         position = compute_workspace(design, settings, rep.sub(0.0, 0.3), cancel)
@@ -180,9 +181,9 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
         ok = reachable_pairs(design, pts[live], rots[s:s + BATCH], eta_step, position.settings.joints).all(axis=1)
         alive[live[~ok]] = False
         rep(0.3 + 0.7 * min(1.0, (s + BATCH) / n), f"total-orientation workspace: {int(alive.sum())} voxels left")
-    out = np.zeros(occ.size, bool)
-    out[idx[alive]] = True
-    out = out.reshape(occ.shape)
+    flat = np.zeros(occ.size, bool)
+    flat[idx[alive]] = True
+    out = flat.reshape(occ.shape)
     seconds = time.perf_counter() - t0
     result = dataclasses.replace(position, occupancy=out, chain_mask=None, volume_inner=None, volume_outer=None,
                                  compute_seconds=position.compute_seconds + seconds)

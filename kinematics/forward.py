@@ -47,12 +47,43 @@ def _to_pose(v: np.ndarray) -> Pose:
 
 def forward_kinematics(design: Design, lengths: Sequence[float], d: Sequence[float], eta_deg: Sequence[float],
                        initial: Pose | None = None, tol: float = 1e-10, max_iter: int = 50) -> ForwardResult:
-    """Newton solve of ``l_i^j(pose) = lengths`` for the pose (see module docstring).
+    """Forward kinematics: Newton solve of ``l_i^j(pose) = lengths`` for the pose (module docstring).
 
-    Args:
-        lengths: six leg lengths ordered ``l_1^1, l_1^2, ..., l_3^2`` (or shape (3, 2)).
-        d, eta_deg: carriage values.
-        initial: starting pose (default: centred, height from the mean length).
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    lengths : sequence of 6 floats or array_like, shape (3, 2)
+        Leg lengths ordered ``l_1^1, l_1^2, ..., l_3^2``.
+    d : sequence of 3 floats
+        Linear carriage positions.
+    eta_deg : sequence of 3 floats
+        Arc carriage positions, degrees.
+    initial : Pose, optional
+        Starting pose (default: centred, height from the mean length).
+    tol : float, optional
+        Largest leg-length residual accepted as converged.
+    max_iter : int, optional
+        Newton iterations at most.
+
+    Returns
+    -------
+    ForwardResult
+        The pose, whether it converged, the iterations, the residual and a message.
+
+    Raises
+    ------
+    ParameterError
+        Not six positive finite lengths.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> design, d, eta = ps.Design(), [30.0] * 3, [0.0] * 3
+    >>> ik = ps.inverse_kinematics(design, ps.Pose(0.0, 0.0, 130.0), d, eta)
+    >>> fk = ps.forward_kinematics(design, ik.lengths, d, eta)
+    >>> fk.converged, round(fk.pose.z, 6)
+    (True, 130.0)
     """
     target = np.asarray(lengths, float).reshape(-1)
     if target.size != 6 or not np.all(np.isfinite(target)) or np.any(target <= 0):

@@ -10,6 +10,7 @@ paper's ``q_1``.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .design import Design
 
@@ -39,7 +40,7 @@ def platform_points(design: Design, position: np.ndarray, rotation: np.ndarray) 
     return np.asarray(position, float) + platform_points_local(design) @ np.asarray(rotation, float).T
 
 
-def base_points(design: Design, d: np.ndarray, eta_deg: np.ndarray) -> np.ndarray:
+def base_points(design: Design, d: ArrayLike, eta_deg: ArrayLike) -> np.ndarray:
     """Eq. (11): ``D_i^j = Z'_i [r - d_i, (-1)^(j+1) b/2, 0]^T`` with ``varpi_i = eta_i + gamma_i``.
 
     Args:

@@ -3,9 +3,8 @@ carriage values, and the state of each leg against its limits."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .design import Design, ParameterError
 from .geometry import base_points, platform_points
@@ -14,7 +13,7 @@ from .pose import Pose
 LEG_STATES: tuple[str, ...] = ("inside", "at_limit", "too_short", "too_long")
 
 
-def leg_lengths(design: Design, pose: Pose, d: Sequence[float], eta_deg: Sequence[float]) -> np.ndarray:
+def leg_lengths(design: Design, pose: Pose, d: ArrayLike, eta_deg: ArrayLike) -> np.ndarray:
     """Eq. (15): the six leg lengths, shape (3, 2), for a pose and carriage values ``d_i``, ``eta_i`` (deg)."""
     b = platform_points(design, pose.position, pose.rotation)
     dd = base_points(design, np.asarray(d, float), np.asarray(eta_deg, float))
@@ -54,7 +53,7 @@ def leg_states(design: Design, lengths: np.ndarray) -> list[list[str]]:
     return out
 
 
-def check_carriage(design: Design, d: Sequence[float], eta_deg: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def check_carriage(design: Design, d: ArrayLike, eta_deg: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Validate hand-set carriage values against the strokes; raises :class:`ParameterError` naming
     ``d_1``..``d_3`` / ``eta_1``..``eta_3`` (paper numbering) and the valid range."""
     d = np.asarray(d, float).reshape(-1)

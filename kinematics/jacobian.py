@@ -22,9 +22,9 @@ Velocity relation (eq. (21)): ``J_x xdot = J_q qdot`` with ``x = [P_o, Theta]``,
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .design import Design
 from .geometry import GAMMA, LEG_SIGN, base_points, platform_points, platform_points_local
@@ -51,8 +51,33 @@ class Jacobians:
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in dataclasses.asdict(self).items()}
 
 
-def jacobians(design: Design, pose: Pose, d: Sequence[float], eta_deg: Sequence[float]) -> Jacobians:
-    """Eqs. (22)-(26) at pose ``pose`` with carriage values ``d`` and ``eta`` (degrees)."""
+def jacobians(design: Design, pose: Pose, d: ArrayLike, eta_deg: ArrayLike) -> Jacobians:
+    """The Jacobians of eqs. (22)-(26) at one configuration.
+
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    pose : Pose
+        Platform position and orientation.
+    d : array_like, shape (3,)
+        Linear carriage positions.
+    eta_deg : array_like, shape (3,)
+        Arc carriage positions, degrees.
+
+    Returns
+    -------
+    Jacobians
+        ``J_x`` (6, 6), ``J_q`` (6, 12), ``J_h`` (6, 6), ``J`` (6, 12) and the condition number of
+        ``J`` (``inf`` when ``J_h`` is singular).
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> jac = ps.jacobians(ps.Design(), ps.Pose(0.0, 0.0, 130.0), [30.0] * 3, [0.0] * 3)
+    >>> jac.J.shape, round(jac.condition_number, 2)
+    ((6, 12), 100.85)
+    """
     rot = pose.rotation
     B = platform_points(design, pose.position, rot)
     D = base_points(design, d, eta_deg)

@@ -197,6 +197,7 @@ h = 2 and 0.8 s at h = 1.5 on two cores (shared), 0.3 s at h = 3, 0.03 s at h = 
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -589,28 +590,51 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
                       feature_radius_extent: float = 0.02) -> WorkspaceMeasures:
     """Compute every measure of the module docstring for one workspace.
 
-    Args:
-        result: a computed workspace (its ``grid``, ``occupancy``, ``settings.z_floor`` and, if
-            present, ``chain_mask`` are used).
-        connectivity: 1 (6-adjacency of the reachable set, 26 for the complement; default) or 3
-            (26-adjacency, 6 for the complement).
-        hollowness: ``"hull"`` (default) or ``"shadow"``: which definition ``hollowness`` uses.
-        floor_closes: whether a surface ending on the floor plane ``z = settings.z_floor`` counts
-            as closed (default) rather than clipped.
-        completeness: ``"sealed"`` (default) or ``"topological"``: which definition
-            ``boundary_complete`` uses.
-        open_cavity_tolerance: largest ``open_cavity_ratio`` a ``"sealed"``-complete workspace may
-            have.
-        piece_fraction: smallest volume fraction of ``V`` a component must hold to count as a
-            piece (default 0.01); smaller components are fragments.
-        feature_radius: radius ``r`` (length units, not voxels) of the ball of ``stable_genus``'s
-            open-close filter; ``None`` (default) takes ``feature_radius_extent`` times the
-            largest extent of the workspace.
-        feature_radius_extent: the fraction of the largest extent used when ``feature_radius`` is
-            ``None`` (default 0.02).
+    Parameters
+    ----------
+    result : WorkspaceResult
+        A computed workspace (its ``grid``, ``occupancy``, ``settings.z_floor`` and, if present,
+        ``chain_mask`` are used).
+    connectivity : int, optional
+        1 (6-adjacency of the reachable set, 26 for the complement; default) or 3 (26-adjacency, 6
+        for the complement).
+    hollowness : str, optional
+        ``"hull"`` (default) or ``"shadow"``: which definition ``hollowness`` uses.
+    floor_closes : bool, optional
+        Whether a surface ending on the floor plane ``z = settings.z_floor`` counts as closed
+        (default) rather than clipped.
+    completeness : str, optional
+        ``"sealed"`` (default) or ``"topological"``: which definition ``boundary_complete`` uses.
+    open_cavity_tolerance : float, optional
+        Largest ``open_cavity_ratio`` a ``"sealed"``-complete workspace may have.
+    piece_fraction : float, optional
+        Smallest volume fraction of ``V`` a component must hold to count as a piece (default
+        0.01); smaller components are fragments.
+    feature_radius : float, optional
+        Radius ``r`` (length units, not voxels) of the ball of ``stable_genus``'s open-close
+        filter; ``None`` (default) takes ``feature_radius_extent`` times the largest extent of the
+        workspace.
+    feature_radius_extent : float, optional
+        The fraction of the largest extent used when ``feature_radius`` is ``None`` (default 0.02).
 
-    Raises:
-        ValueError: invalid ``connectivity``, ``hollowness`` or ``completeness``.
+    Returns
+    -------
+    WorkspaceMeasures
+        Volume, extents, components, voids, hollowness, genus, boundary closure and completeness,
+        and the other measures of the module docstring.
+
+    Raises
+    ------
+    ValueError
+        Invalid ``connectivity``, ``hollowness`` or ``completeness``.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> m = ps.measure_workspace(res)
+    >>> m.voids, m.genus, m.boundary_closed
+    (0, 0, True)
     """
     dual_connectivity(connectivity)  # validates
     if not 0.0 <= piece_fraction <= 1.0:
@@ -636,8 +660,9 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         floor_face = "z-"
     clipped = [f for f in touched if not (floor_closes and f == floor_face)]
     binding = (chain_binding(result.chain_mask, h, occ) if result.chain_mask is not None else None)
-    options = dict(connectivity=connectivity, hollowness_mode=hollowness, completeness_mode=completeness,
-                   floor_face=floor_face, piece_fraction=float(piece_fraction))
+    options: dict[str, Any] = dict(connectivity=connectivity, hollowness_mode=hollowness,
+                                   completeness_mode=completeness, floor_face=floor_face,
+                                   piece_fraction=float(piece_fraction))
 
     if n == 0:
         return WorkspaceMeasures(
@@ -647,7 +672,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
             boundary_complete=False, chain_binding=binding, completeness_reason="empty workspace",
             **options)
 
-    any_x, any_y, any_z = occ.any(axis=(1, 2)), occ.any(axis=(0, 2)), occ.any(axis=(0, 1))
+    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
     for a, m in enumerate((any_x, any_y, any_z)):
         lo_i = int(np.argmax(m))
@@ -658,9 +683,9 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
     # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
-    lo_i = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
-    hi_i = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    occ = occ[lo_i[0]:hi_i[0], lo_i[1]:hi_i[1], 0:hi_i[2]]
+    lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
+    hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
+    occ = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
 
     # topology
     labels, components = ndi.label(occ, structure=_structure(connectivity))

@@ -50,6 +50,29 @@ def topology(chains: int = 3, legs_per_chain: int = 2) -> Topology:
 
 
 def mobility(top: Topology | None = None, d: int = 6, nu: int = 0, xi: int = 0) -> int:
-    """Eq. (1): ``M = d (n - g - 1) + sum f + nu - xi``; the paper's count is 6(20-24-1)+42 = 12."""
+    """Mobility by eq. (1): ``M = d (n - g - 1) + sum f + nu - xi``.
+
+    Parameters
+    ----------
+    top : Topology, optional
+        Links and joints (default: the paper's mechanism, 20 links and 24 joints with 42 freedoms).
+    d : int, optional
+        Dimension of the motion space (6: spatial).
+    nu : int, optional
+        Redundant constraints.
+    xi : int, optional
+        Passive (idle) freedoms.
+
+    Returns
+    -------
+    int
+        The mobility ``M``; the paper's count is 6(20 - 24 - 1) + 42 = 12.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> ps.mobility()
+    12
+    """
     t = top or topology()
     return d * (t.n - t.g - 1) + t.f_sum + nu - xi

@@ -549,7 +549,6 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
                 for fut in batch:
                     i = where[fut.key]
                     pending.discard(fut.key)
-                    row: dict
                     if fut.status == "finished":
                         try:
                             row = {**fut.result(), "ok": True}
@@ -805,17 +804,18 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
             def on_point(done: int, total: int, gen: int = gen) -> None:
                 report((gen - 1 + done / max(total, 1)) / G, f"generation {gen}/{G}: {done}/{total} designs")
 
-            got, n_run = evaluate_population([designs[i] for i in valid], settings.workspace, orientation=ori,
-                                             cache=cache, client=client, evaluate=evaluate, retries=retries,
-                                             cancel=cancel, on_point=on_point)
+            got, n_run = evaluate_population([d for d in designs if d is not None], settings.workspace,
+                                             orientation=ori, cache=cache, client=client, evaluate=evaluate,
+                                             retries=retries, cancel=cancel, on_point=on_point)
             for i, row in zip(valid, got):
                 rows[i] = row
             computed += n_run
             evaluations += len(rows)
             F = np.full((len(rows), len(objs)), _PENALTY)
             Gv = np.zeros((len(rows), 1 + len(cons)))
-            for i, row in enumerate(rows):
-                assert row is not None
+            for i, maybe_row in enumerate(rows):
+                assert maybe_row is not None
+                row = maybe_row
                 if not row.get("ok"):
                     Gv[i, :] = 1.0
                     failed.append({"generation": gen, "design": row.get("design"), "error": row.get("error")})
@@ -842,7 +842,8 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
             info = {"generation": gen, "evaluations": evaluations, "computed": computed,
                     "front_size": int(len(front_idx)), "best": best}
             history.append(info)
-            report(gen / G, f"generation {gen}/{G}, {evaluations} evaluations, best: {best_text(best) or 'none feasible'}")
+            report(gen / G,
+                   f"generation {gen}/{G}, {evaluations} evaluations, best: {best_text(best) or 'none feasible'}")
             if on_generation is not None:
                 on_generation({**info, "front": _front_entries(archive_rows, AF, front_idx)})
     finally:

@@ -517,10 +517,37 @@ def orientation_workspace(design: Design, settings: OrientationSettings = Orient
                           progress: ProgressFn | None = None, cancel: CancelToken = None) -> OrientationResult:
     """Orientation workspace along the z, y' and x lines and the indices TI_1, TI_2 of eq. (28).
 
-    See the module docstring for the lines, the rotations and the definition (D1)-(D3) of the Δ's.
+    See the module docstring for the lines, the rotations and the definition (D1)-(D3) of the
+    Deltas.
 
-    Raises:
-        Cancelled: when ``cancel`` is set (checked every few angles).
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    settings : OrientationSettings, optional
+        Height ``z0`` of the lines, angle range and steps, position step and the Delta definitions.
+    progress : callable, optional
+        ``progress(fraction, message)``.
+    cancel : threading.Event or callable, optional
+        Checked every few angles: when it is set the computation stops.
+
+    Returns
+    -------
+    OrientationResult
+        The reachable (position, angle) masks of the three lines, their Deltas and ``ti1``, ``ti2``
+        (degree x length units).
+
+    Raises
+    ------
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> o = ps.orientation_workspace(ps.Design(), ps.OrientationSettings(angle_step=5.0, position_step=8.0))
+    >>> o.ti1, o.ti2
+    (28800.0, 12680.0)
     """
     rep = Reporter(progress)
     t0 = time.perf_counter()

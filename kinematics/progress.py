@@ -9,7 +9,7 @@ chunks of work and raises :class:`Cancelled` when asked to stop.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol, Union
+from typing import Any, Protocol
 
 
 class Cancelled(Exception):
@@ -21,7 +21,7 @@ class _HasIsSet(Protocol):
 
 
 ProgressFn = Callable[[float, str], None]
-CancelToken = Union[_HasIsSet, Callable[[], bool], None]
+CancelToken = _HasIsSet | Callable[[], bool] | None
 
 
 def is_cancelled(cancel: CancelToken) -> bool:
@@ -29,8 +29,8 @@ def is_cancelled(cancel: CancelToken) -> bool:
     if cancel is None:
         return False
     if hasattr(cancel, "is_set"):
-        return bool(cancel.is_set())  # type: ignore[union-attr]
-    return bool(cancel())  # type: ignore[operator]
+        return bool(cancel.is_set())
+    return bool(cancel())
 
 
 def check(cancel: CancelToken) -> None:

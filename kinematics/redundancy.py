@@ -217,7 +217,7 @@ def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: 
         angles = cone_angles(design, joints, pose.rotation, b, dp, eta)
         for col, name, lim in ((0, "U", joints.theta_u), (1, "S", joints.theta_s)):
             if lim is not None and angles[:, :, col].max() > lim + 1e-7:
-                i, j = np.unravel_index(int(np.argmax(angles[:, :, col])), (3, 2))
+                i, j = (int(k) for k in np.unravel_index(int(np.argmax(angles[:, :, col])), (3, 2)))
                 joint_problem = joint_problem or (f"chain {i + 1}, leg {j + 1}: {name} joint at "
                                                   f"{angles[i, j, col]:.1f}° > theta_{name} = {lim:g}°")
         if joints.min_distance > 0.0:
@@ -239,9 +239,33 @@ def _assemble(design: Design, pose: Pose, d: np.ndarray, eta: np.ndarray, mode: 
 
 def resolve_redundancy(design: Design, pose: Pose, joints: Joints | None = None,
                        eta_step: float = 0.5) -> Resolution:
-    """Redundancy resolution (module docstring): best carriage values per chain, leg lengths, leg
-    states, the condition number of ``J`` (eq. (26)) there, and a one-line verdict. ``joints`` and
-    ``eta_step`` are the engine's options, so the verdict agrees with the workspace engine."""
+    """Redundancy resolution (module docstring): the best carriage values of each chain at a pose.
+
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    pose : Pose
+        Platform position and orientation.
+    joints : Joints, optional
+        Joint cones and leg interference, the workspace engine's options, so that the verdict agrees
+        with the engine.
+    eta_step : float, optional
+        Largest spacing of the arc samples, degrees (the engine's option).
+
+    Returns
+    -------
+    Resolution
+        The carriage values ``d`` and ``eta`` per chain, the leg lengths and states, the condition
+        number of ``J`` (eq. (26)) there, and a one-line verdict ``message``.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> r = ps.resolve_redundancy(ps.Design(), ps.Pose(0.0, 0.0, 130.0))
+    >>> r.feasible, [round(c.d, 1) for c in r.chains]
+    (True, [9.4, 9.4, 9.4])
+    """
     joints = joints or Joints()
     B = platform_points(design, pose.position, pose.rotation)
     d = np.zeros(3)
@@ -263,7 +287,37 @@ def resolve_redundancy(design: Design, pose: Pose, joints: Joints | None = None,
 
 def inverse_kinematics(design: Design, pose: Pose, d: Sequence[float], eta_deg: Sequence[float],
                        joints: Joints | None = None) -> Resolution:
-    """IK with hand-set carriage values (validated against the strokes): leg lengths and states
-    (and, with ``joints``, the cone angles and leg clearances)."""
+    """Inverse kinematics with hand-set carriage values (validated against the strokes).
+
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    pose : Pose
+        Platform position and orientation.
+    d : sequence of 3 floats
+        Linear carriage positions ``d_1, d_2, d_3``, in ``[0, d_s]``.
+    eta_deg : sequence of 3 floats
+        Arc carriage positions ``eta_1, eta_2, eta_3``, degrees, inside the arc stroke.
+    joints : Joints, optional
+        With joint options, also the cone angles and the legs' clearances.
+
+    Returns
+    -------
+    Resolution
+        Leg lengths (eq. (15)) and their states, feasibility and a one-line verdict.
+
+    Raises
+    ------
+    ParameterError
+        A carriage value outside its stroke (named ``d_1`` .. ``eta_3``, with the valid range).
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> ik = ps.inverse_kinematics(ps.Design(), ps.Pose(0.0, 0.0, 130.0), [30.0] * 3, [0.0] * 3)
+    >>> ik.feasible, round(ik.chains[0].lengths[0], 4)
+    (True, 133.9284)
+    """
     dd, ee = check_carriage(design, d, eta_deg)
     return _assemble(design, pose, dd, ee, "manual", joints)

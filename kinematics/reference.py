@@ -46,7 +46,7 @@ def _chain_ok_at_eta(design: Design, B: np.ndarray, varpi: float) -> np.ndarray:
         D = C[..., None] * e + LEG_SIGN[j] * design.b / 2.0 * t  # (N, K, 3)
         length = np.linalg.norm(B[:, None, j, :] - D, axis=-1)
         ok &= (length >= design.l_min - TOL) & (length <= design.l_max + TOL)
-    return ok.any(axis=1)
+    return np.asarray(ok.any(axis=1))
 
 
 def reference_reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),

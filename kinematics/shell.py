@@ -64,7 +64,8 @@ Construction (:func:`workspace_shell`)
 
 The mesh's ``metadata["paraspace"]`` records ``h``, ``level``, ``smooth_sigma``, ``faces_marching``
 (before reduction; ``None`` when the block re-mesh skipped the full-resolution mesh because it has
-more mixed cells than ``max_faces``, so it could not fit anyway), ``reduction``, ``dropped_components``, ``voxel_volume`` and ``volume_error``.
+more mixed cells than ``max_faces``, so it could not fit anyway), ``reduction``, ``dropped_components``,
+``voxel_volume`` and ``volume_error``.
 
 An empty workspace gives an empty ``Trimesh``; :func:`export_shell` refuses it with a
 ``ValueError``.
@@ -74,6 +75,7 @@ from __future__ import annotations
 
 import io
 import math
+from typing import Any, cast
 
 import numpy as np
 import trimesh
@@ -265,7 +267,8 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
         verts, faces = fast_simplification.simplify(verts, faces, target_count=max_faces, agg=agg)
     out = _sub(verts, faces)
     parts = out.split(only_watertight=False)
-    good = sorted((p for p in parts if abs(_signed_volume(p)) > 1e-6 * h ** 3), key=lambda p: len(p.faces), reverse=True)
+    good = sorted((p for p in parts if abs(_signed_volume(p)) > 1e-6 * h ** 3), key=lambda p: len(p.faces),
+                  reverse=True)
     kept, total = [], 0
     for part in good:
         if total + len(part.faces) <= max_faces:
@@ -273,7 +276,7 @@ def _decimate(mesh: trimesh.Trimesh, max_faces: int, h: float) -> tuple[trimesh.
             total += len(part.faces)
     dropped += len(parts) - len(kept)
     if len(kept) != len(parts):
-        out = trimesh.util.concatenate(kept) if kept else trimesh.Trimesh()
+        out = cast(trimesh.Trimesh, trimesh.util.concatenate(kept)) if kept else trimesh.Trimesh()
     if len(out.vertices):
         _separate_coincident(out, h)
     return out, dropped
@@ -328,28 +331,48 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
                     reduction: str = "quadric", volume_rtol: float = _VOLUME_RTOL) -> trimesh.Trimesh:
     """The closed, outward-oriented boundary mesh of the workspace (module docstring, steps 1-5).
 
-    Args:
-        result: a computed workspace.
-        max_faces: reduce to at most this many faces (``None``: no reduction); at least 4.
-        reduction: how to meet ``max_faces``: ``"quadric"`` decimates the full-resolution mesh
-            (keeps sharp detail); ``"remesh"`` re-meshes block means of the field (about 4x faster
-            at h = 2 for the default design, smoother, volume preserved; for display). Both fall
-            back to the closed coarse re-mesh of step 4.
-        smooth_sigma: Gaussian smoothing of the occupancy field, in voxels (0: binary field).
-        color_by_z: viridis vertex colours by height.
-        preserve_volume: with ``smooth_sigma > 0``, choose the iso-level so that the mesh volume
-            equals the voxel volume (otherwise level 1/2).
-        color_range: ``(z_low, z_high)`` mapped to the ends of the colormap (default: the mesh's
-            z range).
-        volume_rtol: relative volume error at which the block re-mesh stops adjusting its level
-            (default 1e-4; a display mesh that :func:`smooth_for_display` rescales to the voxel
-            volume can take 1e-2 and save marching-cubes passes).
+    Parameters
+    ----------
+    result : WorkspaceResult
+        A computed workspace.
+    max_faces : int, optional
+        Reduce to at most this many faces (``None``: no reduction); at least 4.
+    smooth_sigma : float, optional
+        Gaussian smoothing of the occupancy field, in voxels (0: binary field).
+    color_by_z : bool, optional
+        Viridis vertex colours by height.
+    preserve_volume : bool, optional
+        With ``smooth_sigma > 0``, choose the iso-level so that the mesh volume equals the voxel
+        volume (otherwise level 1/2).
+    color_range : tuple of 2 floats, optional
+        ``(z_low, z_high)`` mapped to the ends of the colormap (default: the mesh's z range).
+    reduction : str, optional
+        How to meet ``max_faces``: ``"quadric"`` decimates the full-resolution mesh (keeps sharp
+        detail); ``"remesh"`` re-meshes block means of the field (about 4x faster at h = 2 for the
+        default design, smoother, volume preserved; for display). Both fall back to the closed
+        coarse re-mesh of step 4.
+    volume_rtol : float, optional
+        Relative volume error at which the block re-mesh stops adjusting its level (default 1e-4;
+        a display mesh that :func:`smooth_for_display` rescales to the voxel volume can take 1e-2
+        and save marching-cubes passes).
 
-    Returns:
-        A ``trimesh.Trimesh`` in world units (empty when the workspace is empty).
+    Returns
+    -------
+    trimesh.Trimesh
+        In world units (empty when the workspace is empty).
 
-    Raises:
-        ValueError: ``max_faces < 4`` or ``smooth_sigma`` negative or not finite.
+    Raises
+    ------
+    ValueError
+        ``max_faces < 4`` or ``smooth_sigma`` negative or not finite.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> mesh = ps.workspace_shell(res, max_faces=2000)
+    >>> mesh.is_watertight, len(mesh.faces) <= 2000
+    (True, True)
     """
     if max_faces is not None and (int(max_faces) != max_faces or max_faces < 4):
         raise ValueError(f"max_faces = {max_faces!r} is invalid: valid range integers >= 4 (or None)")
@@ -360,7 +383,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
     grid = result.grid
     h = float(grid.h)
     occ = np.asarray(result.occupancy, dtype=bool)
-    meta = {"h": h, "smooth_sigma": float(smooth_sigma), "level": None, "faces_marching": 0,
+    meta: dict[str, Any] = {"h": h, "smooth_sigma": float(smooth_sigma), "level": None, "faces_marching": 0,
             "voxel_volume": float(occ.sum()) * h ** 3, "volume_error": 0.0, "dropped_components": 0,
             "reduction": "none"}
     if not occ.any():
@@ -369,6 +392,7 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
         return empty
 
     pad = 1 if smooth_sigma == 0 else int(math.ceil(3.0 * smooth_sigma)) + 1
+    mesh: trimesh.Trimesh | None
     field = np.pad(occ.astype(np.float32), pad)
     target = meta["voxel_volume"]
     if smooth_sigma > 0:
@@ -398,18 +422,39 @@ def workspace_shell(result: WorkspaceResult, *, max_faces: int | None = None, sm
         z = mesh.vertices[:, 2]
         lo, hi = (float(z.min()), float(z.max())) if color_range is None else map(float, color_range)
         u = (z - lo) / (hi - lo) if hi > lo else np.zeros_like(z)
-        mesh.visual.vertex_colors = viridis(u)
+        mesh.visual.vertex_colors = viridis(u)  # type: ignore[union-attr]
     meta["volume_error"] = float(abs(abs(_signed_volume(mesh)) - target) / target)
     mesh.metadata["paraspace"] = meta
     return mesh
 
 
 def export_shell(mesh: trimesh.Trimesh, fmt: str) -> bytes:
-    """The mesh as a file in format ``fmt`` (``stl`` binary, ``ply`` binary with vertex colours,
-    ``obj`` text with vertex colours, ``glb`` binary glTF with ``COLOR_0``).
+    """The mesh as a file.
 
-    Raises:
-        ValueError: unknown format (the message names the valid ones) or an empty mesh.
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        A shell of :func:`workspace_shell`.
+    fmt : str
+        ``"stl"`` (binary), ``"ply"`` (binary with vertex colours), ``"obj"`` (text with vertex
+        colours) or ``"glb"`` (binary glTF with ``COLOR_0``).
+
+    Returns
+    -------
+    bytes
+        The file's content.
+
+    Raises
+    ------
+    ValueError
+        Unknown format (the message names the valid ones) or an empty mesh.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> ps.export_shell(ps.workspace_shell(res), "glb")[:4]
+    b'glTF'
     """
     key = str(fmt).lower().lstrip(".")
     if key not in SHELL_FORMATS:
@@ -431,7 +476,7 @@ def load_shell(data: bytes, fmt: str) -> trimesh.Trimesh:
     if key not in SHELL_FORMATS:
         raise ValueError(f"fmt = {fmt!r} is invalid: valid formats {', '.join(SHELL_FORMATS)}")
     # STL stores a triangle soup: merge coincident vertices to recover the connectivity
-    return trimesh.load(io.BytesIO(data), file_type=key, force="mesh", process=key == "stl")
+    return cast(trimesh.Trimesh, trimesh.load(io.BytesIO(data), file_type=key, force="mesh", process=key == "stl"))
 
 
 def shell_volume_error(result: WorkspaceResult, mesh: trimesh.Trimesh) -> float:

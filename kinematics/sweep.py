@@ -15,7 +15,6 @@ Note (paper): Sec. III-E is titled "Combined effect of a and l_s" but Fig. 5 and
 
 from __future__ import annotations
 
-import collections
 import copy
 import dataclasses
 import functools
@@ -31,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from .bytecache import ByteLRU
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -47,16 +47,38 @@ CACHE_SCHEMA = "sweep-1"
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
                     orientation: OrientationSettings | None = None, cancel: CancelToken = None) -> dict:
-    """Measures of one design: the position workspace (``compute_workspace`` + ``measure_workspace``)
-    and, when ``orientation`` is given, the indices TI_1, TI_2 of eq. (28).
+    """Measures of one design: its position workspace and, optionally, its orientation indices.
 
-    Returns a JSON-serializable dict: every field of ``WorkspaceMeasures.to_dict()`` (``volume``,
-    ``voids``, ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
-    ``"TI_2"`` and ``"orientation_deltas"`` (the 18 Δ's and 9 products, named as in the paper), and
-    ``"compute_seconds"`` (wall time of this call; every other entry is deterministic).
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    settings : WorkspaceSettings
+        The workspace computation (:func:`compute_workspace` then :func:`measure_workspace`).
+    orientation : OrientationSettings, optional
+        Also compute the indices TI_1, TI_2 of eq. (28).
+    cancel : threading.Event or callable, optional
+        Stops the computation when set.
 
-    Raises:
-        Cancelled: when ``cancel`` is set.
+    Returns
+    -------
+    dict
+        JSON-serializable: every field of ``WorkspaceMeasures.to_dict()`` (``volume``, ``voids``,
+        ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
+        ``"TI_2"`` and ``"orientation_deltas"`` (the 18 Deltas and 9 products, named as in the paper),
+        and ``"compute_seconds"`` (wall time of this call; every other entry is deterministic).
+
+    Raises
+    ------
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> row = ps.evaluate_design(ps.Design(), ps.WorkspaceSettings(voxel=10.0))
+    >>> row["volume"], row["voids"], row["design"]["d_s"]
+    (5116000.0, 0, 50.0)
     """
     from .measures import measure_workspace  # imported here: a sibling module of the core
 
@@ -118,22 +140,25 @@ def cache_key(design: Design, settings: WorkspaceSettings, orientation: Orientat
 
 
 class ResultCache:
-    """Thread-safe cache of :func:`evaluate_design` results: an in-memory LRU of at most
-    ``max_entries`` entries, backed by an optional directory of JSON files (one per key).
+    """Thread-safe cache of :func:`evaluate_design` results: an in-memory
+    :class:`~kinematics.bytecache.ByteLRU` of at most ``max_entries`` entries and ``max_bytes``
+    bytes, backed by an optional directory of JSON files (one per key).
 
     Values are deep-copied in and out, so callers may mutate what they get.
     """
 
     def __init__(self, max_entries: int = 256, directory: str | os.PathLike | None = None,
-                 version: str | None = None) -> None:
+                 version: str | None = None, *, max_bytes: int = 64 << 20) -> None:
         if not isinstance(max_entries, int) or isinstance(max_entries, bool) or max_entries < 0:
             raise ParameterError("max_entries", max_entries, "an integer >= 0")
+        if not isinstance(max_bytes, int) or isinstance(max_bytes, bool) or max_bytes < 0:
+            raise ParameterError("max_bytes", max_bytes, "an integer >= 0")
         self.max_entries = max_entries
         self.directory = None if directory is None else pathlib.Path(directory)
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
         self.version = version
-        self._mem: collections.OrderedDict[str, dict] = collections.OrderedDict()
+        self._mem = ByteLRU(max_bytes, max_entries=max_entries)
         self._lock = threading.RLock()
         self.hits = 0
         self.misses = 0
@@ -146,21 +171,13 @@ class ResultCache:
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"
 
-    def _remember(self, key: str, value: dict) -> None:
-        if self.max_entries == 0:
-            return
-        self._mem[key] = value
-        self._mem.move_to_end(key)
-        while len(self._mem) > self.max_entries:
-            self._mem.popitem(last=False)
-
     def get(self, key: str) -> dict | None:
         """The cached value (a copy), or ``None``."""
         with self._lock:
-            if key in self._mem:
-                self._mem.move_to_end(key)
+            hit = self._mem.get(key)
+            if hit is not None:
                 self.hits += 1
-                return copy.deepcopy(self._mem[key])
+                return copy.deepcopy(hit)
             path = self._path(key)
             if path is not None and path.is_file():
                 try:
@@ -168,7 +185,7 @@ class ResultCache:
                 except (OSError, ValueError, KeyError, TypeError):
                     value = None
                 if isinstance(value, dict):
-                    self._remember(key, value)
+                    self._mem.put(key, value)
                     self.hits += 1
                     return copy.deepcopy(value)
             self.misses += 1
@@ -178,7 +195,7 @@ class ResultCache:
         """Store a copy of ``value`` (JSON-serializable) in memory and, if configured, on disk."""
         value = copy.deepcopy(value)
         with self._lock:
-            self._remember(key, value)
+            self._mem.put(key, value)
             path = self._path(key)
             if path is not None:
                 fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=str(path.parent))
@@ -241,15 +258,46 @@ def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: O
 def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
              orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
              cancel: CancelToken = None, cache: ResultCache | None = None) -> list[dict]:
-    """Measures against one design parameter (paper Fig. 4): ``design`` with ``param`` set to each of
-    ``values``, the other fields fixed.
+    """Measures against one design parameter (paper Fig. 4).
 
-    Returns:
+    Parameters
+    ----------
+    design : Design
+        The base design: ``param`` is set to each of ``values``, the other fields stay.
+    param : str
+        A design field (``"a"``, ``"d_s"``, ... see ``PARAMS``).
+    values : sequence of float
+        The values of ``param``.
+    settings : WorkspaceSettings
+        The workspace computation of each point.
+    orientation : OrientationSettings, optional
+        Also compute TI_1, TI_2 (eq. (28)) of each point.
+    progress : callable, optional
+        ``progress(fraction, message)``.
+    cancel : threading.Event or callable, optional
+        Stops the sweep when set.
+    cache : ResultCache, optional
+        Points computed before are taken from it.
+
+    Returns
+    -------
+    list of dict
         One dict per value, ``{"param": param, "value": v, **evaluate_design(...)}``.
-    Raises:
-        ParameterError: unknown ``param`` or a value outside the parameter's valid range (checked
-            for every value before any computation).
-        Cancelled: when ``cancel`` is set.
+
+    Raises
+    ------
+    ParameterError
+        Unknown ``param`` or a value outside the parameter's valid range (checked for every value
+        before any computation).
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> rows = ps.sweep_1d(ps.Design(), "d_s", [40.0, 60.0], ps.WorkspaceSettings(voxel=10.0))
+    >>> [(row["value"], row["volume"]) for row in rows]
+    [(40.0, 3800000.0), (60.0, 6216000.0)]
     """
     _check_param(param)
     designs = _designs(design, param, values)
@@ -271,14 +319,46 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
              cache: ResultCache | None = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
-    Returns:
+    Parameters
+    ----------
+    design : Design
+        The base design.
+    param_x, param_y : str
+        Two different design fields.
+    values_x, values_y : sequence of float
+        Their values.
+    settings : WorkspaceSettings
+        The workspace computation of each point.
+    orientation : OrientationSettings, optional
+        Also compute TI_1, TI_2 (eq. (28)) of each point.
+    progress : callable, optional
+        ``progress(fraction, message)``.
+    cancel : threading.Event or callable, optional
+        Stops the sweep when set.
+    cache : ResultCache, optional
+        Points computed before are taken from it.
+
+    Returns
+    -------
+    dict
         ``{"param_x", "param_y", "values_x", "values_y", "volume": [iy][ix], "grids": {measure:
         [iy][ix]} for every numeric scalar measure, "points": [...]}``; the points are in row-major
         order (``iy`` outer) and each is ``{"param_x", "param_y", "x", "y", "ix", "iy",
         **evaluate_design(...)}``.
-    Raises:
-        ParameterError: unknown parameter, ``param_x == param_y``, or an invalid value.
-        Cancelled: when ``cancel`` is set.
+
+    Raises
+    ------
+    ParameterError
+        Unknown parameter, ``param_x == param_y``, or an invalid value.
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> grid = ps.sweep_2d(ps.Design(), "d_s", [40.0, 60.0], "a", [90.0, 110.0], ps.WorkspaceSettings(voxel=10.0))
+    >>> grid["volume"]  # rows: a = 90, 110; columns: d_s = 40, 60
+    [[1680000.0, 1880000.0], [1048000.0, 1220000.0]]
     """
     _check_param(param_x, "param_x")
     _check_param(param_y, "param_y")

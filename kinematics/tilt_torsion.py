@@ -206,7 +206,9 @@ def tilt_torsion_at(design: Design, position: Sequence[float],
     tilt, tsat = _ray_extent(tilt_test, az.size, s.tilt_limit, s.coarse_step, s.tolerance)
     tors, ssat = _ray_extent(torsion_test, 2, s.torsion_limit, s.coarse_step, s.tolerance)
     ok = bool(np.isfinite(tors[0]))
-    f = (lambda v: float(v) if np.isfinite(v) else None)
+    def f(v: float) -> float | None:
+        return float(v) if np.isfinite(v) else None
+
     return TiltTorsionReport(
         position=[float(v) for v in p[0]], reachable=ok, azimuths=[float(v) for v in az],
         max_tilt=[f(v) for v in tilt], tilt_saturated=[bool(v) for v in tsat],

@@ -7,10 +7,10 @@ The chains are independent, so the workspace is the intersection of three per-ch
 
 Engines (``WorkspaceSettings.method``): ``"blocks"`` (default) decides blocks of voxels coarse
 to fine and is voxel-identical to ``"dense"`` (see :mod:`kinematics.blocks` for the proof), which
-is kept as the tests' oracle. Dense engine: a compiled kernel walks each vertical column of voxels (columns in parallel over the
-cores) and, per chain, (1) rejects with the conservative whole-stroke bound, then (2) searches the
-arc samples outward from the sample that worked for the previous voxel of the column (a warm
-start that makes reachable voxels cost about one sample per chain). The chain that failed last
+is kept as the tests' oracle. Dense engine: a compiled kernel walks each vertical column of voxels
+(columns in parallel over the cores) and, per chain, (1) rejects with the conservative whole-stroke
+bound, then (2) searches the arc samples outward from the sample that worked for the previous voxel
+of the column (a warm start that makes reachable voxels cost about one sample per chain). The chain that failed last
 is tested first. Work is issued in chunks of columns so progress is reported and cancellation is
 honoured between chunks. With zero rotation and the centered arc range the mechanism is
 symmetric under the mirror ``y -> -y`` (chain 1 onto itself, chains 2 and 3 swapped), and only
@@ -32,12 +32,14 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import rounding_margin, run_blocks
+from .bracket import volume_bracket
 from .design import Design, ParameterError
-from .feasibility import ChainTables, _chain_excluded, chain_points, chain_search, default_n_eta
+from .feasibility import _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
 from .grid import GridSpec
 from .interference import interference_free
 from .joints import Joints, cone_table
+from .kernel_args import kernel_args
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
@@ -231,16 +233,6 @@ def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
 _MIRROR_BITS = np.array([(v & 1) | (((v >> 2) & 1) << 1) | (((v >> 1) & 1) << 2) for v in range(256)], np.uint8)
 
 
-def _kernel_args(design: Design, orientation_deg, n_eta: int, joints: Joints | None = None) -> tuple:
-    """Kernel constants; ``orientation_deg`` is ``(psi, theta, phi)`` or a 3x3 rotation matrix."""
-    tab = ChainTables(design, n_eta)
-    o = np.asarray(orientation_deg, dtype=float)
-    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
-    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
-    jc = cone_table(design, joints or Joints(), rot)
-    return (u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc)
-
-
 def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
                    eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
     """Bitmask of the chains that can reach each point (bit ``i`` for chain ``i``) at one orientation.
@@ -253,7 +245,7 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
     """
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     out = np.zeros(pts.shape[0], np.uint8)
-    args = _kernel_args(design, orientation, default_n_eta(design, eta_step), joints)
+    args = kernel_args(design, orientation, default_n_eta(design, eta_step), joints)
     with KERNEL_LOCK:
         _points_kernel(pts, *args, out)
     return out
@@ -261,9 +253,32 @@ def chain_masks_at(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.
 
 def reachable(design: Design, points: np.ndarray, orientation=(0.0, 0.0, 0.0),
               eta_step: float = 0.5, joints: Joints | None = None) -> np.ndarray:
-    """Whether each point is reachable at one orientation (bool array (N,)).
+    """Whether each point is reachable at one orientation.
 
-    ``orientation`` is ``(psi, theta, phi)`` in degrees or a 3x3 rotation matrix.
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    points : array_like, shape (N, 3)
+        Platform-centre positions.
+    orientation : tuple of 3 floats or array_like, shape (3, 3), optional
+        ``(psi, theta, phi)`` in degrees (eq. (2)) or a rotation matrix; default the home orientation.
+    eta_step : float, optional
+        Largest spacing of the arc samples, degrees.
+    joints : Joints, optional
+        Joint cones and leg interference (default: none).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+        ``True`` where every chain reaches the point, the test of :func:`compute_workspace`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import paraspace as ps
+    >>> ps.reachable(ps.Design(), np.array([[0.0, 0.0, 130.0], [0.0, 0.0, 1000.0]]))
+    array([ True, False])
     """
     ok = chain_masks_at(design, points, orientation, eta_step, joints) == ALL_CHAINS
     if joints is not None and joints.min_distance > 0.0 and ok.any():
@@ -296,7 +311,7 @@ def reachable_pairs(design: Design, points: np.ndarray, rotations: np.ndarray,
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     rots = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     n_eta = default_n_eta(design, eta_step)
-    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = _kernel_args(design, np.eye(3), n_eta)
+    u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
     jn = joints or Joints()
     us, jcs = rotation_tables(design, rots, jn)
     out = np.zeros((pts.shape[0], rots.shape[0]), np.bool_)
@@ -375,7 +390,7 @@ def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
               progress: Reporter | None, cancel: CancelToken, all_chains: bool = False):
     n_eta = default_n_eta(design, settings.eta_step)
-    args = _kernel_args(design, settings.orientation, n_eta, settings.joints)
+    args = kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     mirror = _use_mirror(design, settings, grid)
@@ -384,8 +399,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
     else:
         out = np.zeros(grid.shape, np.uint8)
-        ix, iy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
-        ix, iy = ix.ravel().astype(np.int64), iy.ravel().astype(np.int64)
+        gx, gy = np.meshgrid(np.arange(nx), np.arange(ny_eval), indexing="ij")
+        ix, iy = gx.ravel().astype(np.int64), gy.ravel().astype(np.int64)
         n = ix.size
         eps = rounding_margin(math.sqrt(args[8]), (xs, ys, zs))
         xlo2, xhi2 = max(math.sqrt(args[7]) - eps, 0.0) ** 2, (math.sqrt(args[8]) + eps) ** 2
@@ -416,11 +431,40 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                       progress: ProgressFn | None = None, cancel: CancelToken = None) -> WorkspaceResult:
     """Compute the constant-orientation position workspace (see the module docstring).
 
-    ``compute_seconds`` is the engine time (excluding compilation, which happens on first use;
-    call :func:`warm_up` to trigger it early).
+    Parameters
+    ----------
+    design : Design
+        The mechanism's dimensions.
+    settings : WorkspaceSettings, optional
+        Voxel edge ``h``, platform orientation, arc sampling, bounds, engine and options (default:
+        ``h = 2`` at the home orientation).
+    progress : callable, optional
+        ``progress(fraction, message)``, called as the computation advances.
+    cancel : threading.Event or callable, optional
+        Checked between chunks of work: when it is set the computation stops.
 
-    Raises:
-        Cancelled: when ``cancel`` is set.
+    Returns
+    -------
+    WorkspaceResult
+        The grid, the occupancy of its voxels, ``voxels`` and ``volume`` (``voxels * h**3``), and
+        ``compute_seconds``: the engine time, excluding compilation (which happens on first use;
+        call :func:`warm_up` to trigger it early).
+
+    Raises
+    ------
+    ParameterError
+        Invalid settings (the message names the field and its valid range).
+    Cancelled
+        When ``cancel`` is set.
+
+    Examples
+    --------
+    >>> import paraspace as ps
+    >>> res = ps.compute_workspace(ps.Design(), ps.WorkspaceSettings(voxel=8.0))
+    >>> res.voxels, res.grid.h
+    (10016, 8.0)
+    >>> res.volume == res.voxels * 8.0 ** 3
+    True
     """
     rep = Reporter(progress)
     t0 = time.perf_counter()
@@ -456,10 +500,9 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
                              chain_mask=mask if settings.diagnostics else None,
                              compute_seconds=seconds, n_eta=n_eta)
     if settings.bracket:
-        from .bracket import volume_bracket
 
         t1 = time.perf_counter()
-        br = volume_bracket(design, grid, _kernel_args(design, settings.orientation, n_eta, settings.joints),
+        br = volume_bracket(design, grid, kernel_args(design, settings.orientation, n_eta, settings.joints),
                             n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine)
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1

@@ -25,7 +25,7 @@ from typing import Any
 # checkout import itself the same way the installed package does.
 _here = pathlib.Path(__file__).resolve().parent
 if not (_here / "kinematics").is_dir() and (_here.parent / "kinematics" / "__init__.py").is_file():
-    __path__.append(str(_here.parent))  # type: ignore[name-defined]
+    __path__.append(str(_here.parent))
 
 try:
     __version__: str = importlib.metadata.version("paraspace")

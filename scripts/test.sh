@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Install everything the tests need and run the whole suite:
+# Install everything the tests need, lint, type-check and run the whole suite:
 #  - Debian's chromium (the browser test drives it through Playwright; `playwright install` cannot
 #    download here), with apt-get (as root, or through sudo);
-#  - ./.venv with the project and its test extras.
+#  - ./.venv with the project and its test extras;
+#  - ruff and mypy (configured in pyproject.toml) on the package: zero findings, or the run stops;
+#  - the doctests of the public functions and the suite (tests/, examples/ run by tests/test_examples.py).
 # Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,4 +17,6 @@ fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q ".[test]"
+.venv/bin/python -m ruff check kinematics app paraspace examples
+.venv/bin/python -m mypy
 exec .venv/bin/python -m pytest -ra "$@"

@@ -147,7 +147,7 @@ def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> N
         return (b is not None and b.measures is not None and b.result.design == s.design
                 and b.result.settings.orientation == (s.pose.psi, s.pose.theta, s.pose.phi)
                 and b.result.settings.voxel == s.voxel
-                and session._ws_info.get("preview") is False and session._ws_info.get("measures") is not None
+                and (info := session.ctx.ws_info) is not None and info.preview is False and info.measures is not None
                 # the certified bracket (its own job, after the shell; none with leg interference)
                 and (b.bracket is not None or b.result.settings.joints.min_distance > 0.0))
     wait_for(idle, timeout, "the session to become idle")

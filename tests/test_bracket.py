@@ -10,8 +10,9 @@ import pytest
 
 from paraspace.kinematics.bracket import BOUNDARY, INSIDE, OUTSIDE, cube_classes
 from paraspace.kinematics.design import Design
+from paraspace.kinematics.kernel_args import kernel_args
 from paraspace.kinematics.reference import reference_reachable
-from paraspace.kinematics.workspace import WorkspaceSettings, _kernel_args, compute_workspace
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
 @pytest.mark.parametrize("design", [Design(), Design(a=10), Design(eta_range="from-zero", l_s=80)])
@@ -29,7 +30,7 @@ def test_cube_classes_against_the_brute_force():
     design = Design()
     res = compute_workspace(design, WorkspaceSettings(voxel=8.0))
     grid = res.grid
-    cls = cube_classes(design, grid, _kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
+    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
     assert {INSIDE, OUTSIDE, BOUNDARY} <= set(np.unique(cls).tolist())
     rng = np.random.default_rng(3)
     centres = grid.points()
@@ -109,7 +110,7 @@ def test_bracket_agrees_with_an_independent_interval_oracle():
     design = Design()
     res = compute_workspace(design, WorkspaceSettings(voxel=16.0))
     grid = res.grid
-    cls = cube_classes(design, grid, _kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
+    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
     centres = grid.points()
     quarter = np.argwhere((centres[..., 0] >= 0) & (centres[..., 1] >= 0))
     cubes = []

@@ -109,7 +109,7 @@ def test_last_slider_value_wins(explorer, browsers):
     time.sleep(0.5)  # a stale job that would still publish has had every chance to
     expected = Design(a=values[-1])
     assert s.bundle.result.design == expected
-    assert s._ws_info["gen"] == s._ws_gen
+    assert s.ctx.ws_info.gen == s.workspace_controller.gen
     ref = compute_workspace(expected, WorkspaceSettings(voxel=3.0))
     assert s.bundle.result.volume == ref.volume
     assert f"{ref.volume:.5g}" in s.panels.numbers.content
@@ -124,9 +124,9 @@ def test_a_slow_job_is_cancelled_when_the_design_moves(explorer, browsers):
     s = b.session
     wait_idle(explorer, s)
     explorer.shell_cache.clear()  # an h = 1 result cached by another test would make this a cache hit
-    old = s._ws_job
+    old = s.workspace_controller.job
     b.set(s.panels.voxel, 1.0)  # h = 1: seconds of work
-    job = wait_for(lambda: s._ws_job if s._ws_job is not None and s._ws_job is not old else None, 10.0, "h=1 job")
+    job = wait_for(lambda: s.workspace_controller.job if s.workspace_controller.job is not None and s.workspace_controller.job is not old else None, 10.0, "h=1 job")
     wait_for(lambda: job.status == "running", 10.0, "h=1 job running")
     b.set(s.panels.voxel, 6.0)
     wait_for(lambda: job.is_final, 10.0, "h=1 job to end")
@@ -245,8 +245,8 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     b.set(s.panels.sweep_points, 3)
     wait_for(lambda: s.panels.sweep_points.value == 3 and s.panels.sweep_param.value == "eta_s", 5.0, "inputs")
     b.click(s.panels.sweep_run)
-    wait_for(lambda: s._sweep is not None, 60.0, "sweep result")
-    rows = s._sweep["rows"]
+    wait_for(lambda: s.studies_controller.sweep is not None, 60.0, "sweep result")
+    rows = s.studies_controller.sweep["rows"]
     assert [r["value"] for r in rows] == [10.0, 55.0, 100.0]
     vols = [r["volume"] for r in rows]
     assert vols == sorted(vols)  # paper Fig. 4: volume grows with eta_s
@@ -257,7 +257,7 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     fig = s.panels.sweep_plot.figure
     assert s.panels.sweep_plot.visible and list(fig.data[0].x) == [10.0, 55.0, 100.0]
     cur = [t for t in fig.data if (t.name or "").startswith("current design")]
-    assert list(cur[0].x) == [30.0] and cur[0].y[0] == s._sweep["current_row"]["volume"]
+    assert list(cur[0].x) == [30.0] and cur[0].y[0] == s.studies_controller.sweep["current_row"]["volume"]
     # PNG (200 dpi) and SVG downloads of the same figure
     b.click(s.panels.sweep_png)
     png = b.download("paraspace_volume_vs_eta_s.png", timeout=60.0)
@@ -313,8 +313,8 @@ def test_camera_presets_reset_and_stop(explorer, browsers):
     # Stop: a slow job (h = 1) ends cancelled and the status says so
     explorer.shell_cache.clear()  # not a cache hit from another test
     b.set(s.panels.voxel, 1.0)
-    job = wait_for(lambda: s._ws_job if s.state.voxel == 1.0 and s._ws_job is not None
-                   and s._ws_job.status == "running" else None, 10.0, "h=1 job running")
+    job = wait_for(lambda: s.workspace_controller.job if s.state.voxel == 1.0 and s.workspace_controller.job is not None
+                   and s.workspace_controller.job.status == "running" else None, 10.0, "h=1 job running")
     b.click(s.panels.stop)
     wait_for(lambda: job.is_final, 10.0, "stopped job")
     assert job.status == "cancelled"
@@ -345,8 +345,8 @@ def test_surface_study(explorer, browsers):
     b.set(s.panels.surface_points, 3)
     wait_for(lambda: s.panels.surface_points.value == 3 and s.panels.study_voxel.value == 10.0, 5.0, "inputs")
     b.click(s.panels.surface_run)
-    wait_for(lambda: s._surface is not None, 120.0, "(a, d_s) study")
-    out = s._surface
+    wait_for(lambda: s.studies_controller.surface is not None, 120.0, "(a, d_s) study")
+    out = s.studies_controller.surface
     assert out["values_x"] == [10.0, 55.0, 100.0] and out["values_y"] == [10.0, 55.0, 100.0]
     vol = np.array(out["volume"], dtype=float)
     assert vol.shape == (3, 3)

@@ -236,7 +236,8 @@ def test_concurrent_sessions_protocol_level(explorer: Explorer) -> None:
             s, design = sessions[i], plans[i].expected()[0]
             try:
                 wait_for(lambda: s.bundle is not None and s.bundle.result.design == design
-                         and s._ws_info.get("preview") is False and s._ws_info.get("measures") is not None,
+                         and (info := s.ctx.ws_info) is not None and info.preview is False
+                         and info.measures is not None,
                          90.0, f"session {i}'s last workspace")
                 settle_ws[i] = time.monotonic() - t_settle
                 wait_idle(explorer, s, timeout=90.0)

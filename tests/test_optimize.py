@@ -338,6 +338,20 @@ def test_cli_json_csv_plot(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["front"] == out["front"]
 
 
+def test_cli_progress_is_the_same_bar_as_every_command(capsys):
+    """--progress draws the progress bar of the other commands (app/progressline.py) even on a
+    pipe; stdout keeps only the JSON."""
+    from paraspace.app.cli import main
+
+    rc = main(["optimize", "--params", "a", "--population", "4", "--generations", "2", "--voxel", "10",
+               "--json", "--progress"])
+    out = capsys.readouterr()
+    assert rc == 0 and json.loads(out.out)["front"]
+    assert "optimize [" in out.err and " %, generation 2/2" in out.err
+    rc = main(["optimize", "--params", "a", "--population", "4", "--generations", "2", "--voxel", "10", "--json"])
+    assert rc == 0 and capsys.readouterr().err == ""  # not a terminal, not asked: nothing drawn
+
+
 @pytest.mark.parametrize("args, field", [
     (["--bounds", "l_s=20"], "bounds"),
     (["--bounds", "zz=1:2"], "bounds"),

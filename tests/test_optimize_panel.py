@@ -9,8 +9,9 @@ import time
 import pytest
 import viser
 
-from paraspace.app.explorer.optimize_panel import URL_KEYS, OptimizePanel, ResultStore
+from paraspace.app.explorer.optimize_panel import URL_KEYS, OptimizePanel
 from paraspace.app.jobs import JobManager
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.optimize import OptimizeSettings, optimize
 from paraspace.kinematics.workspace import WorkspaceSettings
@@ -38,7 +39,7 @@ def host(server):
     jobs = JobManager(max_workers=2)
     loaded: list[Design] = []
     links: list[dict] = []
-    results = ResultStore()
+    results = ByteLRU(16 << 20, max_entries=16)
     base = Design(d_s=60.0)
 
     def make() -> OptimizePanel:

@@ -35,6 +35,7 @@ def test_fresh_install_exposes_only_the_paraspace_namespace(tmp_path):
         rel = init.relative_to(ROOT)
         assert (pkg / rel).is_file(), f"{rel} is not installed: add its package to pyproject.toml"
     assert (pkg / "static" / "index.html").is_file()
+    assert (pkg / "py.typed").is_file()  # PEP 561 marker: type checkers read the package's annotations
     # the installed copy imports as itself (not from this checkout) and finds its own assets
     code = ("import paraspace, paraspace.kinematics as k, importlib.resources as r;"
             "print(paraspace.__file__); print(k.__file__);"
@@ -66,6 +67,15 @@ def test_version_is_stated_once_and_reported_by_the_cli():
     out = subprocess.run([sys.executable, "-m", "paraspace.app.cli", "--version"], capture_output=True,
                          text=True, check=True, cwd=ROOT, timeout=120)
     assert out.stdout.strip() == f"paraspace {declared}"
+
+
+def test_python_m_paraspace_is_the_cli():
+    out = subprocess.run([sys.executable, "-m", "paraspace", "--version"], capture_output=True,
+                         text=True, check=True, cwd=ROOT, timeout=120)
+    assert out.stdout.strip() == f"paraspace {paraspace.__version__}"
+    usage = subprocess.run([sys.executable, "-m", "paraspace", "--help"], capture_output=True,
+                           text=True, check=True, cwd=ROOT, timeout=120)
+    assert usage.stdout.startswith("usage: paraspace ")
 
 
 def test_api_and_explorer_report_the_same_version():

@@ -17,9 +17,9 @@ import pytest
 
 from paraspace.app import cli
 from paraspace.app.api import API_PREFIX, ApiLimits, create_api, decode_link_token
-from paraspace.app.bytecache import ByteLRU, nbytes
 from paraspace.app.jobs import JobManager
 from paraspace.app.serve import check_public_url, serve, start_api
+from paraspace.kinematics.bytecache import ByteLRU, nbytes
 from paraspace.kinematics.design import ParameterError
 
 V1 = API_PREFIX
@@ -110,6 +110,21 @@ def test_history_and_caches_are_bounded_by_bytes():
     assert lru.put("a", b"x" * 600) and lru.put("b", b"y" * 300)
     assert lru.put("c", b"z" * 300) and "a" not in lru and lru.total_bytes <= 1000
     assert not lru.put("huge", b"w" * 2000) and "huge" not in lru
+
+
+def test_the_one_cache_bounds_entries_as_well_as_bytes():
+    """The explorer's Optimize runs and every other cache are one ByteLRU: least recently used out
+    first, by count when ``max_entries`` is given, by bytes always."""
+    lru = ByteLRU(10_000, size=len, max_entries=3)
+    for k in "abcde":
+        assert lru.put(k, b"x" * 100)
+    assert len(lru) == 3 and "a" not in lru and "b" not in lru and lru.total_bytes == 300
+    assert lru.get("c") == b"x" * 100  # c is now the most recently used: d is the oldest
+    lru.put("f", b"y")
+    assert "d" not in lru and "c" in lru and lru.total_bytes == 201
+    assert not ByteLRU(1000, max_entries=0).put("k", b"v")
+    with pytest.raises(ValueError, match="max_entries"):
+        ByteLRU(1000, max_entries=-1)
 
 
 def test_slow_headers_and_bodies_are_cut_off(api):

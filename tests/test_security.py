@@ -118,7 +118,7 @@ def test_explorer_obeys_the_grid_limit(explorer: Explorer) -> None:
             wait_for(lambda: "not started" in s.panels.status.content, 10.0, "the refusal")
             text = s.panels.status.content.replace("\\", "")
             assert "voxel" in text and "200,000" in text
-            assert s._ws_job is None  # nothing was queued
+            assert s.workspace_controller.job is None  # nothing was queued
         finally:
             b.close()
     finally:

@@ -56,6 +56,17 @@ def test_volume_grows_with_strokes(param: str, values: list[float]) -> None:
     assert vols[-1] > vols[0]
 
 
+def test_result_cache_memory_is_bounded_by_bytes() -> None:
+    row = {"ok": True, "volume": 1.0, "note": "x" * 1000}  # about 1.2 kB each
+    cache = ResultCache(max_entries=100, max_bytes=5_000)
+    for i in range(20):
+        cache.put(f"k{i}", row)
+    assert 1 <= len(cache) < 5  # 20 rows are about 24 kB: the byte budget, not the count, binds
+    assert cache.get("k19") == row and cache.get("k0") is None
+    with pytest.raises(ParameterError, match="max_bytes"):
+        ResultCache(max_bytes=-1)
+
+
 def test_cache_hit_returns_equal_results_without_recomputation(counted, tmp_path) -> None:
     cache = ResultCache(max_entries=8, directory=tmp_path)
     first = sweep_1d(Design(), "d_s", [20.0, 40.0], COARSE, cache=cache)

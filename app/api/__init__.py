@@ -38,8 +38,6 @@ router per resource: ``meta`` (health, design defaults, landing page), ``ik``, `
 
 from __future__ import annotations
 
-from typing import Optional
-
 from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
 

@@ -14,20 +14,23 @@ import dataclasses
 import threading
 import time
 from collections.abc import Callable, Hashable
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request
 from fastapi.responses import JSONResponse
 
 import paraspace
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.serialize import jsonable
 
-from ..bytecache import ByteLRU
 from ..jobs import Job, JobManager, LimitExceeded
 from ..limits import check_workspace_grid
 from .errors import ERROR_RESPONSES, RANGES, ApiError
 from .limits import ApiLimits
+
+if TYPE_CHECKING:  # pragma: no cover - types only (imported where it is used)
+    from paraspace.kinematics.sweep import ResultCache
 
 API_PREFIX = "/api/v1"
 API_VERSION = paraspace.__version__  # the package metadata, stated once (pyproject.toml)
@@ -90,7 +93,7 @@ class ApiContext:
         self.shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
         self._submit_lock = threading.Lock()
         self._precheck_slots = threading.BoundedSemaphore(2)  # grid estimates (a coarse scout each) at once
-        self.sweep_cache: Any = None
+        self.sweep_cache: ResultCache | None = None
         try:
             from paraspace.kinematics.sweep import ResultCache
 

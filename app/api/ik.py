@@ -30,7 +30,9 @@ async def ik(req: IkRequest) -> dict[str, Any]:  # ~1 ms of numpy: on the event 
     if req.d is None:
         run = lambda: resolve_redundancy(design, pose, joints)  # noqa: E731
     else:
-        run = lambda: call_core("carriage", lambda: inverse_kinematics(design, pose, req.d, req.eta, joints))  # noqa: E731
+        d, eta = req.d, req.eta
+        assert eta is not None  # both carriages or neither (checked above)
+        run = lambda: call_core("carriage", lambda: inverse_kinematics(design, pose, d, eta, joints))  # noqa: E731
     # with joint options the engine's compiled witness search runs: off the event loop
     res = run() if joints.is_default else await run_in_threadpool(run)
     return jsonable({"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()})

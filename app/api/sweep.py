@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,7 @@ def _start_sweep(ctx: ApiContext, req: SweepRequest, request: Request) -> tuple[
                                    f"n valid range [1, 10000]")
         spec = PARAMS[ax.param]
         if ax.values is None:
+            assert ax.n is not None  # exactly one of values and n (checked above)
             vs = [float(v) for v in sw.study_values(ax.param, ax.n)]
         else:
             vs = [float(v) for v in ax.values]
@@ -73,7 +75,7 @@ def _start_sweep(ctx: ApiContext, req: SweepRequest, request: Request) -> tuple[
         for d in points:
             total += workspace_voxels(d, settings, analytic=True)
             if ori is not None:
-                n_ori = max(n_ori, call_core("orientation", lambda d=d: orientation_samples(d, ori)))
+                n_ori = max(n_ori, call_core("orientation", functools.partial(orientation_samples, d, ori)))
         if total > limits.max_sweep_voxels:
             raise ApiError(413, f"sweep of {total} voxels in all (analytical reach boxes) exceeds the limit "
                                 f"max_sweep_voxels = {limits.max_sweep_voxels}: use a larger voxel "
@@ -103,10 +105,10 @@ def _grid_points(design: Design, params: list[str], vals: list[list[float]], nam
     out: list[Design] = []
     if len(params) == 1:
         for i, v in enumerate(vals[0]):
-            out.append(call_core(f"{names[0]}.values[{i}]", lambda v=v: design.replace(**{params[0]: v})))
+            out.append(call_core(f"{names[0]}.values[{i}]", functools.partial(design.replace, **{params[0]: v})))
         return out
     for i, vx in enumerate(vals[0]):
         for j, vy in enumerate(vals[1]):
             out.append(call_core(f"{names[0]}.values[{i}]/{names[1]}.values[{j}]",
-                                 lambda vx=vx, vy=vy: design.replace(**{params[0]: vx, params[1]: vy})))
+                                 functools.partial(design.replace, **{params[0]: vx, params[1]: vy})))
     return out

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import viser
@@ -28,6 +28,11 @@ from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
+from .session import SessionJobs
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from ..urlstate import ExplorerState
+    from .workspace_job import ShellBundle
 
 #: The paper's Fig. 3 pairs: parameter, first (pinned) and second (current) value.
 FIG3_PAIRS: tuple[tuple[str, float, float], ...] = (("a", 10.0, 80.0), ("d_s", 10.0, 80.0),
@@ -57,7 +62,7 @@ def design_text(d: Design) -> str:
     return t + ("" if d.eta_range == "centered" else f" ({d.eta_range})")
 
 
-def comparison_table(pinned: Any, current: Any) -> str:
+def comparison_table(pinned: ShellBundle, current: ShellBundle) -> str:
     """Markdown table pinned | current | change (absolute and relative) of two bundles with measures."""
     lines = ["| | pinned | current | change |", "|---|---|---|---|"]
     for label, get, digits in ROWS:
@@ -102,11 +107,11 @@ def ghost_glb(mesh: Any) -> bytes:
 class CompareHooks:
     """What the panel needs from its session (kept narrow: state in, state out)."""
 
-    get_state: Callable[[], Any]  # -> ExplorerState
+    get_state: Callable[[], ExplorerState]
     set_pin: Callable[[Design | None], None]  # stores the pin in the state and the link
-    bundle_for: Callable[[Any], Any | None]  # state -> cached ShellBundle with measures, or None
-    compute_bundle: Callable[[Any, Callable[[float, str], None], threading.Event], Any]  # state -> bundle
-    current_bundle: Callable[[], Any | None]
+    bundle_for: Callable[[ExplorerState], ShellBundle | None]  # the cached bundle with measures, or None
+    compute_bundle: Callable[[ExplorerState, Callable[[float, str], None], threading.Event], ShellBundle]
+    current_bundle: Callable[[], ShellBundle | None]
     load_design: Callable[[Design], None]
     notify: Callable[[str, str], None]
 
@@ -116,13 +121,13 @@ class ComparePanel:
 
     NODE = "/workspace/pinned"
 
-    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager, client: str,
+    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager | SessionJobs, client: str,
                  hooks: CompareHooks) -> None:
         self.scene = scene
         self.jobs = jobs
         self.client = client
         self.hooks = hooks
-        self.pinned: Any | None = None  # ShellBundle of the pinned design
+        self.pinned: ShellBundle | None = None  # of the pinned design
         self.handle: Any | None = None
         self.cage: Any | None = None
         self.job: Job | None = None
@@ -201,7 +206,7 @@ class ComparePanel:
                 return
 
     # ----- display ------------------------------------------------------------------------------
-    def _set_pinned(self, bundle: Any) -> None:
+    def _set_pinned(self, bundle: ShellBundle) -> None:
         with self.lock:
             self.pinned = bundle
         self.title.content = f"**Pinned:** {md_text(design_text(bundle.result.design))}"

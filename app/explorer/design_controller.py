@@ -20,6 +20,7 @@ from paraspace.kinematics.workspace import WorkspaceResult
 
 from ..textsafe import md_text
 from ..urlstate import D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS
+from .numbers_panel import NumbersPanel
 from .panels import slider_span
 from .session import SessionContext
 
@@ -38,7 +39,7 @@ class DesignController:
         on_state_change: called after the design, voxel or joints changed the state (the link follows).
     """
 
-    def __init__(self, ctx: SessionContext, *, numbers: Any, update_mechanism: Callable[[], Any],
+    def __init__(self, ctx: SessionContext, *, numbers: NumbersPanel, update_mechanism: Callable[[], Any],
                  submit_workspace: Callable[[], None], on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.numbers = numbers

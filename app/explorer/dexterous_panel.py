@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import viser
@@ -20,6 +20,10 @@ from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
+from .session import SessionJobs
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    import trimesh
 
 #: Voxel edge of the total-orientation workspace (coarser than the shell: it costs a workspace
 #: test per sampled orientation per voxel).
@@ -32,7 +36,7 @@ class DexterousPanel:
 
     NODE = "/workspace/total_orientation"
 
-    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager, *, client: str,
+    def __init__(self, gui: viser.GuiApi, scene: viser.SceneApi, jobs: JobManager | SessionJobs, *, client: str,
                  get_input: Callable[[], tuple[Any, Any]], notify: Callable[[str, str], None]) -> None:
         self.scene = scene
         self.jobs = jobs
@@ -110,9 +114,9 @@ class DexterousPanel:
         self._remove()
         if res.voxels == 0:
             return
-        mesh = workspace_shell(res.result, max_faces=30000, color_by_z=False)
-        mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))
-        glb = glb_with_material(mesh.export(file_type="glb", include_normals=True), 0.85)
+        mesh: trimesh.Trimesh = workspace_shell(res.result, max_faces=30000, color_by_z=False)
+        mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))  # type: ignore[union-attr]
+        glb = glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), 0.85)
         self.handle = self.scene.add_glb(self.NODE, glb, cast_shadow=False, receive_shadow=False)
         self.hide.disabled = False
 

@@ -11,7 +11,7 @@ platform), the cone axes, the legs' diameter (0 = no interference test) and the 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, Literal, cast
 
 import viser
 
@@ -48,7 +48,8 @@ class JointsControls:
         try:
             joints = Joints(theta_u=float(self.u_angle.value) if self.u_on.value else None,
                             theta_s=float(self.s_angle.value) if self.s_on.value else None,
-                            cone_axis=str(self.axis.value), leg_diameter=float(self.diameter.value),
+                            cone_axis=cast(Literal["normal", "home"], str(self.axis.value)),  # checked by Joints
+                            leg_diameter=float(self.diameter.value),
                             clearance=float(self.clearance.value))
         except ParameterError as exc:
             return None, str(exc)

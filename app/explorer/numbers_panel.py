@@ -9,7 +9,7 @@ design that was not applied. :func:`numbers_markdown` builds the text from those
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,7 +17,12 @@ from .. import figures
 from ..numfmt import significant
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
-from .session import SessionContext
+from .session import SessionContext, ShellInfo
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.orientation import OrientationResult
+    from paraspace.kinematics.redundancy import Resolution
 
 
 def fmt(v: float | None, digits: int = 4) -> str:
@@ -32,7 +37,7 @@ def fmt(v: float | None, digits: int = 4) -> str:
     return significant(float(v), digits)
 
 
-def joints_text(j: Any) -> str:
+def joints_text(j: Joints) -> str:
     """One line for the joint options in force, e.g. "theta_U 45°, theta_S 40° (home axes), legs 10 + 1"."""
     parts = []
     if j.theta_u is not None:
@@ -46,24 +51,25 @@ def joints_text(j: Any) -> str:
     return ", ".join(parts)
 
 
-def numbers_markdown(s: ExplorerState, info: dict[str, Any], res: Any, inside: bool | None, ori: Any,
+def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
+                     ori: OrientationResult | None,
                      design_error: str | None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
-    :class:`~app.session.SessionContext`, empty before one), ``res`` the pose's IK, ``inside`` whether
+    :class:`~app.session.SessionContext`, ``None`` before one), ``res`` the pose's IK, ``inside`` whether
     the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of
     ``s``'s design, z0 and joints)."""
     lines: list[str] = []
     if not s.joints.is_default:
         lines.append(f"**Joints** {md_text(joints_text(s.joints))}  ")
-    if info:
-        m = info.get("measures")
-        kind = "preview" if info.get("preview") else "full"
-        lines.append(f"**Volume** {fmt(info['volume'], 4)} units³  ({kind}, h = {info['h']:g})")
-        br = info.get("bracket")
-        if br is not None and info["volume"] > 0:
+    if info is not None:
+        m = info.measures
+        kind = "preview" if info.preview else "full"
+        lines.append(f"**Volume** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
+        br = info.bracket
+        if br is not None and info.volume > 0:
             lines.append(f"certified: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
                          "(continuous workspace, units³)  ")
-        if info["volume"] == 0:
+        if info.volume == 0:
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                          "(psi, theta, phi) with this design.")
         elif m is not None:
@@ -82,8 +88,8 @@ def numbers_markdown(s: ExplorerState, info: dict[str, Any], res: Any, inside: b
                          f"component{'s' if m.components != 1 else ''})  ")
         else:
             lines.append("*measures: computing...*  ")
-        lines.append(f"**Compute** {info['seconds']:.2f} s workspace"
-                     + (f", {info['shell_seconds']:.2f} s shell" if info.get("shell_seconds") else ""))
+        lines.append(f"**Compute** {info.seconds:.2f} s workspace"
+                     + (f", {info.shell_seconds:.2f} s shell" if info.shell_seconds else ""))
     else:
         lines.append("*workspace: computing...*")
     if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design and ori.settings.joints == s.joints:
@@ -118,7 +124,7 @@ class NumbersPanel:
         if ctx.closed:  # the browser left: its GUI handles lead nowhere
             return
         with ctx.lock:
-            info = dict(ctx.ws_info)
+            info = ctx.ws_info  # immutable: replaced, never changed in place
             res = ctx.resolution
             inside = ctx.in_workspace
             ori = ctx.orientation

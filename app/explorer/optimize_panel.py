@@ -9,9 +9,10 @@ folder, ``client.gui``) and needs from its host only
 * ``get_design()``: the current design (the base of the run: fields that are not free stay);
 * ``load_design(design)``: called with a front design when the user loads it;
 * optionally ``cache`` (the explorer's sweep :class:`~kinematics.sweep.ResultCache`, so designs
-  studied elsewhere are not computed again), ``results`` (a server-wide mapping of finished runs
-  by their settings, so a shared link shows its front without recomputing while the server holds
-  it) and ``on_settings_change(query_dict)`` (to put the settings into the shareable link).
+  studied elsewhere are not computed again), ``results`` (a server-wide
+  :class:`~kinematics.bytecache.ByteLRU` of finished runs by their settings, so a shared link shows
+  its front without recomputing while the server holds it) and ``on_settings_change(query_dict)``
+  (to put the settings into the shareable link).
 
 The run's settings travel in the URL as the keys of :data:`URL_KEYS`
 (:meth:`OptimizePanel.query` / :meth:`OptimizePanel.apply_query`). Runs are bounded: at most
@@ -21,13 +22,13 @@ user typed is shown back only as plain text (viser text fields), never as markdo
 
 from __future__ import annotations
 
-import collections
 import threading
-from collections.abc import Callable, Mapping, MutableMapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import viser
 
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.optimize import DEFAULT_PARAMS, OptimizeSettings, optimize
 from paraspace.kinematics.orientation import OrientationSettings
@@ -35,8 +36,12 @@ from paraspace.kinematics.workspace import WorkspaceSettings
 
 from ..jobs import Job, JobManager, LimitExceeded
 from ..optimize_plots import front_figure
+from .session import SessionJobs
 
-__all__ = ["OptimizePanel", "URL_KEYS", "MAX_EVALUATIONS", "MIN_VOXEL", "PANEL_ORIENTATION", "ResultStore"]
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.sweep import ResultCache
+
+__all__ = ["OptimizePanel", "URL_KEYS", "MAX_EVALUATIONS", "MIN_VOXEL", "PANEL_ORIENTATION"]
 
 #: URL query keys of the run's settings (values as the panel's fields hold them).
 URL_KEYS: dict[str, str] = {"opt_params": "params", "opt_objectives": "objectives",
@@ -51,33 +56,6 @@ DEFAULTS: dict[str, Any] = {"params": ",".join(DEFAULT_PARAMS), "objectives": "v
                             "constraints": "", "population": 16, "generations": 10, "voxel": 6.0, "seed": 1}
 
 
-class ResultStore:
-    """A small thread-safe LRU of finished runs, keyed by ``OptimizeSettings.key()`` (server-wide)."""
-
-    def __init__(self, size: int = 16) -> None:
-        self.size = size
-        self._d: collections.OrderedDict[Any, dict] = collections.OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key: Any, default: Any = None) -> Any:
-        with self._lock:
-            if key in self._d:
-                self._d.move_to_end(key)
-                return self._d[key]
-            return default
-
-    def __setitem__(self, key: Any, value: dict) -> None:
-        with self._lock:
-            self._d[key] = value
-            self._d.move_to_end(key)
-            while len(self._d) > self.size:
-                self._d.popitem(last=False)
-
-    def __contains__(self, key: Any) -> bool:
-        with self._lock:
-            return key in self._d
-
-
 def _design_label(i: int, entry: dict, params: list[str], labels: list[str]) -> str:
     ps = ", ".join(f"{p}={entry['design'][p]:g}" for p in params)
     ms = ", ".join(f"{lb.lstrip('-')}={entry['measures'].get(lb.lstrip('-'), float('nan')):.4g}" for lb in labels)
@@ -87,14 +65,14 @@ def _design_label(i: int, entry: dict, params: list[str], labels: list[str]) -> 
 class OptimizePanel:
     """See the module docstring."""
 
-    def __init__(self, gui: Any, jobs: JobManager, *, get_design: Callable[[], Design],
-                 load_design: Callable[[Design], None], client: str = "local", cache: Any = None,
-                 results: MutableMapping[Any, dict] | None = None,
+    def __init__(self, gui: Any, jobs: JobManager | SessionJobs, *, get_design: Callable[[], Design],
+                 load_design: Callable[[Design], None], client: str = "local", cache: ResultCache | None = None,
+                 results: ByteLRU | None = None,
                  on_settings_change: Callable[[dict[str, str]], None] | None = None) -> None:
         self.gui, self.jobs, self.client = gui, jobs, client
         self.get_design, self.load_design = get_design, load_design
         self.cache = cache
-        self.results: Any = results if results is not None else ResultStore()
+        self.results = results if results is not None else ByteLRU(16 << 20, max_entries=16)
         self.on_settings_change = on_settings_change
         self.result: dict | None = None
         self.job: Job | None = None
@@ -240,7 +218,7 @@ class OptimizePanel:
             self.run_button.disabled = False
             self.progress.visible = False
             if job.status == "done":
-                self.results[key] = job.result
+                self.results.put(key, job.result)
                 self._show(job.result, cached=False)
             else:
                 self.status.value = f"{job.status}: {job.error or job.message}"

@@ -14,13 +14,14 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+from paraspace.kinematics.orientation import OrientationResult, OrientationSettings, orientation_workspace
 
 from .. import figures
 from ..jobs import Job, LimitExceeded
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
-from .numbers_panel import fmt
+from .numbers_panel import NumbersPanel, fmt
+from .plot_exports import PlotExports
 from .session import PROGRESS_INTERVAL, SessionContext
 
 
@@ -34,7 +35,7 @@ class OrientationController:
         on_state_change: called after z0 changed the state (the link follows).
     """
 
-    def __init__(self, ctx: SessionContext, *, numbers: Any, exports: Any,
+    def __init__(self, ctx: SessionContext, *, numbers: NumbersPanel, exports: PlotExports,
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.numbers = numbers
@@ -124,7 +125,7 @@ class OrientationController:
                 return
             self.ctx.panels.orientation_status.content = text
 
-    def _publish(self, gen: int, res: Any, spec: figures.FigureSpec) -> None:
+    def _publish(self, gen: int, res: OrientationResult, spec: figures.FigureSpec) -> None:
         fig = figures.to_plotly(spec)
         warning = figures.saturation_warning(res)
         ctx = self.ctx

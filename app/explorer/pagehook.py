@@ -140,9 +140,9 @@ class _PageEditor:
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._done: dict[int, tuple[bytes, bytes]] = {}  # id(original) -> (original, edited)
+        self._done: dict[int, tuple[bytes | bytearray, bytes]] = {}  # id(original) -> (original, edited)
 
-    def edited(self, body: bytes, gzipped: bool) -> bytes:
+    def edited(self, body: bytes | bytearray, gzipped: bool) -> bytes:
         with self._lock:
             hit = self._done.get(id(body))
             if hit is not None and hit[0] is body:
@@ -180,7 +180,8 @@ def _guarded(inner: Callable[[Any, Any], Response | None]) -> Callable[[Any, Any
             body = _EDITOR.edited(resp.body, gz)
             headers = Headers(resp.headers)  # a multidict: assignment appends, so delete first
             # websockets closes the connection after any plain HTTP answer: say so (keep-alive clients)
-            for name, value in (("Content-Length", str(len(body))), ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
+            for name, value in (("Content-Length", str(len(body))),
+                                ("Content-Security-Policy", CONTENT_SECURITY_POLICY),
                                 ("X-Content-Type-Options", "nosniff"), ("Referrer-Policy", "no-referrer"),
                                 ("Connection", "close")):
                 if name in headers:
@@ -242,4 +243,5 @@ def install() -> None:
                 kwargs["process_request"] = _guarded(inner)
             return real_server.serve(*args, **kwargs)
 
-        _infra.websockets = _Delegate(real, asyncio=_Delegate(real.asyncio, server=_Delegate(real_server, serve=serve)))
+        _infra.websockets = _Delegate(  # type: ignore[assignment]  # the module, wrapped
+            real, asyncio=_Delegate(real.asyncio, server=_Delegate(real_server, serve=serve)))

@@ -15,9 +15,12 @@ from typing import Any
 
 import viser
 
+from paraspace.kinematics.bytecache import ByteLRU
+
 from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
+from .session import SessionJobs
 
 #: Voxel edge of the comparison (the CLI's default).
 PAPER_VOXEL = 4.0
@@ -50,11 +53,11 @@ def comparison_markdown(out: dict[str, Any]) -> str:
 class PaperPanel:
     """The Paper tab of one browser (module docstring)."""
 
-    def __init__(self, gui: viser.GuiApi, jobs: JobManager, *, client: str, cache: dict,
+    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str, cache: ByteLRU,
                  notify: Callable[[str, str], None]) -> None:
         self.jobs = jobs
         self.client = client
-        self.cache = cache  # shared by every browser of the server: {voxel: result}
+        self.cache = cache  # shared by every browser of the server: voxel -> result
         self.notify = notify
         self.job: Job | None = None
         self.lock = threading.Lock()
@@ -84,14 +87,14 @@ class PaperPanel:
             return paper_comparison(PAPER_VOXEL, progress, cancel)
 
         def on_progress(job: Job) -> None:
-            self.progress.value = 100.0 * float(job.progress)
+            self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (viser's stub says read-only)
 
         def done(job: Job) -> None:
             self.stop.visible = False
             self.progress.visible = False
             self.run.disabled = False
             if job.status == "done":
-                self.cache[PAPER_VOXEL] = job.result
+                self.cache.put(PAPER_VOXEL, job.result)
                 self.result.content = comparison_markdown(job.result)
             elif job.status == "failed":
                 self.notify("Paper comparison failed", str(job.error))
@@ -107,7 +110,7 @@ class PaperPanel:
         self.run.disabled = True
         self.stop.visible = True
         self.progress.visible = True
-        self.progress.value = 0.0
+        self.progress.value = 0.0  # type: ignore[misc]  # settable (viser's stub says read-only)
 
     def cancel(self) -> None:
         """The Stop button."""

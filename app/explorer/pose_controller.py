@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import viser
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.pose import Pose
@@ -23,6 +24,7 @@ from paraspace.kinematics.workspace import reachable
 
 from ..numfmt import fixed
 from ..urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
+from .numbers_panel import NumbersPanel
 from .panels import slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene
 from .session import SessionContext
@@ -68,14 +70,14 @@ class PoseController:
         on_state_change: called after the pose or the carriages changed the state (the link follows).
     """
 
-    def __init__(self, ctx: SessionContext, *, numbers: Any, submit_workspace: Callable[[], None],
+    def __init__(self, ctx: SessionContext, *, numbers: NumbersPanel, submit_workspace: Callable[[], None],
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.numbers = numbers
         self.submit_workspace = submit_workspace
         self.on_state_change = on_state_change
         self.mechanism: MechanismScene
-        self.gizmo: Any
+        self.gizmo: viser.TransformControlsHandle
 
     def build_scene(self, res: Resolution) -> None:
         """Draw the mechanism at ``res`` and the drag gizmo (the caller holds ``client.atomic()``)."""
@@ -83,10 +85,11 @@ class PoseController:
         s = ctx.state
         scene = ctx.client.scene
         self.mechanism = MechanismScene(scene, s.design, s.pose, res.d, res.eta, res.leg_status)
+        lim_x, lim_y, lim_z = ((POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi) for k in ("x", "y", "z"))
         self.gizmo = scene.add_transform_controls(
             "/gizmo", scale=max(25.0, 0.9 * s.design.a), position=s.pose.position,
             wxyz=self.mechanism.platform.wxyz, depth_test=False, opacity=0.8,
-            translation_limits=tuple((POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi) for k in ("x", "y", "z")))
+            translation_limits=(lim_x, lim_y, lim_z))
 
     def wire(self) -> None:
         """Attach the Pose tab's controls and the gizmo."""
@@ -213,7 +216,7 @@ class PoseController:
                 eta = tuple(float(np.clip(round(v, 2), lo, hi)) + 0.0 for v in res.eta)
             else:
                 d, eta = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-            ctx.state = s.replace(carriages=mode, d=d, eta=eta)  # type: ignore[arg-type]
+            ctx.state = s.replace(carriages=mode, d=d, eta=eta)
         with ctx.programmatic():
             for i in range(3):
                 p.d[i].value = d[i]
@@ -232,6 +235,6 @@ class PoseController:
                 return
             d = tuple(float(h.value) for h in p.d)
             eta = tuple(float(h.value) for h in p.eta)
-            ctx.state = ctx.state.replace(d=d, eta=eta)  # type: ignore[arg-type]
+            ctx.state = ctx.state.replace(d=d, eta=eta)
         self.update_mechanism()
         self.on_state_change()

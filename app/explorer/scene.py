@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import trimesh
@@ -274,7 +274,8 @@ class MechanismScene:
                 lab.visible = False
                 continue
             lab.text = f"chain {k // 2 + 1} leg {k % 2 + 1}: {LEG_STATE_TEXT.get(st, st)}"
-            lab.position = tuple(float(v) for v in self._leg_mid[k])
+            mx, my, mz = (float(v) for v in self._leg_mid[k])
+            lab.position = (mx, my, mz)
             lab.visible = True
 
     def set_reachable(self, reachable: bool) -> None:
@@ -328,11 +329,11 @@ def glb_with_material(glb: bytes, opacity: float) -> bytes:
 
 def _z_color_lookup(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray] | None:
     """(sorted z, RGBA colors) of the mesh's vertices, when it has vertex colors."""
-    if mesh.visual.kind != "vertex" or len(mesh.vertices) == 0:
+    if mesh.visual.kind != "vertex" or len(mesh.vertices) == 0:  # type: ignore[union-attr]
         return None
     z = mesh.vertices[:, 2]
     order = np.argsort(z, kind="stable")
-    return z[order], np.asarray(mesh.visual.vertex_colors)[order]
+    return z[order], np.asarray(mesh.visual.vertex_colors)[order]  # type: ignore[union-attr]
 
 
 def cut_mesh(mesh: trimesh.Trimesh, z: float, keep: str) -> trimesh.Trimesh:
@@ -350,7 +351,7 @@ def cut_mesh(mesh: trimesh.Trimesh, z: float, keep: str) -> trimesh.Trimesh:
     if lut is not None and len(verts):
         zs, cols = lut
         rgba = np.stack([np.interp(verts[:, 2], zs, cols[:, k].astype(float)) for k in range(4)], axis=1)
-        out.visual.vertex_colors = np.round(rgba).astype(np.uint8)
+        out.visual.vertex_colors = np.round(rgba).astype(np.uint8)  # type: ignore[union-attr]
     return out
 
 
@@ -391,7 +392,7 @@ class ShellScene:
         if len(shown.faces) == 0:
             glb = b""
         else:
-            glb = glb_with_material(shown.export(file_type="glb", include_normals=True), opacity)
+            glb = glb_with_material(cast(bytes, shown.export(file_type="glb", include_normals=True)), opacity)
         if not glb:
             if self.handle is not None:
                 self.handle.visible = False

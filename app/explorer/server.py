@@ -37,15 +37,14 @@ import errno
 import logging
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import viser
 
+from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.workspace import warm_up
 
-from ..bytecache import ByteLRU
 from ..hostcheck import HostPolicy
 from ..jobs import JobManager
 from ..limits import MAX_VOXELS
@@ -56,13 +55,13 @@ from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
 from .numbers_panel import NumbersPanel
-from .optimize_panel import OptimizePanel, ResultStore
+from .optimize_panel import OptimizePanel
 from .orientation_controller import OrientationController
 from .panels import build_panels
 from .paper_panel import PaperPanel
 from .plot_exports import PlotExports
 from .pose_controller import PoseController, resolve
-from .scene import ShellScene
+from .scene import MechanismScene, ShellScene
 from .session import SessionContext
 from .share_controller import ShareController
 from .studies_controller import StudiesController
@@ -85,19 +84,11 @@ def _shared(name: str, doc: str) -> Any:
     return property(lambda self: getattr(self.ctx, name), doc=doc)
 
 
-def _forward(controller: str, fn: Callable) -> Callable:
-    """A session method that calls ``fn`` (a controller method) on the session's ``controller``."""
-    def method(self: ClientSession, *args: Any, **kw: Any) -> Any:
-        return getattr(getattr(self, controller), fn.__name__)(*args, **kw)
-    method.__name__ = fn.__name__
-    method.__doc__ = fn.__doc__
-    return method
-
-
 class ClientSession:
     """One browser's explorer: builds its panels and scene, its controllers around one shared
     :class:`~app.session.SessionContext`, wires them, and closes them (module docstring). The
-    attributes and methods below forward to the context and the controllers.
+    attributes below read the context; what the session does is done through its controllers
+    (``design_controller``, ``pose_controller``, ``workspace_controller``, ...).
 
     Args:
         explorer: the owning :class:`Explorer` (shared job manager and caches).
@@ -231,59 +222,16 @@ class ClientSession:
     job_client = _shared("job_client", "This session's client name in the job manager.")
     lock = _shared("lock", "The session's state lock.")
     url_messages = _shared("url_messages", "Problems of the link the page was opened with.")
-    _ws_info = _shared("ws_info", "The shell on screen: volume, h, preview?, seconds, measures.")
 
     @property
-    def mechanism(self) -> Any:
+    def mechanism(self) -> MechanismScene:
         """The mechanism in the scene (:class:`~app.scene.MechanismScene`)."""
         return self.pose_controller.mechanism
 
     @property
-    def gizmo(self) -> Any:
+    def gizmo(self) -> viser.TransformControlsHandle:
         """The drag gizmo on the platform."""
         return self.pose_controller.gizmo
-
-    @property
-    def _ws_gen(self) -> int:
-        return self.workspace_controller.gen
-
-    @property
-    def _ws_job(self) -> Any:
-        return self.workspace_controller.job
-
-    @property
-    def _sweep(self) -> dict | None:
-        return self.studies_controller.sweep
-
-    @property
-    def _surface(self) -> dict | None:
-        return self.studies_controller.surface
-
-    # ----- what the session does (its controllers) ------------------------------------------------
-    apply_design = _forward("design_controller", DesignController.apply_design)
-    load_design = _forward("design_controller", DesignController.load_design)
-    reset_design = _forward("design_controller", DesignController.reset_design)
-    update_mechanism = _forward("pose_controller", PoseController.update_mechanism)
-    submit_workspace = _forward("workspace_controller", WorkspaceController.submit)
-    stop_workspace = _forward("workspace_controller", WorkspaceController.stop)
-    submit_orientation = _forward("orientation_controller", OrientationController.submit)
-    set_camera = _forward("view_controller", ViewController.set_camera)
-    fit_view = _forward("view_controller", ViewController.fit_view)
-    recolour_shell = _forward("view_controller", ViewController.recolour_shell)
-    refresh_shell = _forward("view_controller", ViewController.refresh_shell)
-    run_sweep = _forward("studies_controller", StudiesController.run_sweep)
-    run_surface = _forward("studies_controller", StudiesController.run_surface)
-    download_plot = _forward("exports", PlotExports.download)
-    download_sweep_csv = _forward("studies_controller", StudiesController.download_sweep_csv)
-    download_surface_csv = _forward("studies_controller", StudiesController.download_surface_csv)
-    download_shell = _forward("share_controller", ShareController.download_shell)
-    download_measures = _forward("share_controller", ShareController.download_measures)
-    measures_document = _forward("share_controller", ShareController.measures_document)
-    query = _forward("share_controller", ShareController.query)
-    link = _forward("share_controller", ShareController.link)
-    schedule_url = _forward("share_controller", ShareController.schedule_url)
-    copy_link = _forward("share_controller", ShareController.copy_link)
-    programmatic = _forward("ctx", SessionContext.programmatic)
 
 
 # --------------------------------------------------------------------------------------------
@@ -312,14 +260,15 @@ class Explorer:
         self.server: viser.ViserServer | None = None
         self.sessions: dict[int, ClientSession] = {}
         self._sessions_lock = threading.Lock()
-        # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see app/bytecache.py
+        # bounded by bytes (a voxel-1 result holds ~25 MB of grid): see kinematics/bytecache.py
         self.shell_cache = ByteLRU(256 << 20)
         self.orientation_cache = ByteLRU(64 << 20)
         from paraspace.kinematics.sweep import ResultCache
 
         self.study_cache = ResultCache(max_entries=1024)
-        self.optimize_results = ResultStore(16)  # finished Optimize runs by settings (a shared link reopens them)
-        self.paper_results: dict = {}  # the Paper tab's comparison, by voxel (a few kB)
+        # finished Optimize runs by settings (a shared link reopens them)
+        self.optimize_results = ByteLRU(16 << 20, max_entries=16)
+        self.paper_results = ByteLRU(1 << 20)  # the Paper tab's comparison, by voxel (a few kB)
         self.warm = threading.Event()
         self.connect_seconds: list[float] = []
 

@@ -15,11 +15,12 @@ It holds state, not behaviour: what a panel does lives in its controller (``app/
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import viser
 
@@ -30,6 +31,12 @@ from ..textsafe import plain_text
 from ..urlstate import ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.bracket import VolumeBracket
+    from paraspace.kinematics.bytecache import ByteLRU
+    from paraspace.kinematics.measures import WorkspaceMeasures
+    from paraspace.kinematics.orientation import OrientationResult
+    from paraspace.kinematics.sweep import ResultCache
+
     from .panels import Panels
     from .scene import ShellScene
     from .workspace_job import ShellBundle
@@ -38,6 +45,44 @@ log = logging.getLogger(__name__)
 
 #: Smallest interval between two progress updates of one bar, seconds (see SessionContext.throttled).
 PROGRESS_INTERVAL = 0.25
+
+
+class ExplorerServices(Protocol):
+    """What a browser's session uses of the server that owns it (:class:`~app.explorer.Explorer`)."""
+
+    jobs: JobManager
+    server: viser.ViserServer | None
+    max_voxels: int
+    shell_cache: ByteLRU
+    orientation_cache: ByteLRU
+    study_cache: ResultCache
+
+
+@dataclasses.dataclass(frozen=True)
+class ShellInfo:
+    """The shell on screen, as the numbers panel shows it.
+
+    Attributes:
+        volume: the workspace volume, units³ (voxel count times ``h³``).
+        h: the voxel edge of the grid it was computed on.
+        preview: a coarse preview (``True``) or the full result.
+        seconds: the workspace computation time, s.
+        shell_seconds: the display shell's construction time, s.
+        gen: the workspace controller's generation that published it (a newer one supersedes it).
+        cached: it came from the shared result cache.
+        measures: its measures, ``None`` until they are computed.
+        bracket: its certified volume bracket, ``None`` unless asked for and computed.
+    """
+
+    volume: float
+    h: float
+    preview: bool
+    seconds: float
+    shell_seconds: float
+    gen: int
+    cached: bool
+    measures: WorkspaceMeasures | None = None
+    bracket: VolumeBracket | None = None
 
 
 class SessionJobs:
@@ -71,7 +116,7 @@ class SessionContext:
         messages: problems found in the link (shown on screen).
     """
 
-    def __init__(self, explorer: Any, client: viser.ClientHandle, state: ExplorerState,
+    def __init__(self, explorer: ExplorerServices, client: viser.ClientHandle, state: ExplorerState,
                  base_url: str, messages: list[str]) -> None:
         self.explorer = explorer
         self.client = client
@@ -93,10 +138,10 @@ class SessionContext:
         # what is on screen (written by the controllers, read by the numbers panel and the downloads)
         self.bundle: ShellBundle | None = None  # full result on screen
         self.preview: ShellBundle | None = None
-        self.ws_info: dict[str, Any] = {}  # the shell on screen: volume, h, preview?, seconds, measures...
+        self.ws_info: ShellInfo | None = None  # the shell on screen (None before one)
         self.resolution: Resolution | None = None
         self.in_workspace: bool | None = None
-        self.orientation: Any = None  # kinematics.orientation.OrientationResult on screen
+        self.orientation: OrientationResult | None = None  # the orientation maps on screen
         self.design_error: str | None = None
         self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
@@ -183,7 +228,7 @@ class SessionContext:
     def notify(self, title: str, body: str, color: str = "red") -> None:
         """A toast on this browser (``body`` shown as plain text)."""
         try:
-            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,
-                                         color=color)  # type: ignore[arg-type]
+            self.client.add_notification(title, plain_text(body, 600), auto_close_seconds=8.0,  # type: ignore[call-overload]
+                                         color=color)
         except Exception:  # noqa: BLE001
             log.debug("notification failed", exc_info=True)

@@ -23,6 +23,7 @@ from ..urlstate import encode_query
 from . import jsbridge
 from .optimize_panel import DEFAULTS as _OPT_DEFAULTS
 from .optimize_panel import URL_KEYS as _OPT_URL_KEYS
+from .optimize_panel import OptimizePanel
 from .session import SessionContext
 
 #: Debounce of the address-bar update, seconds.
@@ -48,7 +49,7 @@ class ShareController:
 
     def __init__(self, ctx: SessionContext) -> None:
         self.ctx = ctx
-        self.optimize: Any = None  # app.optimize_panel.OptimizePanel
+        self.optimize: OptimizePanel | None = None  # set when the Optimize tab is built
         self.last_query: str | None = None
         self._timer: threading.Timer | None = None
 

@@ -19,6 +19,7 @@ from paraspace.kinematics.orientation import OrientationSettings
 
 from .. import figures
 from ..jobs import Job, LimitExceeded
+from .plot_exports import PlotExports
 from .session import PROGRESS_INTERVAL, SessionContext
 from .workspace_job import ws_settings
 
@@ -31,7 +32,7 @@ class StudiesController:
         exports: the plots' PNG/SVG downloads (:class:`~app.plot_exports.PlotExports`).
     """
 
-    def __init__(self, ctx: SessionContext, *, exports: Any) -> None:
+    def __init__(self, ctx: SessionContext, *, exports: PlotExports) -> None:
         self.ctx = ctx
         self.exports = exports
         self.sweep_job: Job | None = None

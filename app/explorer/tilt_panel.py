@@ -18,6 +18,7 @@ import viser
 from ..jobs import Job, JobManager, LimitExceeded
 from ..textsafe import md_text
 from .lazy_plot import LazyPlot
+from .session import SessionJobs
 
 
 def tilt_polar_figure(report: Any) -> Any:
@@ -33,8 +34,9 @@ def tilt_polar_figure(report: Any) -> Any:
                                   line={"color": "#1f77b4"}, marker={"size": 4}))
     every = report.min_max_tilt
     if every is not None:
-        fig.add_trace(go.Scatterpolar(r=[every] * len(az), theta=az, mode="lines", name=f"every direction: {every:.1f}°",
-                                      line={"color": "#d62728", "dash": "dash"}, hoverinfo="skip"))
+        fig.add_trace(go.Scatterpolar(r=[every] * len(az), theta=az, mode="lines",
+                                      name=f"every direction: {every:.1f}°", line={"color": "#d62728", "dash": "dash"},
+                                      hoverinfo="skip"))
     tmin, tmax = report.torsion_min, report.torsion_max
     tors = "not reachable" if tmin is None else f"{tmin:.1f}° .. {tmax:.1f}°"
     sat = " (scan limit)" if any(report.torsion_saturated) else ""
@@ -51,7 +53,7 @@ def tilt_polar_figure(report: Any) -> Any:
 class TiltPanel:
     """The button and the polar plot (module docstring)."""
 
-    def __init__(self, gui: viser.GuiApi, jobs: JobManager, *, client: str,
+    def __init__(self, gui: viser.GuiApi, jobs: JobManager | SessionJobs, *, client: str,
                  get_input: Callable[[], tuple[Any, Any, Any]], notify: Callable[[str, str], None]) -> None:
         self.jobs = jobs
         self.client = client
@@ -88,7 +90,8 @@ class TiltPanel:
                 self.plot.visible = True
                 every = rep.min_max_tilt
                 self.text.content = md_text(
-                    f"tilt in every direction: {every:.1f} deg; torsion {rep.torsion_min:.1f} .. {rep.torsion_max:.1f} deg"
+                    f"tilt in every direction: {every:.1f} deg; "
+                    f"torsion {rep.torsion_min:.1f} .. {rep.torsion_max:.1f} deg"
                     if every is not None else "tilt: not reachable in some directions")
             elif job.status == "failed":
                 self.notify("Tilt and torsion failed", str(job.error))

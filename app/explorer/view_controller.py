@@ -135,12 +135,14 @@ class ViewController:
         ctx = self.ctx
         with ctx.view_lock:
             s = ctx.state
+            assert ctx.shell is not None  # built before the controllers are wired
             with ctx.client.atomic():
                 size = ctx.shell.refresh(s.opacity, s.cut, s.cut_z, s.cut_keep)
             self.show_payload(size)
 
     def show_payload(self, size: int) -> None:
         """Say how large the shell on screen is (faces, GLB bytes)."""
+        assert self.ctx.shell is not None  # built before the controllers are wired
         self.ctx.panels.payload.content = (f"shell on screen: {self.ctx.shell.last_faces:,} faces, "
                                            f"{size / 1e6:.2f} MB (GLB)")
 
@@ -150,6 +152,7 @@ class ViewController:
             if ctx.closed:
                 return
             s = ctx.state
+            assert ctx.shell is not None  # built before the controllers are wired
             with ctx.client.atomic():
                 ctx.shell.show(mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
 
@@ -164,6 +167,7 @@ class ViewController:
         mode = str(ctx.panels.shell_colour.value)
         if mode == COLOUR_MODES[0]:
             self._show_mesh(bundle.mesh)
+            assert ctx.shell is not None  # built before the controllers are wired
             zr = ctx.shell.z_range()
             if zr is not None:
                 ctx.panels.legend.show_z_range(*zr)
@@ -202,7 +206,7 @@ class ViewController:
             labels = binding_labels(s.design, bundle.result.settings, mesh.vertices, mesh.vertex_normals,
                                     bundle.result.grid.h)
             out = mesh.copy()
-            out.visual.vertex_colors = np.array([LIMIT_COLOURS[x] + (255,) for x in labels], np.uint8)
+            out.visual.vertex_colors = np.array([LIMIT_COLOURS[x] + (255,) for x in labels], np.uint8)  # type: ignore[union-attr]
             counts = {k: labels.count(k) for k in LIMIT_COLOURS if labels.count(k)}
             return out, counts
 

@@ -12,8 +12,8 @@ computes, the one on screen is marked stale. A finished workspace starts the ori
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
-from typing import Any
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
@@ -22,7 +22,10 @@ from ..jobs import Job, LimitExceeded
 from ..limits import check_workspace_grid
 from ..textsafe import md_text
 from .legend import colorbar_image
-from .session import PROGRESS_INTERVAL, SessionContext
+from .numbers_panel import NumbersPanel
+from .orientation_controller import OrientationController
+from .session import PROGRESS_INTERVAL, SessionContext, ShellInfo
+from .view_controller import ViewController
 from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
 
 
@@ -41,7 +44,8 @@ class WorkspaceController:
         on_state_change: called after Stop changed the state (the mechanism and the link follow).
     """
 
-    def __init__(self, ctx: SessionContext, *, orientation: Any, numbers: Any, view: Any,
+    def __init__(self, ctx: SessionContext, *, orientation: OrientationController, numbers: NumbersPanel,
+                 view: ViewController,
                  on_measures: Callable[[], None], show_controls: Callable[[WorkspaceResult], None],
                  on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
@@ -93,8 +97,8 @@ class WorkspaceController:
                            show_measures=lambda b, preview: self.publish_measures(gen, b, preview))
         try:
             job = ctx.jobs.submit(fn, kind="workspace", client=ctx.job_client, supersede=True,
-                                  on_progress=lambda j, g=gen: self._on_progress(g, j),
-                                  on_done=lambda j, g=gen: self._on_done(g, j))
+                                  on_progress=functools.partial(self._on_progress, gen),
+                                  on_done=functools.partial(self._on_done, gen))
         except LimitExceeded as exc:
             self.set_status(gen, f"not started: {md_text(exc)}", 0.0, running=False)
             return
@@ -130,12 +134,14 @@ class WorkspaceController:
         """The shell on screen belongs to an older state while a new one computes: say so on it and
         in the legend (cleared when the new shell is shown)."""
         ctx = self.ctx
+        shell = ctx.shell
+        assert shell is not None  # built before the controllers are wired
         with ctx.view_lock:
-            if ctx.closed or ctx.shell.source is None:
+            if ctx.closed or shell.source is None:
                 return
             with ctx.client.atomic():
-                ctx.shell.set_stale("previous result - recomputing")
-                zr = ctx.shell.z_range()
+                shell.set_stale("previous result - recomputing")
+                zr = shell.z_range()
                 if zr is not None:
                     ctx.panels.legend.show_z_range(*zr, stale=True)
 
@@ -187,14 +193,16 @@ class WorkspaceController:
                 if gen != self.gen or ctx.closed:
                     return False
                 s = ctx.state
+            shell = ctx.shell
+            assert shell is not None  # built before the controllers are wired
             with ctx.client.atomic():
-                size = ctx.shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
-                zr = ctx.shell.z_range()
+                size = shell.show(bundle.mesh, s.opacity, s.cut, s.cut_z, s.cut_keep)
+                zr = shell.z_range()
                 if zr is not None:
                     colorbar_image(*zr)  # drawn now (cached), so the writes below follow the check at once
                 if ctx.closed:  # the browser left while the shell was being encoded and sent
                     return False
-                ctx.shell.set_stale(None)
+                shell.set_stale(None)
                 if zr is not None:
                     ctx.panels.legend.show_z_range(*zr)
             with ctx.lock:
@@ -202,9 +210,9 @@ class WorkspaceController:
                     ctx.preview = bundle
                 else:
                     ctx.bundle = bundle
-                ctx.ws_info = {"volume": bundle.result.volume, "h": bundle.result.grid.h, "preview": preview,
-                               "seconds": bundle.result.compute_seconds, "shell_seconds": bundle.shell_seconds,
-                               "measures": None, "gen": gen, "cached": from_cache}
+                ctx.ws_info = ShellInfo(volume=bundle.result.volume, h=bundle.result.grid.h, preview=preview,
+                                        seconds=bundle.result.compute_seconds, shell_seconds=bundle.shell_seconds,
+                                        gen=gen, cached=from_cache)
                 first = not self._framed
                 self._framed = True
             if first:  # the first shell: frame it (later shells keep the user's camera)
@@ -222,10 +230,9 @@ class WorkspaceController:
         with ctx.lock:
             if gen != self.gen or ctx.closed:
                 return
-            if ctx.ws_info.get("preview", False) != preview:
+            if ctx.ws_info is None or ctx.ws_info.preview != preview:
                 return
-            ctx.ws_info["measures"] = bundle.measures
-            ctx.ws_info["bracket"] = bundle.bracket
+            ctx.ws_info = dataclasses.replace(ctx.ws_info, measures=bundle.measures, bracket=bundle.bracket)
         self.numbers.render()
         if not preview:
             self.on_measures()
@@ -255,6 +262,7 @@ class WorkspaceController:
             self.show_controls(r)
         if ctx.closed:
             return
+        assert ctx.shell is not None  # built before the controllers are wired
         ctx.shell.set_stale(None)
         zr = ctx.shell.z_range()
         if zr is not None:

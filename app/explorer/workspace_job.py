@@ -15,12 +15,19 @@ import dataclasses
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 from ..urlstate import ExplorerState
+
+if TYPE_CHECKING:  # pragma: no cover - types only (the modules are imported where they are used)
+    import trimesh
+
+    from paraspace.kinematics.bracket import VolumeBracket
+    from paraspace.kinematics.bytecache import ByteLRU
+    from paraspace.kinematics.measures import WorkspaceMeasures
 
 #: Voxel edge of the coarse preview shell.
 PREVIEW_VOXEL = 6.0
@@ -44,13 +51,13 @@ class ShellBundle:
     """A computed workspace and what is derived from it (immutable once built)."""
 
     result: WorkspaceResult
-    mesh: Any  # trimesh.Trimesh (decimated shell, colored by z)
-    measures: Any = None  # kinematics.measures.WorkspaceMeasures
+    mesh: trimesh.Trimesh  # decimated shell, colored by z
+    measures: WorkspaceMeasures | None = None
     shell_seconds: float = 0.0
-    bracket: Any = None  # kinematics.bracket.VolumeBracket (certified volume_inner <= V <= volume_outer)
+    bracket: VolumeBracket | None = None  # certified volume_inner <= V <= volume_outer
 
 
-def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
+def make_shell(result: WorkspaceResult, max_faces: int) -> trimesh.Trimesh:
     """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
     (block re-mesh), smoothed for display (no voxel terracing) and scaled to the voxel volume
     (:func:`kinematics.shell.smooth_for_display`): the final scaling sets the volume, so the re-mesh
@@ -61,14 +68,14 @@ def make_shell(result: WorkspaceResult, max_faces: int) -> Any:
     return smooth_for_display(mesh, volume=result.volume)
 
 
-def measure(result: WorkspaceResult) -> Any:
+def measure(result: WorkspaceResult) -> WorkspaceMeasures:
     """The numbers panel's measures of ``result`` (:func:`kinematics.measures.measure_workspace`)."""
     from paraspace.kinematics.measures import measure_workspace
 
     return measure_workspace(result)
 
 
-def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> Any:
+def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> VolumeBracket | None:
     """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
     bracket does not model). Raises :class:`~kinematics.progress.Cancelled` once ``cancel`` is set."""
     from paraspace.kinematics.bracket import bracket_of
@@ -88,13 +95,13 @@ def ws_key(s: ExplorerState, voxel: float) -> tuple:
     return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel), s.joints.key())
 
 
-def cached_bundle(cache: Any, state: ExplorerState) -> ShellBundle | None:
+def cached_bundle(cache: ByteLRU, state: ExplorerState) -> ShellBundle | None:
     """The measured bundle of ``state`` (at its own voxel edge) if the cache holds one."""
     hit = cache.get(ws_key(state, state.voxel))
     return hit if hit is not None and hit.measures is not None else None
 
 
-def compute_bundle(cache: Any, state: ExplorerState, progress: Progress, cancel: threading.Event) -> ShellBundle:
+def compute_bundle(cache: ByteLRU, state: ExplorerState, progress: Progress, cancel: threading.Event) -> ShellBundle:
     """Compute, mesh and measure the workspace of ``state`` in one go and cache it (the Compare
     tab's pinned design)."""
     res = compute_workspace(state.design, ws_settings(state, state.voxel), progress=progress, cancel=cancel)
@@ -110,7 +117,7 @@ def wants_preview(s: ExplorerState, voxel: float) -> bool:
     return voxel < PREVIEW_VOXEL and (voxel < PREVIEW_BELOW or s.joints.min_distance > 0.0)
 
 
-def workspace_job(s: ExplorerState, cache: Any, show: Callable[[ShellBundle, bool, float], Any],
+def workspace_job(s: ExplorerState, cache: ByteLRU, show: Callable[[ShellBundle, bool, float], Any],
                   show_measures: Callable[[ShellBundle, bool], None]) -> JobFn:
     """The job function of the workspace of ``s``: when the full result takes a while
     (:func:`wants_preview`), the preview shell (cached) is computed and shown first

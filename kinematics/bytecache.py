@@ -1,11 +1,15 @@
-"""Memory accounting for the server's caches: every cache is bounded by bytes, not entries.
+"""The one in-memory cache: least-recently-used, bounded by the bytes of its values.
 
-:func:`nbytes` estimates what an object holds (numpy buffers, bytes, meshes, and the containers and
-dataclasses around them); :class:`ByteLRU` is a thread-safe least-recently-used map that evicts
-until its total is at most ``max_bytes`` (a single value larger than the budget is not kept).
-The explorer's shell and orientation caches, the API's result and shell-file caches and the job
-history's results all use them, so the server's memory is the sum of stated budgets plus the jobs
-running at the moment (README, "Security model and limits").
+Definition: after every ``put``, the least recently used entries are evicted until
+``sum(nbytes(v)) <= max_bytes`` (and, when given, ``len <= max_entries``); a single value larger
+than the budget is not kept. :func:`nbytes` estimates what an object holds (numpy buffers, bytes,
+meshes, and the containers and dataclasses around them).
+
+Every cache of the package is a :class:`ByteLRU`: the explorer's shell, orientation, Optimize-run
+and Paper caches, the API's result and shell-file caches, the job history's results (through
+:func:`nbytes`) and the memory side of :class:`kinematics.sweep.ResultCache`, so the server's memory
+is the sum of stated budgets plus the jobs running at the moment (README, "Security model and
+limits").
 """
 
 from __future__ import annotations
@@ -56,20 +60,24 @@ def nbytes(obj: Any, _seen: set[int] | None = None) -> int:
 
 
 class ByteLRU:
-    """A least-recently-used map bounded by the estimated bytes of its values.
+    """A thread-safe least-recently-used map bounded by the estimated bytes of its values.
 
     Args:
         max_bytes: budget; after each ``put`` the oldest entries are evicted until the total is
             at most this. A value larger than the budget is not stored (``put`` returns False).
         on_evict: called with each evicted value (outside the lock).
         size: how to measure a value (default :func:`nbytes`).
+        max_entries: also keep at most this many entries (``None``: no count limit).
     """
 
     def __init__(self, max_bytes: int, on_evict: Callable[[Any], None] | None = None,
-                 size: Callable[[Any], int] = nbytes) -> None:
+                 size: Callable[[Any], int] = nbytes, *, max_entries: int | None = None) -> None:
         if max_bytes < 0:
             raise ValueError(f"max_bytes = {max_bytes!r} is invalid: valid range >= 0")
+        if max_entries is not None and max_entries < 0:
+            raise ValueError(f"max_entries = {max_entries!r} is invalid: valid range >= 0 (or None)")
         self.max_bytes = int(max_bytes)
+        self.max_entries = max_entries
         self._on_evict = on_evict
         self._size = size
         self._lock = threading.Lock()
@@ -95,11 +103,12 @@ class ByteLRU:
                 self._total -= old[1]
                 if old[0] is not value:
                     evicted.append(old[0])
-            stored = n <= self.max_bytes
+            stored = n <= self.max_bytes and self.max_entries != 0
             if stored:
                 self._data[key] = (value, n)
                 self._total += n
-            while self._total > self.max_bytes and self._data:
+            while self._data and (self._total > self.max_bytes
+                                  or (self.max_entries is not None and len(self._data) > self.max_entries)):
                 _, (v, m) = self._data.popitem(last=False)
                 self._total -= m
                 evicted.append(v)
