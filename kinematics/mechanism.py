@@ -395,7 +395,7 @@ def carriage_samples(chain: Chain, samples: int) -> tuple[np.ndarray, np.ndarray
 
 
 def reachable_brute_force(mech: Mechanism, points: Sequence[float] | np.ndarray, rotation: np.ndarray,
-                          samples: int = 41) -> np.ndarray:
+                          samples: int = 41) -> np.ndarray | bool:
     """The plain oracle: some carriage value on a grid of ``samples`` per joint puts every leg of
     each chain in its length range (and inside its cones, when given), at each of ``points``
     (``(N, 3)``, or one point) with the platform rotation ``rotation``. Returns a bool array
@@ -412,10 +412,13 @@ def reachable_brute_force(mech: Mechanism, points: Sequence[float] | np.ndarray,
         _, bases, rots = carriage_samples(chain, samples)
         lo = np.array([leg.length[0] for leg in chain.legs]) - 1e-9
         hi = np.array([leg.length[1] for leg in chain.legs]) + 1e-9
-        u_axes = [None if leg.u_cone is None else (rots @ np.asarray(leg.u_cone.axis),
-                                                   math.cos(math.radians(leg.u_cone.angle))) for leg in chain.legs]
-        s_axes = [None if leg.s_cone is None else (rotation @ np.asarray(leg.s_cone.axis),
-                                                   math.cos(math.radians(leg.s_cone.angle))) for leg in chain.legs]
+        Cone_ = tuple[np.ndarray, float] | None
+        u_axes: list[Cone_] = [None if leg.u_cone is None else (rots @ np.asarray(leg.u_cone.axis),
+                                                               math.cos(math.radians(leg.u_cone.angle)))
+                               for leg in chain.legs]
+        s_axes: list[Cone_] = [None if leg.s_cone is None else (rotation @ np.asarray(leg.s_cone.axis),
+                                                               math.cos(math.radians(leg.s_cone.angle)))
+                               for leg in chain.legs]
         for p_i, p in enumerate(pts):
             if not ok_all[p_i]:
                 continue
@@ -423,11 +426,10 @@ def reachable_brute_force(mech: Mechanism, points: Sequence[float] | np.ndarray,
             length = np.linalg.norm(v, axis=2)
             ok = np.all((length >= lo) & (length <= hi), axis=1)
             for j in range(n):
-                if u_axes[j] is not None:
-                    axis, cos_t = u_axes[j]
-                    ok &= np.einsum("kc,kc->k", axis, v[:, j]) >= length[:, j] * cos_t - 1e-9
-                if s_axes[j] is not None:
-                    axis, cos_t = s_axes[j]
-                    ok &= v[:, j] @ axis >= length[:, j] * cos_t - 1e-9
+                u_cone, s_cone = u_axes[j], s_axes[j]
+                if u_cone is not None:
+                    ok &= np.einsum("kc,kc->k", u_cone[0], v[:, j]) >= length[:, j] * u_cone[1] - 1e-9
+                if s_cone is not None:
+                    ok &= v[:, j] @ s_cone[0] >= length[:, j] * s_cone[1] - 1e-9
             ok_all[p_i] = bool(ok.any())
     return bool(ok_all[0]) if single else ok_all
