@@ -37,6 +37,7 @@ from typing import Any, NoReturn
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
 
+from .fileout import write_atomic
 from .numfmt import fixed
 from .progressline import progress_line
 
@@ -192,8 +193,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         from paraspace.kinematics.shell import export_shell, workspace_shell
 
         mesh = workspace_shell(result)
-        with open(ns.export, "wb") as fh:
-            fh.write(export_shell(mesh, fmt))
+        write_atomic(ns.export, export_shell(mesh, fmt))
         out["export"] = {"file": ns.export, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
     if ns.json:
         _emit(out)
@@ -364,8 +364,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     rows = [_with_value(r, ns.param, ns.param2) for r in rows]
     failed = [r for r in rows if r.get("ok") is False]
     if ns.csv:
-        with open(ns.csv, "w", newline="") as fh:
-            fh.write(rows_to_csv(rows))
+        write_atomic(ns.csv, rows_to_csv(rows))
     if ns.plot:
         plot_sweep(rows, ns.param, ns.param2, ns.plot, ns.measure, design, settings.voxel)
     if ns.json:
@@ -439,9 +438,7 @@ def plot_sweep(rows: Sequence[dict], param: str, param2: str | None, path: str, 
         cur2 = (float(getattr(design, param)), float(getattr(design, param2))) if design is not None else None
         spec = figures.study_spec(xs, ys, grid, param_x=param, param_y=param2, measure=measure, current=cur2,
                                   voxel=voxel)
-    data = figures.export(spec, fmt)
-    with open(path, "wb") as fh:
-        fh.write(data)
+    write_atomic(path, figures.export(spec, fmt))
 
 
 def cmd_ik(ns: argparse.Namespace) -> int:
@@ -565,8 +562,7 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
     from paraspace.app.optimize_plots import front_csv, front_png
 
     if ns.csv:
-        with open(ns.csv, "w", newline="") as fh:
-            fh.write(front_csv(result))
+        write_atomic(ns.csv, front_csv(result))
     if ns.plot:
         front_png(result, ns.plot)
     if ns.json:

@@ -15,15 +15,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import pathlib
 import sys
-import tempfile
 from typing import Any
 
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.mechanism import MAX_TEXT_BYTES, Mechanism, dumps_mechanism, loads_mechanism
 from paraspace.kinematics.presets import PRESETS, preset
+
+from .fileout import write_atomic
 
 __all__ = ["add_mechanism_parser", "resolve_mechanism"]
 
@@ -56,20 +56,6 @@ def resolve_mechanism(source: str, params: list[str] | None = None) -> Mechanism
     return loads_mechanism(path.read_bytes())
 
 
-def _write_atomic(path: str, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename, so a
-    failed write (a full disk) leaves no half-written file; errors name the file."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".paraspace-", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
 def cmd_mechanism(ns: argparse.Namespace) -> int:
     if ns.action == "presets":
         for p in PRESETS.values():
@@ -85,7 +71,7 @@ def cmd_mechanism(ns: argparse.Namespace) -> int:
     mech = resolve_mechanism(ns.source, ns.param)
     text = json.dumps(mech.to_dict(), indent=2) + "\n" if ns.json else dumps_mechanism(mech)
     if ns.action == "export" and ns.output:
-        _write_atomic(ns.output, text)
+        write_atomic(ns.output, text)
         sys.stderr.write(f"wrote {ns.output}\n")
     else:
         sys.stdout.write(text)

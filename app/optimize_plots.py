@@ -16,8 +16,11 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 from collections.abc import Sequence
 from typing import Any
+
+from .fileout import write_atomic
 
 __all__ = ["front_rows", "front_csv", "front_png", "front_figure", "objective_labels"]
 
@@ -110,8 +113,10 @@ def front_png(result: dict, path: str, *, highlight: dict | None = None) -> None
     ax.set_title(f"{len(front)} Pareto-optimal designs over {', '.join(result['settings']['params'])}"
                  + (f"; hypervolume {hv[-1]:.3g}" if hv else ""), fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, format=os.path.splitext(os.fspath(path))[1].lstrip(".").lower() or "png")
     plt.close(fig)
+    write_atomic(path, buf.getvalue())
 
 
 def front_figure(result: dict, *, selected: int | None = None) -> Any:

@@ -41,6 +41,14 @@ def _poll(http: httpx.Client, job_id: str, timeout: float = 60.0) -> dict:
         time.sleep(0.02)
 
 
+def _wait_running(http: httpx.Client, job_id: str, timeout: float = 120.0) -> None:
+    """Until the job has started (its worker is computing), or fail saying what was awaited."""
+    deadline = time.monotonic() + timeout
+    while http.get(f"{V1}/jobs/{job_id}").json()["status"] == "queued":
+        assert time.monotonic() < deadline, f"job {job_id} did not start within {timeout:g} s"
+        time.sleep(0.02)
+
+
 def test_health_and_docs(http):
     r = http.get(f"{V1}/health")
     assert r.status_code == 200
@@ -222,8 +230,10 @@ def test_jobs_cancel_and_unknown(http):
     r = http.post(f"{V1}/workspace", json={"settings": {"voxel": 2.0, "eta_step": 0.02, "method": "dense"}})
     assert r.status_code == 202, r.text
     job_id = r.json()["job_id"]
+    _wait_running(http, job_id)
     d = http.delete(f"{V1}/jobs/{job_id}")
     assert d.status_code == 200 and d.json()["cancelled"] is True
+    assert d.json()["status"] == "cancelled", "the DELETE answer reports the job as it ends, not 'running'"
     st = _poll(http, job_id)
     assert st["status"] == "cancelled"
     res = http.get(f"{V1}/jobs/{job_id}/result")

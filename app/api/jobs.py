@@ -27,14 +27,22 @@ async def job_status(job_id: str, request: Request, ctx: Ctx) -> dict[str, Any]:
     return jsonable({**job.to_dict(), "links": ctx.job_links(job)})
 
 
+#: Longest wait of a DELETE for the job to reach its final status.
+CANCEL_WAIT_SECONDS = 10.0
+
+
 @router.delete("/jobs/{job_id}", summary="Cancel a job")
 def job_cancel(job_id: str, request: Request, ctx: Ctx) -> dict[str, Any]:
     """Only the client that submitted a job may cancel it; cancelling a finished job is a no-op
-    (``cancelled: false``)."""
+    (``cancelled: false``). A running job stops at its next cancellation check: the answer waits
+    for that (at most :data:`CANCEL_WAIT_SECONDS`), so its ``status`` is ``cancelled``; a job
+    still stopping after that answers ``running`` with the message ``cancel requested``."""
     job = ctx.api_job(job_id)
     if job.client != ctx.client_of(request):
         raise ApiError(403, f"job {job_id} belongs to another client; only its submitter may cancel it")
     ok = ctx.jobs.cancel(job_id)
+    if ok:
+        job.wait(CANCEL_WAIT_SECONDS)
     return jsonable({"cancelled": ok, **job.to_dict()})
 
 
