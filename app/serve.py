@@ -294,6 +294,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
             exp.stop()
         raise
     running = Running(jobs=jobs, api=api, explorer=exp)
+    threading.Thread(target=_warm_up, args=(quiet,), name="paraspace-warmup-api", daemon=True).start()
     if not quiet:
         if exp is not None:
             print(f"paraspace explorer: {running.explorer_url}", flush=True)
@@ -304,6 +305,20 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
     if block:
         running.wait()
     return running
+
+
+def _warm_up(quiet: bool) -> None:
+    """Compile every kernel a request can reach (kinematics/warmup.py), then say so."""
+    from paraspace.kinematics.warmup import warm_up
+
+    try:
+        seconds = warm_up()
+    except Exception:  # noqa: BLE001 - a failed warm-up leaves the first requests slower, not broken
+        log.exception("warm-up failed")
+        return
+    if not quiet:
+        print(f"paraspace: warm-up done ({seconds:.1f} s): every request now answers without compiling",
+              flush=True)
 
 
 def _bracket(host: str) -> str:

@@ -43,7 +43,7 @@ import viser
 
 from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design
-from paraspace.kinematics.workspace import warm_up
+from paraspace.kinematics.warmup import warm_up
 
 from ..hostcheck import HostPolicy
 from ..jobs import JobManager

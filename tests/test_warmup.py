@@ -1,0 +1,69 @@
+"""No request compiles (trust item 9): after kinematics.warmup.warm_up(), requests over real HTTP
+that reach every engine option (joint cones about both axes, leg interference, the bracket, the
+dense engine, orientation, inverse kinematics) add no compiled signature to any numba kernel."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import time
+
+import httpx
+from numba.core.registry import CPUDispatcher
+
+import paraspace.kinematics as core
+from paraspace.app.api import API_PREFIX, create_api
+from paraspace.app.jobs import JobManager
+from paraspace.app.serve import start_api
+from paraspace.kinematics.warmup import warm_up
+
+
+def _compiled() -> dict[str, int]:
+    out: dict[str, int] = {}
+    for info in pkgutil.iter_modules(core.__path__):
+        mod = importlib.import_module(f"paraspace.kinematics.{info.name}")
+        for name, obj in vars(mod).items():
+            if isinstance(obj, CPUDispatcher):
+                out[f"{info.name}.{name}"] = len(obj.overloads)
+    return out
+
+
+def _wait(http: httpx.Client, job_id: str) -> dict:
+    deadline = time.monotonic() + 300
+    while True:
+        st = http.get(f"{API_PREFIX}/jobs/{job_id}").json()
+        if st["status"] in ("done", "failed", "cancelled"):
+            return st
+        assert time.monotonic() < deadline, f"job {job_id} did not finish within 300 s: {st}"
+        time.sleep(0.05)
+
+
+def test_requests_after_warm_up_compile_nothing() -> None:
+    warm_up()
+    before = _compiled()
+    assert before["workspace._points_kernel"] >= 1, "the warm-up ran the kernels"
+    jobs = JobManager(max_workers=1)
+    srv = start_api(create_api(jobs), "127.0.0.1", 0)
+    try:
+        with httpx.Client(base_url=srv.url, timeout=120) as http:
+            for joints in ({"theta_u": 30, "theta_s": 40, "cone_axis": "home"}, {"theta_u": 45},
+                           {"leg_diameter": 10, "clearance": 1}):
+                r = http.post(f"{API_PREFIX}/ik", json={"pose": {"z": 130, "psi": 5}, "joints": joints})
+                assert r.status_code == 200, r.text
+                bracket = "leg_diameter" not in joints  # the bracket does not model interference
+                r = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 12, "joints": joints,
+                                                                             "bracket": bracket, "bracket_refine": 0}})
+                assert r.status_code == 202, r.text
+                assert _wait(http, r.json()["job_id"])["status"] == "done"
+            r = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 12, "method": "dense",
+                                                                         "orientation": {"psi": 10}}})
+            assert _wait(http, r.json()["job_id"])["status"] == "done"
+            r = http.post(f"{API_PREFIX}/orientation", json={"settings": {"angle_step": 15, "position_step": 20}})
+            assert r.status_code == 202, r.text
+            assert _wait(http, r.json()["job_id"])["status"] == "done"
+    finally:
+        jobs.shutdown(wait=False)
+        srv.stop()
+    after = _compiled()
+    grown = {k: (before.get(k, 0), v) for k, v in after.items() if v > before.get(k, 0)}
+    assert not grown, f"kernels compiled inside a request (before, after): {grown}"
