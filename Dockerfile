@@ -1,7 +1,7 @@
 # paraspace: the explorer (viser, port 8080) and the REST API (FastAPI, port 8081) in one container.
 #
 #   docker build -t paraspace .
-#   docker run --rm -p 8080:8080 -p 8081:8081 paraspace
+#   docker run --rm -p 127.0.0.1:8080:8080 -p 127.0.0.1:8081:8081 paraspace   (loopback only: no authentication)
 #   open http://localhost:8080 (explorer) and http://localhost:8081/docs (API)
 #
 # Everything comes from the package registries (the base image, PyPI): no other downloads.
