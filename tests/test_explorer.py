@@ -579,7 +579,9 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
     s = b.session
     wait_idle(explorer, s)
     b.set(s.panels.shell_colour, "dexterity 1/kappa")
-    wait_for(lambda: "1/kappa" in s.panels.legend.caption.content, 60.0, "dexterity colours")
+    wait_for(lambda: "height z" not in s.panels.legend.colorbar.label, 10.0, "the Legend leaves the height key")
+    wait_for(lambda: "1/kappa at the resolved" in s.panels.legend.caption.content, 60.0, "dexterity colours")
+    assert s.panels.legend.colorbar.label == "shell colour = dexterity 1/kappa"
     res = compute_workspace(s.state.design, WorkspaceSettings(voxel=DEXTERITY_VOXEL))
     dex = dexterity_field(res, 0.005)
     shown = s.shell.source
@@ -608,6 +610,7 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
     assert len(np.unique(expect[:, 1])) > 10  # the field varies over the surface
     b.set(s.panels.shell_colour, "height z")
     wait_for(lambda: "height z, from" in s.panels.legend.caption.content, 10.0, "height colours back")
+    assert s.panels.legend.colorbar.label == "shell colour = height z"
 
 
 def test_shell_coloured_by_the_binding_limit(explorer, browsers):
@@ -621,6 +624,8 @@ def test_shell_coloured_by_the_binding_limit(explorer, browsers):
     wait_idle(explorer, s)
     b.set(s.panels.shell_colour, "binding limit")
     wait_for(lambda: "bounds the workspace there" in s.panels.legend.caption.content, 60.0, "limit colours")
+    # the Legend is the binding limit's own key (trust item 3), not the height bar
+    assert s.panels.legend.colorbar.label == "shell colour = binding limit"
     text = s.panels.legend.caption.content
     assert "joint cones" in text and "l_max" in text  # both bind on the default design with 40° cones
     mesh = s.bundle.mesh

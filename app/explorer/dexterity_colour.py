@@ -46,10 +46,17 @@ def field_colours(mesh: Any, dex: Any, result: Any) -> tuple[Any, float, float]:
     return out, lo, hi
 
 
-#: Colours of the binding limits (:func:`binding_labels`).
+#: Colours of the binding limits (:func:`binding_labels`): categorical and away from every
+#: colour the mechanism uses for a state (legs blue / orange / red, platform green / red, the pinned
+#: design magenta), so a leg seen through the shell never reads as a limit or the reverse.
 LIMIT_COLOURS: dict[str, tuple[int, int, int]] = {
-    "l_max": (215, 40, 40), "l_min": (40, 110, 215), "carriage strokes": (240, 160, 20),
-    "joint cones": (150, 60, 200), "interference": (30, 160, 80), "other": (128, 128, 128),
+    "l_max": (235, 215, 0), "l_min": (0, 165, 165), "carriage strokes": (140, 90, 50),
+    "joint cones": (125, 75, 195), "interference": (55, 55, 55), "other": (205, 205, 205),
+}
+#: Their names, as the Legend says them.
+LIMIT_COLOUR_NAMES: dict[str, str] = {
+    "l_max": "yellow", "l_min": "teal", "carriage strokes": "brown", "joint cones": "purple",
+    "interference": "dark grey", "other": "light grey",
 }
 
 

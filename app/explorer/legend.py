@@ -1,7 +1,11 @@
 """The explorer's "Legend" folder: what the 3-D view's colours, labels and units mean.
 
-* a colour bar of the shell's height colouring (the viridis map of :func:`kinematics.shell.viridis`
-  over the shell's z range, with tick values), redrawn when a new shell arrives;
+* the shell's colour key, one per colour mode of the View tab, each with its own title: "height
+  z" (the viridis map of :func:`kinematics.shell.viridis` over the shell's z range, with tick
+  values, redrawn when a new shell arrives), "dexterity 1/kappa" (the same map over the field's
+  range, labelled 1/kappa) and "binding limit" (categorical swatches with each limit's share of
+  the surface); "computing..." while a mode's colours are not ready, so the key never describes
+  colours that are not on screen;
 * the leg colours by state, the platform's colour (pose in or out of the workspace), the axes;
 * the units: lengths in the paper's dimensionless units, volumes in units³, angles in degrees.
 """
@@ -41,14 +45,31 @@ class LegendPanel:
 
     def show_z_range(self, lo: float, hi: float, stale: bool = False) -> None:
         """Redraw the colour bar for a shell spanning ``z in [lo, hi]``."""
+        self.colorbar.label = "shell colour = height z"
         self.colorbar.image = colorbar_image(lo, hi)
         self.caption.content = (f"Shell colour = height z, from {lo:.4g} (bottom) to {hi:.4g} (top), length units"
                                 + (" - *previous design, recomputing*" if stale else ""))
 
-    def show_field_range(self, lo: float, hi: float, label: str, caption: str) -> None:
+    def show_field_range(self, lo: float, hi: float, label: str, caption: str,
+                         title: str = "shell colour = dexterity 1/kappa") -> None:
         """Redraw the colour bar for a shell coloured by another field (e.g. 1/kappa)."""
+        self.colorbar.label = title
         self.colorbar.image = colorbar_image(lo, hi, label=label)
         self.caption.content = caption
+
+    def show_categories(self, title: str, entries: tuple[tuple[str, tuple[int, int, int]], ...],
+                        caption: str) -> None:
+        """A categorical key: one swatch per ``(name, colour)`` (e.g. the binding limits)."""
+        self.colorbar.label = title
+        self.colorbar.image = swatch_image(entries)
+        self.caption.content = caption
+
+    def show_computing(self, title: str, what: str) -> None:
+        """The key of a colour mode whose colours are being computed: no bar, "computing...", so
+        the Legend never describes colours that are not on screen."""
+        self.colorbar.label = title
+        self.colorbar.image = _blank_bar()
+        self.caption.content = f"{what}: computing... (the shell keeps its previous colours until then)"
 
 
 @functools.lru_cache(maxsize=32)
@@ -76,6 +97,45 @@ def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE,
     ax.set_xticks(ticks)
     ax.set_xticklabels([f"{t:.3g}" for t in ticks], fontsize=9)
     ax.set_xlabel(label, fontsize=9, labelpad=1)
+    fig.canvas.draw()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="raw", dpi=100)
+    rgba = np.frombuffer(buf.getvalue(), np.uint8).reshape(int(fig.bbox.height), int(fig.bbox.width), 4)
+    image = np.ascontiguousarray(rgba[:, :, :3])
+    image.setflags(write=False)
+    return image
+
+
+@functools.lru_cache(maxsize=1)
+def _blank_bar(size: tuple[int, int] = BAR_SIZE) -> np.ndarray:
+    image = np.full((size[1], size[0], 3), 255, np.uint8)
+    image.setflags(write=False)
+    return image
+
+
+@functools.lru_cache(maxsize=16)
+def swatch_image(entries: tuple[tuple[str, tuple[int, int, int]], ...],
+                 size: tuple[int, int] = (BAR_SIZE[0], 96)) -> np.ndarray:
+    """RGB image (H, W, 3): a labelled swatch per ``(name, colour)``, two columns of three rows."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    w, h = size
+    fig = Figure(figsize=(w / 100.0, h / 100.0), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    ax.set_xlim(0, 2)
+    ax.set_ylim(0, 3)
+    ax.axis("off")
+    for k, (name, rgb) in enumerate(entries[:6]):
+        col, row = k % 2, 2 - k // 2
+        ax.add_patch(Rectangle((col + 0.03, row + 0.2), 0.14, 0.6, facecolor=np.array(rgb) / 255.0,
+                               edgecolor="black", linewidth=0.6))
+        ax.text(col + 0.21, row + 0.5, name, fontsize=9, va="center", ha="left")
     fig.canvas.draw()
     buf = io.BytesIO()
     fig.savefig(buf, format="raw", dpi=100)

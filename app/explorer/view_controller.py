@@ -21,7 +21,14 @@ from paraspace.kinematics.workspace import compute_workspace
 
 from ..jobs import Job, LimitExceeded
 from ..urlstate import ExplorerState
-from .dexterity_colour import COLOUR_MODES, DEXTERITY_VOXEL, LIMIT_COLOURS, binding_labels, field_colours
+from .dexterity_colour import (
+    COLOUR_MODES,
+    DEXTERITY_VOXEL,
+    LIMIT_COLOUR_NAMES,
+    LIMIT_COLOURS,
+    binding_labels,
+    field_colours,
+)
 from .session import SessionContext
 from .workspace_job import ShellBundle, ws_settings
 
@@ -31,9 +38,6 @@ PRESET_DIRECTIONS: dict[str, tuple[float, float, float]] = {
 }
 #: Share of the window's width that the control panel covers (on the right).
 PANEL_SHARE = 0.3
-#: Colour names of the binding limits, as the legend's caption says them.
-LIMIT_COLOUR_NAMES = {"l_max": "red", "l_min": "blue", "carriage strokes": "orange", "joint cones": "purple",
-                      "interference": "green", "other": "grey"}
 
 
 def camera_framing(lo: np.ndarray, hi: np.ndarray, preset: str, fov: float, aspect: float
@@ -174,8 +178,10 @@ class ViewController:
             return
         s = ctx.state
         if mode == COLOUR_MODES[2]:
+            ctx.panels.legend.show_computing("shell colour = binding limit", "Shell colour = binding limit")
             self._colour_by_limit(bundle, s)
             return
+        ctx.panels.legend.show_computing("shell colour = dexterity 1/kappa", "Shell colour = dexterity 1/kappa")
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
             from paraspace.kinematics.dexterity import dexterity_field
@@ -217,8 +223,11 @@ class ViewController:
             mesh, counts = job.result
             self._show_mesh(mesh)
             total = sum(counts.values()) or 1
-            ctx.panels.legend.caption.content = "Shell colour = the limit that bounds the workspace there: " + \
-                ", ".join(f"{LIMIT_COLOUR_NAMES[k]} {k} ({100 * v / total:.0f} %)" for k, v in counts.items())
+            ctx.panels.legend.show_categories(
+                "shell colour = binding limit",
+                tuple((f"{k} {100 * v / total:.0f} %", LIMIT_COLOURS[k]) for k, v in counts.items()),
+                "Shell colour = the limit that bounds the workspace there: "
+                + ", ".join(f"{LIMIT_COLOUR_NAMES[k]} {k} ({100 * v / total:.0f} %)" for k, v in counts.items()))
 
         self._submit_colours(fn, done, "Limit colours not started")
 
