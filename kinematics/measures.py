@@ -206,6 +206,7 @@ from scipy.spatial import ConvexHull, QhullError
 from skimage.measure import euler_number
 
 from .parallel import KERNEL_LOCK
+from .progress import CancelToken, check
 from .serialize import jsonable
 from .workspace import WorkspaceResult
 
@@ -480,12 +481,13 @@ def ball_dilate(mask: np.ndarray, radius_voxels: float) -> np.ndarray:
     return out
 
 
-def feature_filter(occupancy: np.ndarray, radius_voxels: float) -> np.ndarray:
+def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None) -> np.ndarray:
     """``S_r = close_r(open_r(W))`` with the digital Euclidean ball of radius ``radius_voxels``.
 
     The opening drops material thinner than about ``2 r`` (knife-edged sheets, specks, thin
     bridges); the closing then fills gaps, slots and tunnels narrower than about ``2 r``. The grid
-    is padded with empty voxels first (the box is no obstacle to either operation).
+    is padded with empty voxels first (the box is no obstacle to either operation). Raises
+    :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
     """
     occ = np.asarray(occupancy, dtype=bool)
     w = int(np.floor(radius_voxels + 1e-9))
@@ -493,8 +495,13 @@ def feature_filter(occupancy: np.ndarray, radius_voxels: float) -> np.ndarray:
         return occ.copy()
     p = w + 1
     o = np.pad(occ, p)
-    opened = ball_dilate(~ball_dilate(~o, radius_voxels), radius_voxels)
-    closed = ~ball_dilate(~ball_dilate(opened, radius_voxels), radius_voxels)
+    eroded = ~ball_dilate(~o, radius_voxels)
+    check(cancel)
+    opened = ball_dilate(eroded, radius_voxels)
+    check(cancel)
+    dilated = ball_dilate(opened, radius_voxels)
+    check(cancel)
+    closed = ~ball_dilate(~dilated, radius_voxels)
     return closed[p:-p, p:-p, p:-p]
 
 
@@ -587,7 +594,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
                       floor_closes: bool = True, completeness: str = "sealed",
                       open_cavity_tolerance: float = 0.02, piece_fraction: float = 0.01,
                       feature_radius: float | None = None,
-                      feature_radius_extent: float = 0.02) -> WorkspaceMeasures:
+                      feature_radius_extent: float = 0.02, cancel: CancelToken = None) -> WorkspaceMeasures:
     """Compute every measure of the module docstring for one workspace.
 
     Parameters
@@ -616,6 +623,9 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         workspace.
     feature_radius_extent : float, optional
         The fraction of the largest extent used when ``feature_radius`` is ``None`` (default 0.02).
+    cancel : threading.Event or callable, optional
+        Checked between the steps (labelling, voids, Euler numbers, hull, cavities, each dilation of
+        the feature filter): once set, :class:`~kinematics.progress.Cancelled` is raised.
 
     Returns
     -------
@@ -627,6 +637,8 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     ------
     ValueError
         Invalid ``connectivity``, ``hollowness`` or ``completeness``.
+    Cancelled
+        When ``cancel`` is set.
 
     Examples
     --------
@@ -688,6 +700,7 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     occ = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
 
     # topology
+    check(cancel)
     labels, components = ndi.label(occ, structure=_structure(connectivity))
     sizes = np.bincount(labels.ravel())[1:]
     largest = float(sizes.max() / n)
@@ -696,9 +709,11 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     fragment_fraction = float(sizes[~is_piece].sum() / n)
     piece_set = occ if n_pieces == components else np.concatenate([[False], is_piece])[labels]
     del labels
+    check(cancel)
     voids_m = void_mask(occ, connectivity)
     _, n_voids = ndi.label(voids_m, structure=_structure(dual_connectivity(connectivity)))
     void_volume = int(voids_m.sum()) * vv
+    check(cancel)
     chi_w = int(euler_number(occ, connectivity=connectivity))
     if n_voids:
         filled = occ | voids_m
@@ -709,23 +724,29 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     genus = int(filled_components - chi_f)
 
     # cavities
+    check(cancel)
     hull = hull_mask(occ)
     hull_volume = int(hull.sum()) * vv
+    check(cancel)
     under = hollow_mask(occ, "hull", hull)
     n_under = int(under.sum())
     hollow_volume = (n_under if hollowness == "hull" else int(hollow_mask(occ, hollowness).sum())) * vv
+    check(cancel)
     gap_volume = int(column_gap_mask(occ).sum()) * vv
+    check(cancel)
     sealed = sealed_mask(occ, connectivity, floor=floor_face is not None) if n_under else voids_m
     n_open = int((under & ~sealed).sum())
     open_ratio = n_open / (n_under + n) if n_under else 0.0
 
     # stable topology: pieces, and the genus of the open-close filtered solid
+    check(cancel)
     pieces_filled = (filled_genus(piece_set, connectivity)[0] if n_pieces != components
                      else int(filled_components))
     piece_clipped = [f for f in touched_faces(piece_set) if not (floor_closes and f == floor_face)]
     extent = max(b - a for a, b in zip(bmin, bmax))
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
-    stable = feature_filter(piece_set, r / h)
+    stable = feature_filter(piece_set, r / h, cancel)
+    check(cancel)
     stable_components, stable_genus = filled_genus(stable, connectivity)
     stable_fraction = float(stable.sum() / n)
     del stable

@@ -86,7 +86,7 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     check(cancel)
     result = compute_workspace(design, settings, cancel=cancel)
     check(cancel)
-    out: dict[str, Any] = dict(measure_workspace(result).to_dict())
+    out: dict[str, Any] = dict(measure_workspace(result, cancel=cancel).to_dict())
     if orientation is not None:
         ori = orientation_workspace(design, orientation, cancel=cancel)
         out["TI_1"] = ori.ti1

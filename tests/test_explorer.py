@@ -325,6 +325,37 @@ def test_camera_presets_reset_and_stop(explorer, browsers):
     wait_for(lambda: "voxel=6" in b.search, 5.0, "the link of the shown result")
 
 
+def test_stop_during_the_measures_ends_them_and_says_so(explorer, browsers, monkeypatch):
+    """Trust item 4: Stop while the shell on screen is being measured (an h = 1 job waited 35 s for
+    its measures, then the panel said "measures: computing..." for ever). The measuring step here
+    runs until it is cancelled; after Stop the job ends cancelled and the Numbers say the measures
+    were not computed."""
+    from paraspace.app.explorer import workspace_job
+    from paraspace.kinematics.progress import check
+
+    entered = threading.Event()
+
+    def endless_measure(result, cancel=None):
+        entered.set()
+        while True:  # a measuring step that never ends by itself: only its cancellation checks stop it
+            check(cancel)
+            time.sleep(0.01)
+
+    monkeypatch.setattr(workspace_job, "measure", endless_measure)
+    b = browsers("voxel=6&a=41")
+    s = b.session
+    assert entered.wait(60), "the job reached its measuring step"
+    job = s.workspace_controller.job
+    wait_for(lambda: "measures: computing" in s.panels.numbers.content, 30.0, "measures computing")
+    b.click(s.panels.stop)
+    wait_for(lambda: job.is_final, 10.0, "the stopped job ends")
+    assert job.status == "cancelled"
+    wait_for(lambda: "measures: not computed (stopped)" in s.panels.numbers.content, 10.0, "the Numbers say so")
+    assert "computing" not in s.panels.numbers.content.split("**TI")[0]
+    assert "stopped" in s.panels.status.content
+    assert s.bundle is not None and s.bundle.result.design.a == 41.0  # the shell stays on screen
+
+
 def test_empty_workspace_is_handled(explorer, browsers):
     b = browsers("voxel=6&a=10&r=200&l_min=50&l_s=10&d_s=10&eta_s=10")
     s = b.session

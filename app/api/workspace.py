@@ -43,7 +43,7 @@ def _start_workspace(ctx: ApiContext, req: WorkspaceRequest, request: Request) -
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = compute_workspace(design, settings, progress, cancel)
-        return ApiResult(raw=res, payload=workspace_payload(res))
+        return ApiResult(raw=res, payload=workspace_payload(res, cancel))
 
     return ctx.submit(request, "workspace", key, compute), cached
 
@@ -93,7 +93,7 @@ def workspace_shell(job_id: str, request: Request, ctx: Ctx,
                     headers={"Content-Disposition": f'attachment; filename="workspace-{job_id}.{fmt}"'})
 
 
-def workspace_payload(res: Any) -> dict[str, Any]:
+def workspace_payload(res: Any, cancel: Any = None) -> dict[str, Any]:
     """JSON summary of a WorkspaceResult with its measures."""
     g = res.grid
     payload: dict[str, Any] = {
@@ -114,5 +114,5 @@ def workspace_payload(res: Any) -> dict[str, Any]:
         payload["measures"] = None
         payload["measures_error"] = f"measures unavailable: {e}"
     else:
-        payload["measures"] = measure_workspace(res).to_dict()
+        payload["measures"] = measure_workspace(res, cancel=cancel).to_dict()
     return jsonable(payload)

@@ -86,6 +86,8 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
                          f"{frag}, genus {m.stable_genus} (features > {2 * m.feature_radius:.3g}; "
                          f"voxel-level: genus {m.genus}, {m.components} "
                          f"component{'s' if m.components != 1 else ''})  ")
+        elif info.stopped:
+            lines.append("*measures: not computed (stopped); change a setting to compute them*  ")
         else:
             lines.append("*measures: computing...*  ")
         lines.append(f"**Compute** {info.seconds:.2f} s workspace"

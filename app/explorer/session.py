@@ -72,6 +72,7 @@ class ShellInfo:
         cached: it came from the shared result cache.
         measures: its measures, ``None`` until they are computed.
         bracket: its certified volume bracket, ``None`` unless asked for and computed.
+        stopped: the user stopped the job before its measures were computed (they are not coming).
     """
 
     volume: float
@@ -83,6 +84,7 @@ class ShellInfo:
     cached: bool
     measures: WorkspaceMeasures | None = None
     bracket: VolumeBracket | None = None
+    stopped: bool = False
 
 
 class SessionJobs:

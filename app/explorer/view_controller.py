@@ -187,7 +187,7 @@ class ViewController:
             from paraspace.kinematics.dexterity import dexterity_field
 
             res = compute_workspace(s.design, ws_settings(s, DEXTERITY_VOXEL), cancel=cancel)
-            dex = dexterity_field(res, 0.005)
+            dex = dexterity_field(res, 0.005, cancel=cancel)
             return field_colours(bundle.mesh, dex, res) + (dex,)
 
         def done(job: Job) -> None:

@@ -245,6 +245,7 @@ class WorkspaceController:
         describe a result that exists (issue 8 defect 10)."""
         ctx = self.ctx
         ctx.cancel_job(self.job)
+        ctx.cancel_job(self.bracket_job)
         shown = ctx.bundle
         if shown is None:
             return
@@ -255,11 +256,22 @@ class WorkspaceController:
                 s = ctx.state
                 back = s.replace(design=r.design, voxel=float(r.settings.voxel), joints=r.settings.joints,
                                  pose=dataclasses.replace(s.pose, psi=psi, theta=theta, phi=phi))
-                if back == s:
-                    return
                 self.gen += 1  # late progress of the cancelled job must not touch the status
+                info = ctx.ws_info
+                if info is not None and info.measures is None and info.volume > 0:
+                    # the shell on screen stays; its measures were being computed: say they are not coming
+                    ctx.ws_info = dataclasses.replace(info, stopped=True)
+                same = back == s
                 ctx.state = back
-            self.show_controls(r)
+            if not same:
+                self.show_controls(r)
+        if same:
+            if not ctx.closed:
+                self.numbers.render()
+                self.set_status(self.gen, "stopped: the shell on screen is kept, its measures were not computed"
+                                if ctx.ws_info is not None and ctx.ws_info.stopped else "stopped", 100.0,
+                                running=False)
+            return
         if ctx.closed:
             return
         assert ctx.shell is not None  # built before the controllers are wired

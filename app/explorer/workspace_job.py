@@ -68,11 +68,12 @@ def make_shell(result: WorkspaceResult, max_faces: int) -> trimesh.Trimesh:
     return smooth_for_display(mesh, volume=result.volume)
 
 
-def measure(result: WorkspaceResult) -> WorkspaceMeasures:
-    """The numbers panel's measures of ``result`` (:func:`kinematics.measures.measure_workspace`)."""
+def measure(result: WorkspaceResult, cancel: threading.Event | None = None) -> WorkspaceMeasures:
+    """The numbers panel's measures of ``result`` (:func:`kinematics.measures.measure_workspace`);
+    raises :class:`~kinematics.progress.Cancelled` between its steps once ``cancel`` is set."""
     from paraspace.kinematics.measures import measure_workspace
 
-    return measure_workspace(result)
+    return measure_workspace(result, cancel=cancel)
 
 
 def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> VolumeBracket | None:
@@ -157,7 +158,7 @@ def workspace_job(s: ExplorerState, cache: ByteLRU, show: Callable[[ShellBundle,
             raise Cancelled()
         show(bundle, False, time.perf_counter() - t0)
         progress(0.9, "measuring (voids, genus, hollowness)...")
-        bundle.measures = measure(res)
+        bundle.measures = measure(res, cancel)
         cache.put(full_key, bundle)
         if cancel.is_set():
             raise Cancelled()
