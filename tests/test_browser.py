@@ -15,6 +15,7 @@ import os
 import pathlib
 import re
 import tempfile
+import threading
 import time
 import urllib.parse
 from collections.abc import Iterator
@@ -304,3 +305,50 @@ def test_viser_panel_does_not_flash_before_the_explorer_gui(browser: Browser, ex
         assert samples[-1]["ours"] and samples[-1]["panel"], "the explorer's panel was never shown"
     finally:
         ctx.close()
+
+
+def _number_box(page: Page, session: ClientSession, key: str) -> Any:
+    """The number box inside the design slider ``key`` (Mantine's NumberInput beside the track)."""
+    uuid = session.panels.design[key]._impl.uuid
+    return page.locator(f'[id="{uuid}"]').locator("xpath=../..").locator("input.mantine-NumberInput-input")
+
+
+def _watch_design(session: ClientSession, key: str, stop: threading.Event, seen: list[float]) -> None:
+    while not stop.is_set():
+        v = float(getattr(session.state.design, key))
+        if not seen or seen[-1] != v:
+            seen.append(v)
+        time.sleep(0.005)
+
+
+def test_typing_never_applies_a_prefix(browser: Browser, explorer: Explorer) -> None:
+    """Trust item 1: '80' typed key by key into a_s's number box applies 80, never 8; '120' typed
+    into d_s's (d_s must not exceed r = 100) is refused and the design keeps d_s = 50, never 12;
+    neither the link nor the state ever holds a prefix."""
+    page, s = open_page(browser, explorer, "voxel=6")
+    full_volume_text(page)
+    for key, typed, applied in (("a", "80", 80.0), ("d_s", "120", 50.0)):
+        seen: list[float] = []
+        urls: list[str] = []
+        stop = threading.Event()
+        watcher = threading.Thread(target=_watch_design, args=(s, key, stop, seen), daemon=True)
+        watcher.start()
+        page.on("framenavigated", lambda f, urls=urls: urls.append(f.url))
+        box = _number_box(page, s, key)
+        box.click()
+        box.press("Control+a")
+        box.press_sequentially(typed, delay=150)  # key by key, faster than the pause
+        box.press("Enter")
+        wait_for(lambda key=key, applied=applied: float(getattr(s.state.design, key)) == applied and
+                 (applied != 50.0 or s.panels.design_message.visible), 30, f"{key} after typing {typed}")
+        time.sleep(1.5)  # anything late (a pause timer, the URL sync) has had its chance
+        stop.set()
+        watcher.join(5)
+        prefixes = {float(typed[:n]) for n in range(1, len(typed))}
+        assert not prefixes & set(seen), f"{key} took a prefix of {typed!r}: {seen}"
+        link = page.evaluate("() => location.search")
+        assert f"{key}={applied:g}" in link, link
+        assert not any(f"{key}={p:g}&" in u for u in urls + [link] for p in prefixes), urls
+    text = page.locator("body").inner_text()
+    assert "d_s = 120 is invalid; valid range [0, r=100]. The design keeps d_s = 50." in text, text[-800:]
+    assert s.state.design.d_s == 50.0 and s.state.design.a == 80.0

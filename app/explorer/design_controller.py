@@ -104,7 +104,10 @@ class DesignController:
         except ParameterError as exc:
             ctx.design_error = f"{exc.field} = {exc.value:g} is invalid; valid range {exc.valid}" \
                 if isinstance(exc.value, float) else str(exc)
-            p.design_message.content = f"**Not applied:** {md_text(ctx.design_error)}. The last valid design stays."
+            kept = ctx.state.design
+            was = f"{exc.field} = {getattr(kept, exc.field):g}" if exc.field in DESIGN_KEYS else "the last valid design"
+            p.design_message.content = (f"**Not applied:** {md_text(ctx.design_error)}. "
+                                        f"The design keeps {md_text(was)}.")
             p.design_message.visible = True
             self.numbers.render()
             return

@@ -21,7 +21,8 @@ passes untouched):
 3. the page itself is served with a ``Content-Security-Policy`` whose ``connect-src 'self'`` keeps
    the page from opening a websocket (or fetch) to any other server, even if a future client
    learned another way to be pointed elsewhere; its ``<title>`` says paraspace, and it hides
-   viser's own control panel until the explorer's GUI has arrived (:data:`PANEL_WAIT`).
+   viser's own control panel until the explorer's GUI has arrived (:data:`PANEL_WAIT`), and its
+   number boxes apply a typed value only on Enter, leaving the box or a pause (:data:`TYPING_GATE`).
 
 Before all of this, every request (page or websocket upgrade) must pass the host and origin rules
 of :mod:`paraspace.app.hostcheck` (DNS rebinding, cross-site websockets): a refused one gets a
@@ -67,8 +68,27 @@ PANEL_WAIT = (
     f'<style>html.{PANEL_WAIT_CLASS} [data-testid="floating-panel"]{{visibility:hidden}}</style>'
     f'<script>document.documentElement.classList.add("{PANEL_WAIT_CLASS}");setTimeout(function(){{'
     f'document.documentElement.classList.remove("{PANEL_WAIT_CLASS}");}}, {PANEL_WAIT_MS});</script>').encode()
+#: Longest pause between keystrokes in a number box before its value is applied, milliseconds.
+TYPING_PAUSE_MS = 800
+#: Put into the page's head: a number box (Mantine's NumberInput, inside every slider) applies what
+#: is typed only on Enter, on leaving the box, or after a pause of :data:`TYPING_PAUSE_MS` - never
+#: a keystroke's prefix ("120" typed key by key never applies 12). The keystrokes' ``input`` events
+#: are held at the document (capture phase, before React's root listener sees them); on Enter, blur
+#: or the pause one ``input`` event with the box's whole text goes to React, which applies it.
+TYPING_GATE = (
+    "<script>(function(){var P=" + str(TYPING_PAUSE_MS) + ",q=new Map();"
+    "function own(e){return e&&e.classList&&e.classList.contains('mantine-NumberInput-input');}"
+    "function go(e){var t=q.get(e);if(t===undefined)return;clearTimeout(t);q.delete(e);e.__psGo=true;"
+    "try{e.dispatchEvent(new Event('input',{bubbles:true}));}finally{e.__psGo=false;}}"
+    "document.addEventListener('input',function(v){var e=v.target;if(!own(e)||e.__psGo)return;"
+    "v.stopImmediatePropagation();var t=q.get(e);if(t!==undefined)clearTimeout(t);"
+    "q.set(e,setTimeout(function(){go(e);},P));},true);"
+    "document.addEventListener('keydown',function(v){if(v.key==='Enter'&&q.has(v.target))go(v.target);},true);"
+    "document.addEventListener('blur',function(v){if(q.has(v.target))go(v.target);},true);"
+    "})();</script>").encode()
 #: Replacements applied to viser's page (its HTML is otherwise served as is).
-PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = ((b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT),)
+PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = (
+    (b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT + TYPING_GATE),)
 
 _KNOWN = frozenset(link_keys())
 
