@@ -32,7 +32,12 @@ __all__ = ["FakeBrowser", "wait_for", "wait_idle"]
 class FakeBrowser:
     """A viser client over the websocket protocol, with a fake ``location`` and localStorage."""
 
-    def __init__(self, explorer: Explorer, search: str = "") -> None:
+    def __init__(self, explorer: Explorer, search: str = "", *, location_delay: float = 0.0,
+                 answers_location: bool = True, build_timeout: float = 20.0) -> None:
+        """``location_delay``: seconds this "browser" takes to tell its link (a busy browser);
+        ``answers_location=False``: it never does."""
+        self.location_delay = location_delay
+        self.answers_location = answers_location
         self.explorer = explorer
         self.search = search if not search or search.startswith("?") else "?" + search
         self.base = explorer.url
@@ -51,7 +56,7 @@ class FakeBrowser:
         self.thread.start()
         self.session: ClientSession = wait_for(
             lambda: next((s for cid, s in list(explorer.sessions.items()) if cid not in before and s.ready.is_set()),
-                         None), 20.0, "the session was not built")
+                         None), build_timeout, "the session was not built")
 
     # ----- wire ---------------------------------------------------------------------------------
     def _send(self, msg: dict) -> None:
@@ -89,8 +94,15 @@ class FakeBrowser:
                 self.search = json.loads(q.group(1))
         elif kind == "LocalStorageGetItemRequestMessage":
             value = self.storage.get("viser-user:" + m["key"])
-            self._send({"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,
-                        "request_uuid": m["request_uuid"]})
+            answer = {"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,
+                      "request_uuid": m["request_uuid"]}
+            if "paraspace_location" in m["key"]:  # the page's link: a busy browser answers late, or never
+                if not self.answers_location:
+                    return
+                if self.location_delay > 0:
+                    threading.Timer(self.location_delay, self._send, (answer,)).start()
+                    return
+            self._send(answer)
         elif kind == "LocalStorageRemoveItemMessage":
             self.storage.pop("viser-user:" + m["key"], None)
         elif kind == "FileTransferStartDownload":

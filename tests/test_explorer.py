@@ -356,6 +356,58 @@ def test_stop_during_the_measures_ends_them_and_says_so(explorer, browsers, monk
     assert s.bundle is not None and s.bundle.result.design.a == 41.0  # the shell stays on screen
 
 
+def test_links_opened_at_once_by_busy_browsers_are_kept(explorer):
+    """Trust item 2: eight pages opened at once, each browser taking 7 s to tell its link (longer
+    than the old 5 s wait, after which the page fell back to the defaults and its address bar was
+    rewritten to a=50): every page ends on its own link's design, volume and address bar."""
+    links = {f"?a={21 + 7 * i}&z=125&voxel=8": 21.0 + 7 * i for i in range(8)}
+    before = set(explorer.sessions)
+    opened: dict[str, FakeBrowser] = {}
+
+    def open_(link: str) -> None:
+        opened[link] = FakeBrowser(explorer, link, location_delay=7.0, build_timeout=120.0)
+
+    threads = [threading.Thread(target=open_, args=(link,)) for link in links]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(180)
+    try:
+        assert set(opened) == set(links), "every page got its session"
+        new = [s for cid, s in list(explorer.sessions.items()) if cid not in before]
+        assert sorted(s.state.design.a for s in new) == sorted(links.values())
+        for s in new:
+            wait_for(lambda s=s: s.bundle is not None and s.bundle.result.design == s.state.design, 120.0,
+                     "each page's full shell")
+            assert s.bundle.result.volume == compute_workspace(
+                Design(a=s.state.design.a), WorkspaceSettings(voxel=8.0)).volume
+        time.sleep(1.5)  # the address-bar sync (debounced) has run
+        for link, b in opened.items():
+            got = parse_query(b.search)[0]
+            assert got.design.a == links[link] and got.pose.z == 125.0, (link, b.search)
+    finally:
+        for b in opened.values():
+            b.close()
+
+
+def test_a_link_the_browser_never_tells_is_left_in_the_address_bar(explorer, monkeypatch):
+    """Trust item 2: if the browser never tells the page's link, the page says so, shows the
+    defaults, and never rewrites its address bar (a reload can still open the link)."""
+    monkeypatch.setattr(explorer, "link_read_seconds", 2.0)
+    b = FakeBrowser(explorer, "?a=33&z=120", answers_location=False, build_timeout=30.0)
+    try:
+        s = b.session
+        wait_for(lambda: s.bundle is not None, 60.0, "the default design's shell")
+        assert s.state.design == Design()
+        assert "could not be read" in s.panels.url_messages.content and s.panels.url_messages.visible
+        b.set(s.panels.voxel, 7.0)  # a change: the Share tab's link follows, the address bar does not
+        wait_for(lambda: "voxel=7" in s.panels.link.value, 10.0, "the Share tab's link")
+        assert b.search == "?a=33&z=120"
+        assert not any("replaceState" in src for src in b.scripts)
+    finally:
+        b.close()
+
+
 def test_empty_workspace_is_handled(explorer, browsers):
     b = browsers("voxel=6&a=10&r=200&l_min=50&l_s=10&d_s=10&eta_s=10")
     s = b.session

@@ -238,6 +238,11 @@ class ClientSession:
 # the server
 
 
+#: Seconds a new page's browser gets to tell the server its link (``location.search``) before the
+#: page is built on the defaults (with a message; its address bar is then never rewritten).
+LINK_READ_SECONDS = 60.0
+
+
 class Explorer:
     """The viser server with one :class:`ClientSession` per browser.
 
@@ -270,6 +275,8 @@ class Explorer:
         self.optimize_results = ByteLRU(16 << 20, max_entries=16)
         self.paper_results = ByteLRU(1 << 20)  # the Paper tab's comparison, by voxel (a few kB)
         self.warm = threading.Event()
+        #: Seconds a new page's browser gets to tell its link (a busy browser can take many seconds).
+        self.link_read_seconds = LINK_READ_SECONDS
         self.connect_seconds: list[float] = []
 
     @property
@@ -334,11 +341,20 @@ class Explorer:
             self.jobs.shutdown(wait=False)
 
     def _on_connect(self, client: viser.ClientHandle) -> None:
+        """Build the session of a new page on the state of its link. The link (``location.search``)
+        is read from the browser before anything is built or written: a busy browser gets
+        :attr:`link_read_seconds` to answer. If it never does, the page says so, shows the paper's
+        design and its address bar is never rewritten (its link is kept for a reload)."""
         t0 = time.perf_counter()
-        loc = jsbridge.read_location(client, timeout=5.0)
+        loc = jsbridge.read_location(client, timeout=self.link_read_seconds)
         search, base = loc if loc is not None else ("", self.url.rstrip("/") + "/")
         state, messages = parse_query(search)
+        if loc is None:
+            messages = [f"this page's link could not be read from the browser within {self.link_read_seconds:g} s; "
+                        "the paper's default design is shown and the address bar keeps the link: reload the "
+                        "page to open it"]
         session = ClientSession(self, client, state, base or self.url, messages, panel_pairs(search))
+        session.ctx.link_unread = loc is None
         with self._sessions_lock:
             self.sessions[client.client_id] = session
         try:

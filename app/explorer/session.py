@@ -131,6 +131,8 @@ class SessionContext:
         self.state = state
         self.base_url = base_url
         self.url_messages = list(messages)
+        #: The browser never told the page's link: the address bar is never rewritten (it keeps the link).
+        self.link_unread = False
         self._closed = False
         self._tls = threading.local()
         self._last_update: dict[str, float] = {}

@@ -117,7 +117,8 @@ class ShareController:
         if q == self.last_query:
             return
         self.last_query = q
-        jsbridge.replace_query(ctx.client, q)
+        if not ctx.link_unread:  # a page whose link was never read keeps it in its address bar
+            jsbridge.replace_query(ctx.client, q)
         ctx.panels.link.value = f"{ctx.base_url}?{q}"
         ctx.event("url")
 
