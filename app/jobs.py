@@ -219,6 +219,7 @@ class JobManager:
         self._running_kind: collections.Counter[tuple[str, str]] = collections.Counter()  # per (client, kind)
         self._kept: collections.OrderedDict[str, int] = collections.OrderedDict()  # job id -> result bytes
         self._kept_total = 0
+        self._departed: collections.OrderedDict[str, None] = collections.OrderedDict()  # forget_client
         self._closed = False
         self._wake = threading.Condition(self._lock)
         self._work = threading.Condition(self._lock)
@@ -363,6 +364,22 @@ class JobManager:
         self._finish_all(finish)
         return True
 
+    def forget_client(self, client: str) -> int:
+        """Drop the kept results of ``client``'s finished jobs (a browser that left: nobody will
+        fetch them), and keep none of its jobs that finish later; returns how many were dropped."""
+        dropped = 0
+        with self._lock:
+            self._departed[client] = None
+            while len(self._departed) > 4096:
+                self._departed.popitem(last=False)
+            for job_id in list(self._kept):
+                job = self._jobs.get(job_id)
+                if job is not None and job.client == client and job.is_final:
+                    self._kept_total -= self._kept.pop(job_id)
+                    job.result, job.result_dropped = None, True
+                    dropped += 1
+        return dropped
+
     def shutdown(self, wait: bool = False) -> None:
         """Cancel every unfinished job and stop accepting work.
 
@@ -421,6 +438,9 @@ class JobManager:
         oldest full results are first replaced by their summary (``summarize``; none: dropped),
         then, if still over, the oldest summaries are dropped too."""
         if job.result is None or job.id not in self._jobs:
+            return
+        if job.client in self._departed:  # its page left: nobody will fetch it (forget_client)
+            job.result, job.result_dropped = None, True
             return
         self._kept[job.id] = self._measure(job.result)
         self._kept_total += self._kept[job.id]

@@ -28,6 +28,7 @@ from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from paraspace.kinematics.design import ParameterError
 
+from . import memory
 from .api import ApiLimits, create_api
 from .hostcheck import HostPolicy
 from .jobs import JobManager
@@ -255,6 +256,7 @@ def serve(host: str = "127.0.0.1", port: int = 8080, api_port: int = 8081, *, bl
     Raises:
         ParameterError: ``api_port`` cannot be bound (in use); names ``api-port``.
     """
+    memory.limit_arenas()  # before the worker threads start: freed memory returns to the system
     jobs = JobManager(max_workers=max_workers, max_jobs_total=max(limits.max_jobs_total, 16),
                       max_jobs_per_client=max(limits.max_jobs_per_client, 4),
                       max_seconds=max(limits.max_job_seconds, 1.0))

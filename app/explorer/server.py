@@ -45,6 +45,7 @@ from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.warmup import warm_up
 
+from .. import memory
 from ..hostcheck import HostPolicy
 from ..jobs import JobManager
 from ..limits import MAX_VOXELS
@@ -296,6 +297,7 @@ class Explorer:
         """Start the viser server (returns at once; the numba kernels warm up in the background)."""
         if self.server is not None:
             return self
+        memory.limit_arenas()  # freed memory returns to the system (app/memory.py)
         threading.Thread(target=self._warm_up, name="paraspace-warmup", daemon=True).start()
         pagehook.install()  # links carry only explorer keys; the page connects only to this server
         server = viser.ViserServer(host=self.host, port=self._requested_port, verbose=False)
@@ -379,6 +381,9 @@ class Explorer:
             session = self.sessions.pop(client.client_id, None)
         if session is not None:
             session.close()
+            # nobody fetches a departed page's job results; then give the freed heap back (app/memory.py)
+            self.jobs.forget_client(session.ctx.job_client)
+            memory.trim_soon()
 
     def session(self, client_id: int) -> ClientSession | None:
         """The session of a connected client (``None`` if unknown)."""
