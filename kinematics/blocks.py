@@ -360,6 +360,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
         b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
         level += 1
         if progress is not None:
-            progress(min(1.0, level / n_levels), f"position workspace: level {level}, {b0.shape[0]} blocks "
-                     f"from {n_before}")
+            frac = min(1.0, level / n_levels)
+            progress(frac, f"computing the workspace, {100 * frac:.0f} % (refining {b0.shape[0]:,} boundary "
+                           f"blocks of {n_before:,})")
     return out

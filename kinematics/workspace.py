@@ -411,7 +411,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
             with KERNEL_LOCK:
                 _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *args, all_chains, xlo2, xhi2, out)
             if progress is not None:
-                progress(min(1.0, (s + step) / n), "position workspace")
+                frac = min(1.0, (s + step) / n)
+                progress(frac, f"computing the workspace, {100 * frac:.0f} %")
     if mirror:
         # rows that have mirror images, with chains 2 and 3 swapped
         out[:, ny_eval:] = _MIRROR_BITS[out[:, : ny - ny_eval]][:, ::-1]
