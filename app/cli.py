@@ -103,10 +103,10 @@ def _joints(ns: argparse.Namespace):
 
 
 def _voxel(ns: argparse.Namespace) -> float:
-    try:
-        return float(ns.voxel)
-    except (TypeError, ValueError):
-        raise ParameterError("voxel", ns.voxel, "[0.25, 100] (a number)") from None
+    """``--voxel`` read and checked by its table entry (:data:`kinematics.settings.WORKSPACE`)."""
+    from paraspace.kinematics.settings import WORKSPACE
+
+    return float(WORKSPACE["voxel"].parse(ns.voxel))
 
 
 def _float_arg(field: str, raw: Any, valid: str) -> float:

@@ -38,11 +38,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import urllib.parse
+from collections.abc import Iterator, Mapping
 from typing import Any, Literal
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
+from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
 
 CarriageMode = Literal["auto", "manual"]
 CameraPreset = Literal["iso", "top", "bottom", "side"]
@@ -98,21 +100,42 @@ POSE_SLIDERS: dict[str, Range] = {
     "theta": Range(-60.0, 60.0, 0.5),
     "phi": Range(-60.0, 60.0, 0.5),
 }
+#: The settings whose rule is a core table entry (:mod:`kinematics.settings`): URL key -> entry.
+TABLE_SETTINGS: dict[str, tuple[dict[str, Setting], str]] = {"voxel": (WORKSPACE, "voxel"),
+                                                              "z0": (ORIENTATION, "z0")}
+
+
+class _SettingRanges(Mapping[str, Range]):
+    """Ranges of the other numeric settings: the view's own (``cut_z``, ``opacity``), and for the
+    keys of :data:`TABLE_SETTINGS` the core table's entry, read when asked (one definition)."""
+
+    def __init__(self, own: dict[str, Range], slider: bool) -> None:
+        self._own = own
+        self._slider = slider
+
+    def __getitem__(self, key: str) -> Range:
+        if key in TABLE_SETTINGS:
+            table, name = TABLE_SETTINGS[key]
+            spec = table[name]
+            if self._slider and spec.slider is not None:
+                return Range(*spec.slider)
+            return Range(spec.lo, spec.hi, spec.slider[2] if spec.slider else 0.5)
+        return self._own[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter((*TABLE_SETTINGS, *self._own))
+
+    def __len__(self) -> int:
+        return len(TABLE_SETTINGS) + len(self._own)
+
+
 #: Accepted ranges of the other numeric settings (voxel: ``WorkspaceSettings``; z0: the
 #: orientation settings; a grid over the voxel limit is refused when computed, with its message).
-SETTING_RANGES: dict[str, Range] = {
-    "voxel": Range(0.25, 100.0, 0.5),
-    "z0": Range(-1e4, 1e4, 1.0),
-    "cut_z": Range(-1e4, 1e4, 1.0),
-    "opacity": Range(0.0, 1.0, 0.05),
-}
+SETTING_RANGES: Mapping[str, Range] = _SettingRanges(
+    {"cut_z": Range(-1e4, 1e4, 1.0), "opacity": Range(0.0, 1.0, 0.05)}, slider=False)
 #: Slider ranges of the other numeric settings.
-SETTING_SLIDERS: dict[str, Range] = {
-    "voxel": Range(1.0, 10.0, 0.5),
-    "z0": Range(0.0, 350.0, 1.0),
-    "cut_z": Range(0.0, 350.0, 1.0),
-    "opacity": Range(0.1, 1.0, 0.05),
-}
+SETTING_SLIDERS: Mapping[str, Range] = _SettingRanges(
+    {"cut_z": Range(0.0, 350.0, 1.0), "opacity": Range(0.1, 1.0, 0.05)}, slider=True)
 #: Keys of the joint options (:mod:`kinematics.joints`), written only when set.
 JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
 
@@ -144,7 +167,7 @@ def parse_pin(raw: str) -> tuple[Design | None, str | None]:
 
 def check_field(key: str, value: float) -> str | None:
     """The one message for a numeric field outside its accepted range (``None`` when valid)."""
-    rng = {**DESIGN_RANGES, **POSE_RANGES, **SETTING_RANGES}[key]
+    rng = DESIGN_RANGES.get(key) or POSE_RANGES.get(key) or SETTING_RANGES[key]
     if not (math.isfinite(value) and rng.lo <= value <= rng.hi):
         return f"{key} = {value:g} is out of range; valid range {rng.text(UNITS.get(key, ''))}"
     return None
@@ -221,7 +244,7 @@ def format_number(value: float) -> str:
     return text
 
 
-def _parse_fields(keys, values: dict[str, str], ranges: dict[str, Range], messages: list[str]) -> dict[str, float]:
+def _parse_fields(keys, values: dict[str, str], ranges: Mapping[str, Range], messages: list[str]) -> dict[str, float]:
     """:func:`_parse_number` for every ``key`` present in ``values``; bad ones add a message."""
     out: dict[str, float] = {}
     for key in keys:

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, Strict
 from paraspace.kinematics.design import PARAMS, Design
 from paraspace.kinematics.joints import JOINT_RANGES, Joints
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
+from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
 
 from .errors import RANGES, FieldError, call_core
 
@@ -32,6 +33,17 @@ def _num(section: str, name: str, default: Any, lo: float, hi: float, descriptio
     bound = {"gt": lo} if lo_open else {"ge": lo}
     return Field(default, le=hi, allow_inf_nan=False, strict=True,
                  description=f"{description}; valid range {text}", **bound)
+
+
+def _setting(section: str, spec: Setting) -> Any:
+    """The field of one core table entry (:mod:`kinematics.settings`): its default, bounds, label
+    and range text (the one message) all come from the entry."""
+    text = spec.range_text()
+    RANGES[(section, spec.name)] = text
+    bound = {"gt": spec.lo} if spec.lo_open else {"ge": spec.lo}
+    extra: dict[str, Any] = {} if spec.integer else {"allow_inf_nan": False}
+    return Field(spec.default, le=spec.hi, strict=True, description=f"{spec.label}; valid range {text}",
+                 **bound, **extra)
 
 
 _MODEL = ConfigDict(extra="forbid")
@@ -99,7 +111,6 @@ class BoundsIn(BaseModel):
 
 
 RANGES[("bounds", "lo")] = RANGES[("bounds", "hi")] = "[-10000, 10000] on each of x, y, z, lo < hi"
-RANGES[("settings", "bracket_refine")] = "[0, 3]"
 
 
 def _joint_field(name: str, default: Any, description: str, optional: bool = False) -> Any:
@@ -130,18 +141,17 @@ class WorkspaceSettingsIn(BaseModel):
     """How the position workspace is sampled (see ``kinematics.workspace.WorkspaceSettings``)."""
 
     model_config = _MODEL
-    voxel: float = _num("settings", "voxel", 2.0, 0.25, 100.0, "voxel edge h")
+    voxel: float = _setting("settings", WORKSPACE["voxel"])
     orientation: AnglesIn = Field(default_factory=AnglesIn, description="constant platform orientation")
-    eta_step: float = _num("settings", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
+    eta_step: float = _setting("settings", WORKSPACE["eta_step"])
     bounds: BoundsIn | None = Field(None, description="explicit box; null derives it from the design")
-    z_floor: float = _num("settings", "z_floor", 0.0, -1e4, 1e4, "lowest platform height of derived bounds")
+    z_floor: float = _setting("settings", WORKSPACE["z_floor"])
     symmetry: bool = Field(True, description="use the y -> -y mirror symmetry when it holds exactly")
     diagnostics: bool = Field(False, description="evaluate every chain at every voxel (slower)")
     method: Literal["blocks", "dense"] = Field("blocks", description="engine: coarse-to-fine blocks (default) "
                                                "or every voxel (dense); the same voxels")
     bracket: bool = Field(False, description="also certify volume_inner <= V <= volume_outer (continuous workspace)")
-    bracket_refine: int = Field(2, ge=0, le=3, strict=True, description="halvings of the bracket's boundary "
-                                "cubes; valid range [0, 3]")
+    bracket_refine: int = _setting("settings", WORKSPACE["bracket_refine"])
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
     def build(self) -> Any:
@@ -167,18 +177,17 @@ class OrientationSettingsIn(BaseModel):
     """Orientation workspace along the z, y' and x lines (see ``kinematics.orientation``)."""
 
     model_config = _MODEL
-    z0: float = _num("orientation", "z0", 130.0, -1e4, 1e4, "height of the x and y' lines")
-    angle_range: float = _num("orientation", "angle_range", 90.0, 0.0, 180.0,
-                              "angles scanned in [-angle_range, angle_range]", "degrees", lo_open=True)
-    angle_step: float = _num("orientation", "angle_step", 0.5, 0.01, 30.0, "angle sample spacing", "degrees")
-    position_step: float = _num("orientation", "position_step", 1.0, 0.01, 100.0, "position sample spacing")
+    z0: float = _setting("orientation", ORIENTATION["z0"])
+    angle_range: float = _setting("orientation", ORIENTATION["angle_range"])
+    angle_step: float = _setting("orientation", ORIENTATION["angle_step"])
+    position_step: float = _setting("orientation", ORIENTATION["position_step"])
     delta: Literal["extent", "area"] = Field("extent", description="Δ of eq. (28): extent products or area")
     region: Literal["all", "connected"] = Field("all", description="feasible samples counted")
     position_delta: Literal["per_region", "line", "phi"] = Field(
         "per_region", description="position Δ: each region's own, the union of a line's regions, or one per line "
                                   "from the φ region (the literal eq. (28))")
-    eta_step: float = _num("orientation", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
-    z_min: float = _num("orientation", "z_min", 0.0, -1e4, 1e4, "lower end of the z line")
+    eta_step: float = _setting("orientation", ORIENTATION["eta_step"])
+    z_min: float = _setting("orientation", ORIENTATION["z_min"])
     z_max: float | None = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
                                    description="upper end of the z line; null: l_max; valid range [z_min, 10000]")
     s_max: float | None = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
