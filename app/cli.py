@@ -379,19 +379,16 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
 
 def _sweep_orientation(ns: argparse.Namespace) -> Any:
     """The orientation settings of a sweep: ``--z0``, or the paper's z0 = 130 when ``--measure`` is
-    TI_1/TI_2 (``None``: no orientation maps). Checks ``--measure``."""
+    TI_1/TI_2 (``None``: no orientation maps), with the joint flags. Checks ``--measure``."""
     from paraspace.app.figures import MEASURES
     from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.settings import ORIENTATION
 
     if ns.measure not in MEASURES:
         raise ParameterError("measure", ns.measure, "one of " + ", ".join(MEASURES))
     if ns.z0 is None:
-        return OrientationSettings() if ns.measure in ("TI_1", "TI_2") else None
-    try:
-        z0 = float(ns.z0)
-    except (TypeError, ValueError):
-        raise ParameterError("z0", ns.z0, "a number") from None
-    return OrientationSettings(z0=z0)
+        return OrientationSettings(joints=_joints(ns)) if ns.measure in ("TI_1", "TI_2") else None
+    return OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)), joints=_joints(ns))
 
 
 def _with_value(row: dict, param: str, param2: str | None) -> dict:

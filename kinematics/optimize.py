@@ -307,7 +307,9 @@ class OptimizeSettings:
         design: the base design; its fields that are not free stay fixed.
         workspace: sampling of each design's workspace (voxel edge ``h``...).
         orientation: sampling of the orientation workspace, used only when a measure needs it
-            (TI_1, TI_2); ``None``: ``OrientationSettings()`` then.
+            (TI_1, TI_2); ``None``: ``OrientationSettings()`` with the workspace's joints then.
+            Its joints must be the workspace's (one mechanism per run: a TI objective of other
+            joints than the volume's would not describe the designs it ranks).
         population: individuals per generation, [4, 1000].
         generations: generations, [1, 1000]; evaluations <= population x generations.
         seed: random seed, [0, 2^32 - 1].
@@ -378,6 +380,9 @@ class OptimizeSettings:
             raise ParameterError("workspace", self.workspace, "WorkspaceSettings")
         if self.orientation is not None and not isinstance(self.orientation, OrientationSettings):
             raise ParameterError("orientation", self.orientation, "OrientationSettings or None")
+        if self.orientation is not None and self.orientation.joints != self.workspace.joints:
+            raise ParameterError("orientation.joints", self.orientation.joints.to_dict(),
+                                 f"the workspace's joints {self.workspace.joints.to_dict()}")
         set_("population", _int("population", self.population, 4, 1000))
         set_("generations", _int("generations", self.generations, 1, 1000))
         set_("seed", _int("seed", self.seed, 0, 2**32 - 1))
@@ -410,7 +415,9 @@ class OptimizeSettings:
         """The orientation settings evaluations run with (``None`` when no measure needs them)."""
         if not self.needs_orientation:
             return None
-        return self.orientation if self.orientation is not None else OrientationSettings()
+        if self.orientation is not None:
+            return self.orientation
+        return OrientationSettings(joints=self.workspace.joints)
 
     @property
     def algorithm_used(self) -> str:

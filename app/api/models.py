@@ -236,6 +236,21 @@ class OrientationRequest(BaseModel):
     settings: OrientationSettingsIn = Field(default_factory=OrientationSettingsIn)
 
 
+def study_settings(settings: WorkspaceSettingsIn, orientation: OrientationSettingsIn | None) -> tuple[Any, Any]:
+    """The core ``(WorkspaceSettings, OrientationSettings | None)`` of a study (sweep, optimiser):
+    one mechanism, so the joints given in ``settings`` or in ``orientation`` apply to both; given in
+    both, they must agree (422 naming ``orientation.joints``)."""
+    if orientation is None:
+        return settings.build(), None
+    given_s, given_o = "joints" in settings.model_fields_set, "joints" in orientation.model_fields_set
+    if given_s and given_o and settings.joints != orientation.joints:
+        raise FieldError("orientation.joints", "orientation.joints differs from settings.joints: valid values the "
+                                               "same joints (or give them once, in settings.joints)")
+    joints = orientation.joints if given_o else settings.joints
+    return (settings.model_copy(update={"joints": joints}).build(),
+            orientation.model_copy(update={"joints": joints}).build())
+
+
 ParamName = Literal["a", "b", "d_s", "r", "l_min", "l_s", "eta_s"]
 
 
@@ -261,7 +276,8 @@ class SweepRequest(BaseModel):
     settings: WorkspaceSettingsIn = Field(default_factory=lambda: WorkspaceSettingsIn(voxel=4.0))
     x: SweepAxis
     y: SweepAxis | None = None
-    orientation: OrientationSettingsIn | None = None
+    orientation: OrientationSettingsIn | None = Field(
+        None, description="orientation sampling for TI_1/TI_2; its joints are settings.joints when not given here")
 
 
 class OptimizeRequest(BaseModel):
@@ -287,7 +303,8 @@ class OptimizeRequest(BaseModel):
                         description="parameter resolution; valid range [1e-06, 10]")
     algorithm: Literal["auto", "nsga2", "nsga3", "agemoea"] = Field("auto")
     orientation: OrientationSettingsIn | None = Field(
-        None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed)")
+        None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed); "
+                          "its joints are settings.joints when not given here")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
@@ -296,10 +313,11 @@ class OptimizeRequest(BaseModel):
         for text in self.objectives + self.constraints:
             if len(text) > 100:
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
+        workspace, orientation = study_settings(self.settings, self.orientation)
         return OptimizeSettings(
             params=tuple(self.params), bounds=dict(self.bounds), objectives=list(self.objectives),
-            constraints=list(self.constraints), design=self.design.build(), workspace=self.settings.build(),
-            orientation=None if self.orientation is None else self.orientation.build(),
+            constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
+            orientation=orientation,
             population=self.population, generations=self.generations, seed=self.seed, step=self.step,
             algorithm=self.algorithm)
 
