@@ -57,7 +57,8 @@ def test_rest_study_joints_reach_the_orientation(direct: dict[str, float]) -> No
     assert ws.joints == CONES and ori.joints == CONES
     assert evaluate_design(Design(), ws, orientation=ori)["TI_1"] == pytest.approx(direct["cones"], rel=1e-12)
     # given only in orientation: the workspace takes them too
-    req = models.SweepRequest.model_validate({**body, "settings": {"voxel": 8.0}, "orientation": {"joints": CONES_JSON}})
+    req = models.SweepRequest.model_validate({**body, "settings": {"voxel": 8.0},
+                                              "orientation": {"joints": CONES_JSON}})
     assert models.study_settings(req.settings, req.orientation)[0].joints == CONES
     # given in both places and different: refused, naming the field
     req = models.SweepRequest.model_validate({**body, "orientation": {"joints": {"theta_u": 20.0}}})
@@ -91,3 +92,27 @@ def test_explorer_optimize_panel_uses_the_explorers_joints() -> None:
     s = panel.settings()
     assert s.workspace.joints == CONES
     assert s.orientation_used == dataclasses.replace(PANEL_ORIENTATION, joints=CONES)
+
+
+def test_cli_optimize_takes_joint_and_scan_flags() -> None:
+    ns = cli.build_parser().parse_args(["optimize", "--objectives", "TI_1", "--voxel", "8", "--u-cone", "30",
+                                        "--s-cone", "30", "--cone-axis", "home", "--angle-step", "3",
+                                        "--position-step", "5", "--angle-range", "60", "--leg-diameter", "4"])
+    s = cli.optimize_settings_from_args(ns)
+    joints = dataclasses.replace(CONES, leg_diameter=4.0)
+    assert s.workspace.joints == joints
+    assert s.orientation_used == OrientationSettings(angle_range=60.0, angle_step=3.0, position_step=5.0, joints=joints)
+
+
+def test_cli_orientation_scan_flags_give_the_direct_numbers(capsys: pytest.CaptureFixture[str]) -> None:
+    flags = ["--angle-range", "45", "--angle-step", "3", "--position-step", "5"]
+    assert cli.main(["orientation", *flags, "--u-cone", "30", "--cone-axis", "home", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    want = orientation_workspace(Design(), OrientationSettings(angle_range=45.0, angle_step=3.0, position_step=5.0,
+                                                               joints=Joints(theta_u=30.0, cone_axis="home")))
+    assert got["TI_1"] == want.ti1 and got["TI_2"] == want.ti2 and got["scan"]["angle_range"] == [-45.0, 45.0]
+    # a scan flag where no scan runs is refused, not ignored
+    assert cli.main(["orientation", "--at", "0,0,130", "--angle-step", "3"]) == 2
+    assert "angle-step" in capsys.readouterr().err
+    assert cli.main(["sweep", "--param", "a", "--values", "50", "--angle-step", "3"]) == 2
+    assert "only with --measure TI_1/TI_2" in capsys.readouterr().err

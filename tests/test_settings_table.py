@@ -89,3 +89,17 @@ def test_documented_ranges_unchanged() -> None:
     assert (WORKSPACE["voxel"].lo, WORKSPACE["voxel"].hi) == (0.25, 100.0)
     assert ORIENTATION["angle_range"].range_text() == "(0, 180] degrees"
     assert WORKSPACE["bracket_refine"].range_text() == "[0, 3]"
+
+
+def test_table_defaults_are_the_dataclass_defaults() -> None:
+    for cls, table in ((WorkspaceSettings, WORKSPACE), (OrientationSettings, ORIENTATION)):
+        defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+        for name, spec in table.items():
+            assert defaults[name] == spec.default, (cls.__name__, name)
+
+
+def test_patched_scan_bound_reaches_the_cli_flags(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    monkeypatch.setitem(ORIENTATION, "angle_range", dataclasses.replace(ORIENTATION["angle_range"], hi=60.0))
+    assert cli.main(["orientation", "--angle-range", "70"]) == 2
+    assert "angle_range = 70.0 is invalid: valid range (0, 60] degrees" in capsys.readouterr().err
+    assert "(0, 60] degrees" in cli.build_parser()._subparsers._group_actions[0].choices["sweep"].format_help()
