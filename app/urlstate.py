@@ -10,7 +10,7 @@ URL format (keys are the CLI's names)::
     ?a=60&b=14&d_s=40&r=100&l_min=114.5&l_s=50&eta_s=30&eta_range=centered
      &x=0&y=0&z=130&psi=0&theta=0&phi=0
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
-     [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
+     [&voxel=2&z0=130&angle_range=90&angle_step=0.5&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
      [&pin=10,14,50,100,114.5,50,30,centered]
 
@@ -43,6 +43,7 @@ from typing import Any, Literal
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
+from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
 
@@ -101,8 +102,9 @@ POSE_SLIDERS: dict[str, Range] = {
     "phi": Range(-60.0, 60.0, 0.5),
 }
 #: The settings whose rule is a core table entry (:mod:`kinematics.settings`): URL key -> entry.
-TABLE_SETTINGS: dict[str, tuple[dict[str, Setting], str]] = {"voxel": (WORKSPACE, "voxel"),
-                                                              "z0": (ORIENTATION, "z0")}
+TABLE_SETTINGS: dict[str, tuple[dict[str, Setting], str]] = {
+    "voxel": (WORKSPACE, "voxel"), "z0": (ORIENTATION, "z0"),
+    "angle_range": (ORIENTATION, "angle_range"), "angle_step": (ORIENTATION, "angle_step")}
 
 
 class _SettingRanges(Mapping[str, Range]):
@@ -201,6 +203,8 @@ class ExplorerState:
         eta: hand-set arc carriage values ``eta_1..eta_3`` in degrees, in the design's arc range.
         voxel: voxel edge ``h`` of the full workspace computation.
         z0: height of the x and y' lines of the orientation maps.
+        angle_range: the orientation maps scan angles in ``[-angle_range, angle_range]`` degrees.
+        angle_step: angle sample spacing of the orientation maps, degrees.
         view: camera preset.
         cut: whether the shell is cut by a horizontal plane.
         cut_z: height of the cut plane.
@@ -217,6 +221,8 @@ class ExplorerState:
     eta: tuple[float, float, float] = (0.0, 0.0, 0.0)
     voxel: float = 2.0
     z0: float = 130.0
+    angle_range: float = ORIENTATION["angle_range"].default
+    angle_step: float = ORIENTATION["angle_step"].default
     view: CameraPreset = "iso"
     cut: bool = False
     cut_z: float = 80.0
@@ -228,6 +234,11 @@ class ExplorerState:
     def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
         return dataclasses.replace(self, **changes)
+
+    def orientation_settings(self) -> OrientationSettings:
+        """The settings of this state's orientation maps (z0, scan range and step, joints)."""
+        return OrientationSettings(z0=self.z0, angle_range=self.angle_range, angle_step=self.angle_step,
+                                   joints=self.joints)
 
 
 DEFAULT_STATE = ExplorerState()
@@ -249,7 +260,11 @@ def _parse_fields(keys, values: dict[str, str], ranges: Mapping[str, Range], mes
     out: dict[str, float] = {}
     for key in keys:
         if key in values:
-            v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""))
+            spec = TABLE_SETTINGS[key][0][TABLE_SETTINGS[key][1]] if key in TABLE_SETTINGS else None
+            text = spec.range_text() if spec is not None else None  # the table's one message text
+            v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""), range_text=text)
+            if spec is not None and not msg and not spec.contains(v):  # type: ignore[arg-type]
+                msg = f"{key} = {_cut(values[key])} is out of range; valid range {text}"  # e.g. open at lo
             if msg:
                 messages.append(msg)
             else:
@@ -305,7 +320,8 @@ def panel_pairs(query: str) -> dict[str, str]:
 def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
-            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity") + JOINT_KEYS + ("pin",))
+            + ("voxel", "z0", "angle_range", "angle_step", "view", "cut", "cut_z", "cut_keep", "opacity")
+            + JOINT_KEYS + ("pin",))
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -398,7 +414,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
     # Defaults of d/eta (0) are always inside the strokes.
 
     # ----- settings and view ------------------------------------------------------------------------
-    numbers = _parse_fields(("voxel", "z0", "cut_z", "opacity"), values, SETTING_RANGES, messages)
+    numbers = _parse_fields(("voxel", "z0", "angle_range", "angle_step", "cut_z", "opacity"), values,
+                            SETTING_RANGES, messages)
     view = DEFAULT_STATE.view
     if "view" in values:
         v, msg = _parse_choice("view", values["view"], CAMERA_PRESETS)
@@ -455,6 +472,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         design=design, pose=pose, carriages=carriages, joints=joints, pin=pin,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
+        angle_range=numbers.get("angle_range", DEFAULT_STATE.angle_range),
+        angle_step=numbers.get("angle_step", DEFAULT_STATE.angle_step),
         view=view, cut=cut, cut_z=numbers.get("cut_z", DEFAULT_STATE.cut_z), cut_keep=cut_keep,
         opacity=numbers.get("opacity", DEFAULT_STATE.opacity),
     )
@@ -475,7 +494,7 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
             or state.eta != DEFAULT_STATE.eta):
         pairs += [(k, format_number(v)) for k, v in zip(D_KEYS, state.d)]
         pairs += [(k, format_number(v)) for k, v in zip(ETA_KEYS, state.eta)]
-    for key in ("voxel", "z0"):
+    for key in ("voxel", "z0", "angle_range", "angle_step"):
         if getattr(state, key) != getattr(DEFAULT_STATE, key):
             pairs.append((key, format_number(getattr(state, key))))
     if state.view != DEFAULT_STATE.view:

@@ -90,8 +90,8 @@ WORKSPACE: dict[str, Setting] = _table(
 ORIENTATION: dict[str, Setting] = _table(
     Setting("z0", 130.0, -1e4, 1e4, "height of the x and y' lines", slider=(0.0, 350.0, 1.0)),
     Setting("angle_range", 90.0, 0.0, 180.0, "angles scanned in [-angle_range, angle_range]", "degrees",
-            lo_open=True),
-    Setting("angle_step", 0.5, 0.01, 30.0, "angle sample spacing", "degrees"),
+            lo_open=True, slider=(10.0, 180.0, 5.0)),
+    Setting("angle_step", 0.5, 0.01, 30.0, "angle sample spacing", "degrees", slider=(0.25, 5.0, 0.25)),
     Setting("position_step", 1.0, 0.01, 100.0, "position sample spacing"),
     Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
     Setting("z_min", 0.0, -1e4, 1e4, "lower end of the z line"),
