@@ -547,17 +547,11 @@ def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
     return out
 
 
-def _int_arg(field: str, raw: Any) -> int:
-    try:
-        return int(str(raw).strip())
-    except ValueError:
-        raise ParameterError(field, raw, "an integer") from None
-
-
 def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     """The core ``OptimizeSettings`` of the ``optimize`` flags (validated by the core)."""
     from paraspace.kinematics.optimize import OptimizeSettings
     from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.settings import OPTIMIZE
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
@@ -567,8 +561,9 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
         orientation=OrientationSettings(joints=joints, **_scan(ns)),
-        population=_int_arg("population", ns.population), generations=_int_arg("generations", ns.generations),
-        seed=_int_arg("seed", ns.seed), step=ns.step, algorithm=ns.algorithm)
+        population=OPTIMIZE["population"].parse(ns.population),
+        generations=OPTIMIZE["generations"].parse(ns.generations),
+        seed=OPTIMIZE["seed"].parse(ns.seed), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
 
 
 def cmd_optimize(ns: argparse.Namespace) -> int:
@@ -629,11 +624,14 @@ def _add_optimize_parser(sub: Any) -> None:
                    help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
                         + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
     z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges)")
-    z.add_argument("--population", default=16, help="designs per generation (default 16)")
-    z.add_argument("--generations", default=12, help="generations (default 12; 16 x 12 at h = 4 takes about 50 s here)")
-    z.add_argument("--seed", default=1, help="random seed (default 1)")
+    from paraspace.kinematics.settings import OPTIMIZE
+
+    for name, note in (("population", ""), ("generations", "; 16 x 12 at h = 4 takes about 50 s here"), ("seed", ""),
+                       ("step", "")):
+        spec = OPTIMIZE[name]
+        z.add_argument(f"--{name}", default=spec.default,
+                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g}{note})")
     z.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
-    z.add_argument("--step", default=0.01, help="parameter resolution (default 0.01)")
     z.add_argument("--algorithm", default="auto", choices=ALGORITHMS,
                    help="auto: NSGA-II up to 2 objectives, NSGA-III from 3")
     z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")

@@ -65,6 +65,7 @@ from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings
 from .progress import Cancelled, CancelToken, ProgressFn, check, is_cancelled
 from .serialize import jsonable
+from .settings import OPTIMIZE
 from .workspace import WorkspaceSettings
 
 __all__ = ["Measure", "MEASURES", "register_measure", "Objective", "Constraint", "OptimizeSettings",
@@ -288,12 +289,6 @@ def parse_constraint(text: str, field: str = "constraint") -> Constraint:
 # settings
 
 
-def _int(field: str, value: Any, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= int(value) <= hi:
-        raise ParameterError(field, value, f"[{lo}, {hi}] (an integer)")
-    return int(value)
-
-
 @dataclasses.dataclass(frozen=True)
 class OptimizeSettings:
     """What to optimise and how (all validated on construction, naming the field).
@@ -383,16 +378,9 @@ class OptimizeSettings:
         if self.orientation is not None and self.orientation.joints != self.workspace.joints:
             raise ParameterError("orientation.joints", self.orientation.joints.to_dict(),
                                  f"the workspace's joints {self.workspace.joints.to_dict()}")
-        set_("population", _int("population", self.population, 4, 1000))
-        set_("generations", _int("generations", self.generations, 1, 1000))
-        set_("seed", _int("seed", self.seed, 0, 2**32 - 1))
-        try:
-            step = float(self.step)
-        except (TypeError, ValueError):
-            raise ParameterError("step", self.step, "[1e-06, 10] (a number)") from None
-        if not (math.isfinite(step) and 1e-6 <= step <= 10.0):
-            raise ParameterError("step", self.step, "[1e-06, 10]")
-        set_("step", step)
+        for name in ("population", "generations", "seed"):
+            set_(name, OPTIMIZE[name].check(getattr(self, name)))
+        set_("step", float(OPTIMIZE["step"].parse(self.step)))  # a number or its text (the CLI's)
         if self.algorithm not in ALGORITHMS:
             raise ParameterError("algorithm", self.algorithm, " or ".join(ALGORITHMS))
 

@@ -6,8 +6,9 @@ A :class:`Setting` is a named number ``v`` with a default, a unit, a one-line la
                                                                    v an integer when integer)
 
 Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPACE` for
-:class:`~kinematics.workspace.WorkspaceSettings` and :data:`ORIENTATION` for
-:class:`~kinematics.orientation.OrientationSettings`. The core's validation, the URL parser's ranges,
+:class:`~kinematics.workspace.WorkspaceSettings`, :data:`ORIENTATION` for
+:class:`~kinematics.orientation.OrientationSettings` and :data:`OPTIMIZE` for
+:class:`~kinematics.optimize.OptimizeSettings`. The core's validation, the URL parser's ranges,
 the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
 slider specs are all derived from these entries, so a bound is written once and the message
 (:meth:`Setting.range_text`) is the same everywhere. The design parameters' table is
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from typing import Any
 
 from .design import ParameterError
@@ -43,7 +45,8 @@ class Setting:
 
     def range_text(self, with_unit: bool = True) -> str:
         """``"[lo, hi]"`` (``"(lo, hi]"`` when open at ``lo``), plus the unit: the one message text."""
-        text = f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
+        lo, hi = (f"{int(self.lo)}", f"{int(self.hi)}") if self.integer else (f"{self.lo:g}", f"{self.hi:g}")
+        text = f"{'(' if self.lo_open else '['}{lo}, {hi}]"
         return f"{text} {self.unit}" if (with_unit and self.unit) else text
 
     def contains(self, value: float) -> bool:
@@ -54,11 +57,12 @@ class Setting:
         """``value`` validated (a number of the right kind inside the range), else ParameterError
         naming the setting and its range. Strings are not numbers here (see :meth:`parse`)."""
         if self.integer:
-            ok = isinstance(value, int) and not isinstance(value, bool) and self.contains(float(value))
+            ok = (isinstance(value, numbers.Integral) and not isinstance(value, bool)
+                  and self.contains(float(value)))
             if not ok:
                 raise ParameterError(self.name, value, self.range_text() + " (an integer)")
             return int(value)
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
         if not ok or not self.contains(float(value)):
             raise ParameterError(self.name, value, self.range_text())
         return float(value)
@@ -95,4 +99,12 @@ ORIENTATION: dict[str, Setting] = _table(
     Setting("position_step", 1.0, 0.01, 100.0, "position sample spacing"),
     Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
     Setting("z_min", 0.0, -1e4, 1e4, "lower end of the z line"),
+)
+
+#: :class:`~kinematics.optimize.OptimizeSettings`'s numbers.
+OPTIMIZE: dict[str, Setting] = _table(
+    Setting("population", 16, 4, 1000, "designs per generation", integer=True),
+    Setting("generations", 12, 1, 1000, "generations", integer=True),
+    Setting("seed", 1, 0, 2**32 - 1, "random seed", integer=True),
+    Setting("step", 0.01, 1e-6, 10.0, "parameter resolution"),
 )

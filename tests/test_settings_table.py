@@ -19,8 +19,9 @@ from paraspace.app import cli
 from paraspace.app.api import models
 from paraspace.app.urlstate import SETTING_RANGES, SETTING_SLIDERS, Range, parse_query
 from paraspace.kinematics.design import ParameterError
+from paraspace.kinematics.optimize import OptimizeSettings
 from paraspace.kinematics.orientation import OrientationSettings
-from paraspace.kinematics.settings import ORIENTATION, WORKSPACE
+from paraspace.kinematics.settings import OPTIMIZE, ORIENTATION, WORKSPACE
 from paraspace.kinematics.workspace import WorkspaceSettings
 
 
@@ -59,10 +60,14 @@ _REST_SCRIPT = textwrap.dedent("""
     from paraspace.kinematics.settings import ORIENTATION, WORKSPACE
     WORKSPACE["voxel"] = dataclasses.replace(WORKSPACE["voxel"], hi=50.0)
     ORIENTATION["angle_step"] = dataclasses.replace(ORIENTATION["angle_step"], lo=0.1, hi=20.0)
+    from paraspace.kinematics.settings import OPTIMIZE
+    OPTIMIZE["population"] = dataclasses.replace(OPTIMIZE["population"], hi=200)
     from paraspace.app.api import errors, models
     w = models.WorkspaceSettingsIn.model_json_schema()["properties"]["voxel"]
     o = models.OrientationSettingsIn.model_json_schema()["properties"]["angle_step"]
-    print(json.dumps({"voxel": [w["minimum"], w["maximum"], errors.RANGES[("settings", "voxel")]],
+    p = models.OptimizeRequest.model_json_schema()["properties"]["population"]
+    print(json.dumps({"population": [p["minimum"], p["maximum"], errors.RANGES[("body", "population")]],
+                      "voxel": [w["minimum"], w["maximum"], errors.RANGES[("settings", "voxel")]],
                       "angle_step": [o["minimum"], o["maximum"], errors.RANGES[("orientation", "angle_step")]]}))
 """)
 
@@ -70,7 +75,8 @@ _REST_SCRIPT = textwrap.dedent("""
 def test_patched_bounds_reach_the_rest_model() -> None:
     out = subprocess.run([sys.executable, "-c", _REST_SCRIPT], capture_output=True, text=True, timeout=300, check=True)
     got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got == {"voxel": [0.25, 50.0, "[0.25, 50]"], "angle_step": [0.1, 20.0, "[0.1, 20] degrees"]}
+    assert got == {"voxel": [0.25, 50.0, "[0.25, 50]"], "angle_step": [0.1, 20.0, "[0.1, 20] degrees"],
+                   "population": [4, 200, "[4, 200]"]}
 
 
 @pytest.mark.parametrize(("model", "section", "table"), [
@@ -103,3 +109,14 @@ def test_patched_scan_bound_reaches_the_cli_flags(monkeypatch: pytest.MonkeyPatc
     assert cli.main(["orientation", "--angle-range", "70"]) == 2
     assert "angle_range = 70.0 is invalid: valid range (0, 60] degrees" in capsys.readouterr().err
     assert "(0, 60] degrees" in cli.build_parser()._subparsers._group_actions[0].choices["sweep"].format_help()
+
+
+def test_patched_optimiser_bound_reaches_core_and_cli(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    assert OptimizeSettings(population=500).population == 500
+    monkeypatch.setitem(OPTIMIZE, "population", dataclasses.replace(OPTIMIZE["population"], hi=200))
+    with pytest.raises(ParameterError, match=r"population = 500 is invalid: valid range \[4, 200\] \(an integer\)"):
+        OptimizeSettings(population=500)
+    ns = cli.build_parser().parse_args(["optimize", "--population", "500"])
+    with pytest.raises(ParameterError, match=r"\[4, 200\]"):
+        cli.optimize_settings_from_args(ns)
+    assert "[4, 200]" in cli.build_parser()._subparsers._group_actions[0].choices["optimize"].format_help()

@@ -15,7 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, Strict
 from paraspace.kinematics.design import PARAMS, Design
 from paraspace.kinematics.joints import JOINT_RANGES, Joints
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
-from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
+from paraspace.kinematics.settings import OPTIMIZE, ORIENTATION, WORKSPACE, Setting
 
 from .errors import RANGES, FieldError, call_core
 
@@ -35,14 +35,14 @@ def _num(section: str, name: str, default: Any, lo: float, hi: float, descriptio
                  description=f"{description}; valid range {text}", **bound)
 
 
-def _setting(section: str, spec: Setting) -> Any:
+def _setting(section: str, spec: Setting, strict: bool = True) -> Any:
     """The field of one core table entry (:mod:`kinematics.settings`): its default, bounds, label
     and range text (the one message) all come from the entry."""
     text = spec.range_text()
     RANGES[(section, spec.name)] = text
     bound = {"gt": spec.lo} if spec.lo_open else {"ge": spec.lo}
     extra: dict[str, Any] = {} if spec.integer else {"allow_inf_nan": False}
-    return Field(spec.default, le=spec.hi, strict=True, description=f"{spec.label}; valid range {text}",
+    return Field(spec.default, le=spec.hi, strict=strict, description=f"{spec.label}; valid range {text}",
                  **bound, **extra)
 
 
@@ -296,11 +296,10 @@ class OptimizeRequest(BaseModel):
                                   description="measures; a leading - minimises (kinematics.optimize.MEASURES)")
     constraints: list[str] = Field(default_factory=list, max_length=8,
                                    description="flags (boundary_complete) or MEASURE>=V / MEASURE<=V")
-    population: int = Field(16, ge=4, le=1000, description="designs per generation; valid range [4, 1000]")
-    generations: int = Field(12, ge=1, le=1000, description="generations; valid range [1, 1000]")
-    seed: int = Field(1, ge=0, le=2**32 - 1, description="random seed; valid range [0, 4294967295]")
-    step: float = Field(0.01, ge=1e-6, le=10.0, allow_inf_nan=False,
-                        description="parameter resolution; valid range [1e-06, 10]")
+    population: int = _setting("body", OPTIMIZE["population"], strict=False)
+    generations: int = _setting("body", OPTIMIZE["generations"], strict=False)
+    seed: int = _setting("body", OPTIMIZE["seed"], strict=False)
+    step: float = _setting("body", OPTIMIZE["step"], strict=False)
     algorithm: Literal["auto", "nsga2", "nsga3", "agemoea"] = Field("auto")
     orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed); "
@@ -322,8 +321,6 @@ class OptimizeRequest(BaseModel):
             algorithm=self.algorithm)
 
 
-RANGES[("body", "population")] = "[4, 1000]"
-RANGES[("body", "generations")] = "[1, 1000]"
 
 
 class LinkRequest(BaseModel):
