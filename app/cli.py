@@ -82,18 +82,20 @@ def _design(ns: argparse.Namespace) -> Design:
 
 
 def _add_joint_flags(p: argparse.ArgumentParser) -> None:
-    from paraspace.kinematics.joints import CONE_AXES
+    from paraspace.kinematics.joints import CONE_AXES, JOINT_RANGES
 
     g = p.add_argument_group("joints (default: the paper's model, strokes only; see README 'Joint limits')")
     g.add_argument("--u-cone", dest="theta_u", metavar="DEG",
-                   help="half-angle of every U joint's cone, (0, 90] degrees")
+                   help=f"half-angle of every U joint's cone, {JOINT_RANGES['theta_u'][3]}")
     g.add_argument("--s-cone", dest="theta_s", metavar="DEG",
-                   help="half-angle of every S joint's cone, (0, 90] degrees")
+                   help=f"half-angle of every S joint's cone, {JOINT_RANGES['theta_s'][3]}")
     g.add_argument("--cone-axis", dest="cone_axis", default="normal", metavar="|".join(CONE_AXES),
                    help="cone axes: base / platform normal (default) or the legs' home directions")
     g.add_argument("--leg-diameter", dest="leg_diameter", default=0.0, metavar="W",
-                   help="legs are capsules of this diameter; two legs closer than W + C interfere (default 0: off)")
-    g.add_argument("--clearance", default=0.0, metavar="C", help="extra distance between legs (default 0)")
+                   help=f"legs are capsules of this diameter, {JOINT_RANGES['leg_diameter'][3]}; two legs closer "
+                        "than W + C interfere (default 0: off)")
+    g.add_argument("--clearance", default=0.0, metavar="C",
+                   help=f"extra distance between legs, {JOINT_RANGES['clearance'][3]} (default 0)")
 
 
 def _joints(ns: argparse.Namespace):

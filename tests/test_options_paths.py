@@ -116,3 +116,15 @@ def test_cli_orientation_scan_flags_give_the_direct_numbers(capsys: pytest.Captu
     assert "angle-step" in capsys.readouterr().err
     assert cli.main(["sweep", "--param", "a", "--values", "50", "--angle-step", "3"]) == 2
     assert "only with --measure TI_1/TI_2" in capsys.readouterr().err
+
+
+def test_dask_sweep_keeps_the_joints() -> None:
+    """The CLI's --workers path: the orientation settings (with their joints) reach the workers."""
+    pytest.importorskip("distributed")
+    from paraspace.kinematics.distributed import sweep_grid
+
+    ori = OrientationSettings(angle_step=3.0, position_step=5.0, joints=CONES)
+    rows = sweep_grid(Design(), {"a": [50.0]}, WorkspaceSettings(voxel=8.0, joints=CONES), orientation=ori,
+                      n_workers=1)
+    assert rows[0]["TI_1"] == orientation_workspace(Design(), ori).ti1
+    assert rows[0]["TI_1"] != orientation_workspace(Design(), dataclasses.replace(ori, joints=Joints())).ti1
