@@ -16,8 +16,10 @@
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
-Joint flags (``workspace``, ``orientation``, ``sweep``, ``ik``): ``--u-cone DEG --s-cone DEG
+Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``ik``): ``--u-cone DEG --s-cone DEG
 [--cone-axis normal|home] --leg-diameter W [--clearance C]``.
+Scan flags (``orientation``, ``sweep``, ``optimize``; TI_1 and TI_2): ``--angle-range DEG --angle-step DEG
+--position-step S`` (ranges: ``kinematics.settings.ORIENTATION``).
 Every command except ``serve`` uses only the numerical core (no web packages are imported).
 Bad flags or values exit with status 2 and one line naming the field and its valid range.
 """
@@ -82,18 +84,20 @@ def _design(ns: argparse.Namespace) -> Design:
 
 
 def _add_joint_flags(p: argparse.ArgumentParser) -> None:
-    from paraspace.kinematics.joints import CONE_AXES
+    from paraspace.kinematics.joints import CONE_AXES, JOINT_RANGES
 
     g = p.add_argument_group("joints (default: the paper's model, strokes only; see README 'Joint limits')")
     g.add_argument("--u-cone", dest="theta_u", metavar="DEG",
-                   help="half-angle of every U joint's cone, (0, 90] degrees")
+                   help=f"half-angle of every U joint's cone, {JOINT_RANGES['theta_u'][3]}")
     g.add_argument("--s-cone", dest="theta_s", metavar="DEG",
-                   help="half-angle of every S joint's cone, (0, 90] degrees")
+                   help=f"half-angle of every S joint's cone, {JOINT_RANGES['theta_s'][3]}")
     g.add_argument("--cone-axis", dest="cone_axis", default="normal", metavar="|".join(CONE_AXES),
                    help="cone axes: base / platform normal (default) or the legs' home directions")
     g.add_argument("--leg-diameter", dest="leg_diameter", default=0.0, metavar="W",
-                   help="legs are capsules of this diameter; two legs closer than W + C interfere (default 0: off)")
-    g.add_argument("--clearance", default=0.0, metavar="C", help="extra distance between legs (default 0)")
+                   help=f"legs are capsules of this diameter, {JOINT_RANGES['leg_diameter'][3]}; two legs closer "
+                        "than W + C interfere (default 0: off)")
+    g.add_argument("--clearance", default=0.0, metavar="C",
+                   help=f"extra distance between legs, {JOINT_RANGES['clearance'][3]} (default 0)")
 
 
 def _joints(ns: argparse.Namespace):
@@ -104,11 +108,36 @@ def _joints(ns: argparse.Namespace):
                   clearance=ns.clearance)
 
 
+#: The orientation scan's flags (``orientation``, ``sweep``, ``optimize``): flag -> table entry name.
+SCAN_FLAGS: dict[str, str] = {"--angle-range": "angle_range", "--angle-step": "angle_step",
+                              "--position-step": "position_step"}
+
+
+def _add_scan_flags(p: argparse.ArgumentParser) -> None:
+    """The orientation scan's flags, each derived from its entry of ``kinematics.settings.ORIENTATION``
+    (help: label, valid range, default)."""
+    from paraspace.kinematics.settings import ORIENTATION
+
+    g = p.add_argument_group("orientation scan (TI_1, TI_2)")
+    for flag, name in SCAN_FLAGS.items():
+        spec = ORIENTATION[name]
+        g.add_argument(flag, dest=f"scan_{name}", default=None, metavar="V",
+                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
+
+
+def _scan(ns: argparse.Namespace) -> dict[str, float]:
+    """The scan flags given, read and checked by their table entries (the others keep their defaults)."""
+    from paraspace.kinematics.settings import ORIENTATION
+
+    return {name: float(ORIENTATION[name].parse(getattr(ns, f"scan_{name}"))) for name in SCAN_FLAGS.values()
+            if getattr(ns, f"scan_{name}", None) is not None}
+
+
 def _voxel(ns: argparse.Namespace) -> float:
-    try:
-        return float(ns.voxel)
-    except (TypeError, ValueError):
-        raise ParameterError("voxel", ns.voxel, "[0.25, 100] (a number)") from None
+    """``--voxel`` read and checked by its table entry (:data:`kinematics.settings.WORKSPACE`)."""
+    from paraspace.kinematics.settings import WORKSPACE
+
+    return float(WORKSPACE["voxel"].parse(ns.voxel))
 
 
 def _float_arg(field: str, raw: Any, valid: str) -> float:
@@ -230,12 +259,15 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
 
     design = _design(ns)
     if ns.at is not None:
+        given = [flag for flag, name in SCAN_FLAGS.items() if getattr(ns, f"scan_{name}") is not None]
+        if given:
+            raise ParameterError(given[0].lstrip("-"), getattr(ns, f"scan_{SCAN_FLAGS[given[0]]}"),
+                                 "not with --at (the tilt-and-torsion report has its own scan: --azimuth-step)")
         return _tilt_torsion(ns, design)
-    try:
-        z0 = float(ns.z0)
-    except (TypeError, ValueError):
-        raise ParameterError("z0", ns.z0, "a number") from None
-    settings = OrientationSettings(z0=z0, joints=_joints(ns), position_delta=ns.position_delta)
+    from paraspace.kinematics.settings import ORIENTATION
+
+    z0 = float(ORIENTATION["z0"].parse(ns.z0))
+    settings = OrientationSettings(z0=z0, joints=_joints(ns), position_delta=ns.position_delta, **_scan(ns))
     warm_up()
     progress, done = progress_line("orientation")
     try:
@@ -380,19 +412,22 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
 
 def _sweep_orientation(ns: argparse.Namespace) -> Any:
     """The orientation settings of a sweep: ``--z0``, or the paper's z0 = 130 when ``--measure`` is
-    TI_1/TI_2 (``None``: no orientation maps). Checks ``--measure``."""
+    TI_1/TI_2 (``None``: no orientation maps), with the joint flags. Checks ``--measure``."""
     from paraspace.app.figures import MEASURES
     from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.settings import ORIENTATION
 
     if ns.measure not in MEASURES:
         raise ParameterError("measure", ns.measure, "one of " + ", ".join(MEASURES))
     if ns.z0 is None:
-        return OrientationSettings() if ns.measure in ("TI_1", "TI_2") else None
-    try:
-        z0 = float(ns.z0)
-    except (TypeError, ValueError):
-        raise ParameterError("z0", ns.z0, "a number") from None
-    return OrientationSettings(z0=z0)
+        if ns.measure not in ("TI_1", "TI_2"):
+            given = [flag for flag, name in SCAN_FLAGS.items() if getattr(ns, f"scan_{name}") is not None]
+            if given:
+                raise ParameterError(given[0].lstrip("-"), getattr(ns, f"scan_{SCAN_FLAGS[given[0]]}"),
+                                     "only with --measure TI_1/TI_2 or --z0 (the orientation maps)")
+            return None
+        return OrientationSettings(joints=_joints(ns), **_scan(ns))
+    return OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)), joints=_joints(ns), **_scan(ns))
 
 
 def _with_value(row: dict, param: str, param2: str | None) -> dict:
@@ -515,31 +550,23 @@ def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
     return out
 
 
-def _int_arg(field: str, raw: Any) -> int:
-    try:
-        return int(str(raw).strip())
-    except ValueError:
-        raise ParameterError(field, raw, "an integer") from None
-
-
 def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     """The core ``OptimizeSettings`` of the ``optimize`` flags (validated by the core)."""
     from paraspace.kinematics.optimize import OptimizeSettings
     from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.settings import OPTIMIZE
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
-    try:
-        angle_step, position_step = float(ns.angle_step), float(ns.position_step)
-    except (TypeError, ValueError):
-        raise ParameterError("angle-step", f"{ns.angle_step}/{ns.position_step}", "numbers") from None
+    joints = _joints(ns)
     return OptimizeSettings(
         params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
-        workspace=WorkspaceSettings(voxel=_voxel(ns)),
-        orientation=OrientationSettings(angle_step=angle_step, position_step=position_step),
-        population=_int_arg("population", ns.population), generations=_int_arg("generations", ns.generations),
-        seed=_int_arg("seed", ns.seed), step=ns.step, algorithm=ns.algorithm)
+        workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
+        orientation=OrientationSettings(joints=joints, **_scan(ns)),
+        population=OPTIMIZE["population"].parse(ns.population),
+        generations=OPTIMIZE["generations"].parse(ns.generations),
+        seed=OPTIMIZE["seed"].parse(ns.seed), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
 
 
 def cmd_optimize(ns: argparse.Namespace) -> int:
@@ -599,17 +626,16 @@ def _add_optimize_parser(sub: Any) -> None:
                    help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
                         + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
     z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges)")
-    z.add_argument("--population", default=16, help="designs per generation (default 16)")
-    z.add_argument("--generations", default=12, help="generations (default 12; 16 x 12 at h = 4 takes about 50 s here)")
-    z.add_argument("--seed", default=1, help="random seed (default 1)")
+    from paraspace.kinematics.settings import OPTIMIZE
+
+    for name, note in (("population", ""), ("generations", "; 16 x 12 at h = 4 takes about 50 s here"), ("seed", ""),
+                       ("step", "")):
+        spec = OPTIMIZE[name]
+        z.add_argument(f"--{name}", default=spec.default,
+                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g}{note})")
     z.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
-    z.add_argument("--step", default=0.01, help="parameter resolution (default 0.01)")
     z.add_argument("--algorithm", default="auto", choices=ALGORITHMS,
                    help="auto: NSGA-II up to 2 objectives, NSGA-III from 3")
-    z.add_argument("--angle-step", dest="angle_step", default=0.5,
-                   help="orientation angle step in degrees, for TI_1/TI_2 (default 0.5)")
-    z.add_argument("--position-step", dest="position_step", default=1.0,
-                   help="orientation position step, for TI_1/TI_2 (default 1)")
     z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")
     z.add_argument("--csv", metavar="FILE", help="the front, one design per row")
     z.add_argument("--plot", metavar="FILE.png", help="a picture of the front")
@@ -617,6 +643,8 @@ def _add_optimize_parser(sub: Any) -> None:
                    help="show the progress bar on stderr even when it is not a terminal")
     z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
+    _add_scan_flags(z)
+    _add_joint_flags(z)
     z.set_defaults(func=cmd_optimize)
 
 
@@ -667,6 +695,7 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=("per_region", "line", "phi"),
                    help="eq. (28)'s position Δ: each region's own (default), the union of a line's regions, "
                         "or the literal reading: one Δ per line taken from the φ region")
+    _add_scan_flags(o)
     _add_joint_flags(o)
     o.set_defaults(func=cmd_orientation)
 
@@ -687,6 +716,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    _add_scan_flags(s)
     _add_joint_flags(s)
     s.set_defaults(func=cmd_sweep)
 

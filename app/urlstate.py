@@ -10,7 +10,7 @@ URL format (keys are the CLI's names)::
     ?a=60&b=14&d_s=40&r=100&l_min=114.5&l_s=50&eta_s=30&eta_range=centered
      &x=0&y=0&z=130&psi=0&theta=0&phi=0
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
-     [&voxel=2&z0=130&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
+     [&voxel=2&z0=130&angle_range=90&angle_step=0.5&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
      [&pin=10,14,50,100,114.5,50,30,centered]
 
@@ -38,11 +38,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import urllib.parse
+from collections.abc import Iterator, Mapping
 from typing import Any, Literal
 
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
 from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
+from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
+from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
 
 CarriageMode = Literal["auto", "manual"]
 CameraPreset = Literal["iso", "top", "bottom", "side"]
@@ -98,21 +101,43 @@ POSE_SLIDERS: dict[str, Range] = {
     "theta": Range(-60.0, 60.0, 0.5),
     "phi": Range(-60.0, 60.0, 0.5),
 }
+#: The settings whose rule is a core table entry (:mod:`kinematics.settings`): URL key -> entry.
+TABLE_SETTINGS: dict[str, tuple[dict[str, Setting], str]] = {
+    "voxel": (WORKSPACE, "voxel"), "z0": (ORIENTATION, "z0"),
+    "angle_range": (ORIENTATION, "angle_range"), "angle_step": (ORIENTATION, "angle_step")}
+
+
+class _SettingRanges(Mapping[str, Range]):
+    """Ranges of the other numeric settings: the view's own (``cut_z``, ``opacity``), and for the
+    keys of :data:`TABLE_SETTINGS` the core table's entry, read when asked (one definition)."""
+
+    def __init__(self, own: dict[str, Range], slider: bool) -> None:
+        self._own = own
+        self._slider = slider
+
+    def __getitem__(self, key: str) -> Range:
+        if key in TABLE_SETTINGS:
+            table, name = TABLE_SETTINGS[key]
+            spec = table[name]
+            if self._slider and spec.slider is not None:
+                return Range(*spec.slider)
+            return Range(spec.lo, spec.hi, spec.slider[2] if spec.slider else 0.5)
+        return self._own[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter((*TABLE_SETTINGS, *self._own))
+
+    def __len__(self) -> int:
+        return len(TABLE_SETTINGS) + len(self._own)
+
+
 #: Accepted ranges of the other numeric settings (voxel: ``WorkspaceSettings``; z0: the
 #: orientation settings; a grid over the voxel limit is refused when computed, with its message).
-SETTING_RANGES: dict[str, Range] = {
-    "voxel": Range(0.25, 100.0, 0.5),
-    "z0": Range(-1e4, 1e4, 1.0),
-    "cut_z": Range(-1e4, 1e4, 1.0),
-    "opacity": Range(0.0, 1.0, 0.05),
-}
+SETTING_RANGES: Mapping[str, Range] = _SettingRanges(
+    {"cut_z": Range(-1e4, 1e4, 1.0), "opacity": Range(0.0, 1.0, 0.05)}, slider=False)
 #: Slider ranges of the other numeric settings.
-SETTING_SLIDERS: dict[str, Range] = {
-    "voxel": Range(1.0, 10.0, 0.5),
-    "z0": Range(0.0, 350.0, 1.0),
-    "cut_z": Range(0.0, 350.0, 1.0),
-    "opacity": Range(0.1, 1.0, 0.05),
-}
+SETTING_SLIDERS: Mapping[str, Range] = _SettingRanges(
+    {"cut_z": Range(0.0, 350.0, 1.0), "opacity": Range(0.1, 1.0, 0.05)}, slider=True)
 #: Keys of the joint options (:mod:`kinematics.joints`), written only when set.
 JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
 
@@ -144,7 +169,7 @@ def parse_pin(raw: str) -> tuple[Design | None, str | None]:
 
 def check_field(key: str, value: float) -> str | None:
     """The one message for a numeric field outside its accepted range (``None`` when valid)."""
-    rng = {**DESIGN_RANGES, **POSE_RANGES, **SETTING_RANGES}[key]
+    rng = DESIGN_RANGES.get(key) or POSE_RANGES.get(key) or SETTING_RANGES[key]
     if not (math.isfinite(value) and rng.lo <= value <= rng.hi):
         return f"{key} = {value:g} is out of range; valid range {rng.text(UNITS.get(key, ''))}"
     return None
@@ -178,6 +203,8 @@ class ExplorerState:
         eta: hand-set arc carriage values ``eta_1..eta_3`` in degrees, in the design's arc range.
         voxel: voxel edge ``h`` of the full workspace computation.
         z0: height of the x and y' lines of the orientation maps.
+        angle_range: the orientation maps scan angles in ``[-angle_range, angle_range]`` degrees.
+        angle_step: angle sample spacing of the orientation maps, degrees.
         view: camera preset.
         cut: whether the shell is cut by a horizontal plane.
         cut_z: height of the cut plane.
@@ -194,6 +221,8 @@ class ExplorerState:
     eta: tuple[float, float, float] = (0.0, 0.0, 0.0)
     voxel: float = 2.0
     z0: float = 130.0
+    angle_range: float = ORIENTATION["angle_range"].default
+    angle_step: float = ORIENTATION["angle_step"].default
     view: CameraPreset = "iso"
     cut: bool = False
     cut_z: float = 80.0
@@ -205,6 +234,11 @@ class ExplorerState:
     def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
         return dataclasses.replace(self, **changes)
+
+    def orientation_settings(self) -> OrientationSettings:
+        """The settings of this state's orientation maps (z0, scan range and step, joints)."""
+        return OrientationSettings(z0=self.z0, angle_range=self.angle_range, angle_step=self.angle_step,
+                                   joints=self.joints)
 
 
 DEFAULT_STATE = ExplorerState()
@@ -221,12 +255,16 @@ def format_number(value: float) -> str:
     return text
 
 
-def _parse_fields(keys, values: dict[str, str], ranges: dict[str, Range], messages: list[str]) -> dict[str, float]:
+def _parse_fields(keys, values: dict[str, str], ranges: Mapping[str, Range], messages: list[str]) -> dict[str, float]:
     """:func:`_parse_number` for every ``key`` present in ``values``; bad ones add a message."""
     out: dict[str, float] = {}
     for key in keys:
         if key in values:
-            v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""))
+            spec = TABLE_SETTINGS[key][0][TABLE_SETTINGS[key][1]] if key in TABLE_SETTINGS else None
+            text = spec.range_text() if spec is not None else None  # the table's one message text
+            v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""), range_text=text)
+            if spec is not None and not msg and not spec.contains(v):  # type: ignore[arg-type]
+                msg = f"{key} = {_cut(values[key])} is out of range; valid range {text}"  # e.g. open at lo
             if msg:
                 messages.append(msg)
             else:
@@ -282,7 +320,8 @@ def panel_pairs(query: str) -> dict[str, str]:
 def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
-            + ("voxel", "z0", "view", "cut", "cut_z", "cut_keep", "opacity") + JOINT_KEYS + ("pin",))
+            + ("voxel", "z0", "angle_range", "angle_step", "view", "cut", "cut_z", "cut_keep", "opacity")
+            + JOINT_KEYS + ("pin",))
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -375,7 +414,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
     # Defaults of d/eta (0) are always inside the strokes.
 
     # ----- settings and view ------------------------------------------------------------------------
-    numbers = _parse_fields(("voxel", "z0", "cut_z", "opacity"), values, SETTING_RANGES, messages)
+    numbers = _parse_fields(("voxel", "z0", "angle_range", "angle_step", "cut_z", "opacity"), values,
+                            SETTING_RANGES, messages)
     view = DEFAULT_STATE.view
     if "view" in values:
         v, msg = _parse_choice("view", values["view"], CAMERA_PRESETS)
@@ -432,6 +472,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         design=design, pose=pose, carriages=carriages, joints=joints, pin=pin,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
+        angle_range=numbers.get("angle_range", DEFAULT_STATE.angle_range),
+        angle_step=numbers.get("angle_step", DEFAULT_STATE.angle_step),
         view=view, cut=cut, cut_z=numbers.get("cut_z", DEFAULT_STATE.cut_z), cut_keep=cut_keep,
         opacity=numbers.get("opacity", DEFAULT_STATE.opacity),
     )
@@ -452,7 +494,7 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
             or state.eta != DEFAULT_STATE.eta):
         pairs += [(k, format_number(v)) for k, v in zip(D_KEYS, state.d)]
         pairs += [(k, format_number(v)) for k, v in zip(ETA_KEYS, state.eta)]
-    for key in ("voxel", "z0"):
+    for key in ("voxel", "z0", "angle_range", "angle_step"):
         if getattr(state, key) != getattr(DEFAULT_STATE, key):
             pairs.append((key, format_number(getattr(state, key))))
     if state.view != DEFAULT_STATE.view:

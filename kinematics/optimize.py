@@ -65,6 +65,7 @@ from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings
 from .progress import Cancelled, CancelToken, ProgressFn, check, is_cancelled
 from .serialize import jsonable
+from .settings import OPTIMIZE
 from .workspace import WorkspaceSettings
 
 __all__ = ["Measure", "MEASURES", "register_measure", "Objective", "Constraint", "OptimizeSettings",
@@ -288,12 +289,6 @@ def parse_constraint(text: str, field: str = "constraint") -> Constraint:
 # settings
 
 
-def _int(field: str, value: Any, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= int(value) <= hi:
-        raise ParameterError(field, value, f"[{lo}, {hi}] (an integer)")
-    return int(value)
-
-
 @dataclasses.dataclass(frozen=True)
 class OptimizeSettings:
     """What to optimise and how (all validated on construction, naming the field).
@@ -307,7 +302,9 @@ class OptimizeSettings:
         design: the base design; its fields that are not free stay fixed.
         workspace: sampling of each design's workspace (voxel edge ``h``...).
         orientation: sampling of the orientation workspace, used only when a measure needs it
-            (TI_1, TI_2); ``None``: ``OrientationSettings()`` then.
+            (TI_1, TI_2); ``None``: ``OrientationSettings()`` with the workspace's joints then.
+            Its joints must be the workspace's (one mechanism per run: a TI objective of other
+            joints than the volume's would not describe the designs it ranks).
         population: individuals per generation, [4, 1000].
         generations: generations, [1, 1000]; evaluations <= population x generations.
         seed: random seed, [0, 2^32 - 1].
@@ -378,16 +375,12 @@ class OptimizeSettings:
             raise ParameterError("workspace", self.workspace, "WorkspaceSettings")
         if self.orientation is not None and not isinstance(self.orientation, OrientationSettings):
             raise ParameterError("orientation", self.orientation, "OrientationSettings or None")
-        set_("population", _int("population", self.population, 4, 1000))
-        set_("generations", _int("generations", self.generations, 1, 1000))
-        set_("seed", _int("seed", self.seed, 0, 2**32 - 1))
-        try:
-            step = float(self.step)
-        except (TypeError, ValueError):
-            raise ParameterError("step", self.step, "[1e-06, 10] (a number)") from None
-        if not (math.isfinite(step) and 1e-6 <= step <= 10.0):
-            raise ParameterError("step", self.step, "[1e-06, 10]")
-        set_("step", step)
+        if self.orientation is not None and self.orientation.joints != self.workspace.joints:
+            raise ParameterError("orientation.joints", self.orientation.joints.to_dict(),
+                                 f"the workspace's joints {self.workspace.joints.to_dict()}")
+        for name in ("population", "generations", "seed"):
+            set_(name, OPTIMIZE[name].check(getattr(self, name)))
+        set_("step", float(OPTIMIZE["step"].parse(self.step)))  # a number or its text (the CLI's)
         if self.algorithm not in ALGORITHMS:
             raise ParameterError("algorithm", self.algorithm, " or ".join(ALGORITHMS))
 
@@ -410,7 +403,9 @@ class OptimizeSettings:
         """The orientation settings evaluations run with (``None`` when no measure needs them)."""
         if not self.needs_orientation:
             return None
-        return self.orientation if self.orientation is not None else OrientationSettings()
+        if self.orientation is not None:
+            return self.orientation
+        return OrientationSettings(joints=self.workspace.joints)
 
     @property
     def algorithm_used(self) -> str:

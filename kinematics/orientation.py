@@ -88,6 +88,7 @@ from .joints import Joints
 from .line_scan import reachable_along
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import Y_PRIME_AXIS, axis_angle, rot_x, rot_z
+from .settings import ORIENTATION
 from .workspace import reachable, reachable_pairs  # noqa: F401 - the documented test and its oracle
 
 #: Line keys and their unit direction (``None``: the z line, positions are heights).
@@ -160,12 +161,8 @@ class OrientationSettings:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
         if not isinstance(self.joints, Joints):
             raise ParameterError("joints", self.joints, "a Joints value")
-        set_("z0", _num("z0", self.z0, -1e4, 1e4))
-        set_("angle_range", _num("angle_range", self.angle_range, 0.0, 180.0, lo_open=True))
-        set_("angle_step", _num("angle_step", self.angle_step, 0.01, 30.0))
-        set_("position_step", _num("position_step", self.position_step, 0.01, 100.0))
-        set_("eta_step", _num("eta_step", self.eta_step, 0.01, 10.0))
-        set_("z_min", _num("z_min", self.z_min, -1e4, 1e4))
+        for name, spec in ORIENTATION.items():
+            set_(name, spec.check(getattr(self, name)))
         if self.z_max is not None:
             set_("z_max", _num("z_max", self.z_max, self.z_min, 1e4))
         if self.s_max is not None:

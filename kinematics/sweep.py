@@ -38,7 +38,7 @@ from .serialize import jsonable
 from .workspace import WorkspaceSettings, compute_workspace
 
 #: Bump when the meaning of a cached result changes without a change of the kinematics sources.
-CACHE_SCHEMA = "sweep-1"
+CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 
 
 # --------------------------------------------------------------------------------------------
@@ -65,8 +65,10 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     dict
         JSON-serializable: every field of ``WorkspaceMeasures.to_dict()`` (``volume``, ``voids``,
         ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
-        ``"TI_2"`` and ``"orientation_deltas"`` (the 18 Deltas and 9 products, named as in the paper),
-        and ``"compute_seconds"`` (wall time of this call; every other entry is deterministic).
+        ``"TI_2"``, ``"orientation_deltas"`` (the 18 Deltas and 9 products, named as in the paper),
+        ``"TI_saturated"`` (an angle Delta of TI_1 or TI_2 equals the scan range: the index measures
+        the scan, not the mechanism) and ``"saturation_note"`` (which Deltas; '' when none), and
+        ``"compute_seconds"`` (wall time of this call; every other entry is deterministic).
 
     Raises
     ------
@@ -92,6 +94,8 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         out["TI_1"] = ori.ti1
         out["TI_2"] = ori.ti2
         out["orientation_deltas"] = dict(ori.deltas)
+        out["saturation_note"] = ori.saturation_note()
+        out["TI_saturated"] = bool(out["saturation_note"])
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)

@@ -43,6 +43,7 @@ from .kernel_args import kernel_args
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
+from .settings import WORKSPACE
 
 ALL_CHAINS = 7  # bitmask with the three chain bits set
 #: extra mask bit: every chain is feasible on its own but the legs interfere (:mod:`kinematics.interference`)
@@ -86,20 +87,16 @@ class WorkspaceSettings:
     bracket_refine: int = 2
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.bracket_refine, int) and not isinstance(self.bracket_refine, bool)
-                and 0 <= self.bracket_refine <= 3):
-            raise ParameterError("bracket_refine", self.bracket_refine, "[0, 3] (an integer)")
+        WORKSPACE["bracket_refine"].check(self.bracket_refine)
         if not isinstance(self.joints, Joints):
             raise ParameterError("joints", self.joints, "a Joints value")
         if self.bracket and self.joints.min_distance > 0.0:
             raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
         if self.method not in METHODS:
             raise ParameterError("method", self.method, " or ".join(METHODS))
-        v = self.voxel
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.25 <= v <= 100.0):
-            raise ParameterError("voxel", v, "[0.25, 100]")
-        if not (isinstance(self.eta_step, (int, float)) and 0.01 <= self.eta_step <= 10.0):
-            raise ParameterError("eta_step", self.eta_step, "[0.01, 10] degrees")
+        WORKSPACE["voxel"].check(self.voxel)
+        WORKSPACE["eta_step"].check(self.eta_step)
+        WORKSPACE["z_floor"].check(self.z_floor)
         o = tuple(float(x) for x in self.orientation)
         if len(o) != 3 or not all(math.isfinite(x) for x in o):
             raise ParameterError("orientation", self.orientation, "three angles psi,theta,phi in degrees")

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, Strict
 from paraspace.kinematics.design import PARAMS, Design
 from paraspace.kinematics.joints import JOINT_RANGES, Joints
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
+from paraspace.kinematics.settings import OPTIMIZE, ORIENTATION, WORKSPACE, Setting
 
 from .errors import RANGES, FieldError, call_core
 
@@ -32,6 +33,17 @@ def _num(section: str, name: str, default: Any, lo: float, hi: float, descriptio
     bound = {"gt": lo} if lo_open else {"ge": lo}
     return Field(default, le=hi, allow_inf_nan=False, strict=True,
                  description=f"{description}; valid range {text}", **bound)
+
+
+def _setting(section: str, spec: Setting, strict: bool = True) -> Any:
+    """The field of one core table entry (:mod:`kinematics.settings`): its default, bounds, label
+    and range text (the one message) all come from the entry."""
+    text = spec.range_text()
+    RANGES[(section, spec.name)] = text
+    bound = {"gt": spec.lo} if spec.lo_open else {"ge": spec.lo}
+    extra: dict[str, Any] = {} if spec.integer else {"allow_inf_nan": False}
+    return Field(spec.default, le=spec.hi, strict=strict, description=f"{spec.label}; valid range {text}",
+                 **bound, **extra)
 
 
 _MODEL = ConfigDict(extra="forbid")
@@ -99,7 +111,6 @@ class BoundsIn(BaseModel):
 
 
 RANGES[("bounds", "lo")] = RANGES[("bounds", "hi")] = "[-10000, 10000] on each of x, y, z, lo < hi"
-RANGES[("settings", "bracket_refine")] = "[0, 3]"
 
 
 def _joint_field(name: str, default: Any, description: str, optional: bool = False) -> Any:
@@ -130,18 +141,17 @@ class WorkspaceSettingsIn(BaseModel):
     """How the position workspace is sampled (see ``kinematics.workspace.WorkspaceSettings``)."""
 
     model_config = _MODEL
-    voxel: float = _num("settings", "voxel", 2.0, 0.25, 100.0, "voxel edge h")
+    voxel: float = _setting("settings", WORKSPACE["voxel"])
     orientation: AnglesIn = Field(default_factory=AnglesIn, description="constant platform orientation")
-    eta_step: float = _num("settings", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
+    eta_step: float = _setting("settings", WORKSPACE["eta_step"])
     bounds: BoundsIn | None = Field(None, description="explicit box; null derives it from the design")
-    z_floor: float = _num("settings", "z_floor", 0.0, -1e4, 1e4, "lowest platform height of derived bounds")
+    z_floor: float = _setting("settings", WORKSPACE["z_floor"])
     symmetry: bool = Field(True, description="use the y -> -y mirror symmetry when it holds exactly")
     diagnostics: bool = Field(False, description="evaluate every chain at every voxel (slower)")
     method: Literal["blocks", "dense"] = Field("blocks", description="engine: coarse-to-fine blocks (default) "
                                                "or every voxel (dense); the same voxels")
     bracket: bool = Field(False, description="also certify volume_inner <= V <= volume_outer (continuous workspace)")
-    bracket_refine: int = Field(2, ge=0, le=3, strict=True, description="halvings of the bracket's boundary "
-                                "cubes; valid range [0, 3]")
+    bracket_refine: int = _setting("settings", WORKSPACE["bracket_refine"])
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
 
     def build(self) -> Any:
@@ -167,18 +177,17 @@ class OrientationSettingsIn(BaseModel):
     """Orientation workspace along the z, y' and x lines (see ``kinematics.orientation``)."""
 
     model_config = _MODEL
-    z0: float = _num("orientation", "z0", 130.0, -1e4, 1e4, "height of the x and y' lines")
-    angle_range: float = _num("orientation", "angle_range", 90.0, 0.0, 180.0,
-                              "angles scanned in [-angle_range, angle_range]", "degrees", lo_open=True)
-    angle_step: float = _num("orientation", "angle_step", 0.5, 0.01, 30.0, "angle sample spacing", "degrees")
-    position_step: float = _num("orientation", "position_step", 1.0, 0.01, 100.0, "position sample spacing")
+    z0: float = _setting("orientation", ORIENTATION["z0"])
+    angle_range: float = _setting("orientation", ORIENTATION["angle_range"])
+    angle_step: float = _setting("orientation", ORIENTATION["angle_step"])
+    position_step: float = _setting("orientation", ORIENTATION["position_step"])
     delta: Literal["extent", "area"] = Field("extent", description="Δ of eq. (28): extent products or area")
     region: Literal["all", "connected"] = Field("all", description="feasible samples counted")
     position_delta: Literal["per_region", "line", "phi"] = Field(
         "per_region", description="position Δ: each region's own, the union of a line's regions, or one per line "
                                   "from the φ region (the literal eq. (28))")
-    eta_step: float = _num("orientation", "eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees")
-    z_min: float = _num("orientation", "z_min", 0.0, -1e4, 1e4, "lower end of the z line")
+    eta_step: float = _setting("orientation", ORIENTATION["eta_step"])
+    z_min: float = _setting("orientation", ORIENTATION["z_min"])
     z_max: float | None = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
                                    description="upper end of the z line; null: l_max; valid range [z_min, 10000]")
     s_max: float | None = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
@@ -227,6 +236,21 @@ class OrientationRequest(BaseModel):
     settings: OrientationSettingsIn = Field(default_factory=OrientationSettingsIn)
 
 
+def study_settings(settings: WorkspaceSettingsIn, orientation: OrientationSettingsIn | None) -> tuple[Any, Any]:
+    """The core ``(WorkspaceSettings, OrientationSettings | None)`` of a study (sweep, optimiser):
+    one mechanism, so the joints given in ``settings`` or in ``orientation`` apply to both; given in
+    both, they must agree (422 naming ``orientation.joints``)."""
+    if orientation is None:
+        return settings.build(), None
+    given_s, given_o = "joints" in settings.model_fields_set, "joints" in orientation.model_fields_set
+    if given_s and given_o and settings.joints != orientation.joints:
+        raise FieldError("orientation.joints", "orientation.joints differs from settings.joints: valid values the "
+                                               "same joints (or give them once, in settings.joints)")
+    joints = orientation.joints if given_o else settings.joints
+    return (settings.model_copy(update={"joints": joints}).build(),
+            orientation.model_copy(update={"joints": joints}).build())
+
+
 ParamName = Literal["a", "b", "d_s", "r", "l_min", "l_s", "eta_s"]
 
 
@@ -252,7 +276,8 @@ class SweepRequest(BaseModel):
     settings: WorkspaceSettingsIn = Field(default_factory=lambda: WorkspaceSettingsIn(voxel=4.0))
     x: SweepAxis
     y: SweepAxis | None = None
-    orientation: OrientationSettingsIn | None = None
+    orientation: OrientationSettingsIn | None = Field(
+        None, description="orientation sampling for TI_1/TI_2; its joints are settings.joints when not given here")
 
 
 class OptimizeRequest(BaseModel):
@@ -271,14 +296,14 @@ class OptimizeRequest(BaseModel):
                                   description="measures; a leading - minimises (kinematics.optimize.MEASURES)")
     constraints: list[str] = Field(default_factory=list, max_length=8,
                                    description="flags (boundary_complete) or MEASURE>=V / MEASURE<=V")
-    population: int = Field(16, ge=4, le=1000, description="designs per generation; valid range [4, 1000]")
-    generations: int = Field(12, ge=1, le=1000, description="generations; valid range [1, 1000]")
-    seed: int = Field(1, ge=0, le=2**32 - 1, description="random seed; valid range [0, 4294967295]")
-    step: float = Field(0.01, ge=1e-6, le=10.0, allow_inf_nan=False,
-                        description="parameter resolution; valid range [1e-06, 10]")
+    population: int = _setting("body", OPTIMIZE["population"], strict=False)
+    generations: int = _setting("body", OPTIMIZE["generations"], strict=False)
+    seed: int = _setting("body", OPTIMIZE["seed"], strict=False)
+    step: float = _setting("body", OPTIMIZE["step"], strict=False)
     algorithm: Literal["auto", "nsga2", "nsga3", "agemoea"] = Field("auto")
     orientation: OrientationSettingsIn | None = Field(
-        None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed)")
+        None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed); "
+                          "its joints are settings.joints when not given here")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
@@ -287,16 +312,15 @@ class OptimizeRequest(BaseModel):
         for text in self.objectives + self.constraints:
             if len(text) > 100:
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
+        workspace, orientation = study_settings(self.settings, self.orientation)
         return OptimizeSettings(
             params=tuple(self.params), bounds=dict(self.bounds), objectives=list(self.objectives),
-            constraints=list(self.constraints), design=self.design.build(), workspace=self.settings.build(),
-            orientation=None if self.orientation is None else self.orientation.build(),
+            constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
+            orientation=orientation,
             population=self.population, generations=self.generations, seed=self.seed, step=self.step,
             algorithm=self.algorithm)
 
 
-RANGES[("body", "population")] = "[4, 1000]"
-RANGES[("body", "generations")] = "[1, 1000]"
 
 
 class LinkRequest(BaseModel):

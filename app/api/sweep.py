@@ -17,7 +17,7 @@ from ..jobs import Job
 from ..limits import orientation_samples, workspace_voxels
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
 from .errors import ApiError, FieldError, call_core
-from .models import SweepRequest
+from .models import SweepRequest, study_settings
 
 router = api_router()
 
@@ -35,8 +35,8 @@ def _start_sweep(ctx: ApiContext, req: SweepRequest, request: Request) -> tuple[
     from paraspace.kinematics import sweep as sw
 
     limits = ctx.limits
-    design, settings = req.design.build(), req.settings.build()
-    ori = req.orientation.build() if req.orientation is not None else None
+    design = req.design.build()
+    settings, ori = study_settings(req.settings, req.orientation)
     axes = [("x", req.x)] + ([("y", req.y)] if req.y is not None else [])
     if len(axes) == 2 and req.x.param == req.y.param:  # type: ignore[union-attr]
         raise FieldError("y.param", f"y.param = {req.y.param!r} is invalid: "  # type: ignore[union-attr]

@@ -94,7 +94,7 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
                      + (f", {info.shell_seconds:.2f} s shell" if info.shell_seconds else ""))
     else:
         lines.append("*workspace: computing...*")
-    if ori is not None and ori.settings.z0 == s.z0 and ori.design == s.design and ori.settings.joints == s.joints:
+    if ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
         sat = {x.index for x in figures.orientation_saturation(ori)}
         flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
         lines.append(f"**TI₁** {fmt(ori.ti1, 4)}{flag['TI_1']}  **TI₂** {fmt(ori.ti2, 4)}{flag['TI_2']} "

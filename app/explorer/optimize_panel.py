@@ -8,6 +8,8 @@ folder, ``client.gui``) and needs from its host only
   supersede, the manager's limits);
 * ``get_design()``: the current design (the base of the run: fields that are not free stay);
 * ``load_design(design)``: called with a front design when the user loads it;
+* ``get_joints()``: the current joint cones and leg interference (the run's workspaces and TI's
+  use them; default: none);
 * optionally ``cache`` (the explorer's sweep :class:`~kinematics.sweep.ResultCache`, so designs
   studied elsewhere are not computed again), ``results`` (a server-wide
   :class:`~kinematics.bytecache.ByteLRU` of finished runs by their settings, so a shared link shows
@@ -22,6 +24,7 @@ user typed is shown back only as plain text (viser text fields), never as markdo
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
@@ -30,6 +33,7 @@ import viser
 
 from paraspace.kinematics.bytecache import ByteLRU
 from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.optimize import DEFAULT_PARAMS, OptimizeSettings, optimize
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.workspace import WorkspaceSettings
@@ -66,11 +70,12 @@ class OptimizePanel:
     """See the module docstring."""
 
     def __init__(self, gui: Any, jobs: JobManager | SessionJobs, *, get_design: Callable[[], Design],
-                 load_design: Callable[[Design], None], client: str = "local", cache: ResultCache | None = None,
+                 load_design: Callable[[Design], None], get_joints: Callable[[], Joints] = Joints,
+                 client: str = "local", cache: ResultCache | None = None,
                  results: ByteLRU | None = None,
                  on_settings_change: Callable[[dict[str, str]], None] | None = None) -> None:
         self.gui, self.jobs, self.client = gui, jobs, client
-        self.get_design, self.load_design = get_design, load_design
+        self.get_design, self.load_design, self.get_joints = get_design, load_design, get_joints
         self.cache = cache
         self.results = results if results is not None else ByteLRU(16 << 20, max_entries=16)
         self.on_settings_change = on_settings_change
@@ -167,10 +172,12 @@ class OptimizePanel:
         if v["population"] * v["generations"] > MAX_EVALUATIONS:
             raise ParameterError("generations", v["generations"],
                                  f"population x generations <= {MAX_EVALUATIONS} in the explorer")
+        joints = self.get_joints()
         return OptimizeSettings(params=v["params"], objectives=v["objectives"],
                                 constraints=[c for c in v["constraints"].split(",") if c.strip()],
-                                design=self.get_design(), workspace=WorkspaceSettings(voxel=max(MIN_VOXEL, v["voxel"])),
-                                orientation=PANEL_ORIENTATION,
+                                design=self.get_design(),
+                                workspace=WorkspaceSettings(voxel=max(MIN_VOXEL, v["voxel"]), joints=joints),
+                                orientation=dataclasses.replace(PANEL_ORIENTATION, joints=joints),
                                 population=v["population"], generations=v["generations"], seed=v["seed"])
 
     # ----- running ----------------------------------------------------------------------------------

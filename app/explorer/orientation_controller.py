@@ -14,7 +14,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from paraspace.kinematics.orientation import OrientationResult, OrientationSettings, orientation_workspace
+from paraspace.kinematics.design import ParameterError
+from paraspace.kinematics.orientation import OrientationResult, orientation_workspace
 
 from .. import figures
 from ..jobs import Job, LimitExceeded
@@ -49,18 +50,29 @@ class OrientationController:
         """Attach z0 and the maps' download buttons."""
         p, cb = self.ctx.panels, self.ctx.callback
         p.z0.on_update(cb(self.on_z0))
+        p.scan_range.on_update(cb(self.on_z0))
+        p.scan_step.on_update(cb(self.on_z0))
         p.orientation_png.on_click(cb(lambda: self.exports.download("orientation", "png")))
         p.orientation_svg.on_click(cb(lambda: self.exports.download("orientation", "svg")))
 
     def on_z0(self) -> None:
-        """The height of the orientation-map lines changed: recompute the maps."""
-        self.ctx.update_state(z0=float(self.ctx.panels.z0.value))
+        """The height of the orientation-map lines or the scan's range or step changed: recompute the
+        maps (a value outside its table range is refused with the table's message)."""
+        p = self.ctx.panels
+        try:
+            s = self.ctx.state.replace(z0=float(p.z0.value), angle_range=float(p.scan_range.value),
+                                       angle_step=float(p.scan_step.value))
+            s.orientation_settings()
+        except ParameterError as exc:
+            p.orientation_status.content = f"**Not applied:** {md_text(str(exc))}"
+            return
+        self.ctx.update_state(z0=s.z0, angle_range=s.angle_range, angle_step=s.angle_step)
         self.submit()
         self.on_state_change()
 
     @staticmethod
     def _key(s: ExplorerState) -> tuple:
-        return (s.design.key(), s.z0, s.joints.key())
+        return (s.design.key(), s.orientation_settings().key())
 
     def forget_stale(self, s: ExplorerState) -> None:
         """Maps of another design than ``s``'s are stale: never show them, and free the worker at once."""
@@ -93,7 +105,7 @@ class OrientationController:
             return
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
-            res = orientation_workspace(s.design, OrientationSettings(z0=s.z0, joints=s.joints),
+            res = orientation_workspace(s.design, s.orientation_settings(),
                                         progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
             progress(0.9, "drawing...")
             spec = figures.orientation_spec(res, s.z0)

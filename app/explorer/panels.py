@@ -21,6 +21,7 @@ import viser
 
 import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
+from paraspace.kinematics.settings import ORIENTATION
 
 from .. import figures
 from ..urlstate import (
@@ -86,6 +87,8 @@ class Panels:
     payload: Any
     # plots
     z0: Any
+    scan_range: Any
+    scan_step: Any
     orientation_status: Any
     orientation_plot: Any
     orientation_png: Any
@@ -226,6 +229,12 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             rng = SETTING_SLIDERS["z0"]
             z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
                                 hint="height of the x and y' lines")
+            scan_range, scan_step = (
+                gui.add_slider(label, *slider_span(rng.lo, rng.hi, value), step=rng.step, initial_value=value,
+                               hint=f"{ORIENTATION[key].label}; type values in {ORIENTATION[key].range_text()}")
+                for label, key, rng, value in (
+                    ("scan ± (deg)", "angle_range", SETTING_SLIDERS["angle_range"], state.angle_range),
+                    ("scan step (deg)", "angle_step", SETTING_SLIDERS["angle_step"], state.angle_step)))
             orientation_status = gui.add_markdown("*waiting for the workspace...*")
             orientation_plot = _plot(gui, orientation_folder, "the orientation maps appear here")
             orientation_png, orientation_svg = _downloads(gui, disabled=False)
@@ -272,6 +281,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         cut_keep=cut_keep, opacity=opacity,
         payload=payload,
         z0=z0, orientation_status=orientation_status, orientation_plot=orientation_plot,
+        scan_range=scan_range, scan_step=scan_step,
         orientation_png=orientation_png, orientation_svg=orientation_svg, study_voxel=study_voxel,
         sweep_param=sweep_param, sweep_measure=sweep_measure,
         sweep_points=sweep_points, sweep_run=sweep_run, sweep_stop=sweep_stop, sweep_progress=sweep_progress,

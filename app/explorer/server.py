@@ -181,6 +181,7 @@ class ClientSession:
             self.optimize = OptimizePanel(
                 self.client.gui, ctx.jobs, client=ctx.job_client,
                 get_design=lambda: ctx.state.design, load_design=self.design_controller.load_design,
+                get_joints=lambda: ctx.state.joints,
                 cache=self.explorer.study_cache, results=self.explorer.optimize_results,
                 on_settings_change=lambda _q: self.share_controller.schedule_url())
         self.share_controller.optimize = self.optimize

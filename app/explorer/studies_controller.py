@@ -15,8 +15,6 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from paraspace.kinematics.orientation import OrientationSettings
-
 from .. import figures
 from ..jobs import Job, LimitExceeded
 from .plot_exports import PlotExports
@@ -72,7 +70,7 @@ class StudiesController:
         cache = ctx.explorer.study_cache
 
         # TI_1/TI_2 need the orientation maps of every point (at the current z0)
-        ori = OrientationSettings(z0=s.z0, joints=s.joints) if measure in ("TI_1", "TI_2") else None
+        ori = s.orientation_settings() if measure in ("TI_1", "TI_2") else None
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
             rows = sweep_1d(s.design, param, values, settings, orientation=ori,

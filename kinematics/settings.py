@@ -1,0 +1,110 @@
+"""Settings tables: one rule per numeric setting, read by every entry point.
+
+A :class:`Setting` is a named number ``v`` with a default, a unit, a one-line label and a range::
+
+    valid(v)  <=>  v is a finite number  and  lo <= v <= hi      (lo < v <= hi when lo_open;
+                                                                   v an integer when integer)
+
+Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPACE` for
+:class:`~kinematics.workspace.WorkspaceSettings`, :data:`ORIENTATION` for
+:class:`~kinematics.orientation.OrientationSettings` and :data:`OPTIMIZE` for
+:class:`~kinematics.optimize.OptimizeSettings`. The core's validation, the URL parser's ranges,
+the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
+slider specs are all derived from these entries, so a bound is written once and the message
+(:meth:`Setting.range_text`) is the same everywhere. The design parameters' table is
+:data:`kinematics.design.PARAMS`; the joint options' is :data:`kinematics.joints.JOINT_RANGES`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from typing import Any
+
+from .design import ParameterError
+
+
+@dataclasses.dataclass(frozen=True)
+class Setting:
+    """One numeric setting: its range, default, unit, label and (optionally) the explorer's slider.
+
+    ``slider`` is ``(lo, hi, step)`` of the slider (a practical sub-range; the number box beside it
+    takes any valid value), or ``None`` where the explorer has no slider for the setting.
+    """
+
+    name: str
+    default: float
+    lo: float
+    hi: float
+    label: str
+    unit: str = ""
+    lo_open: bool = False
+    integer: bool = False
+    slider: tuple[float, float, float] | None = None
+
+    def range_text(self, with_unit: bool = True) -> str:
+        """``"[lo, hi]"`` (``"(lo, hi]"`` when open at ``lo``), plus the unit: the one message text."""
+        lo, hi = (f"{int(self.lo)}", f"{int(self.hi)}") if self.integer else (f"{self.lo:g}", f"{self.hi:g}")
+        text = f"{'(' if self.lo_open else '['}{lo}, {hi}]"
+        return f"{text} {self.unit}" if (with_unit and self.unit) else text
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` (a finite float) lies in the range."""
+        return (value > self.lo if self.lo_open else value >= self.lo) and value <= self.hi
+
+    def check(self, value: Any) -> float | int:
+        """``value`` validated (a number of the right kind inside the range), else ParameterError
+        naming the setting and its range. Strings are not numbers here (see :meth:`parse`)."""
+        if self.integer:
+            ok = (isinstance(value, numbers.Integral) and not isinstance(value, bool)
+                  and self.contains(float(value)))
+            if not ok:
+                raise ParameterError(self.name, value, self.range_text() + " (an integer)")
+            return int(value)
+        ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+        if not ok or not self.contains(float(value)):
+            raise ParameterError(self.name, value, self.range_text())
+        return float(value)
+
+    def parse(self, raw: Any) -> float | int:
+        """A command-line or form text read as this setting's number, then :meth:`check`-ed."""
+        try:
+            v: float | int = int(str(raw).strip()) if self.integer else float(raw)
+        except (TypeError, ValueError):
+            kind = "an integer" if self.integer else "a number"
+            raise ParameterError(self.name, raw, f"{self.range_text()} ({kind})") from None
+        return self.check(v)
+
+
+def _table(*settings: Setting) -> dict[str, Setting]:
+    return {s.name: s for s in settings}
+
+
+#: :class:`~kinematics.workspace.WorkspaceSettings`'s numbers.
+WORKSPACE: dict[str, Setting] = _table(
+    Setting("voxel", 2.0, 0.25, 100.0, "voxel edge h", slider=(1.0, 10.0, 0.5)),
+    Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
+    Setting("z_floor", 0.0, -1e4, 1e4, "lowest platform height of derived bounds"),
+    Setting("bracket_refine", 2, 0, 3, "halvings of the bracket's boundary cubes", integer=True),
+)
+
+#: :class:`~kinematics.orientation.OrientationSettings`'s numbers (z_max and s_max, optional and
+#: bounded by other fields, stay in that class).
+ORIENTATION: dict[str, Setting] = _table(
+    Setting("z0", 130.0, -1e4, 1e4, "height of the x and y' lines", slider=(0.0, 350.0, 1.0)),
+    Setting("angle_range", 90.0, 0.0, 180.0, "angles scanned in [-angle_range, angle_range]", "degrees",
+            lo_open=True, slider=(10.0, 180.0, 5.0)),
+    Setting("angle_step", 0.5, 0.01, 30.0, "angle sample spacing", "degrees", slider=(0.25, 5.0, 0.25)),
+    Setting("position_step", 1.0, 0.01, 100.0, "position sample spacing"),
+    Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
+    Setting("z_min", 0.0, -1e4, 1e4, "lower end of the z line"),
+)
+
+#: :class:`~kinematics.optimize.OptimizeSettings`'s numbers.
+OPTIMIZE: dict[str, Setting] = _table(
+    Setting("population", 16, 4, 1000, "designs per generation", integer=True),
+    Setting("generations", 12, 1, 1000, "generations", integer=True),
+    Setting("seed", 1, 0, 2**32 - 1, "random seed", integer=True),
+    Setting("step", 0.01, 1e-6, 10.0, "parameter resolution"),
+)

@@ -1,0 +1,43 @@
+"""The explorer's orientation scan range and step: from the link, from the sliders, into the maps
+(the same numbers as the direct core call with those settings) and back into the link."""
+
+from __future__ import annotations
+
+import pytest
+from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
+
+from paraspace.app.explorer import Explorer
+from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+
+@pytest.fixture(scope="module")
+def explorer():
+    exp = Explorer("127.0.0.1", 0).start()
+    exp.warm.wait(120)
+    yield exp
+    exp.stop()
+
+
+def test_scan_range_and_step_from_link_and_sliders(explorer) -> None:
+    b = FakeBrowser(explorer, "voxel=6&angle_range=45&angle_step=3&theta_u=30")
+    try:
+        s = b.session
+        assert (s.state.angle_range, s.state.angle_step) == (45.0, 3.0)
+        assert (s.panels.scan_range.value, s.panels.scan_step.value) == (45.0, 3.0)
+        wait_idle(explorer, s)
+        wait_for(lambda: s.orientation is not None and s.orientation.settings.angle_step == 3.0, 60.0, "maps")
+        want = orientation_workspace(s.state.design, OrientationSettings(angle_range=45.0, angle_step=3.0,
+                                                                         joints=s.state.joints))
+        assert s.state.joints.theta_u == 30.0
+        assert (s.orientation.ti1, s.orientation.ti2) == (want.ti1, want.ti2)
+        b.set(s.panels.scan_step, 2.0)
+        wait_for(lambda: s.state.angle_step == 2.0, 5.0, "the step applied")
+        wait_for(lambda: s.orientation is not None and s.orientation.settings.angle_step == 2.0, 60.0, "new maps")
+        assert s.orientation.settings.angle_range == 45.0
+        wait_for(lambda: "angle_step=2" in b.search and "angle_range=45" in b.search, 5.0, "the link")
+        b.set(s.panels.scan_range, 0.0)  # typed: outside (0, 180]
+        wait_for(lambda: "Not applied" in s.panels.orientation_status.content, 5.0, "the message")
+        assert "(0, 180] degrees" in s.panels.orientation_status.content.replace("\\", "")
+        assert s.state.angle_range == 45.0
+    finally:
+        b.close()
