@@ -37,6 +37,8 @@ Semantics:
   instead of waiting behind one client's batch of heavy jobs, while one explorer page may still
   compute its shell and its orientation maps side by side. (The numba kernels are serialised by
   ``kinematics.parallel.KERNEL_LOCK`` and use every core, so a client loses little by this cap.)
+  Besides the ``max_workers`` workers, one *reserve* worker runs only a job of a client that has
+  nothing running: whatever kinds one client keeps busy, another client's job starts at once.
 
 ``on_done(job)`` is called exactly once per submission when the job reaches a final status
 (``done``, ``failed`` or ``cancelled``); check ``job.status``. It runs in the worker thread (or, for
@@ -225,6 +227,8 @@ class JobManager:
         self._work = threading.Condition(self._lock)
         self._workers = [threading.Thread(target=self._worker, name=f"paraspace-job-{i}", daemon=True)
                          for i in range(max_workers)]
+        self._workers.append(threading.Thread(target=self._worker, args=(True,), name="paraspace-job-reserve",
+                                              daemon=True))
         for w in self._workers:
             w.start()
         self._watchdog = threading.Thread(target=self._watch, name="paraspace-job-watchdog", daemon=True)
@@ -315,7 +319,7 @@ class JobManager:
         with self._lock:
             if not job.is_final:
                 self._queue.append((job, fn))
-                self._work.notify()
+                self._work.notify_all()  # the reserve worker may take it, or only a normal one may
         return job
 
     # ----- queries ---------------------------------------------------------------------------
@@ -527,16 +531,19 @@ class JobManager:
                     log.exception("on_progress hook of job %s raised", job.id)
         return progress
 
-    def _pick_locked(self) -> tuple[Job, JobFn] | None:
+    def _pick_locked(self, reserve: bool = False) -> tuple[Job, JobFn] | None:
         """The next queued job to run: among jobs whose (client, kind) is under
         ``max_running_per_client``, the one whose client has the fewest running jobs, then the
-        oldest submission. Drops finalized entries."""
+        oldest submission (for the reserve worker: only jobs of a client with nothing running).
+        Drops finalized entries."""
         self._queue = [(j, f) for j, f in self._queue if not j.is_final]
         best = None
         for i, (job, _fn) in enumerate(self._queue):
             if self._running_kind[(job.client, job.kind)] >= self.max_running_per_client:
                 continue
             running = self._running[job.client]
+            if reserve and (running or sum(self._running.values()) < self.max_workers):
+                continue  # the reserve serves a client with nothing running, when every worker is busy
             rank = (running, i)
             if best is None or rank < best[0]:
                 best = (rank, i)
@@ -544,12 +551,12 @@ class JobManager:
             return None
         return self._queue.pop(best[1])
 
-    def _worker(self) -> None:
+    def _worker(self, reserve: bool = False) -> None:
         while True:
             with self._lock:
                 pick = None
                 while not self._closed:
-                    pick = self._pick_locked()
+                    pick = self._pick_locked(reserve)
                     if pick is not None:
                         break
                     self._work.wait()

@@ -72,6 +72,11 @@ class ApiServer:
 
 #: Connections (and requests) the API serves at once; more get 503 at once.
 MAX_CONNECTIONS = 200
+#: Connections one client address may hold; a new one beyond it closes that address's oldest idle one.
+MAX_CONNECTIONS_PER_CLIENT = 64
+#: Connections kept free for others: when more than ``MAX_CONNECTIONS - RESERVE`` are open, a new
+#: connection closes the oldest idle connection of the address holding the most.
+RESERVE = 16
 #: Seconds a new connection may take to send its request line and headers.
 HEADER_TIMEOUT = 10.0
 #: Seconds an idle keep-alive connection is kept.
@@ -86,16 +91,47 @@ class _TimedH11(H11Protocol):
 
     header_timeout = HEADER_TIMEOUT
     _head_timer: asyncio.TimerHandle | None
+    per_client = MAX_CONNECTIONS_PER_CLIENT
+    room = MAX_CONNECTIONS - RESERVE
 
     def connection_made(self, transport: Any) -> None:
         super().connection_made(transport)
+        self._opened = time.monotonic()
         self._head_timer = self.loop.call_later(self.header_timeout, self._head_deadline)
+        self._make_room()
+
+    def _idle(self) -> bool:
+        """No request in progress: head not sent yet, or a keep-alive connection between requests."""
+        return self.cycle is None or self.cycle.response_complete
+
+    def _make_room(self) -> None:
+        """Fairness between clients (a client is a peer address): one address holds at most
+        ``per_client`` connections, and ``MAX_CONNECTIONS - room`` stay free for others; a new
+        connection over either bound closes the oldest *idle* connection (no request in progress)
+        of its own address, or else of the address holding the most. Busy connections are never
+        closed; if none is idle the new one gets uvicorn's 503 when the total is reached."""
+        me = self.client[0] if self.client else None
+        others = [p for p in list(self.connections) if p is not self and isinstance(p, _TimedH11)]
+        by_addr: dict[str | None, list[_TimedH11]] = {}
+        for p in others:
+            by_addr.setdefault(p.client[0] if p.client else None, []).append(p)
+        mine = by_addr.get(me, [])
+        if len(mine) >= self.per_client:
+            pool = mine
+        elif len(others) + 1 > self.room:
+            pool = max(by_addr.values(), key=len, default=[])
+        else:
+            return
+        idle = [p for p in pool if p._idle() and not p.transport.is_closing()]
+        if idle:
+            min(idle, key=lambda p: p._opened).transport.close()
 
     def _head_deadline(self) -> None:
         if self.cycle is None and not self.transport.is_closing():
             self.transport.close()
 
     def handle_events(self) -> None:
+        self._opened = time.monotonic()  # activity: the oldest idle connection is the longest unused
         super().handle_events()
         timer = getattr(self, "_head_timer", None)
         if self.cycle is not None and timer is not None:

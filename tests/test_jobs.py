@@ -292,3 +292,33 @@ def test_job_overhead_printed(jm):
     lat.sort()
     print(f"trivial job submit->done: median {1e6 * lat[100]:.0f} us, p95 {1e6 * lat[190]:.0f} us, "
           f"{200 / (time.perf_counter() - t0):.0f} jobs/s sequential")
+
+
+def test_another_clients_job_starts_whatever_kinds_one_client_runs():
+    """Client A keeps both workers busy with two jobs of different kinds (an optimisation and a
+    workspace): client B's small job still runs to completion while A's jobs are still running."""
+    m = JobManager(max_workers=2, max_jobs_total=16, max_jobs_per_client=4, max_seconds=120.0)
+    release = threading.Event()
+    started = threading.Semaphore(0)
+
+    def heavy(progress, cancel):
+        started.release()
+        release.wait(120)
+        return "heavy"
+
+    try:
+        a1 = m.submit(heavy, kind="optimize", client="A")
+        a2 = m.submit(heavy, kind="workspace", client="A")
+        for _ in range(2):
+            assert started.acquire(timeout=60), "client A's jobs did not both start within 60 s"
+        assert a1.status == a2.status == "running"
+        b = m.submit(lambda progress, cancel: "small", kind="workspace", client="B")
+        assert b.wait(60), "client B's job did not finish within 60 s while A's jobs ran"
+        assert b.status == "done" and b.result == "small"
+        assert a1.status == a2.status == "running"
+        # the reserve serves only a client with nothing running: A's third job waits for A's others
+        a3 = m.submit(lambda progress, cancel: "a3", kind="sweep", client="A")
+        assert not a3.wait(0.3) and a3.status == "queued"
+    finally:
+        release.set()
+        m.shutdown(wait=True)
