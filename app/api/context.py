@@ -91,6 +91,7 @@ class ApiContext:
             "optimize": ByteLRU(limits.cache_bytes)}
         self.shells = ByteLRU(limits.shell_cache_bytes)
         self.shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
+        self._shell_locks = [threading.Lock() for _ in range(32)]  # one build per shell file at a time
         self._submit_lock = threading.Lock()
         self._precheck_slots = threading.BoundedSemaphore(2)  # grid estimates (a coarse scout each) at once
         self.sweep_cache: ResultCache | None = None
@@ -102,6 +103,11 @@ class ApiContext:
             self.sweep_cache = None
 
     # ----- who asks, and how many jobs they have -----------------------------------------------
+    def shell_key_lock(self, key: tuple[Any, ...]) -> threading.Lock:
+        """The lock that serialises building the shell file ``key`` (striped: 32 locks), so that
+        concurrent downloads of one file build it once and the others read the cache."""
+        return self._shell_locks[hash(key) % len(self._shell_locks)]
+
     def client_of(self, request: Request) -> str:
         """The caller's identity: ``limits.client_header`` when set, else the peer address."""
         ident = None

@@ -20,7 +20,9 @@ site = APIRouter()
 @router.get("/health", summary="Liveness, job counts and limits")
 async def health(ctx: Ctx) -> dict[str, Any]:
     """Always cheap; 200 while the server can answer."""
-    return {"status": "ok", "api_version": "v1", "version": API_VERSION, "time": time.time(),
+    from paraspace.kinematics.warmup import is_warm
+
+    return {"status": "ok", "warm": is_warm(), "api_version": "v1", "version": API_VERSION, "time": time.time(),
             "explorer_url": ctx.explorer_url, "jobs": ctx.jobs.stats(), "limits": ctx.limits.to_dict()}
 
 

@@ -12,6 +12,7 @@ from starlette.concurrency import run_in_threadpool
 
 from paraspace.kinematics.serialize import jsonable
 
+from .. import memory
 from ..jobs import Job
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
 from .errors import RANGES, ApiError, FieldError
@@ -83,10 +84,14 @@ def workspace_shell(job_id: str, request: Request, ctx: Ctx,
                                 f"request again to export its shell")
         if not raw.occupancy.any():
             raise ApiError(409, "the workspace is empty: there is no shell to export")
-        with ctx.shell_builds:
-            mesh = make_shell(raw, max_faces=max_faces)
-            data = export_shell(mesh, fmt)
-        ctx.shells.put(skey, data)
+        with ctx.shell_key_lock(skey), ctx.shell_builds:
+            data = ctx.shells.get(skey)  # built by a concurrent request for the same file meanwhile
+            if data is None:
+                mesh = make_shell(raw, max_faces=max_faces)
+                data = export_shell(mesh, fmt)
+                del mesh  # a trimesh mesh is a reference cycle: app/memory.trim collects it
+                ctx.shells.put(skey, data)
+                memory.trim(force=True)  # marching cubes' and decimation's temporaries back to the system
     media = {"stl": "model/stl", "ply": "application/octet-stream", "obj": "model/obj",
              "glb": "model/gltf-binary"}[fmt]
     return Response(content=data, media_type=media,
