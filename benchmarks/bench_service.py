@@ -8,7 +8,11 @@ Everything runs on 127.0.0.1 with bounded loops:
    against the explorer's port: status codes, 5xx;
 3. load: 8 threads polling /health and /ik for ``--seconds`` while two clients keep the job
    queue full of heavy workspace requests (and get 429 when at their quota): p50/p95 latency of
-   the cheap endpoints, 5xx.
+   the cheap endpoints, 5xx;
+4. trust figures: websocket handshakes to the explorer from foreign origins accepted (should be
+   0); connections held by one client (127.0.0.1, idle, renewed) while another client's (127.0.0.2)
+   /health p95 stays under 200 ms; RSS of a real server process before/after 30 downloads of a
+   shell file (its shell cache made too small to hold it, so each download rebuilds it).
 
     .venv/bin/python benchmarks/bench_service.py [--examples 10] [--links 300] [--seconds 5]
 
@@ -28,6 +32,7 @@ import time
 import urllib.parse
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # measure this checkout
 
 import httpx  # noqa: E402
 
@@ -135,6 +140,134 @@ def load(url: str, seconds: float) -> dict:
         "statuses": dict(sorted(codes.items())), "5xx": sum(v for k, v in codes.items() if k >= 500)}
 
 
+FOREIGN_ORIGINS = ("http://evil.example", "null", "https://localhost.evil.example", "http://127.0.0.1:1")
+
+
+def foreign_handshakes(explorer_port: int) -> dict:
+    """Raw websocket upgrades to the explorer with foreign Origins (and a foreign Host): how many
+    were accepted (101)."""
+    import socket
+
+    accepted = 0
+    cases = [(f"127.0.0.1:{explorer_port}", o) for o in FOREIGN_ORIGINS]
+    cases.append((f"attacker.example:{explorer_port}", f"http://attacker.example:{explorer_port}"))
+    for host, origin in cases:
+        with socket.create_connection(("127.0.0.1", explorer_port), timeout=30) as s:
+            s.sendall((f"GET / HTTP/1.1\r\nHost: {host}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                       "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                       f"Origin: {origin}\r\n\r\n").encode())
+            accepted += s.recv(64).startswith(b"HTTP/1.1 101")
+    return {"foreign_handshakes": len(cases), "accepted": accepted}
+
+
+def held_connections(api_port: int, counts: tuple[int, ...] = (50, 100, 200, 300)) -> dict:
+    """For each count: client A (127.0.0.1) opens that many idle connections, then client B
+    (127.0.0.2) makes 40 /health requests on new connections: B's p95 and failures."""
+    import socket
+
+    out = {}
+    for n in counts:
+        held = [socket.create_connection(("127.0.0.1", api_port), timeout=30) for _ in range(n)]
+        lat, failed = [], 0
+        for _ in range(40):
+            t0 = time.perf_counter()
+            try:
+                with socket.socket() as s:
+                    s.settimeout(30)
+                    s.bind(("127.0.0.2", 0))
+                    s.connect(("127.0.0.1", api_port))
+                    s.sendall(f"GET /api/v1/health HTTP/1.1\r\nHost: 127.0.0.1:{api_port}\r\n"
+                              "Connection: close\r\n\r\n".encode())
+                    failed += not s.recv(64).startswith(b"HTTP/1.1 200")
+            except OSError:
+                failed += 1
+            lat.append(time.perf_counter() - t0)
+        for s in held:
+            s.close()
+        lat.sort()
+        out[n] = {"p95_ms": round(1000 * lat[int(0.95 * (len(lat) - 1))], 1), "failed": failed}
+    return out
+
+
+def rss_after_downloads(n: int = 30, voxel: float = 2.0) -> dict:
+    """A real server process: RSS (MB, /proc) before and after ``n`` shell downloads."""
+    import subprocess
+
+    from paraspace.app.serve import free_port
+
+    port = free_port()
+    code = ("from paraspace.app.serve import serve; from paraspace.app.api import ApiLimits; "
+            f"serve('127.0.0.1', 0, {port}, explorer=False, quiet=True, limits=ApiLimits(shell_cache_bytes=1000))")
+    proc = subprocess.Popen([sys.executable, "-c", code])
+
+    def rss() -> float:
+        with open(f"/proc/{proc.pid}/status") as fh:
+            return next(int(x.split()[1]) / 1024 for x in fh if x.startswith("VmRSS:"))
+
+    base = f"http://127.0.0.1:{port}/api/v1"
+    try:
+        with httpx.Client(timeout=300) as c:
+            while True:
+                try:
+                    if c.get(f"{base}/health").json().get("warm"):
+                        break
+                except httpx.HTTPError:
+                    pass
+                time.sleep(0.5)
+            job = c.post(f"{base}/workspace", json={"settings": {"voxel": voxel}}).json()["job_id"]
+            while c.get(f"{base}/jobs/{job}").json()["status"] not in ("done", "failed", "cancelled"):
+                time.sleep(0.2)
+            size = len(c.get(f"{base}/workspace/{job}/shell.stl").content)
+            before = rss()
+            for _ in range(n):
+                c.get(f"{base}/workspace/{job}/shell.stl")
+            after = rss()
+            time.sleep(5)
+            idle = rss()
+        return {"voxel": voxel, "shell_mb": round(size / 2**20, 1), "downloads": n, "rss_before_mb": round(before),
+                "rss_after_mb": round(after), "rss_after_5s_idle_mb": round(idle)}
+    finally:
+        proc.terminate()
+        proc.wait(60)
+
+
+def links_kept(n: int = 8, voxel: float = 8.0) -> dict:
+    """``n`` pages opened at once in one headless Chromium (each its own link ``?a=...&z=125``):
+    how many ended on their own link's design (the server's session) and kept it in the address
+    bar (trust item 2). Needs Debian's chromium; skipped without it."""
+    chromium = "/usr/bin/chromium"
+    if not os.path.exists(chromium):
+        return {"skipped": f"{chromium} is missing"}
+    from playwright.sync_api import sync_playwright
+
+    exp = Explorer("127.0.0.1", 0).start()
+    exp.warm.wait(300)
+    links = {f"a={15 + 8 * i}&z=125&voxel={voxel:g}": 15.0 + 8 * i for i in range(n)}
+    kept = 0
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=chromium, headless=True,
+                                        args=["--no-sandbox", "--disable-gpu"])
+            pages = []
+            for link in links:  # all opened before any is waited for
+                page = browser.new_context(viewport={"width": 1200, "height": 800}).new_page()
+                page.goto(f"{exp.url}?{link}", wait_until="commit")
+                pages.append((link, page))
+            deadline = time.monotonic() + 240
+            while time.monotonic() < deadline and len(exp.sessions) < n:
+                time.sleep(0.5)
+            time.sleep(3.0)  # the address-bar sync (debounced) has run
+            designs = sorted(s.state.design.a for s in list(exp.sessions.values()))
+            for link, page in pages:
+                search = page.evaluate("() => location.search")
+                if f"a={links[link]:g}&" in search and links[link] in designs:
+                    kept += 1
+            browser.close()
+    finally:
+        exp.stop()
+    return {"pages": n, "kept_their_link": kept, "sessions": len(designs)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--examples", type=int, default=10)
@@ -152,6 +285,10 @@ def main() -> None:
         print("schemathesis:", schemathesis_run(srv.url, ns.examples), f"({time.perf_counter() - t0:.1f} s)")
         print("explorer link fuzz:", link_fuzz(exp.url, ns.links))
         print("load (cheap endpoints while heavy jobs queue):", load(srv.url, ns.seconds))
+        print("websocket handshakes from a foreign origin:", foreign_handshakes(exp.port))
+        print("connections held by one client -> another client's /health:", held_connections(srv.port))
+        print("RSS before/after shell downloads:", rss_after_downloads())
+        print("pages opened at once that kept their link:", links_kept())
         print(f"machine load average at end: {os.getloadavg()}")
     finally:
         exp.stop()
