@@ -5,9 +5,13 @@
 #   open http://localhost:8080 (explorer) and http://localhost:8081/docs (API)
 #
 # Everything comes from the package registries (the base image, PyPI): no other downloads.
+# The base image is pinned by digest (a tag moves; a digest does not): the python:3.11-slim image
+# index in use in 2026. To move to a newer one: `docker buildx imagetools inspect python:3.11-slim`
+# and replace the digest (then run the tests).
 # The dependency versions are pinned by a pip constraints file written below (the versions the
-# test suite ran with); the install command itself is the README's `pip install .`.
-FROM python:3.11-slim
+# test suite ran with) and installed from requirements.lock, each with its sha256; the project
+# itself is installed as the README's `pip install .` does (without fetching a build backend).
+FROM python:3.11-slim@sha256:9c900dea9e8fb7e16277c179b555cc72d29a352dbc33cff48ad5a0412fd5bfc7
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
@@ -46,9 +50,13 @@ RUN useradd --create-home --uid 10001 --shell /usr/sbin/nologin paraspace \
     && mkdir -p /home/paraspace/.cache/numba /home/paraspace/.cache/matplotlib \
     && chown -R paraspace:paraspace /home/paraspace/.cache
 
+# Every dependency (and the build backend) from requirements.lock, each wheel checked against its
+# sha256 (linux x86_64 wheels); then the project itself with that backend (no other download).
+COPY requirements.lock /opt/paraspace/requirements.lock
+RUN pip install --require-hashes --no-deps -r /opt/paraspace/requirements.lock
 WORKDIR /opt/paraspace/src
 COPY . .
-RUN pip install . \
+RUN pip install --no-build-isolation . \
     && cd / && rm -rf /opt/paraspace/src
 
 USER paraspace

@@ -64,7 +64,8 @@ def _pins(instr: list[tuple[str, str]]) -> dict[str, str]:
 
 def test_base_user_ports_entrypoint():
     instr = _instructions()
-    assert _one(instr, "FROM") == "python:3.11-slim"
+    base = _one(instr, "FROM")
+    assert re.fullmatch(r"python:3\.11-slim@sha256:[0-9a-f]{64}", base), f"the base image is pinned by digest: {base}"
     users = [(i, a) for i, (w, a) in enumerate(instr) if w == "USER"]
     assert users, "the image must switch to a non-root USER"
     last_user = users[-1][1]
@@ -92,7 +93,10 @@ def test_install_is_the_readme_install_from_registries_only():
     instr = _instructions()
     runs = [a for w, a in instr if w == "RUN"]
     installs = [m.group(0).strip() for a in runs for m in re.finditer(r"pip install[^&|;]*", a)]
-    assert installs == ["pip install ."], installs
+    # the dependencies, each checked against its hash, then the project as `pip install .` (with the
+    # hash-checked build backend instead of one fetched for an isolated build)
+    assert installs == ["pip install --require-hashes --no-deps -r /opt/paraspace/requirements.lock",
+                        "pip install --no-build-isolation ."], installs
     # the same command as the documented / scripted install of the project for running it
     run_sh = (ROOT / "scripts" / "run.sh").read_text()
     assert re.search(r"pip install (-q )?\.\s*$", run_sh, re.M), "scripts/run.sh installs the project with `pip install .`"
@@ -209,3 +213,20 @@ def test_entrypoint_runs_and_both_ports_answer(tmp_path):
         if proc.poll() is None:
             proc.kill()
             proc.wait(10)
+
+
+def test_every_pinned_dependency_is_installed_by_hash():
+    """requirements.lock holds exactly the Dockerfile's pins (plus the build backend), each with a
+    sha256, and satisfies pyproject's build requirement."""
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+
+    lock = (ROOT / "requirements.lock").read_text()
+    entries = re.findall(r"^([A-Za-z0-9_.\-]+)==(\S+) \\\n\s+--hash=sha256:([0-9a-f]{64})$", lock, re.M)
+    locked = {canonicalize_name(n): v for n, v, _ in entries}
+    assert len(entries) == len(re.findall(r"^[A-Za-z0-9_.\-]+==", lock, re.M)), "every entry has its hash"
+    pins = {canonicalize_name(k): v for k, v in _pins(_instructions()).items()}
+    assert {k: locked.get(k) for k in pins} == pins, "the lock installs the pinned versions"
+    backend = tomllib.loads((ROOT / "pyproject.toml").read_text())["build-system"]["requires"]
+    for req in map(Requirement, backend):
+        assert req.specifier.contains(locked[canonicalize_name(req.name)]), f"{req} is in the lock"
