@@ -168,12 +168,13 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
                                  bracket_refine=refine,
                                  joints=_joints(ns))
     from paraspace.kinematics.dexterous import check_step, orientation_samples
+    from paraspace.kinematics.settings import TOTAL_ORIENTATION
 
-    step = check_step(_float_arg("angle_step", ns.angle_step, "[0.25, 30] degrees"))
+    step = check_step(ns.angle_step)
     total = ns.tilt is not None or ns.torsion is not None
     if total:
-        tilt = _float_arg("tilt", 0.0 if ns.tilt is None else ns.tilt, "[0, 90] degrees")
-        torsion = _float_arg("torsion", 0.0 if ns.torsion is None else ns.torsion, "[0, 180] degrees")
+        tilt = TOTAL_ORIENTATION["tilt"].parse(0.0 if ns.tilt is None else ns.tilt)
+        torsion = TOTAL_ORIENTATION["torsion"].parse(0.0 if ns.torsion is None else ns.torsion)
         orientation_samples(tilt, torsion, step)  # validates tilt and torsion
     dexterity = ns.dexterity or ns.kappa_min is not None
     if dexterity:

@@ -49,6 +49,7 @@ import numpy as np
 
 from .design import Design, ParameterError
 from .progress import CancelToken, ProgressFn, Reporter, check
+from .settings import TOTAL_ORIENTATION
 from .tilt_torsion import tt_rotations
 from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, reachable_pairs
 
@@ -56,25 +57,14 @@ from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, re
 BATCH = 16
 
 
-def _angle(field: str, value, hi: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(field, value, f"[0, {hi:g}] degrees (a number)") from None
-    if not (math.isfinite(v) and 0.0 <= v <= hi):
-        raise ParameterError(field, value, f"[0, {hi:g}] degrees")
-    return v
+def _angle(field: str, value, hi: float | None = None) -> float:
+    """``value`` checked against its row of :data:`kinematics.settings.TOTAL_ORIENTATION`."""
+    return float(TOTAL_ORIENTATION[field].parse(value))
 
 
 def check_step(step) -> float:
-    """Validate the angular step: ``[0.25, 30]`` degrees."""
-    try:
-        v = float(step)
-    except (TypeError, ValueError):
-        raise ParameterError("angle_step", step, "[0.25, 30] degrees (a number)") from None
-    if not (math.isfinite(v) and 0.25 <= v <= 30.0):
-        raise ParameterError("angle_step", step, "[0.25, 30] degrees")
-    return v
+    """Validate the angular step (:data:`kinematics.settings.TOTAL_ORIENTATION`, ``[0.25, 30]`` degrees)."""
+    return float(TOTAL_ORIENTATION["angle_step"].parse(step))
 
 
 def _pow2(span: float, step: float, minimum: int) -> int:
@@ -88,8 +78,8 @@ def _pow2(span: float, step: float, minimum: int) -> int:
 def orientation_samples(tilt: float, torsion: float, step: float = 5.0) -> np.ndarray:
     """The sample set ``S`` of the module docstring as ``(azimuth, tilt, torsion)`` rows (degrees),
     ordered hardest first (largest tilt, then largest ``|torsion|``)."""
-    tilt = _angle("tilt", tilt, 90.0)
-    torsion = _angle("torsion", torsion, 180.0)
+    tilt = _angle("tilt", tilt)
+    torsion = _angle("torsion", torsion)
     step = check_step(step)
     if torsion > 0:
         n = _pow2(2 * torsion, step, 1)

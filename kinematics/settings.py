@@ -7,8 +7,10 @@ A :class:`Setting` is a named number ``v`` with a default, a unit, a one-line la
 
 Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPACE` for
 :class:`~kinematics.workspace.WorkspaceSettings`, :data:`ORIENTATION` for
-:class:`~kinematics.orientation.OrientationSettings` and :data:`OPTIMIZE` for
-:class:`~kinematics.optimize.OptimizeSettings`. The core's validation, the URL parser's ranges,
+:class:`~kinematics.orientation.OrientationSettings`, :data:`OPTIMIZE` for
+:class:`~kinematics.optimize.OptimizeSettings`, :data:`TOTAL_ORIENTATION` for the total-orientation
+workspace (:func:`~kinematics.dexterous.total_orientation_workspace`) and :data:`TILT_TORSION` for
+:class:`~kinematics.tilt_torsion.TiltTorsionSettings`. The core's validation, the URL parser's ranges,
 the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
 slider specs are all derived from these entries, so a bound is written once and the message
 (:meth:`Setting.range_text`) is the same everywhere. The design parameters' table is
@@ -107,4 +109,22 @@ OPTIMIZE: dict[str, Setting] = _table(
     Setting("generations", 12, 1, 1000, "generations", integer=True),
     Setting("seed", 1, 0, 2**32 - 1, "random seed", integer=True),
     Setting("step", 0.01, 1e-6, 10.0, "parameter resolution"),
+)
+
+
+#: The total-orientation workspace's numbers (:func:`kinematics.dexterous.total_orientation_workspace`).
+TOTAL_ORIENTATION: dict[str, Setting] = _table(
+    Setting("tilt", 15.0, 0.0, 90.0, "every tilt up to T (all azimuths)", "degrees", slider=(0.0, 45.0, 1.0)),
+    Setting("torsion", 15.0, 0.0, 180.0, "every torsion in [-S, S]", "degrees", slider=(0.0, 90.0, 1.0)),
+    Setting("angle_step", 5.0, 0.25, 30.0, "orientation sample spacing", "degrees", slider=(2.5, 15.0, 2.5)),
+)
+
+#: :class:`~kinematics.tilt_torsion.TiltTorsionSettings`'s numbers (``tolerance`` is bounded by
+#: ``coarse_step`` and stays in that class).
+TILT_TORSION: dict[str, Setting] = _table(
+    Setting("azimuth_step", 5.0, 0.1, 90.0, "azimuth spacing of the tilt search", "degrees"),
+    Setting("coarse_step", 1.0, 0.0, 30.0, "coarse tilt step before the bisection", "degrees", lo_open=True),
+    Setting("tilt_limit", 90.0, 0.0, 180.0, "largest tilt searched", "degrees", lo_open=True),
+    Setting("torsion_limit", 180.0, 0.0, 180.0, "largest torsion searched", "degrees", lo_open=True),
+    Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
 )

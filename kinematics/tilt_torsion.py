@@ -43,6 +43,7 @@ import numpy as np
 
 from .design import Design, ParameterError
 from .joints import Joints
+from .settings import TILT_TORSION
 from .workspace import reachable_pairs
 
 
@@ -106,14 +107,9 @@ class TiltTorsionSettings:
     eta_step: float = 0.5
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "azimuth_step", _num("azimuth_step", self.azimuth_step, 0.0, 90.0, True))
-        object.__setattr__(self, "coarse_step", _num("coarse_step", self.coarse_step, 0.0, 30.0, True))
+        for name in ("azimuth_step", "coarse_step", "tilt_limit", "torsion_limit", "eta_step"):
+            object.__setattr__(self, name, float(TILT_TORSION[name].parse(getattr(self, name))))
         object.__setattr__(self, "tolerance", _num("tolerance", self.tolerance, 0.0, self.coarse_step, True))
-        object.__setattr__(self, "tilt_limit", _num("tilt_limit", self.tilt_limit, 0.0, 180.0, True))
-        object.__setattr__(self, "torsion_limit", _num("torsion_limit", self.torsion_limit, 0.0, 180.0, True))
-        object.__setattr__(self, "eta_step", _num("eta_step", self.eta_step, 0.01, 10.0))
-        if 360.0 / self.azimuth_step > 3600:
-            raise ParameterError("azimuth_step", self.azimuth_step, "(0.1, 90] degrees")
 
 
 def azimuths(settings: TiltTorsionSettings) -> np.ndarray:

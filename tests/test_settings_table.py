@@ -120,3 +120,38 @@ def test_patched_optimiser_bound_reaches_core_and_cli(monkeypatch: pytest.Monkey
     with pytest.raises(ParameterError, match=r"\[4, 200\]"):
         cli.optimize_settings_from_args(ns)
     assert "[4, 200]" in cli.build_parser()._subparsers._group_actions[0].choices["optimize"].format_help()
+
+
+def test_patched_total_orientation_bounds_reach_core_cli_and_sliders(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    from paraspace.kinematics.dexterous import check_step, orientation_samples
+    from paraspace.kinematics.settings import TILT_TORSION, TOTAL_ORIENTATION
+    from paraspace.kinematics.tilt_torsion import TiltTorsionSettings
+
+    assert check_step(20.0) == 20.0 and TiltTorsionSettings(azimuth_step=60.0).azimuth_step == 60.0
+    monkeypatch.setitem(TOTAL_ORIENTATION, "angle_step",
+                        dataclasses.replace(TOTAL_ORIENTATION["angle_step"], hi=10.0, slider=(1.0, 9.0, 1.0)))
+    monkeypatch.setitem(TOTAL_ORIENTATION, "tilt", dataclasses.replace(TOTAL_ORIENTATION["tilt"], hi=30.0))
+    monkeypatch.setitem(TILT_TORSION, "azimuth_step", dataclasses.replace(TILT_TORSION["azimuth_step"], hi=45.0))
+    with pytest.raises(ParameterError, match=r"angle_step = 20.0 is invalid: valid range \[0.25, 10\] degrees"):
+        check_step(20.0)
+    with pytest.raises(ParameterError, match=r"tilt = 40.0 is invalid: valid range \[0, 30\] degrees"):
+        orientation_samples(40.0, 10.0, 5.0)
+    with pytest.raises(ParameterError, match=r"azimuth_step = 60.0 is invalid: valid range \[0.1, 45\] degrees"):
+        TiltTorsionSettings(azimuth_step=60.0)
+    assert cli.main(["workspace", "--voxel", "8", "--tilt", "40", "--torsion", "5"]) == 2
+    assert "tilt = 40.0 is invalid: valid range [0, 30] degrees" in capsys.readouterr().err
+
+    class Gui:  # records the explorer's slider specs
+        def __init__(self) -> None:
+            self.sliders: dict[str, dict] = {}
+
+        def add_slider(self, label: str, **kw):
+            self.sliders[label] = kw
+            return label
+
+    from paraspace.app.explorer.dexterous_panel import _slider
+
+    gui = Gui()
+    _slider(gui, "angle step (deg)", TOTAL_ORIENTATION["angle_step"])
+    spec = gui.sliders["angle step (deg)"]
+    assert (spec["min"], spec["max"], spec["step"]) == (1.0, 9.0, 1.0) and "[0.25, 10] degrees" in spec["hint"]

@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 import viser
 
+from paraspace.kinematics.settings import TOTAL_ORIENTATION, Setting
+
 from ..jobs import Job, JobManager, LimitExceeded
 from ..numfmt import significant
 from ..textsafe import md_text
@@ -29,6 +31,14 @@ if TYPE_CHECKING:  # pragma: no cover - types only
 #: test per sampled orientation per voxel).
 DEXTEROUS_VOXEL = 6.0
 COLOR = (140, 60, 200, 255)
+
+
+def _slider(gui: Any, label: str, spec: Setting) -> Any:
+    """A slider of one row of :data:`kinematics.settings.TOTAL_ORIENTATION` (range, default, words)."""
+    assert spec.slider is not None
+    lo, hi, step = spec.slider
+    return gui.add_slider(label, min=lo, max=hi, step=step, initial_value=float(spec.default),
+                          hint=f"{spec.label}; valid range {spec.range_text()}")
 
 
 class DexterousPanel:
@@ -48,12 +58,9 @@ class DexterousPanel:
         self.handle: Any | None = None
         self.result: Any | None = None
         with gui.add_folder("Total-orientation workspace", expand_by_default=False):
-            self.tilt = gui.add_slider("tilt T (deg)", min=0.0, max=45.0, step=1.0, initial_value=15.0,
-                                       hint="every tilt up to T, in every azimuth")
-            self.torsion = gui.add_slider("torsion S (deg)", min=0.0, max=90.0, step=1.0, initial_value=15.0,
-                                          hint="every torsion in [-S, S]")
-            self.step = gui.add_slider("angle step (deg)", min=2.5, max=15.0, step=2.5, initial_value=5.0,
-                                       hint="largest spacing of the sampled orientations")
+            self.tilt = _slider(gui, "tilt T (deg)", TOTAL_ORIENTATION["tilt"])
+            self.torsion = _slider(gui, "torsion S (deg)", TOTAL_ORIENTATION["torsion"])
+            self.step = _slider(gui, "angle step (deg)", TOTAL_ORIENTATION["angle_step"])
             self.show = gui.add_button(f"Show (h = {DEXTEROUS_VOXEL:g})", icon=viser.Icon.PLAYER_PLAY)
             self.hide = gui.add_button("Hide", icon=viser.Icon.EYE_OFF, disabled=True)
             self.text = gui.add_markdown("The positions from which every such orientation is reachable, drawn "
