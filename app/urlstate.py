@@ -18,8 +18,8 @@ Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys ar
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
 if the paper defaults of a later version change. Every other key is written only when it differs
 from its default (short links); the six carriage values are written whenever
-``carriages=manual`` or any of them is not 0. Numbers are written in Python's shortest round-trip form (``60``, ``114.5``),
-so ``parse_query(encode_query(s)) == (s, [])`` exactly.
+``carriages=manual`` or any of them is not 0. Numbers are written in Python's shortest round-trip
+form (``60``, ``114.5``), so ``parse_query(encode_query(s)) == (s, [])`` exactly.
 
 Parsing policy (:func:`parse_query`): never raises. Each bad field (not a number, not one of the
 choices, outside the field's accepted range (the same as the model's and the explorer's number
@@ -46,6 +46,8 @@ from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
+
+from .schema import LINK_FIELDS, link_number_error
 
 CarriageMode = Literal["auto", "manual"]
 CameraPreset = Literal["iso", "top", "bottom", "side"]
@@ -162,13 +164,20 @@ def parse_pin(raw: str) -> tuple[Design | None, str | None]:
             return None, f"pin: {msg}"
         fields[key] = v
     try:
-        return Design(**fields, eta_range=parts[-1]), None  # type: ignore[arg-type]
+        return Design(**fields, eta_range=parts[-1]), None
     except ParameterError as exc:
         return None, f"pin: {exc}"
 
 
 def check_field(key: str, value: float) -> str | None:
     """The one message for a numeric field outside its accepted range (``None`` when valid)."""
+    if key in LINK_FIELDS and key not in TABLE_SETTINGS:  # the input field of the same name (app/schema.py)
+        valid = link_number_error(key, value)
+        return None if valid is None else f"{key} = {value:g} is out of range; valid range {valid}"
+    if key in TABLE_SETTINGS:  # the core table's entry: its range (open or closed) and its text
+        spec = TABLE_SETTINGS[key][0][TABLE_SETTINGS[key][1]]
+        ok = math.isfinite(value) and spec.contains(value)
+        return None if ok else f"{key} = {value:g} is out of range; valid range {spec.range_text()}"
     rng = DESIGN_RANGES.get(key) or POSE_RANGES.get(key) or SETTING_RANGES[key]
     if not (math.isfinite(value) and rng.lo <= value <= rng.hi):
         return f"{key} = {value:g} is out of range; valid range {rng.text(UNITS.get(key, ''))}"
@@ -263,7 +272,7 @@ def _parse_fields(keys, values: dict[str, str], ranges: Mapping[str, Range], mes
             spec = TABLE_SETTINGS[key][0][TABLE_SETTINGS[key][1]] if key in TABLE_SETTINGS else None
             text = spec.range_text() if spec is not None else None  # the table's one message text
             v, msg = _parse_number(key, values[key], ranges[key], UNITS.get(key, ""), range_text=text)
-            if spec is not None and not msg and not spec.contains(v):  # type: ignore[arg-type]
+            if spec is not None and v is not None and not msg and not spec.contains(v):
                 msg = f"{key} = {_cut(values[key])} is out of range; valid range {text}"  # e.g. open at lo
             if msg:
                 messages.append(msg)
@@ -282,6 +291,11 @@ def _parse_number(key: str, raw: str, rng: Range, unit: str = "",
         return None, f"{key} = {_quote(raw)} is not a number; valid range {valid}"
     if not math.isfinite(v):
         return None, f"{key} = {_quote(raw)} is not a finite number; valid range {valid}"
+    if range_text is None and key in LINK_FIELDS and key not in TABLE_SETTINGS:  # its input field (app/schema.py)
+        field_text = link_number_error(key, v)
+        if field_text is not None:
+            return None, f"{key} = {_cut(raw)} is out of range; valid range {field_text}"
+        return (0.0 if v == 0.0 else v), None
     if not (rng.lo <= v <= rng.hi):
         return None, f"{key} = {_cut(raw)} is out of range; valid range {valid}"
     return (0.0 if v == 0.0 else v), None
@@ -398,19 +412,19 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
     e_rng = Range(e_lo, e_hi, 0.5)
     for i, key in enumerate(D_KEYS):
         if key in values:
-            v, msg = _parse_number(key, values[key], d_rng, range_text=f"[0, d_s={design.d_s:g}]")
-            if msg:
-                messages.append(msg)
+            num, msg = _parse_number(key, values[key], d_rng, range_text=f"[0, d_s={design.d_s:g}]")
+            if msg or num is None:
+                messages.append(msg or key)
             else:
-                d[i] = v  # type: ignore[assignment]
+                d[i] = num
     for i, key in enumerate(ETA_KEYS):
         if key in values:
-            v, msg = _parse_number(key, values[key], e_rng, range_text=(
+            num, msg = _parse_number(key, values[key], e_rng, range_text=(
                 f"[{e_lo:g}, {e_hi:g}] deg (eta_s={design.eta_s:g}, {design.eta_range})"))
-            if msg:
-                messages.append(msg)
+            if msg or num is None:
+                messages.append(msg or key)
             else:
-                eta[i] = v  # type: ignore[assignment]
+                eta[i] = num
     # Defaults of d/eta (0) are always inside the strokes.
 
     # ----- settings and view ------------------------------------------------------------------------

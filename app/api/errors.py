@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import errno
 import logging
-from collections.abc import Callable
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -24,16 +23,7 @@ from paraspace.kinematics.design import ParameterError
 
 log = logging.getLogger("paraspace.app.api")
 
-#: (section, field) -> valid range text used in 422 messages.
-RANGES: dict[tuple[str, str], str] = {}
-
-
-class FieldError(Exception):
-    """Bad input in one field: answered with 422 ``{"detail": [{"field", "message"}]}``."""
-
-    def __init__(self, field: str, message: str) -> None:
-        self.field, self.message = field, message
-        super().__init__(message)
+from ..schema import RANGES, FieldError, call_core  # noqa: E402,F401 - the inputs' registry and errors
 
 
 class ApiError(Exception):
@@ -42,14 +32,6 @@ class ApiError(Exception):
     def __init__(self, status: int, detail: str, headers: dict[str, str] | None = None) -> None:
         self.status, self.detail, self.headers = status, detail, headers
         super().__init__(detail)
-
-
-def call_core(section: str, build: Callable[[], Any]) -> Any:
-    """Run a core constructor, turning its ParameterError into a FieldError under ``section``."""
-    try:
-        return build()
-    except ParameterError as e:
-        raise FieldError(f"{section}.{e.field}", str(e)) from None
 
 
 def _short_repr(value: Any) -> str:
