@@ -97,6 +97,11 @@ def colorbar_image(lo: float, hi: float, size: tuple[int, int] = BAR_SIZE,
     ax.set_xticks(ticks)
     ax.set_xticklabels([f"{t:.3g}" for t in ticks], fontsize=9)
     ax.set_xlabel(label, fontsize=9, labelpad=1)
+    return _pixels(fig)
+
+
+def _pixels(fig: Any) -> np.ndarray:
+    """The drawn figure as a read-only RGB image (H, W, 3) (matplotlib's object API: thread-safe)."""
     fig.canvas.draw()
     buf = io.BytesIO()
     fig.savefig(buf, format="raw", dpi=100)
@@ -136,13 +141,7 @@ def swatch_image(entries: tuple[tuple[str, tuple[int, int, int]], ...],
         ax.add_patch(Rectangle((col + 0.03, row + 0.2), 0.14, 0.6, facecolor=np.array(rgb) / 255.0,
                                edgecolor="black", linewidth=0.6))
         ax.text(col + 0.21, row + 0.5, name, fontsize=9, va="center", ha="left")
-    fig.canvas.draw()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="raw", dpi=100)
-    rgba = np.frombuffer(buf.getvalue(), np.uint8).reshape(int(fig.bbox.height), int(fig.bbox.width), 4)
-    image = np.ascontiguousarray(rgba[:, :, :3])
-    image.setflags(write=False)
-    return image
+    return _pixels(fig)
 
 
 def build_legend_folder(gui: viser.GuiApi) -> LegendPanel:
