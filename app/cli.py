@@ -125,7 +125,7 @@ def _add_scan_flags(p: argparse.ArgumentParser) -> None:
                        help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
 
 
-def _scan(ns: argparse.Namespace) -> dict[str, float]:
+def _scan(ns: argparse.Namespace) -> dict[str, Any]:
     """The scan flags given, read and checked by their table entries (the others keep their defaults)."""
     from paraspace.kinematics.settings import ORIENTATION
 
@@ -565,9 +565,9 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
         orientation=OrientationSettings(joints=joints, **_scan(ns)),
-        population=OPTIMIZE["population"].parse(ns.population),
-        generations=OPTIMIZE["generations"].parse(ns.generations),
-        seed=OPTIMIZE["seed"].parse(ns.seed), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
+        population=int(OPTIMIZE["population"].parse(ns.population)),
+        generations=int(OPTIMIZE["generations"].parse(ns.generations)),
+        seed=int(OPTIMIZE["seed"].parse(ns.seed)), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
 
 
 def cmd_optimize(ns: argparse.Namespace) -> int:

@@ -42,6 +42,10 @@ def call_core(section: str, build: Callable[[], Any]) -> Any:
         raise FieldError(f"{section}.{e.field}", str(e)) from None
 
 
+#: pydantic's ``Field`` called with bounds built at run time (its typed overloads take literals only).
+_field: Callable[..., Any] = Field
+
+
 def _rng_text(lo: float, hi: float, unit: str = "", lo_open: bool = False) -> str:
     text = f"{'(' if lo_open else '['}{lo:g}, {hi:g}]"
     return f"{text} {unit}".rstrip()
@@ -61,10 +65,11 @@ def _setting(section: str, spec: Setting, strict: bool = True) -> Any:
     and range text (the one message) all come from the entry."""
     text = spec.range_text()
     RANGES[(section, spec.name)] = text
-    bound = {"gt": spec.lo} if spec.lo_open else {"ge": spec.lo}
-    extra: dict[str, Any] = {} if spec.integer else {"allow_inf_nan": False}
-    return Field(spec.default, le=spec.hi, strict=strict, description=f"{spec.label}; valid range {text}",
-                 **bound, **extra)
+    kwargs: dict[str, Any] = {"gt": spec.lo} if spec.lo_open else {"ge": spec.lo}
+    if not spec.integer:
+        kwargs["allow_inf_nan"] = False
+    return _field(spec.default, le=spec.hi, strict=strict, description=f"{spec.label}; valid range {text}",
+                  **kwargs)
 
 
 _MODEL = ConfigDict(extra="forbid")
@@ -144,8 +149,8 @@ def _joint_field(name: str, default: Any, description: str, optional: bool = Fal
     lo, hi, lo_open, text = JOINT_RANGES[name]
     RANGES[("joints", name)] = text + (" or null (no limit)" if optional else "")
     bound = {"gt": lo} if lo_open else {"ge": lo}
-    return Field(default, le=hi, allow_inf_nan=False, strict=True,
-                 description=f"{description}; valid range {RANGES[('joints', name)]}", **bound)
+    return _field(default, le=hi, allow_inf_nan=False, strict=True,
+                  description=f"{description}; valid range {RANGES[('joints', name)]}", **bound)
 
 
 class JointsIn(BaseModel):
@@ -193,7 +198,8 @@ class WorkspaceSettingsIn(BaseModel):
                     if not (math.isfinite(v) and -1e4 <= v <= 1e4):
                         raise FieldError(f"settings.bounds.{corner}",
                                          f"bounds.{corner}.{axis} = {v!r} is invalid: valid range [-10000, 10000]")
-            bounds = (tuple(self.bounds.lo), tuple(self.bounds.hi))
+            lo, hi = self.bounds.lo, self.bounds.hi
+            bounds = ((lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2]))
         return call_core("settings", lambda: WorkspaceSettings(
             voxel=self.voxel, orientation=(o.psi, o.theta, o.phi), eta_step=self.eta_step, bounds=bounds,
             z_floor=self.z_floor, symmetry=self.symmetry, diagnostics=self.diagnostics, method=self.method,

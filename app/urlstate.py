@@ -39,9 +39,9 @@ import dataclasses
 import math
 import urllib.parse
 from collections.abc import Iterator, Mapping
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
-from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, EtaRange, ParameterError
 from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
@@ -164,7 +164,7 @@ def parse_pin(raw: str) -> tuple[Design | None, str | None]:
             return None, f"pin: {msg}"
         fields[key] = v
     try:
-        return Design(**fields, eta_range=parts[-1]), None
+        return Design(**fields, eta_range=cast(EtaRange, parts[-1])), None
     except ParameterError as exc:
         return None, f"pin: {exc}"
 

@@ -141,7 +141,8 @@ class OptimizeRequest(BaseModel):
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
         workspace, orientation = study_settings(self.settings, self.orientation)
         return OptimizeSettings(
-            params=tuple(self.params), bounds=dict(self.bounds), objectives=list(self.objectives),
+            params=tuple(self.params),
+            bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(self.objectives),
             constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
             orientation=orientation,
             population=self.population, generations=self.generations, seed=self.seed, step=self.step,
