@@ -754,7 +754,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.set_defaults(func=cmd_serve)
 
     from .mechanism_cli import add_mechanism_parser
+    from .report_cli import add_report_parser
     add_mechanism_parser(sub)
+    add_report_parser(sub)
     return p
 
 

@@ -125,6 +125,8 @@ class Panels:
     download_ply: Any
     download_glb: Any
     download_json: Any
+    download_report: Any
+    report_status: Any
     version: Any
 
 
@@ -294,6 +296,11 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         download_ply = gui.add_button("Shell PLY", icon=viser.Icon.DOWNLOAD)
         download_glb = gui.add_button("Shell GLB", icon=viser.Icon.DOWNLOAD)
         download_json = gui.add_button("Measures JSON", icon=viser.Icon.DOWNLOAD)
+        download_report = gui.add_button("Design report (HTML)", icon=viser.Icon.FILE_DESCRIPTION,
+                                         hint="one self-contained page: parameters, mechanism, the shell's four "
+                                              "views, every measure with its definition, orientation maps, the "
+                                              "pinned design beside it, this link; print it to PDF from the browser")
+        report_status = gui.add_markdown("")
         version = gui.add_markdown(f"paraspace {paraspace.__version__} (the same version as "
                                    "`paraspace --version` and `/api/v1/health`)")
 
@@ -316,5 +323,6 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
         surface_plot=surface_plot, surface_csv=surface_csv, surface_png=surface_png, surface_svg=surface_svg,
         link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
-        download_glb=download_glb, download_json=download_json, version=version,
+        download_glb=download_glb, download_json=download_json,
+        download_report=download_report, report_status=report_status, version=version,
     )
