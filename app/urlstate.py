@@ -12,7 +12,7 @@ URL format (keys are the CLI's names)::
      [&carriages=manual&d_1=10&d_2=10&d_3=10&eta_1=0&eta_2=0&eta_3=0]
      [&voxel=2&z0=130&angle_range=90&angle_step=0.5&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
-     [&pin=10,14,50,100,114.5,50,30,centered]
+     [&pin=10,14,50,100,114.5,50,30,centered[;80,14,50,100,114.5,50,30,centered...]]
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -144,6 +144,10 @@ SETTING_SLIDERS: Mapping[str, Range] = _SettingRanges(
 JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
 
 
+#: Most designs pinned at once (Compare tab, and the link's ``pin`` key).
+MAX_PINS = 4
+
+
 def encode_pin(design: Design) -> str:
     """The ``pin`` value: the seven design numbers in :data:`DESIGN_KEYS` order and the arc range,
     comma-separated (``50,14,50,100,114.5,50,30,centered``)."""
@@ -220,7 +224,8 @@ class ExplorerState:
         cut_keep: which side of the cut plane stays visible.
         opacity: shell opacity.
         joints: joint cones and leg interference (:mod:`kinematics.joints`).
-        pin: a pinned design shown beside the current one (Compare tab), or ``None``.
+        pins: the pinned designs shown beside the current one (Compare tab), at most
+            :data:`MAX_PINS`; the link writes them in one ``pin`` key, separated by ``;``.
     """
 
     design: Design = dataclasses.field(default_factory=Design)
@@ -238,7 +243,7 @@ class ExplorerState:
     cut_keep: CutKeep = "below"
     opacity: float = 0.6
     joints: Joints = dataclasses.field(default_factory=Joints)
-    pin: Design | None = None
+    pins: tuple[Design, ...] = ()
 
     def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
@@ -476,14 +481,21 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         joint_fields.pop(exc.field, None)
         joints = Joints(**joint_fields)
 
-    pin = None
+    pins: list[Design] = []
     if "pin" in values:
-        pin, msg = parse_pin(values["pin"])
-        if msg:
-            messages.append(msg)
+        parts = values["pin"].split(";")
+        if len(parts) > MAX_PINS:
+            messages.append(f"pin = {_quote(values['pin'])} is invalid; at most {MAX_PINS} designs separated by ';' "
+                            f"({len(parts)} given; the first {MAX_PINS} are kept)")
+        for part in parts[:MAX_PINS]:
+            pin, msg = parse_pin(part)
+            if msg:
+                messages.append(msg)
+            elif pin is not None and pin not in pins:
+                pins.append(pin)
 
     state = ExplorerState(
-        design=design, pose=pose, carriages=carriages, joints=joints, pin=pin,
+        design=design, pose=pose, carriages=carriages, joints=joints, pins=tuple(pins),
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
         angle_range=numbers.get("angle_range", DEFAULT_STATE.angle_range),
@@ -521,8 +533,8 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
         pairs.append(("cut_keep", state.cut_keep))
     if state.opacity != DEFAULT_STATE.opacity:
         pairs.append(("opacity", format_number(state.opacity)))
-    if state.pin is not None:
-        pairs.append(("pin", encode_pin(state.pin)))
+    if state.pins:
+        pairs.append(("pin", ";".join(encode_pin(d) for d in state.pins)))
     j = state.joints
     for key in JOINT_KEYS:
         v = getattr(j, key)
@@ -537,4 +549,4 @@ def encode_query(state: ExplorerState) -> str:
     Design and pose keys are always written; the others only when they differ from their defaults
     (the carriage values whenever ``carriages=manual`` or one is not 0). See the module docstring.
     """
-    return urllib.parse.urlencode(encode_pairs(state), safe=",")
+    return urllib.parse.urlencode(encode_pairs(state), safe=",;")

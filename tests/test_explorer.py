@@ -236,7 +236,7 @@ def test_design_report_of_the_design_on_screen_and_the_pinned_one(explorer, brow
     wait_idle(explorer, s)
     b.click(s.panels.download_report)
     page = b.download("paraspace_report.html", timeout=120.0).decode("utf-8")
-    assert "the design on screen" in page and "the pinned design" in page
+    assert "the design on screen" in page and "pinned design 1" in page
     marked = re.findall(r'<tr class="differs"><th>([^<]*)</th>', page)
     assert [m.replace("&middot;", "·") for m in marked] == ["a · platform radius"]
     # the volume of the design on screen is the one the Numbers show
@@ -620,12 +620,12 @@ def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
     s = b.session
     wait_idle(explorer, s)
     b.set(s.compare.pairs, "a 10|80")
-    wait_for(lambda: s.state.design.a == 80.0 and s.state.pin is not None and s.state.pin.a == 10.0, 10.0,
+    wait_for(lambda: s.state.design.a == 80.0 and len(s.state.pins) == 1 and s.state.pins[0].a == 10.0, 10.0,
              "pair loaded")
     wait_idle(explorer, s)
     wait_for(lambda: s.compare.pinned is not None and "| volume" in s.compare.table.content, 30.0, "the table")
     text = s.compare.table.content
-    assert "pinned" in text and "current" in text and "change" in text
+    assert "pin 1 (magenta)" in text and "current" in text and "change" in text
     v10 = s.compare.pinned.result.volume
     v80 = s.bundle.result.volume
     assert s.compare.pinned.result.design.a == 10.0 and s.bundle.result.design.a == 80.0 and v10 != v80
@@ -636,8 +636,48 @@ def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
     wait_for(lambda: s2.compare.pinned is not None, 30.0, "pin restored from the link")
     assert s2.compare.pinned.result.design.a == 10.0
     b2.click(s2.compare.unpin_button)
-    wait_for(lambda: s2.state.pin is None and s2.compare.handle is None and s2.compare.cage is None, 5.0, "unpinned")
+    wait_for(lambda: s2.state.pins == () and s2.compare.handle is None and s2.compare.cage is None, 5.0, "unpinned")
     wait_for(lambda: "pin=" not in b2.search, 5.0, "pin gone from the link")
+
+
+def test_several_pins_each_in_its_colour_with_one_table_and_undo(explorer, browsers):
+    """Issue 20 item 11: three pins from a link, each ghost in its own colour, one table across the
+    pins and the current design (differing parameters marked, TI_1 and TI_2 once computed); unpinning
+    the middle one keeps the others in order; a Fig. 3 pair says what it loaded and Undo puts back the
+    user's design and pins."""
+    from paraspace.app.explorer.compare_panel import PIN_COLOURS
+
+    pins = ";".join(f"{a},14,50,100,114.5,50,30,centered" for a in (20, 40, 70))
+    b = browsers(f"voxel=8&angle_step=10&a=50&pin={pins}")
+    s = b.session
+    wait_idle(explorer, s)
+    wait_for(lambda: len(s.compare.pins) == 3 and all(p.indices is not None and p.cage is not None
+                                                      for p in s.compare.pins)
+             and "TI₁" in s.compare.table.content, 60.0, "three pins with their ghosts and indices")
+    assert [p.design.a for p in s.compare.pins] == [20.0, 40.0, 70.0]
+    assert [p.colour for p in s.compare.pins] == [c for _, c in PIN_COLOURS[:3]]
+    assert all(p.handle is not None for p in s.compare.pins)
+    table = s.compare.table.content
+    header = table.splitlines()[2]
+    assert "pin 1 (magenta)" in header and "pin 3 (olive)" in header and "current" in header
+    assert "a · platform radius ◆" in table and "b · U-joint spacing ◆" not in table
+    # the table's volumes are the pins' own workspaces
+    for p in s.compare.pins:
+        ref = compute_workspace(p.design, WorkspaceSettings(voxel=8.0)).volume
+        assert p.bundle.result.volume == ref
+    # unpin the middle one: the others keep their order and take the colours of their places
+    b.set(s.compare.unpin_choice, "pin 2")
+    b.click(s.compare.unpin_button)
+    wait_for(lambda: [d.a for d in s.state.pins] == [20.0, 70.0], 10.0, "pin 2 removed")
+    assert [p.colour for p in s.compare.pins] == [c for _, c in PIN_COLOURS[:2]]
+    wait_for(lambda: "pin=20,14,50,100,114.5,50,30,centered;70," in urllib.parse.unquote(b.search), 5.0, "the link")
+    # a Fig. 3 pair replaces design and pins, says so, and Undo restores both
+    b.set(s.compare.pairs, "d_s 10|80")
+    wait_for(lambda: s.state.design.d_s == 80.0 and [d.d_s for d in s.state.pins] == [10.0], 10.0, "the pair")
+    assert s.compare.pair_note.visible and r"d\_s = 10 (pinned)" in s.compare.pair_note.content  # markdown-escaped
+    b.click(s.compare.undo_button)
+    wait_for(lambda: s.state.design == Design() and [d.a for d in s.state.pins] == [20.0, 70.0], 10.0, "undone")
+    assert not s.compare.undo_button.visible
 
 
 def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):

@@ -180,11 +180,29 @@ def test_garbage_never_raises(query: str) -> None:
 
 
 def test_pinned_design_round_trips_and_bad_pins_are_named() -> None:
-    s = DEFAULT_STATE.replace(pin=Design(a=10.0, eta_range="from-zero"))
+    s = DEFAULT_STATE.replace(pins=(Design(a=10.0, eta_range="from-zero"),))
     q = encode_query(s)
     assert "pin=10%2C14%2C50%2C100%2C114.5%2C50%2C30%2Cfrom-zero" in q or "pin=10,14,50,100,114.5,50,30,from-zero" in q
     assert parse_query(q) == (s, [])
     for bad, text in (("1,2,3", "expected 7 numbers"), ("10,14,50,100,114.5,50,300,centered", "eta_s"),
                       ("10,14,150,100,114.5,50,30,centered", "d_s"), ("10,14,50,100,114.5,50,30,sideways", "eta_range")):
         state, messages = parse_query("pin=" + bad)
-        assert state.pin is None and len(messages) == 1 and text in messages[0], (bad, messages)
+        assert state.pins == () and len(messages) == 1 and text in messages[0], (bad, messages)
+
+
+def test_several_pins_round_trip_in_order_and_the_bound_is_named() -> None:
+    from paraspace.app.urlstate import MAX_PINS
+
+    pins = tuple(Design(a=a) for a in (10.0, 30.0, 80.0))
+    s = DEFAULT_STATE.replace(pins=pins)
+    q = encode_query(s)
+    assert q.count("pin=") == 1 and q.count(";") == 2  # one key, designs separated by ';'
+    assert parse_query(q) == (s, [])
+    # a bad design among good ones is named; the good ones are kept, in order
+    good = "10,14,50,100,114.5,50,30,centered"
+    state, messages = parse_query(f"pin={good};1,2,3;80,14,50,100,114.5,50,30,centered")
+    assert [d.a for d in state.pins] == [10.0, 80.0] and len(messages) == 1 and "expected 7 numbers" in messages[0]
+    # more than MAX_PINS: the bound is named, the first MAX_PINS kept (nothing silently dropped)
+    many = ";".join(f"{10 + k},14,50,100,114.5,50,30,centered" for k in range(MAX_PINS + 2))
+    state, messages = parse_query("pin=" + many)
+    assert len(state.pins) == MAX_PINS and any(f"at most {MAX_PINS} designs" in m for m in messages)

@@ -45,6 +45,7 @@ class OrientationController:
         self.gen = 0
         self.job: Job | None = None
         self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
+        self.on_shown: Callable[[], None] | None = None  # e.g. the Compare table's TI column
 
     def wire(self) -> None:
         """Attach z0 and the maps' download buttons."""
@@ -154,5 +155,7 @@ class OrientationController:
                 f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28)."
                 + (f"  \n⚠ {md_text(warning, 600)}" if warning else ""))
         self.numbers.render()
+        if self.on_shown is not None:
+            self.on_shown()
         ctx.event("orientation-shown")
 

@@ -144,11 +144,13 @@ class ClientSession:
         cache = self.explorer.shell_cache
         with ctx.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
             self.compare = ComparePanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
-                                        CompareHooks(get_state=lambda: ctx.state, set_pin=self._set_pin,
+                                        CompareHooks(get_state=lambda: ctx.state, set_pins=self._set_pins,
                                                      bundle_for=lambda st: cached_bundle(cache, st),
                                                      compute_bundle=lambda st, pr, c: compute_bundle(cache, st, pr, c),
                                                      current_bundle=lambda: ctx.bundle,
-                                                     load_design=self.design_controller.load_design, notify=notify))
+                                                     load_design=self.design_controller.load_design, notify=notify,
+                                                     current_indices=self._current_indices))
+        self.orientation_controller.on_shown = self.compare.refresh
         with ctx.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
             self.paper = PaperPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                     cache=self.explorer.paper_results, notify=notify)
@@ -169,8 +171,8 @@ class ClientSession:
         self.view_controller.set_camera(s.view)
         self.share_controller.sync_url_now()
         self.workspace_controller.submit()
-        if s.pin is not None:
-            self.compare.restore(s.pin)
+        if s.pins:
+            self.compare.restore(s.pins)
         self.ready.set()
 
     def _build_optimize_tab(self) -> None:
@@ -188,10 +190,22 @@ class ClientSession:
         if self.optimize_query:
             ctx.url_messages += self.optimize.apply_query(self.optimize_query)
 
-    def _set_pin(self, design: Design | None) -> None:
-        """The Compare tab pinned ``design`` (or none): it goes into the state and the link."""
-        self.ctx.update_state(pin=design)
+    def _set_pins(self, designs: tuple[Design, ...]) -> None:
+        """The Compare tab's pinned designs changed: they go into the state and the link."""
+        self.ctx.update_state(pins=tuple(designs))
         self.share_controller.schedule_url()
+
+    def _current_indices(self) -> tuple[float, float, bool, bool] | None:
+        """TI_1, TI_2 (and whether each is a lower bound) of the orientation maps on screen, when they
+        are of the current design and settings."""
+        from .compare_panel import index_row
+
+        ctx = self.ctx
+        with ctx.lock:
+            ori, s = ctx.orientation, ctx.state
+        if ori is None or ori.design != s.design or ori.settings != s.orientation_settings():
+            return None
+        return index_row(ori)
 
     def _after_stop(self) -> None:
         """Stop put the state back to the shell on screen: the mechanism and the link follow."""

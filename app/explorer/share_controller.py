@@ -5,7 +5,7 @@ change the controllers call :meth:`ShareController.schedule_url`, which rewrites
 (debounced, ``history.replaceState``; :mod:`app.jsbridge`) from the state (:func:`app.urlstate.encode_query`)
 so it always holds a link to what is on screen; the Share tab shows the same link, copies it, and
 downloads the full-resolution shell (STL, PLY, GLB), the measures (JSON) and the design report
-(HTML, :mod:`app.report`: the design on screen and the pinned one, computed in a background job
+(HTML, :mod:`app.report`: the design on screen and the pinned ones, computed in a background job
 that reuses what is already on screen). The problems of the
 link the page was opened with are shown here too (:meth:`ShareController.show_link_messages`).
 """
@@ -186,10 +186,10 @@ class ShareController:
         self.ctx.client.send_file_download("paraspace_measures.json", data, save_immediately=True)
 
     def download_report(self) -> None:
-        """Write the design report of the design on screen (and of the pinned design, when one is
-        pinned) in a background job, then send it as ``paraspace_report.html``. The current
-        design's workspace, measures, bracket and orientation maps are the ones on screen; only
-        the pinned design (and what is not on screen yet) is computed."""
+        """Write the design report of the design on screen and the pinned designs in a background
+        job, then send it as ``paraspace_report.html``. The current design's workspace, measures,
+        bracket and orientation maps are the ones on screen; only the pinned designs (and what is
+        not on screen yet) are computed."""
         import paraspace
         from paraspace.kinematics.orientation import OrientationResult
         from paraspace.kinematics.workspace import WorkspaceSettings
@@ -212,7 +212,7 @@ class ShareController:
         p = ctx.panels
         p.download_report.disabled = True
         p.report_status.content = "writing the report..."
-        pin = s.pin
+        pins = s.pins
 
         def fn(progress: Any, cancel: threading.Event) -> bytes:
             from paraspace.kinematics.bracket import bracket_of
@@ -223,11 +223,11 @@ class ShareController:
                                                                                                     cancel=cancel)
             o = ori_now if ori_now is not None else orientation_workspace(s.design, osettings, cancel=cancel)
             entries = [ReportEntry("the design on screen", s.design, b.result, b.measures, bracket, o, link)]
-            if pin is not None:
-                progress(0.4, "the pinned design")
-                settings = WorkspaceSettings(voxel=b.result.grid.h, joints=s.joints)
-                pin_link = link.split("?")[0] + "?" + encode_query(dataclasses.replace(s, design=pin, pin=None))
-                entries.append(compute_entry("the pinned design", pin, settings, osettings, link=pin_link,
+            settings = WorkspaceSettings(voxel=b.result.grid.h, joints=s.joints)
+            for k, pin in enumerate(pins):
+                progress(0.3 + 0.5 * k / len(pins), f"pinned design {k + 1}")
+                pin_link = link.split("?")[0] + "?" + encode_query(dataclasses.replace(s, design=pin, pins=()))
+                entries.append(compute_entry(f"pinned design {k + 1}", pin, settings, osettings, link=pin_link,
                                              cancel=cancel))
             progress(0.8, "drawing the pictures")
             return report_html(entries, version=paraspace.__version__).encode("utf-8")
