@@ -327,6 +327,13 @@ def test_camera_presets_reset_and_stop(explorer, browsers):
     wait_for(lambda: abs(cam.position[2] - cam.look_at[2]) > 10 * np.hypot(*(cam.position[:2] - cam.look_at[:2])),
              5.0, "camera above the workspace")
     wait_for(lambda: "view=top" in b.search, 5.0, "view in the URL")
+    # from below, the floor grid would hide the workspace's underside: hidden there, back elsewhere
+    grid = s.pose_controller.mechanism.grid
+    assert grid.visible
+    b.set(s.panels.view_buttons, "bottom")
+    wait_for(lambda: s.state.view == "bottom" and not grid.visible, 5.0, "the grid hidden in the bottom view")
+    b.set(s.panels.view_buttons, "iso")
+    wait_for(lambda: s.state.view == "iso" and grid.visible, 5.0, "the grid back")
     b.click(s.panels.reset)
     wait_for(lambda: s.state.design == Design() and s.panels.design["a"].value == 50.0, 10.0, "reset")
     wait_idle(explorer, s)

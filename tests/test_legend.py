@@ -41,3 +41,14 @@ def test_swatch_key_shows_each_colour() -> None:
     for name, colour in entries:
         assert tuple(colour) in pixels, f"the swatch of {name} is drawn in its colour"
     assert image.shape[1] == colorbar_image(0.0, 1.0).shape[1], "as wide as the colour bar"
+
+
+def test_one_label_per_chain_names_its_legs_in_words():
+    from paraspace.app.explorer.scene import chain_label_text, grid_scale_text
+    from paraspace.kinematics.design import Design
+
+    assert chain_label_text(0, ["inside", "inside"]) is None
+    assert chain_label_text(1, ["too_long", "too_long"]) == "chain 2: legs 1, 2 too long"
+    assert chain_label_text(0, ["inside", "at_limit"]) == "chain 1: leg 2 at a limit"
+    assert chain_label_text(2, ["too_short", "at_limit"]) == "chain 3: leg 1 too short, leg 2 at a limit"
+    assert grid_scale_text(Design(r=150.0)) == "grid: 30 units per cell, 150 per section"

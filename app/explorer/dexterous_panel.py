@@ -31,6 +31,8 @@ if TYPE_CHECKING:  # pragma: no cover - types only
 #: test per sampled orientation per voxel).
 DEXTEROUS_VOXEL = 6.0
 COLOR = (140, 60, 200, 255)
+#: Opacity of the total-orientation shell: the position shell and the legs stay visible through it.
+OPACITY = 0.55
 
 
 def _slider(gui: Any, label: str, spec: Setting) -> Any:
@@ -108,7 +110,7 @@ class DexterousPanel:
         self.text.content = "computing..."
 
     def _draw(self, res: Any) -> None:
-        from paraspace.kinematics.shell import workspace_shell
+        from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
         self.result = res
         s = res.summary()
@@ -121,9 +123,13 @@ class DexterousPanel:
         self._remove()
         if res.voxels == 0:
             return
-        mesh: trimesh.Trimesh = workspace_shell(res.result, max_faces=30000, color_by_z=False)
+        # drawn like the position shell: re-meshed, smoothed for display (no h = 6 staircase) and
+        # translucent, so that the legs and the position shell stay visible through it
+        mesh: trimesh.Trimesh = workspace_shell(res.result, max_faces=30000, color_by_z=False, reduction="remesh",
+                                                volume_rtol=1e-2)
+        mesh = smooth_for_display(mesh, volume=res.result.volume)
         mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))  # type: ignore[union-attr]
-        glb = glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), 0.85)
+        glb = glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), OPACITY)
         self.handle = self.scene.add_glb(self.NODE, glb, cast_shadow=False, receive_shadow=False)
         self.hide.disabled = False
 

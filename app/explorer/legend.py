@@ -29,6 +29,7 @@ LEGEND_TEXT = (
     "**Legs:** blue = inside their stroke, orange = at a limit, red = out of range (a label names the leg)  \n"
     "**Platform:** green = the pose is in the workspace, red = outside (label above the platform)  \n"
     "**Axes:** x red, y green, z blue, from the base centre; grid cells r/5, sections r  \n"
+    "**Total-orientation workspace** (Pose tab, on request): translucent purple  \n"
     "**Pinned designs** (Compare tab): height contours in the pin's colour: pin 1 magenta, 2 brown, "
     "3 olive, 4 cyan  \n"
     "**Units:** lengths in the paper's units (dimensionless, r = 100 by default), volumes in units³, "

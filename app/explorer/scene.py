@@ -120,13 +120,17 @@ class MechanismScene:
         self.arc_rails = sc.add_line_segments("/mechanism/arc_rails", g["arcs"], ARC_COLOR, thickness=2.0 * g["thick"])
         self.labels = [sc.add_label(f"/mechanism/chain_label_{i + 1}", f"chain {i + 1}", position=g["labels"][i],
                                     font_size_mode="screen", font_screen_scale=0.8) for i in range(3)]
+        # the scale: what one grid cell measures, at the grid's near corner
+        self.scale_label = sc.add_label("/mechanism/grid_scale", grid_scale_text(design), position=g["scale_at"],
+                                        font_size_mode="screen", font_screen_scale=0.7)
         B, D = self._joint_points(design, pose, d, eta)
         wxyz, ctr, length = segment_transforms(D, B)
         lr, jr = g["leg_radius"], g["joint_radius"]
         self.legs = sc.add_batched_meshes_simple(
             "/mechanism/legs", _UNIT_CYLINDER.vertices, _UNIT_CYLINDER.faces, wxyz, ctr,
             batched_scales=np.c_[np.full(6, lr), np.full(6, lr), length],
-            batched_colors=self._leg_colors(leg_status), lod="off", cast_shadow=False, receive_shadow=False)
+            batched_colors=self._leg_colors(leg_status), lod="off", cast_shadow=False, receive_shadow=False,
+            material="toon3")  # flat bands: a leg's state colour stays readable, never shaded to near-black
         self.joints = sc.add_batched_meshes_simple(
             "/mechanism/joints", _UNIT_SPHERE.vertices, _UNIT_SPHERE.faces,
             np.tile([1.0, 0.0, 0.0, 0.0], (12, 1)), np.vstack([D, B]),
@@ -149,9 +153,10 @@ class MechanismScene:
         # labels are drawn over the 3-D scene: never hidden by the translucent shell or the gizmo
         self.pose_label = sc.add_label("/platform/pose_label", "P", position=(0.0, 0.0, 0.9 * design.a),
                                        font_size_mode="screen", font_screen_scale=0.9)
+        # one label per chain whose legs leave their stroke, at the top end of its first such leg
         self.leg_labels = [sc.add_label(f"/mechanism/leg_label_{k}", "", position=(0.0, 0.0, 0.0), visible=False,
-                                        font_size_mode="screen", font_screen_scale=0.75) for k in range(6)]
-        self._leg_mid = ctr
+                                        font_size_mode="screen", font_screen_scale=0.75) for k in range(3)]
+        self._leg_top = B
         self._leg_status = leg_status
         self._show_leg_labels()
         ax_len = 1.35 * design.r
@@ -184,6 +189,7 @@ class MechanismScene:
             "radial_thick": max(0.8, 0.02 * design.r),
             "grid": 4.0 * design.r,
             "cell": design.r / 5.0,
+            "scale_at": (1.7 * design.r, -0.5 * design.r, 0.0),
             "labels": [1.12 * design.r * np.array([np.cos(GAMMA[i]), np.sin(GAMMA[i]), 0.0]) for i in range(3)],
             "leg_radius": lr,
             "joint_radius": jr,
@@ -229,6 +235,8 @@ class MechanismScene:
         self.arc_rails.thickness = 2.0 * g["thick"]
         for label, pos in zip(self.labels, g["labels"]):
             label.position = pos
+        self.scale_label.text = grid_scale_text(design)
+        self.scale_label.position = g["scale_at"]
         self.joints.batched_scales = np.full(12, g["joint_radius"])
         self.carriages.batched_scales = g["carriage_scale"]
         self.radials.thickness = g["radial_thick"]
@@ -262,20 +270,21 @@ class MechanismScene:
         self.radials.points = self._radial_segments(design, eta)
         self.platform.position = pose.position
         self.platform.wxyz = rotation_wxyz(pose.rotation)
-        self._leg_mid = ctr
+        self._leg_top = B
         self._leg_status = leg_status
         self._show_leg_labels()
 
     def _show_leg_labels(self) -> None:
-        """A label on every leg that is not inside its stroke (its state in words)."""
-        for k, lab in enumerate(self.leg_labels):
-            st = self._leg_status[k // 2][k % 2]
-            if st == "inside":
+        """One label per chain with a leg that is not inside its stroke, at that leg's top end
+        (:func:`chain_label_text`)."""
+        for i, lab in enumerate(self.leg_labels):
+            text = chain_label_text(i, self._leg_status[i])
+            if text is None:
                 lab.visible = False
                 continue
-            lab.text = f"chain {k // 2 + 1} leg {k % 2 + 1}: {LEG_STATE_TEXT.get(st, st)}"
-            mx, my, mz = (float(v) for v in self._leg_mid[k])
-            lab.position = (mx, my, mz)
+            j = next(j for j in range(2) if self._leg_status[i][j] != "inside")
+            lab.text = text
+            lab.position = tuple(float(v) for v in self._leg_top[2 * i + j])
             lab.visible = True
 
     def set_reachable(self, reachable: bool) -> None:
@@ -287,6 +296,23 @@ class MechanismScene:
 
 # --------------------------------------------------------------------------------------------
 # workspace shell
+
+
+def grid_scale_text(design: Design) -> str:
+    """The grid's scale in words: "grid: 20 units per cell, 100 per section" (cells r/5, sections r)."""
+    return f"grid: {design.r / 5.0:g} units per cell, {design.r:g} per section"
+
+
+def chain_label_text(chain: int, states: list[str]) -> str | None:
+    """The label of chain ``chain`` (0-based) with leg states ``states`` (2), ``None`` when both
+    legs are inside their stroke: "chain 2: legs 1, 2 too long", "chain 1: leg 2 at a limit",
+    "chain 3: leg 1 too short, leg 2 at a limit"."""
+    out = [(j, st) for j, st in enumerate(states) if st != "inside"]
+    if not out:
+        return None
+    if len(out) == 2 and out[0][1] == out[1][1]:
+        return f"chain {chain + 1}: legs 1, 2 {LEG_STATE_TEXT.get(out[0][1], out[0][1])}"
+    return f"chain {chain + 1}: " + ", ".join(f"leg {j + 1} {LEG_STATE_TEXT.get(st, st)}" for j, st in out)
 
 
 def remove_node(handle: Any | None) -> None:

@@ -161,6 +161,8 @@ class ClientSession:
         ctx.resolution = res
         with client.atomic():
             self.pose_controller.build_scene(res)
+            grid = self.pose_controller.mechanism.grid
+            self.view_controller.show_grid = lambda on: setattr(grid, "visible", on)
             ctx.shell = ShellScene(client.scene, is_closed=lambda: ctx.closed)
         for controller in (self.design_controller, self.pose_controller, self.view_controller,
                            self.workspace_controller, self.orientation_controller, self.studies_controller,

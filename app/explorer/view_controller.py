@@ -78,6 +78,7 @@ class ViewController:
     def __init__(self, ctx: SessionContext, *, on_state_change: Callable[[], None]) -> None:
         self.ctx = ctx
         self.on_state_change = on_state_change
+        self.show_grid: Callable[[bool], None] | None = None  # the floor grid's visibility (the mechanism's)
 
     def wire(self) -> None:
         """Attach the View tab's controls."""
@@ -109,6 +110,8 @@ class ViewController:
         except Exception:  # noqa: BLE001 - before the browser reported its camera
             fov, aspect = math.radians(50.0), 16.0 / 9.0
         position, look_at = camera_framing(lo, hi, preset, fov, aspect)
+        if self.show_grid is not None:  # from below, the floor grid would only hide the workspace's underside
+            self.show_grid(preset != "bottom")
         with client.atomic():
             cam.up_direction = (0.0, 0.0, 1.0)
             # position first: viser moves look_at along with the position, then aims at look_at
