@@ -854,7 +854,8 @@ def fit_assumptions(voxel: float = 4.0, grid: dict[str, tuple] | None = None, *,
         "ti_ratio_range": [min(r["TI_2"] / r["TI_1"] for r in rows if r["TI_1"]),
                            max(r["TI_2"] / r["TI_1"] for r in rows if r["TI_1"])],
         "summary": (f"best of {len(rows)} models: {best['eta_range']} arc range, cones {best['cones'] or 'none'}, "
-                    f"scan ±{best['angle_range']:g}°, z floor {best['z_floor']:g}: V {_pct(best['residuals']['volume'])}, "
+                    f"scan ±{best['angle_range']:g}°, z floor {best['z_floor']:g}: "
+                    f"V {_pct(best['residuals']['volume'])}, "
                     f"TI_1 {_pct(best['residuals']['TI_1'])}, TI_2 {_pct(best['residuals']['TI_2'])}; "
                     f"{'none comes within 20 % on all three' if worst_best > 0.2 else 'within 20 % on all three'} "
                     f"(coarse: h = {voxel:g}, scan steps {angle_step:g}° / {position_step:g})"),
