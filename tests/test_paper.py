@@ -17,8 +17,14 @@ from paraspace.kinematics.grid import GridSpec
 from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.measures import measure_workspace
 from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
-from paraspace.kinematics.paper import (ASSUMPTION_KEYS, CLAIMS, PAPER_REPORTED, fit_assumptions, paper_comparison,
-                                        shape_measures)
+from paraspace.kinematics.paper import (
+    ASSUMPTION_KEYS,
+    CLAIMS,
+    PAPER_REPORTED,
+    fit_assumptions,
+    paper_comparison,
+    shape_measures,
+)
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 H = 8.0
@@ -80,7 +86,8 @@ def test_closest_is_only_among_the_papers_design(comparison):
 def test_volume_and_cavity_claims_recomputed(comparison):
     rows = {r["id"]: r for r in comparison["claims"]}
     base = measure_workspace(_ws())
-    for rid, kw, key, sign, need in (("a10-V", {"a": 10.0}, "volume", -1, 0.2), ("ds80-V", {"d_s": 80.0}, "volume", 1, 0.01),
+    for rid, kw, key, sign, need in (("a10-V", {"a": 10.0}, "volume", -1, 0.2),
+                                     ("ds80-V", {"d_s": 80.0}, "volume", 1, 0.01),
                                      ("ls20-cav", {"l_s": 20.0}, "hollowness", 1, 0.2),
                                      ("eta60-cav", {"eta_s": 60.0}, "hollowness", -1, 0.2)):
         m = measure_workspace(_ws(**kw))
@@ -146,7 +153,8 @@ def test_shape_words_on_known_shapes():
     dome = (np.sqrt(rho ** 2 + z ** 2) <= 18) & (np.sqrt(rho ** 2 + z ** 2) >= 12)  # hemispherical shell
     s = _shape(dome)
     assert s["inverted_bowl"] and s["disc"] and not s["mushroom"]
-    assert s["z_extent"] == pytest.approx(18.0, abs=1.0) and s["footprint"] == pytest.approx(math.pi * 18 ** 2, rel=0.05)
+    assert s["z_extent"] == pytest.approx(18.0, abs=1.0)
+    assert s["footprint"] == pytest.approx(math.pi * 18 ** 2, rel=0.05)
     ball = np.sqrt(rho ** 2 + (z - 20) ** 2) <= 15
     assert not _shape(ball)["inverted_bowl"] and _shape(ball)["disc"]
     square = (np.abs(x - 20) <= 15) & (np.abs(y - 20) <= 15) & (z < 10)  # top view a square: fill 2/pi
