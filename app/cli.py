@@ -232,9 +232,21 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         if ns.bracket:
             print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
                   "  (continuous workspace)")
-        for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
-            if key in out:
-                print(f"{key:<15} {out[key]}")
+        if out["voxels"]:
+            # the measures that do not change with h lead (kinematics.measures, "Stable measures")
+            frag = f" ({100 * out['fragment_volume_fraction']:.2f} % of the volume)" if out["fragments"] else ""
+            print(f"pieces          {out['pieces']}  (components of >= {100 * out['piece_fraction']:g} % of the "
+                  "volume; stable in h)")
+            print(f"stable_genus    {out['stable_genus']}  (tunnels or windows wider than "
+                  f"{2 * out['feature_radius']:.3g}; stable in h)")
+            print(f"fragments       {out['fragments']}{frag}  (specks of thin sheets; their number grows as h "
+                  "shrinks, their volume does not)")
+            print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}  "
+                  f"({out['completeness_reason']})")
+            print(f"hollowness      {out['hollowness']:.4g}  (underside cavity ratio)")
+            print(f"voids           {out['voids']}  (enclosed cavities; void ratio {out['void_ratio']:.4g})")
+            print(f"voxel-level     components {out['components']}, genus {out['genus']}, boundary_closed "
+                  f"{out['boundary_closed']}  (raw voxel counts: they change with h)")
         print(f"bounds          {out.get('bounds')}")
         if ns.diagnostics:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")

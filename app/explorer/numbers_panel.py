@@ -73,19 +73,20 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                          "(psi, theta, phi) with this design.")
         elif m is not None:
-            lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
-            lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
+            closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
+            frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
+                    f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
+            lines.append(f"**Topology** (stable in h) surface {closed}, {m.pieces} "
+                         f"piece{'s' if m.pieces != 1 else ''}{frag}, genus {m.stable_genus} "
+                         f"(features > {2 * m.feature_radius:.3g})  ")
             if m.boundary_complete:
                 lines.append("**Boundary** complete: one closed surface standing on the base  ")
             else:
                 lines.append(f"**Boundary** incomplete: {md_text(m.completeness_reason)}  ")
-            closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
-            frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
-                    f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
-            lines.append(f"**Topology** surface {closed}, {m.pieces} piece{'s' if m.pieces != 1 else ''}"
-                         f"{frag}, genus {m.stable_genus} (features > {2 * m.feature_radius:.3g}; "
-                         f"voxel-level: genus {m.genus}, {m.components} "
-                         f"component{'s' if m.components != 1 else ''})  ")
+            lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
+            lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
+            lines.append(f"*voxel-level counts (change with h): genus {m.genus}, {m.components} "
+                         f"component{'s' if m.components != 1 else ''}*  ")
         elif info.stopped:
             lines.append("*measures: not computed (stopped); change a setting to compute them*  ")
         else:
