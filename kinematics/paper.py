@@ -793,7 +793,7 @@ FIT_GRID: dict[str, tuple] = {
     "eta_range": ("centered", "from-zero"),
     "cones": (None, (20.0, "home"), (30.0, "home"), (45.0, "home"), (60.0, "home"),
               (30.0, "normal"), (45.0, "normal"), (60.0, "normal")),
-    "angle_range": (30.0, 45.0, 60.0, 90.0, 180.0),
+    "angle_range": (10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 90.0, 180.0),
     "z_floor": (0.0, 50.0, 100.0),
 }
 
@@ -846,11 +846,12 @@ def fit_assumptions(voxel: float = 4.0, grid: dict[str, tuple] | None = None, *,
         rep((n + 1) / len(combos), "fit of the unstated assumptions")
     rows.sort(key=lambda r: r["score"])
     best = rows[0]
+    edges = [k for k in ("angle_range", "z_floor") if len(g[k]) > 1 and best[k] in (min(g[k]), max(g[k]))]
     worst_best = max(abs(v) for v in best["residuals"].values())
     return {
         "grid": {k: [v if not isinstance(v, tuple) else list(v) for v in vals] for k, vals in g.items()},
         "voxel": voxel, "angle_step": angle_step, "position_step": position_step,
-        "models": len(rows), "best": best, "top": rows[:10],
+        "models": len(rows), "best": best, "top": rows[:10], "best_on_grid_edge": edges,
         "ti_ratio_range": [min(r["TI_2"] / r["TI_1"] for r in rows if r["TI_1"]),
                            max(r["TI_2"] / r["TI_1"] for r in rows if r["TI_1"])],
         "summary": (f"best of {len(rows)} models: {best['eta_range']} arc range, cones {best['cones'] or 'none'}, "
@@ -858,5 +859,6 @@ def fit_assumptions(voxel: float = 4.0, grid: dict[str, tuple] | None = None, *,
                     f"V {_pct(best['residuals']['volume'])}, "
                     f"TI_1 {_pct(best['residuals']['TI_1'])}, TI_2 {_pct(best['residuals']['TI_2'])}; "
                     f"{'none comes within 20 % on all three' if worst_best > 0.2 else 'within 20 % on all three'} "
-                    f"(coarse: h = {voxel:g}, scan steps {angle_step:g}° / {position_step:g})"),
+                    f"(coarse: h = {voxel:g}, scan steps {angle_step:g}° / {position_step:g})"
+                    + (f"; the best lies on the grid's edge in {', '.join(edges)}" if edges else "")),
     }
