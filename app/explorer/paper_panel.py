@@ -32,7 +32,7 @@ PAPER_SCAN: dict[str, float] = {"angle_step": 1.0, "position_step": 2.0}
 #: The assumption columns computed (None: all of :data:`kinematics.paper.ASSUMPTION_KEYS`).
 PAPER_ASSUMPTIONS: tuple[str, ...] | None = None
 
-_MARK = {"holds": "holds", "fails": "**fails**"}
+_MARK = {"holds": "✓ holds", "fails": "✗ **fails**"}
 
 
 def _verdict(v: str) -> str:
@@ -53,24 +53,29 @@ def comparison_markdown(out: dict[str, Any]) -> str:
         n = out["counts"][a["key"]]
         lines.append(f"| {md_text(a['key'])} | {md_text(a['label'])} | {n['holds']} | {n['fails']} | "
                      f"{n['not testable']} |")
-    lines += ["", "**The reported numbers, ours under each column**", "",
-              "| | reported | " + " | ".join(md_text(a["key"]) for a in cols) + " |",
-              "|---|---|" + "---|" * len(cols)]
-    for key, label in (("volume", "V"), ("TI_1", "TI₁"), ("TI_2", "TI₂")):
-        rv = out["reported_vs_ours"][key]
-        vals = {r["assumption"]: r for r in rv["ours"]}
-        cells = [f"{significant(vals[a['key']]['value'], 3)} ({100 * vals[a['key']]['gap']:+.0f} %)" for a in cols]
-        lines.append(f"| {label} | {significant(rv['paper'], 4)} | " + " | ".join(cells) + " |")
+    lines += ["", "**The reported numbers, ours under each column** (gap to the paper's)", "",
+              "| column | V | TI₁ | TI₂ |", "|---|---|---|---|",
+              f"| *the paper* | {significant(rep['volume'], 3)} | {significant(rep['TI_1'], 4)} | "
+              f"{significant(rep['TI_2'], 4)} |"]
+    by_col = {k: {r["assumption"]: r for r in v["ours"]} for k, v in out["reported_vs_ours"].items()}
+    for a in cols:
+        cells = [f"{significant(by_col[k][a['key']]['value'], 3)} "
+                 f"({100 * by_col[k][a['key']]['gap']:+.0f}\u00a0%)"
+                 for k in ("volume", "TI_1", "TI_2")]
+        lines.append(f"| {md_text(a['key'])} | " + " | ".join(cells) + " |")
     lines += ["", "All three **fail** (gap beyond 5 %) under every column; the closest column: " + "; ".join(
-        f"{k} {md_text(v['closest'])} ({100 * v['closest_gap']:+.0f} %)" for k, v in out["reported_vs_ours"].items())
-        + ".", "", f"**Claims** ({md_text(out['summary'])})", "",
-        "| claim | the paper's words | ours (paper's model) | verdict | differs under |", "|---|---|---|---|---|"]
+        f"{md_text(k)} {md_text(v['closest'])} ({100 * v['closest_gap']:+.0f} %)"
+        for k, v in out["reported_vs_ours"].items()) + ".", "", f"**Claims** ({md_text(out['summary'])})", "",
+        "Each claim: the verdict under the paper's model, the paper's words, our value, and the columns "
+        "under which the verdict differs (which assumption decides the claim).", ""]
     for c in out["claims"]:
-        flips = ", ".join(f"{md_text(k)}: {_verdict(c['by_assumption'][k]['verdict'])}" for k in c["decided_by"])
+        flips = ", ".join(f"{md_text(k)} → {_verdict(c['by_assumption'][k]['verdict'])}" for k in c["decided_by"])
         tuned = (f" · {md_text(c['tuned_value'])}" if c.get("tuned_value") else
-                 " (definition tuned on the nine designs)" if c.get("tuned") else "")
-        lines.append(f"| {md_text(c['id'])} | “{md_text(c['quote'], 200)}” | {md_text(str(c['value']), 160)} | "
-                     f"{_verdict(c['verdict'])}{tuned} | {flips or '–'} |")
+                 " · *definition tuned on the nine designs*" if c.get("tuned") else "")
+        lines += [f"- {_verdict(c['verdict'])} · **{md_text(c['id'])}** ({md_text(c['where'])}): "
+                  f"“{md_text(c['quote'], 200)}”  ",
+                  f"  ours: {md_text(str(c['value']), 200)}{tuned}  ",
+                  f"  differs under: {flips or 'none'}"]
     lines += ["", "**Tuned on the paper's nine designs:** " + " · ".join(md_text(t, 400) for t in out["tuned"]),
               "", md_text(out.get("note", ""), 800),
               "", "Definitions of every measure: `paraspace paper --json` (field `definition`); the fit of the "
