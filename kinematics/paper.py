@@ -51,11 +51,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from .design import Design, ParameterError
+from .design import Design, EtaRange, ParameterError
 from .joints import Joints
 from .progress import CancelToken, ProgressFn, Reporter, check
 
@@ -88,7 +88,7 @@ class Assumption:
 
     key: str
     label: str
-    eta_range: str = "centered"
+    eta_range: EtaRange = "centered"
     joints: Joints = Joints()
     angle_range: float | None = None  # None: the comparison's scan range
     sweeps: bool = True  # whether the trend claims (many workspaces) are computed in this column
@@ -176,10 +176,9 @@ class _Column:
         self.a = a
         self.voxel = max(voxel, a.min_voxel)
         self.ws_settings = WorkspaceSettings(voxel=self.voxel, joints=a.joints)
-        scan = dict(orient)
-        if a.angle_range is not None:
-            scan["angle_range"] = a.angle_range
-        self.or_settings = OrientationSettings(joints=a.joints, **scan)
+        self.or_settings = OrientationSettings(
+            joints=a.joints, angle_range=orient["angle_range"] if a.angle_range is None else a.angle_range,
+            angle_step=orient["angle_step"], position_step=orient["position_step"])
         self.cancel = cancel
         self._ws: dict[tuple, dict[str, Any]] = {}
         self._vol: dict[tuple, float] = {}
@@ -842,7 +841,7 @@ def fit_assumptions(voxel: float = 4.0, grid: dict[str, tuple] | None = None, *,
     for n, (eta, cones, zf) in enumerate(combos):
         check(cancel)
         joints = Joints() if cones is None else Joints(theta_u=cones[0], theta_s=cones[0], cone_axis=cones[1])
-        design = Design(eta_range=eta)
+        design = Design(eta_range=cast(EtaRange, eta))
         vol = float(compute_workspace(design, WorkspaceSettings(voxel=voxel, joints=joints, z_floor=zf),
                                       cancel=cancel).volume)
         o = orientation_workspace(design, OrientationSettings(angle_range=a_max, angle_step=angle_step,
