@@ -212,6 +212,7 @@ class _Column:
                              "complete": bool(m.boundary_complete), "complete_reason": m.completeness_reason,
                              "sealed": bool(sealed.boundary_complete), "voids": int(m.voids),
                              "sealed_cavity_volume": float(m.sealed_cavity_volume),
+                             "resolved": bool(m.feature_radius_voxels >= 1.0),
                              **shape_measures(res, m)}
         return self._ws[key]
 
@@ -266,9 +267,14 @@ def _cmp_ws(param: str, value: float, key: str, sign: int, strong: bool = False)
     return test
 
 
+_UNRESOLVED = "not testable (the stable genus is not resolved at this h: feature radius below one voxel)"
+
+
 def _complete(param: str | None, value: float, expect: bool) -> Check:
     def test(c: _Column) -> Verdict:
         m = c.ws(**({param: value} if param else {}))
+        if not m["resolved"]:
+            return "-", _UNRESOLVED
         ours = m["complete"]
         text = ("complete" if ours else f"incomplete ({m['complete_reason']})")
         return text, _v(ours == expect)
@@ -442,6 +448,8 @@ def _fig5(c: _Column) -> Verdict:
 
 
 def _extreme_a(c: _Column) -> Verdict:
+    if not (c.ws(a=10.0)["resolved"] and c.ws(a=100.0)["resolved"]):
+        return "-", _UNRESOLVED
     lo, hi = c.ws(a=10.0)["complete"], c.ws(a=100.0)["complete"]
     return f"a = 10: {'complete' if lo else 'incomplete'}; a = 100: {'complete' if hi else 'incomplete'}", \
         _v(not lo and not hi)
@@ -461,6 +469,8 @@ def _ds_orientation(c: _Column) -> Verdict:
 
 
 def _eta_completeness(c: _Column) -> Verdict:
+    if not all(c.ws(eta_s=v)["resolved"] for v in ORIENT_SWEEP):
+        return "-", _UNRESOLVED
     flags = [c.ws(eta_s=v)["complete"] for v in ORIENT_SWEEP]
     return "complete at eta_s = " + ", ".join(f"{v:g}: {f}" for v, f in zip(ORIENT_SWEEP, flags)), \
         _v(len(set(flags)) == 1)
