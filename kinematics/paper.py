@@ -5,7 +5,7 @@ A *claim* is a sentence of the paper that a computation can confirm or refute. E
 definition (``measure``, ``definition``), our number (``value``) and a ``verdict``: ``"holds"``,
 ``"fails"`` or ``"not testable (why)"``. The verdict is given under the paper's model and under
 each *assumption* the paper does not state (:data:`ASSUMPTIONS`: the arc-range convention, joint
-cones and their axes, the orientation scan range, leg interference), so a reader sees which
+cones and their axes, the orientation scan range and steps, leg interference), so a reader sees which
 assumption decides which claim (``decided_by``).
 
 The words, read once (:data:`WORDS`, fixed from the paper's wording before any result was looked
@@ -91,6 +91,8 @@ class Assumption:
     eta_range: EtaRange = "centered"
     joints: Joints = Joints()
     angle_range: float | None = None  # None: the comparison's scan range
+    angle_step: float | None = None  # None: the comparison's scan steps
+    position_step: float | None = None
     sweeps: bool = True  # whether the trend claims (many workspaces) are computed in this column
     min_voxel: float = 0.0  # the column's workspaces use max(voxel, min_voxel)
 
@@ -104,6 +106,8 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
     Assumption("cones45_normal", "joint cones 45° about the base / platform normals",
                joints=Joints(theta_u=45.0, theta_s=45.0, cone_axis="normal")),
     Assumption("scan180", "orientation scan ±180° (instead of ±90°)", angle_range=180.0),
+    Assumption("scan_coarse", "orientation scan steps 5° / 5 (instead of the comparison's)", angle_step=5.0,
+               position_step=5.0),
     Assumption("legs10", "leg interference, legs of diameter 10 (h >= 8, no trends: ~20 s a workspace at h = 4)",
                joints=Joints(leg_diameter=10.0), sweeps=False, min_voxel=8.0),
 )
@@ -178,7 +182,8 @@ class _Column:
         self.ws_settings = WorkspaceSettings(voxel=self.voxel, joints=a.joints)
         self.or_settings = OrientationSettings(
             joints=a.joints, angle_range=orient["angle_range"] if a.angle_range is None else a.angle_range,
-            angle_step=orient["angle_step"], position_step=orient["position_step"])
+            angle_step=orient["angle_step"] if a.angle_step is None else a.angle_step,
+            position_step=orient["position_step"] if a.position_step is None else a.position_step)
         self.cancel = cancel
         self._ws: dict[tuple, dict[str, Any]] = {}
         self._vol: dict[tuple, float] = {}
@@ -756,9 +761,10 @@ def paper_comparison(voxel: float = 4.0, progress: ProgressFn | None = None, can
             raise ParameterError("assumptions", k, "one of " + ", ".join(ASSUMPTION_KEYS))
     keys = ("paper",) + tuple(k for k in keys if k != "paper")
     cols = {a.key: _Column(a, voxel, scan, cancel) for a in ASSUMPTIONS if a.key in keys}
-    # the scan column shares the paper's workspaces (the scan changes only the orientation claims)
-    if "scan180" in cols:
-        cols["scan180"]._ws, cols["scan180"]._vol = cols["paper"]._ws, cols["paper"]._vol
+    # the scan columns share the paper's workspaces (the scan changes only the orientation claims)
+    for key in ("scan180", "scan_coarse"):
+        if key in cols:
+            cols[key]._ws, cols[key]._vol = cols["paper"]._ws, cols["paper"]._vol
     rep = Reporter(progress)
     rows = []
     total = len(CLAIMS) * len(cols)
@@ -798,7 +804,9 @@ def paper_comparison(voxel: float = 4.0, progress: ProgressFn | None = None, can
         "scan": scan,
         "words": dict(WORDS),
         "assumptions": [{"key": a.key, "label": a.label, "eta_range": a.eta_range, "joints": a.joints.to_dict(),
-                         "angle_range": a.angle_range or scan["angle_range"], "voxel": max(voxel, a.min_voxel),
+                         "angle_range": a.angle_range or scan["angle_range"],
+                         "angle_step": a.angle_step or scan["angle_step"],
+                         "position_step": a.position_step or scan["position_step"], "voxel": max(voxel, a.min_voxel),
                          "trends_computed": a.sweeps} for a in ASSUMPTIONS if a.key in cols],
         "claims": rows,
         "counts": counts,
