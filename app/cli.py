@@ -771,7 +771,8 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")
     pp.add_argument("--json", action="store_true")
     pp.add_argument("--assumptions", metavar="K[,K]",
-                    help="only these columns (paper, from_zero, cones30_home, cones45_normal, scan180, scan_coarse, legs10)")
+                    help="only these columns (paper, from_zero, cones30_home, cones45_normal, scan180, scan_coarse, "
+                         "legs10; default all)")
     pp.add_argument("--fit", action="store_true",
                     help="fit the unstated assumptions (arc range, cones, scan range, z floor) to V, TI_1, TI_2")
     _add_scan_flags(pp)
