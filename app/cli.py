@@ -381,7 +381,8 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     print("verdict counts: " + "; ".join(f"{c}: {n['holds']} hold, {n['fails']} fail, {n['not testable']} n/t"
                                          for c, n in out["counts"].items()))
     for key, rv in out["reported_vs_ours"].items():
-        verdict = "holds" if abs(rv["closest_gap"]) <= out["words"]["reported"] else "fails under every column"
+        verdict = (f"holds under {rv['closest']}" if abs(rv["closest_gap"]) <= out["words"]["reported"]
+                   else "fails under every column")
         print(f"{key}: paper {rv['paper']:.6g}: {verdict}; smallest gap {100 * rv['closest_gap']:+.0f} % "
               f"(column {rv['closest']}, the paper's design)")
     print("tuned on the paper's nine designs: " + " | ".join(out["tuned"]))
