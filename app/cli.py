@@ -40,7 +40,7 @@ import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
 
 from .fileout import write_atomic
-from .numfmt import fixed
+from .numfmt import fixed, significant
 from .progressline import progress_line
 
 
@@ -544,7 +544,7 @@ def cmd_ik(ns: argparse.Namespace) -> int:
         for ch in res.chains:
             print(f"chain {ch.chain + 1}: d = {fixed(ch.d, 3, 8)}  eta = {fixed(ch.eta, 3, 8)} deg  lengths = "
                   f"{fixed(ch.lengths[0], 3, 8)} {fixed(ch.lengths[1], 3, 8)}  ({', '.join(ch.leg_status)})")
-        print(f"condition number of J: {out['condition_number']}")
+        print(f"condition number of J: {significant(out['condition_number'], 4)}")
         if res.cone_angles is not None:
             print(f"largest joint angles: U {res.cone_angles[:, :, 0].max():.2f} deg, "
                   f"S {res.cone_angles[:, :, 1].max():.2f} deg")
@@ -807,7 +807,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.set_defaults(func=cmd_serve)
 
     from .mechanism_cli import add_mechanism_parser
+    from .report_cli import add_report_parser
     add_mechanism_parser(sub)
+    add_report_parser(sub)
     return p
 
 

@@ -2,7 +2,9 @@
 
 :func:`significant` writes ``digits`` significant digits, in plain notation with thousands
 separators between 0.001 and one million (``29,400``, ``0.402``) and in scientific notation
-outside (``5.12e+06``), so one panel never mixes ``13579.3`` with ``2.94e+04``.
+outside (``5.120e+06``), so one panel never mixes ``13579.3`` with ``2.94e+04``. Trailing zeros are
+kept (``0.4020``, ``5.120e+06``): a value and its bracket written to the same digits read alike
+(``5.120e+06`` beside ``4.905e+06``, never ``5.12e+06``).
 
 :func:`fixed` writes a fixed number of decimals and never a negative zero: a value that rounds to
 zero prints as ``0.000``, not ``-0.000`` (a carriage at ``eta = -1e-15`` is at zero, and a minus
@@ -29,12 +31,8 @@ def significant(value: float, digits: int = 4) -> str:
     v = float(value)
     if v == 0.0 or not math.isfinite(v):
         return "0" if v == 0.0 else str(v)
-    a = abs(v)
-    if not 1e-3 <= a < 1e6:
-        return f"{v:.{digits}g}"
-    r = float(f"{v:.{digits}g}")
+    r = float(f"{v:.{digits}g}")  # rounded first: 999,999.7 reads 1.000e+06, not 1,000,000
+    if not 1e-3 <= abs(r) < 1e6:
+        return f"{v:#.{digits}g}"
     decimals = max(0, digits - 1 - math.floor(math.log10(abs(r))))
-    text = f"{r:,.{decimals}f}"
-    if "." in text:
-        text = text.rstrip("0").rstrip(".")
-    return text
+    return f"{r:,.{decimals}f}"

@@ -54,16 +54,32 @@ class ParamSpec:
     slider_max: float
     unit: str = ""
     table_fixed: float | None = None
+    #: a label of a few words for a control ("platform radius"); the description is the long form
+    short: str = ""
+
+    @property
+    def label(self) -> str:
+        """The control's label: the paper's symbol, its name in words and a unit other than length,
+        e.g. ``"eta_s · arc stroke (deg)"``."""
+        unit = f" ({self.unit})" if self.unit else ""
+        return f"{self.name} · {self.short or self.description}{unit}"
 
 
 PARAMS: dict[str, ParamSpec] = {
-    "a": ParamSpec("a", "radius of the moving platform", 50.0, 1e-6, 1000.0, 10.0, 100.0),
-    "b": ParamSpec("b", "spacing of a carriage's two U joints", 14.0, 0.0, 1000.0, 0.0, 40.0, table_fixed=14.0),
-    "d_s": ParamSpec("d_s", "stroke of the radial prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0),
-    "r": ParamSpec("r", "radius of the fixed base", 100.0, 1e-6, 1000.0, 50.0, 200.0, table_fixed=100.0),
-    "l_min": ParamSpec("l_min", "minimum leg length", 114.5, 1e-6, 1000.0, 50.0, 200.0, table_fixed=114.5),
-    "l_s": ParamSpec("l_s", "stroke of the leg prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0),
-    "eta_s": ParamSpec("eta_s", "stroke of the arc joint", 30.0, 0.0, 180.0, 10.0, 100.0, "deg"),
+    "a": ParamSpec("a", "radius of the moving platform", 50.0, 1e-6, 1000.0, 10.0, 100.0,
+                   short="platform radius"),
+    "b": ParamSpec("b", "spacing of a carriage's two U joints", 14.0, 0.0, 1000.0, 0.0, 40.0, table_fixed=14.0,
+                   short="U-joint spacing"),
+    "d_s": ParamSpec("d_s", "stroke of the radial prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0,
+                     short="radial stroke"),
+    "r": ParamSpec("r", "radius of the fixed base", 100.0, 1e-6, 1000.0, 50.0, 200.0, table_fixed=100.0,
+                   short="base radius"),
+    "l_min": ParamSpec("l_min", "minimum leg length", 114.5, 1e-6, 1000.0, 50.0, 200.0, table_fixed=114.5,
+                       short="shortest leg"),
+    "l_s": ParamSpec("l_s", "stroke of the leg prismatic joint", 50.0, 0.0, 1000.0, 10.0, 100.0,
+                     short="leg stroke"),
+    "eta_s": ParamSpec("eta_s", "stroke of the arc joint", 30.0, 0.0, 180.0, 10.0, 100.0, "deg",
+                       short="arc stroke"),
 }
 PARAM_NAMES: tuple[str, ...] = tuple(PARAMS)
 

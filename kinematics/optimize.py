@@ -543,6 +543,11 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
                     continue
                 for fut in batch:
                     i = where[fut.key]
+                    if fut.status in ("lost", "pending"):
+                        # its result was computed, then lost with a worker that died: the scheduler
+                        # recomputes it elsewhere, so wait for that rather than fail an innocent point
+                        ac.add(fut)
+                        continue
                     pending.discard(fut.key)
                     if fut.status == "finished":
                         try:

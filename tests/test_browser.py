@@ -63,10 +63,11 @@ def browser() -> Iterator[Browser]:
         b.close()
 
 
-def open_page(browser: Browser, explorer: Explorer, query: str = "") -> tuple[Page, ClientSession]:
+def open_page(browser: Browser, explorer: Explorer, query: str = "",
+              viewport: tuple[int, int] = (1400, 900)) -> tuple[Page, ClientSession]:
     """A fresh browser context (own localStorage) on the explorer; returns the page and its session."""
     before = set(explorer.sessions)
-    ctx = browser.new_context(viewport={"width": 1400, "height": 900})
+    ctx = browser.new_context(viewport={"width": viewport[0], "height": viewport[1]})
     page = ctx.new_page()
     page.goto(explorer.url + (("?" + query) if query else ""))
     page.wait_for_function("() => !document.body.innerText.includes('Connecting...')", timeout=30000)
@@ -273,17 +274,50 @@ def test_the_explorer_explains_itself(browser: Browser, explorer: Explorer) -> N
     page.context.close()
 
 
+def test_layout_a_slider_and_the_volume_in_view_with_definitions(browser: Browser, explorer: Explorer) -> None:
+    """Issue 20 items 1, 2 and 9 at 1440x900: without scrolling, a design slider and the pinned
+    strip (volume, bracket, boundary, TI) are on screen together; every measure's name in the strip
+    and the Numbers carries its definition as a hover text; the software-WebGL notice covers the
+    scene only on the first load of a browser."""
+    from paraspace.app.glossary import DEFINITIONS
+
+    page, session = open_page(browser, explorer, viewport=(1440, 900))
+    full_volume_text(page)
+    wait_for(lambda: "TI₂" in page.locator("body").inner_text(), 60, "TI in the strip")
+    strip = page.locator("p").filter(has_text=re.compile(r"^V .*units³ ∈ \[")).first
+    track = page.locator(f'[id="{session.panels.design["a"]._impl.uuid}"] .mantine-Slider-track')
+    for what, loc in (("the pinned strip", strip), ("the slider a", track)):
+        box = loc.bounding_box()
+        assert box is not None and 0 <= box["y"] and box["y"] + box["height"] <= 900, f"{what} is not in view: {box}"
+    assert re.search(r"units³ ∈ \[[0-9.e+]+, [0-9.e+]+\] · boundary (complete|incomplete)", strip.inner_text())
+    titles = dict(page.evaluate("() => [...document.querySelectorAll('span[title]')]"
+                                ".map(e => [e.textContent, e.getAttribute('title')])"))
+    for label, name in (("V", "volume"), ("∈", "bracket"), ("boundary", "boundary"), ("TI₁", "TI_1"),
+                        ("TI₂", "TI_2"), ("Volume", "volume"), ("certified", "bracket"), ("Voids", "voids"),
+                        ("Hollowness", "hollowness"), ("Boundary", "boundary"), ("Topology", "topology"),
+                        ("Compute", "compute")):
+        assert titles.get(label) == DEFINITIONS[name], label
+    # the design sliders say what they are in words
+    assert "a · platform radius" in page.locator("body").inner_text()
+    # a second load in the same browser: viser's software-WebGL notice is closed at once
+    page.reload()
+    page.wait_for_function("n => !!window.__viserMutable?.nodeRefFromName[n]", arg="/workspace/shell", timeout=30000)
+    time.sleep(1.0)
+    assert page.locator(".mantine-Notification-root", has_text="Software WebGL").count() == 0
+    page.context.close()
+
+
 def test_viser_panel_does_not_flash_before_the_explorer_gui(browser: Browser, explorer: Explorer) -> None:
     """Issue 8 defect 10: until the explorer's GUI has arrived, viser's own panel (connection,
     "Save Canvas", scene tree) must not be visible; once it has, the panel (with the explorer's
-    "Workspace" folder) is. The page is sampled from navigation on, every few tens of ms."""
+    Design tab and Numbers) is. The page is sampled from navigation on, every few tens of ms."""
     ctx = browser.new_context(viewport={"width": 1400, "height": 900})
     page = ctx.new_page()
     probe = """() => {
         const panel = document.querySelector('[data-testid="floating-panel"]');
         const shown = el => !!el && getComputedStyle(el).visibility === 'visible' && el.getClientRects().length > 0;
         const viserOwn = [...document.querySelectorAll('button')].find(b => b.innerText.includes('Save Canvas'));
-        const ours = panel && panel.textContent.includes('Workspace') && panel.textContent.includes('Numbers');
+        const ours = panel && panel.textContent.includes('Design') && panel.textContent.includes('Numbers');
         return {viser: shown(viserOwn), ours: !!ours, panel: shown(panel)};
     }"""
     try:

@@ -114,8 +114,10 @@ def test_significant_digits_read_the_same_everywhere():
     from paraspace.app.numfmt import significant
 
     assert significant(29400.0) == "29,400" and significant(13579.333) == "13,580"
-    assert significant(5.1201e6) == "5.12e+06" and significant(0.402) == "0.402"
-    assert significant(0.0) == "0" and significant(-2.5e-5) == "-2.5e-05"
+    # trailing zeros kept: a value and its bracket show the same number of digits
+    assert significant(5.1201e6) == "5.120e+06" and significant(4.9049e6) == "4.905e+06"
+    assert significant(0.402) == "0.4020" and significant(12.5, 3) == "12.5"
+    assert significant(0.0) == "0" and significant(-2.5e-5) == "-2.500e-05"
 
 
 def test_cli_joint_flags_echo_and_one_message():

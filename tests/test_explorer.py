@@ -24,6 +24,7 @@ import pytest
 from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.explorer import Explorer
+from paraspace.app.numfmt import significant
 from paraspace.app.urlstate import parse_query
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.pose import Pose
@@ -223,6 +224,25 @@ def test_downloads(explorer, browsers):
     assert len(stl) == 84 + 50 * len(full.faces) and len(full.faces) >= len(s.bundle.mesh.faces)
     mesh = load_shell(stl, "stl")
     assert mesh.is_watertight and abs(mesh.volume - s.bundle.result.volume) / s.bundle.result.volume < 0.01
+
+
+def test_design_report_of_the_design_on_screen_and_the_pinned_one(explorer, browsers):
+    """Share tab: "Design report (HTML)" writes the report in a background job from what is on
+    screen, with the pinned design beside it, and sends it as a download."""
+    import re
+
+    b = browsers("voxel=8&a=40&pin=70,14,50,100,114.5,50,30,centered&angle_step=10")
+    s = b.session
+    wait_idle(explorer, s)
+    b.click(s.panels.download_report)
+    page = b.download("paraspace_report.html", timeout=120.0).decode("utf-8")
+    assert "the design on screen" in page and "the pinned design" in page
+    marked = re.findall(r'<tr class="differs"><th>([^<]*)</th>', page)
+    assert [m.replace("&middot;", "·") for m in marked] == ["a · platform radius"]
+    # the volume of the design on screen is the one the Numbers show
+    assert f"{significant(s.bundle.result.volume, 4)} units³ (h = 8)" in page
+    wait_for(lambda: "report sent" in s.panels.report_status.content, 10.0, "the status line")
+    assert not s.panels.download_report.disabled
 
 
 def test_view_settings_cut_the_shell(explorer, browsers):
@@ -435,7 +455,8 @@ def test_surface_study(explorer, browsers):
     assert vol.shape == (3, 3)
     ref = compute_workspace(Design(a=55.0, d_s=10.0), WorkspaceSettings(voxel=10.0)).volume
     assert vol[0, 1] == ref  # [iy][ix]: d_s = 10, a = 55
-    assert s.panels.surface_plot.visible and not s.panels.surface_csv.disabled
+    # the result is stored before the plot is drawn (in the same job callback): wait for the plot
+    wait_for(lambda: s.panels.surface_plot.visible and not s.panels.surface_csv.disabled, 10.0, "the plot")
     heat = [t for t in s.panels.surface_plot.figure.data if t.type == "heatmap"]
     assert list(heat[0].x) == out["values_x"] and list(heat[0].y) == out["values_y"]  # cells centred on samples
     assert any(t.type == "surface" for t in s.panels.surface_plot.figure.data)

@@ -21,7 +21,7 @@ from paraspace.kinematics.workspace import WorkspaceResult
 from ..textsafe import md_text
 from ..urlstate import D_KEYS, DESIGN_KEYS, DESIGN_SLIDERS, ETA_KEYS
 from .numbers_panel import NumbersPanel
-from .panels import slider_span
+from .panels import pose_slider_span, slider_span
 from .session import SessionContext
 
 #: Seconds of quiet after which a value typed outside a slider's range is applied (see on_design_input).
@@ -190,6 +190,8 @@ class DesignController:
                 p.eta[i].min = lo
                 p.eta[i].max = max(hi, lo + 1e-6)
                 p.eta[i].value = eta[i]
+            z = p.pose["z"]
+            z.min, z.max = pose_slider_span("z", design, float(self.ctx.state.pose.z))
 
     # ----- joints and voxel ---------------------------------------------------------------------
     def on_joints_input(self) -> None:

@@ -144,9 +144,9 @@ def swatch_image(entries: tuple[tuple[str, tuple[int, int, int]], ...],
     return _pixels(fig)
 
 
-def build_legend_folder(gui: viser.GuiApi) -> LegendPanel:
-    """The Legend folder (open by default: a first-time user needs it)."""
-    with gui.add_folder("Legend", expand_by_default=True):
+def build_legend_folder(gui: viser.GuiApi, order: float | None = None) -> LegendPanel:
+    """The Legend folder (open by default: a first-time user needs it), at ``order`` in the panel."""
+    with gui.add_folder("Legend", expand_by_default=True, order=order):
         colorbar = gui.add_image(np.full((BAR_SIZE[1], BAR_SIZE[0], 3), 255, np.uint8), format="png",
                                  label="shell colour = height z")
         caption = gui.add_markdown("Shell colour = height z (waiting for the workspace)")

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import figures
+from ..glossary import hover
 from ..numfmt import significant
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
@@ -64,41 +65,44 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
     if info is not None:
         m = info.measures
         kind = "preview" if info.preview else "full"
-        lines.append(f"**Volume** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
+        lines.append(f"**{hover('Volume', 'volume')}** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
         br = info.bracket
         if br is not None and info.volume > 0:
-            lines.append(f"certified: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
+            lines.append(f"{hover('certified', 'bracket')}: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
                          "(continuous workspace, units³)  ")
         if info.volume == 0:
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                          "(psi, theta, phi) with this design.")
         elif m is not None:
+            # the measures that do not change with h lead; the raw voxel counts come last, labelled
             closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
             frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
                     f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
-            lines.append(f"**Topology** (stable in h) surface {closed}, {m.pieces} "
-                         f"piece{'s' if m.pieces != 1 else ''}{frag}, genus {m.stable_genus} "
-                         f"(features > {2 * m.feature_radius:.3g})  ")
+            pieces = f"{m.pieces} piece{'s' if m.pieces != 1 else ''}"
+            lines.append(f"**{hover('Topology', 'topology')}** (stable in h) surface {closed}, {pieces}{frag}, genus "
+                         f"{m.stable_genus} ({hover('ignoring features narrower than', 'features')} "
+                         f"{fmt(2 * m.feature_radius, 3)} units)  ")
             if m.boundary_complete:
-                lines.append("**Boundary** complete: one closed surface standing on the base  ")
+                lines.append(f"**{hover('Boundary', 'boundary')}** complete: one closed surface standing on the base  ")
             else:
-                lines.append(f"**Boundary** incomplete: {md_text(m.completeness_reason)}  ")
-            lines.append(f"**Hollowness** {m.hollowness:.3f}  ")
-            lines.append(f"**Voids** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
-            lines.append(f"*voxel-level counts (change with h): genus {m.genus}, {m.components} "
-                         f"component{'s' if m.components != 1 else ''}*  ")
+                lines.append(f"**{hover('Boundary', 'boundary')}** incomplete: {md_text(m.completeness_reason)}  ")
+            lines.append(f"**{hover('Hollowness', 'hollowness')}** {fmt(m.hollowness, 3)}  ")
+            lines.append(f"**{hover('Voids', 'voids')}** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
+            lines.append(f"<small>raw voxel counts (change with h): genus {m.genus}, {m.components} "
+                         f"component{'s' if m.components != 1 else ''}</small>  ")
         elif info.stopped:
             lines.append("*measures: not computed (stopped); change a setting to compute them*  ")
         else:
             lines.append("*measures: computing...*  ")
-        lines.append(f"**Compute** {info.seconds:.2f} s workspace"
+        lines.append(f"**{hover('Compute', 'compute')}** {info.seconds:.2f} s workspace"
                      + (f", {info.shell_seconds:.2f} s shell" if info.shell_seconds else ""))
     else:
         lines.append("*workspace: computing...*")
     if ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
         sat = {x.index for x in figures.orientation_saturation(ori)}
         flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
-        lines.append(f"**TI₁** {fmt(ori.ti1, 4)}{flag['TI_1']}  **TI₂** {fmt(ori.ti2, 4)}{flag['TI_2']} "
+        lines.append(f"**{hover('TI₁', 'TI_1')}** {fmt(ori.ti1, 4)}{flag['TI_1']}  "
+                     f"**{hover('TI₂', 'TI_2')}** {fmt(ori.ti2, 4)}{flag['TI_2']} "
                      f"deg·units  (z0 = {ori.settings.z0:g})")
         if sat:
             lines.append(f"⚠ {md_text(figures.saturation_warning(ori), 600)}")
@@ -107,12 +111,42 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
     if res is not None:
         where = "" if inside is None else (" · inside the workspace" if inside else " · outside the workspace")
         if res.feasible:
-            lines.append(f"**Pose** reachable{where}")
+            lines.append(f"**{hover('Pose', 'pose')}** reachable{where}")
         else:
-            lines.append(f"**Pose** {md_text(res.message)}{where}")
+            lines.append(f"**{hover('Pose', 'pose')}** {md_text(res.message)}{where}")
     if design_error:
         lines.append(f"**Design not applied:** {md_text(design_error)}")
     return "\n\n".join(lines)
+
+
+def summary_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
+                     ori: OrientationResult | None) -> str:
+    """The pinned strip above the tabs: volume with its bracket, boundary, TI_1, TI_2 and the pose,
+    in two short lines (the Numbers below the tabs hold the rest). The same values and digits as
+    :func:`numbers_markdown`; each name carries its definition as a hover text."""
+    if info is None:
+        first = "*workspace: computing...*"
+    elif info.volume == 0:
+        first = f"**{hover('V', 'volume')}** 0: empty workspace at this orientation"
+    else:
+        first = f"**{hover('V', 'volume')}** {fmt(info.volume, 4)} units³"
+        br = info.bracket
+        if br is not None:
+            first += f" {hover('∈', 'bracket')} [{fmt(br.volume_inner, 4)}, {fmt(br.volume_outer, 4)}]"
+        first += " (preview)" if info.preview else ""
+        m = info.measures
+        if m is not None:
+            first += f" · {hover('boundary', 'boundary')} {'complete' if m.boundary_complete else 'incomplete'}"
+    parts = []
+    if ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
+        sat = {x.index for x in figures.orientation_saturation(ori)}
+        for key, label, value in (("TI_1", "TI₁", ori.ti1), ("TI_2", "TI₂", ori.ti2)):
+            parts.append(f"**{hover(label, key)}** {'≥ ' if key in sat else ''}{fmt(value, 4)}")
+    else:
+        parts.append("TI₁ / TI₂ *computing...*")
+    if res is not None:
+        parts.append(f"{hover('pose', 'pose')} {'reachable' if res.feasible else 'not reachable'}")
+    return first + "  \n" + " · ".join(parts)
 
 
 class NumbersPanel:
@@ -133,3 +167,4 @@ class NumbersPanel:
             ori = ctx.orientation
             s = ctx.state
         ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error)
+        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori)

@@ -86,9 +86,23 @@ TYPING_GATE = (
     "document.addEventListener('keydown',function(v){if(v.key==='Enter'&&q.has(v.target))go(v.target);},true);"
     "document.addEventListener('blur',function(v){if(q.has(v.target))go(v.target);},true);"
     "})();</script>").encode()
+#: How long viser's "Software WebGL rendering detected" notice stays the first time, milliseconds.
+WEBGL_NOTICE_MS = 8000
+#: Put into the page's head: viser's software-WebGL notice (it covers the scene's top left corner)
+#: is shown once per browser for :data:`WEBGL_NOTICE_MS`, then closed; on later loads it is closed
+#: as soon as it appears (the browser remembers in its localStorage that it was told).
+WEBGL_NOTICE = (
+    "<script>(function(){var K='paraspace.webglNoticeShown',seen=false;"
+    "try{seen=localStorage.getItem(K)==='1';}catch(e){}"
+    "function close(n){var b=n.querySelector('.mantine-Notification-closeButton');if(b)b.click();}"
+    "new MutationObserver(function(){document.querySelectorAll('.mantine-Notification-root').forEach("
+    "function(n){if(n.__ps||n.textContent.indexOf('Software WebGL')<0)return;n.__ps=true;"
+    "if(seen){close(n);return;}seen=true;try{localStorage.setItem(K,'1');}catch(e){}"
+    "setTimeout(function(){close(n);}," + str(WEBGL_NOTICE_MS) + ");});})"
+    ".observe(document.documentElement,{childList:true,subtree:true});})();</script>").encode()
 #: Replacements applied to viser's page (its HTML is otherwise served as is).
 PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = (
-    (b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT + TYPING_GATE),)
+    (b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT + TYPING_GATE + WEBGL_NOTICE),)
 
 _KNOWN = frozenset(link_keys())
 

@@ -15,12 +15,13 @@ Layout, top to bottom:
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import viser
 
 import paraspace
-from paraspace.kinematics.design import ETA_RANGES, PARAMS, paper_range_text
+from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, paper_range_text
 from paraspace.kinematics.settings import ORIENTATION
 
 from .. import figures
@@ -43,10 +44,14 @@ from .lazy_plot import LazyPlot
 from .legend import LegendPanel, build_legend_folder
 
 POSE_HINTS: dict[str, str] = {
-    "x": "platform centre P, x", "y": "platform centre P, y", "z": "platform centre P, height",
+    "x": "platform centre P, x (length units)", "y": "platform centre P, y (length units)",
+    "z": "platform centre P, height (length units); the slider spans the design's reach, 0 to l_min + l_s",
     "psi": "Euler angle about z (eq. 2: R1 = Rz(psi) Ry(theta) Rx(phi)), degrees",
     "theta": "Euler angle about y, degrees", "phi": "Euler angle about x, degrees",
 }
+#: pose slider labels: the key and its unit
+POSE_LABELS: dict[str, str] = {"x": "x", "y": "y", "z": "z", "psi": "psi (deg)", "theta": "theta (deg)",
+                               "phi": "phi (deg)"}
 STUDY_PARAMS: tuple[str, ...] = DESIGN_KEYS
 
 
@@ -59,6 +64,7 @@ class Panels:
     status: Any
     stop: Any
     numbers: Any
+    summary: Any
     tabs: Any
     legend: LegendPanel
     # design
@@ -119,13 +125,29 @@ class Panels:
     download_ply: Any
     download_glb: Any
     download_json: Any
+    download_report: Any
+    report_status: Any
     version: Any
+
+
+#: ``order`` of the folders below the tab group (viser sorts a container's children by ``order``;
+#: the default is the creation count, so these stay below every tab added later).
+LOWER_ORDER = 1.0e6
 
 
 def slider_span(lo: float, hi: float, value: float) -> tuple[float, float]:
     """A slider's ``(min, max)``: its range widened to hold ``value`` (a value typed in the number
     box or restored from a link may lie outside the Table I range; the slider must still show it)."""
     return min(lo, value), max(hi, value)
+
+
+def pose_slider_span(key: str, design: Design, value: float) -> tuple[float, float]:
+    """The pose slider ``key``'s ``(min, max)`` for ``design``: the height ``z`` spans the design's
+    reach ``[0, l_min + l_s]`` (no platform centre rises above its longest leg: the base joints lie
+    in z = 0), rounded up to 5 units; the others their fixed range. Widened to hold ``value``."""
+    rng = POSE_SLIDERS[key]
+    hi = 5.0 * math.ceil((design.l_min + design.l_s) / 5.0) if key == "z" else rng.hi
+    return slider_span(rng.lo, hi, value)
 
 
 #: Measures offered by the sweep's "measure" menu (``app.figures.MEASURES`` names).
@@ -153,15 +175,19 @@ def _downloads(gui: viser.GuiApi, disabled: bool = True) -> tuple[Any, Any]:
 
 def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
     """Create every GUI element on ``gui`` (a client's ``client.gui``) showing ``state``."""
+    # Top to bottom: the job's status line and the pinned numbers strip (always in view), then the
+    # tabs (a design slider and the volume are visible together at 1440x900), then the full
+    # Numbers and the Legend, which the user opens when needed. Tabs added later (Compare, Paper,
+    # Optimize) join the same tab group; the folders below keep their place with ``order``.
     url_messages = gui.add_markdown("", visible=False)
-    with gui.add_folder("Workspace", expand_by_default=True):
-        progress = gui.add_progress_bar(0.0, animated=False)
-        status = gui.add_markdown("*starting...*")
-        stop = gui.add_button("Stop computation", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
-    with gui.add_folder("Numbers", expand_by_default=True):
-        numbers = gui.add_markdown("*computing...*")
-    legend = build_legend_folder(gui)
+    progress = gui.add_progress_bar(0.0, animated=False)
+    status = gui.add_markdown("*starting...*")
+    stop = gui.add_button("Stop computation", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
+    summary = gui.add_markdown("*computing...*")
     tabs = gui.add_tab_group()
+    with gui.add_folder("Numbers", expand_by_default=True, order=LOWER_ORDER):
+        numbers = gui.add_markdown("*computing...*")
+    legend = build_legend_folder(gui, order=LOWER_ORDER + 1)
 
     with tabs.add_tab("Design", viser.Icon.RULER_MEASURE):
         design = {}
@@ -170,7 +196,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             spec = PARAMS[key]
             value = float(getattr(state.design, key))
             lo, hi = slider_span(rng.lo, rng.hi, value)
-            design[key] = gui.add_slider(key, min=lo, max=hi, step=rng.step, initial_value=value,
+            design[key] = gui.add_slider(spec.label, min=lo, max=hi, step=rng.step, initial_value=value,
                                          hint=f"{spec.description}; {paper_range_text(key)}; type values "
                                               f"in {DESIGN_RANGES[key].text(spec.unit)} in the box")
         eta_range = gui.add_dropdown("eta_range", ETA_RANGES, initial_value=state.design.eta_range,
@@ -189,8 +215,9 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         for key in POSE_KEYS:
             rng = POSE_SLIDERS[key]
             value = float(getattr(state.pose, key))
-            lo, hi = slider_span(rng.lo, rng.hi, value)
-            pose[key] = gui.add_slider(key, min=lo, max=hi, step=rng.step, initial_value=value, hint=POSE_HINTS[key])
+            lo, hi = pose_slider_span(key, state.design, value)
+            pose[key] = gui.add_slider(POSE_LABELS[key], min=lo, max=hi, step=rng.step, initial_value=value,
+                                       hint=POSE_HINTS[key])
         gizmo = gui.add_checkbox("drag gizmo", True, hint="show the drag handle on the platform")
         carriages = gui.add_dropdown("carriages", ("auto", "manual"), initial_value=state.carriages,
                                      hint="auto: redundancy resolved (max leg margin); manual: set d_i, eta_i")
@@ -269,11 +296,17 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         download_ply = gui.add_button("Shell PLY", icon=viser.Icon.DOWNLOAD)
         download_glb = gui.add_button("Shell GLB", icon=viser.Icon.DOWNLOAD)
         download_json = gui.add_button("Measures JSON", icon=viser.Icon.DOWNLOAD)
+        download_report = gui.add_button("Design report (HTML)", icon=viser.Icon.FILE_DESCRIPTION,
+                                         hint="one self-contained page: parameters, mechanism, the shell's four "
+                                              "views, every measure with its definition, orientation maps, the "
+                                              "pinned design beside it, this link; print it to PDF from the browser")
+        report_status = gui.add_markdown("")
         version = gui.add_markdown(f"paraspace {paraspace.__version__} (the same version as "
                                    "`paraspace --version` and `/api/v1/health`)")
 
     return Panels(
-        url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, tabs=tabs,
+        url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, summary=summary,
+        tabs=tabs,
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose_tab=pose_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
@@ -290,5 +323,6 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
         surface_plot=surface_plot, surface_csv=surface_csv, surface_png=surface_png, surface_svg=surface_svg,
         link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
-        download_glb=download_glb, download_json=download_json, version=version,
+        download_glb=download_glb, download_json=download_json,
+        download_report=download_report, report_status=report_status, version=version,
     )

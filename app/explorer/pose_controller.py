@@ -25,7 +25,7 @@ from paraspace.kinematics.workspace import reachable
 from ..numfmt import fixed
 from ..urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
 from .numbers_panel import NumbersPanel
-from .panels import slider_span
+from .panels import pose_slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene
 from .session import SessionContext
 
@@ -190,7 +190,7 @@ class PoseController:
         with ctx.programmatic():
             for k in POSE_KEYS:
                 h = ctx.panels.pose[k]
-                h.min, h.max = slider_span(POSE_SLIDERS[k].lo, POSE_SLIDERS[k].hi, vals[k])
+                h.min, h.max = pose_slider_span(k, ctx.state.design, vals[k])
                 h.value = vals[k]
         with ctx.lock:
             old = ctx.state.pose

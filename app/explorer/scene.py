@@ -422,4 +422,7 @@ class ShellScene:
         mesh = self.source
         if mesh is None or len(mesh.vertices) == 0:
             return None
+        zr = mesh.metadata.get("paraspace", {}).get("color_range")
+        if zr is not None:  # the reachable voxels' heights (workspace_job.voxel_z_range)
+            return float(zr[0]), float(zr[1])
         return float(mesh.vertices[:, 2].min()), float(mesh.vertices[:, 2].max())

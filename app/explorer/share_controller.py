@@ -4,7 +4,9 @@ Beside the data path slider -> state -> job -> engine -> mesh -> scene, reading 
 change the controllers call :meth:`ShareController.schedule_url`, which rewrites the address bar
 (debounced, ``history.replaceState``; :mod:`app.jsbridge`) from the state (:func:`app.urlstate.encode_query`)
 so it always holds a link to what is on screen; the Share tab shows the same link, copies it, and
-downloads the full-resolution shell (STL, PLY, GLB) and the measures (JSON). The problems of the
+downloads the full-resolution shell (STL, PLY, GLB), the measures (JSON) and the design report
+(HTML, :mod:`app.report`: the design on screen and the pinned one, computed in a background job
+that reuses what is already on screen). The problems of the
 link the page was opened with are shown here too (:meth:`ShareController.show_link_messages`).
 """
 
@@ -61,6 +63,7 @@ class ShareController:
         p.download_ply.on_click(cb(lambda: self.download_shell("ply")))
         p.download_glb.on_click(cb(lambda: self.download_shell("glb")))
         p.download_json.on_click(cb(self.download_measures))
+        p.download_report.on_click(cb(self.download_report))
 
     def close(self) -> None:
         """The browser left: no address-bar update is pending."""
@@ -181,3 +184,71 @@ class ShareController:
         """Send :meth:`measures_document` as JSON."""
         data = json.dumps(self.measures_document(), indent=2, default=_json_default).encode()
         self.ctx.client.send_file_download("paraspace_measures.json", data, save_immediately=True)
+
+    def download_report(self) -> None:
+        """Write the design report of the design on screen (and of the pinned design, when one is
+        pinned) in a background job, then send it as ``paraspace_report.html``. The current
+        design's workspace, measures, bracket and orientation maps are the ones on screen; only
+        the pinned design (and what is not on screen yet) is computed."""
+        import paraspace
+        from paraspace.kinematics.orientation import OrientationResult
+        from paraspace.kinematics.workspace import WorkspaceSettings
+
+        from ..report import ReportEntry, compute_entry, report_html
+
+        ctx = self.ctx
+        with ctx.lock:
+            s = ctx.state
+            b = ctx.bundle
+            ori = ctx.orientation
+        if b is None or b.measures is None or b.result.design != s.design:
+            ctx.notify("Report not started", "the full workspace is still being computed; try again when the "
+                       "numbers show the full result", color="orange")
+            return
+        link = self.link()
+        osettings = s.orientation_settings()
+        ori_now: OrientationResult | None = (ori if ori is not None and ori.settings == osettings
+                                             and ori.design == s.design else None)
+        p = ctx.panels
+        p.download_report.disabled = True
+        p.report_status.content = "writing the report..."
+        pin = s.pin
+
+        def fn(progress: Any, cancel: threading.Event) -> bytes:
+            from paraspace.kinematics.bracket import bracket_of
+            from paraspace.kinematics.orientation import orientation_workspace
+
+            progress(0.05, "the design on screen")
+            bracket = b.bracket if b.bracket is not None or s.joints.min_distance > 0 else bracket_of(b.result,
+                                                                                                    cancel=cancel)
+            o = ori_now if ori_now is not None else orientation_workspace(s.design, osettings, cancel=cancel)
+            entries = [ReportEntry("the design on screen", s.design, b.result, b.measures, bracket, o, link)]
+            if pin is not None:
+                progress(0.4, "the pinned design")
+                settings = WorkspaceSettings(voxel=b.result.grid.h, joints=s.joints)
+                pin_link = link.split("?")[0] + "?" + encode_query(dataclasses.replace(s, design=pin, pin=None))
+                entries.append(compute_entry("the pinned design", pin, settings, osettings, link=pin_link,
+                                             cancel=cancel))
+            progress(0.8, "drawing the pictures")
+            return report_html(entries, version=paraspace.__version__).encode("utf-8")
+
+        def done(job: Any) -> None:
+            p.download_report.disabled = False
+            if job.status == "done":
+                ctx.client.send_file_download("paraspace_report.html", job.result, save_immediately=True)
+                p.report_status.content = (f"report sent ({len(job.result) / 1e6:.1f} MB): open it in the browser; "
+                                           "print it to PDF from there")
+            elif job.status == "failed":
+                p.report_status.content = f"**report failed:** {md_text(job.error)}"
+            else:
+                p.report_status.content = "report stopped"
+
+        def on_progress(job: Any) -> None:
+            p.report_status.content = f"writing the report: {md_text(job.message or '')}, {100 * job.progress:.0f} %"
+
+        try:
+            ctx.jobs.submit(fn, kind="report", client=ctx.job_client, supersede=True, on_done=done,
+                            on_progress=on_progress)
+        except Exception as exc:  # noqa: BLE001 - e.g. the job limits: said, not raised into viser
+            p.download_report.disabled = False
+            p.report_status.content = f"report not started: {md_text(str(exc))}"

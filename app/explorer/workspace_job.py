@@ -17,6 +17,8 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
@@ -64,8 +66,26 @@ def make_shell(result: WorkspaceResult, max_faces: int) -> trimesh.Trimesh:
     needs no volume-matching passes (1 % is enough; the exported meshes keep 1e-4)."""
     from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
-    mesh = workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh", volume_rtol=1e-2)
-    return smooth_for_display(mesh, volume=result.volume)
+    zr = voxel_z_range(result)
+    mesh = workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh", volume_rtol=1e-2,
+                           color_range=zr)
+    mesh = smooth_for_display(mesh, volume=result.volume)
+    if zr is not None:
+        mesh.metadata.setdefault("paraspace", {})["color_range"] = zr
+    return mesh
+
+
+def voxel_z_range(result: WorkspaceResult) -> tuple[float, float] | None:
+    """The heights the reachable voxels' cubes span, ``[z_bottom, z_top]`` (the colour bar's range:
+    the display smoothing moves the surface by a fraction of a voxel, e.g. to z = -0.21, which is
+    not a height of the workspace); ``None`` for an empty workspace."""
+    occ = result.occupancy
+    layers = np.flatnonzero(occ.any(axis=(0, 1)))
+    if len(layers) == 0:
+        return None
+    h, oz = result.grid.h, result.grid.origin[2]
+    lo = max(oz + h * (layers[0] - 0.5), result.settings.z_floor)
+    return float(lo), float(oz + h * (layers[-1] + 0.5))
 
 
 def measure(result: WorkspaceResult, cancel: threading.Event | None = None) -> WorkspaceMeasures:
