@@ -95,6 +95,17 @@ def test_volume_and_cavity_claims_recomputed(comparison):
         assert rows[rid]["verdict"] == ("holds" if sign * r >= need else "fails"), rid
 
 
+def test_joint_limits_claim_recomputed(comparison):
+    """'restrictions of joint motion aren't ... a primary factor': V with 45° cones about the normals
+    against V without (the paper's model), and the column's own 30° home cones against none."""
+    rows = {r["id"]: r for r in comparison["claims"]}["sec3-joints"]["by_assumption"]
+    free = _ws().volume
+    for key, joints in (("paper", Joints(45.0, 45.0, "normal")), ("cones30_home", Joints(30.0, 30.0, "home"))):
+        r = compute_workspace(Design(), WorkspaceSettings(voxel=H, joints=joints)).volume / free - 1
+        assert rows[key]["verdict"] == ("holds" if abs(r) < 0.2 else "fails")
+        assert f"{100 * r:+.0f} %" in rows[key]["value"]
+
+
 def test_completeness_uses_the_untuned_reading_and_shows_the_tuned_one(comparison):
     """Completeness verdicts use the topological reading where its filter is resolved (radius >= one
     voxel), else they are 'not testable'; the tuned 'sealed' reading is shown beside, never deciding."""
