@@ -11,14 +11,14 @@
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
-    paraspace paper       [--voxel H] [--json]   (the paper's numbers and claims beside ours)
+    paraspace paper       [--voxel H] [--assumptions K,..] [scan flags] [--fit] [--json]   (every claim, verdicts)
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``ik``): ``--u-cone DEG --s-cone DEG
 [--cone-axis normal|home] --leg-diameter W [--clearance C]``.
-Scan flags (``orientation``, ``sweep``, ``optimize``; TI_1 and TI_2): ``--angle-range DEG --angle-step DEG
+Scan flags (``orientation``, ``sweep``, ``optimize``, ``paper``; TI_1 and TI_2): ``--angle-range DEG --angle-step DEG
 --position-step S`` (ranges: ``kinematics.settings.ORIENTATION``).
 Every command except ``serve`` uses only the numerical core (no web packages are imported).
 Bad flags or values exit with status 2 and one line naming the field and its valid range.
@@ -232,9 +232,21 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         if ns.bracket:
             print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
                   "  (continuous workspace)")
-        for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
-            if key in out:
-                print(f"{key:<15} {out[key]}")
+        if out["voxels"]:
+            # the measures that do not change with h lead (kinematics.measures, "Stable measures")
+            frag = f" ({100 * out['fragment_volume_fraction']:.2f} % of the volume)" if out["fragments"] else ""
+            print(f"pieces          {out['pieces']}  (components of >= {100 * out['piece_fraction']:g} % of the "
+                  "volume; stable in h)")
+            print(f"stable_genus    {out['stable_genus']}  (tunnels or windows wider than "
+                  f"{2 * out['feature_radius']:.3g}; stable in h)")
+            print(f"fragments       {out['fragments']}{frag}  (specks of thin sheets; their number grows as h "
+                  "shrinks, their volume does not)")
+            print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}  "
+                  f"({out['completeness_reason']})")
+            print(f"hollowness      {out['hollowness']:.4g}  (underside cavity ratio)")
+            print(f"voids           {out['voids']}  (enclosed cavities; void ratio {out['void_ratio']:.4g})")
+            print(f"voxel-level     components {out['components']}, genus {out['genus']}, boundary_closed "
+                  f"{out['boundary_closed']}  (raw voxel counts: they change with h)")
         print(f"bounds          {out.get('bounds')}")
         if ns.diagnostics:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
@@ -313,32 +325,67 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
 
 
 def cmd_paper(ns: argparse.Namespace) -> int:
-    """``paraspace paper``: the paper's reported numbers and Sec. III claims beside ours."""
-    from paraspace.kinematics.paper import paper_comparison
+    """``paraspace paper``: every checkable claim of the paper with its verdict under each assumption;
+    ``--fit``: the bounded fit of the unstated assumptions toward V, TI_1 and TI_2."""
+    from paraspace.kinematics.paper import ASSUMPTION_KEYS, fit_assumptions, paper_comparison
+    from paraspace.kinematics.settings import ORIENTATION
     from paraspace.kinematics.workspace import warm_up
 
     voxel = _voxel(ns)
+    scan = _scan(ns)
+    keys = None
+    if ns.assumptions is not None:
+        keys = tuple(k.strip() for k in ns.assumptions.split(",") if k.strip())
+        bad = [k for k in keys if k not in ASSUMPTION_KEYS]
+        if bad or not keys:
+            raise ParameterError("assumptions", ns.assumptions,
+                                 "comma-separated names of " + ", ".join(ASSUMPTION_KEYS))
+    if ns.fit and "angle_range" in scan:
+        raise ParameterError("angle-range", scan["angle_range"], "not with --fit (the fit scans its own ranges)")
     warm_up()
     progress, done = progress_line("paper")
     try:
-        out = paper_comparison(voxel, progress)
+        if ns.fit:
+            steps = {"angle_step": scan.get("angle_step", 2.0), "position_step": scan.get("position_step", 4.0)}
+            out = fit_assumptions(voxel, progress=progress, **steps)
+        else:
+            steps = {"angle_step": scan.get("angle_step", 1.0), "position_step": scan.get("position_step", 2.0)}
+            out = paper_comparison(voxel, progress, assumptions=keys, **steps,
+                                   angle_range=scan.get("angle_range", ORIENTATION["angle_range"].default))
     finally:
         done()
     if ns.json:
         _emit(out)
         return 0
-    rep = out["reported"]
-    print(f"paper: V = {rep['volume']:.3g}, TI_1 = {rep['TI_1']:g}, TI_2 = {rep['TI_2']:g} (default design)")
-    for row in out["volume"]["ours"]:
-        print(f"  V = {row['volume']:.3g}   {row['convention']}")
-    print(f"  closest to the paper's V: {out['volume']['closest']}")
-    for row in out["indices"]["ours"]:
-        note = f"  ({row['saturation_note']})" if row["saturation_note"] else ""
-        print(f"  TI_1 = {row['TI_1']:.4g}, TI_2 = {row['TI_2']:.4g}   {row['convention']}{note}")
-    print(f"  closest TI_1: {out['indices']['closest_TI_1']}; closest TI_2: {out['indices']['closest_TI_2']}")
-    for c in out["claims"]:
-        ours = c["ours"] if isinstance(c["ours"], bool) else f"{c['ours']:.4g} (default {c['default']:.4g})"
-        print(f"  [{'holds' if c['holds'] else 'FAILS'}] {c['design']}: {c['measure']} {c['paper']}; ours {ours}")
+    if ns.fit:
+        print(out["summary"])
+        print(f"TI_2 / TI_1 over all {out['models']} models: {out['ti_ratio_range'][0]:.2f} .. "
+              f"{out['ti_ratio_range'][1]:.2f} (paper 1.74)")
+        print(f"{'arc range':<10} {'cones':<11} {'scan':>5} {'z floor':>7} {'V':>9} {'TI_1':>8} {'TI_2':>8}  residuals")
+        for r in out["top"]:
+            res = ", ".join(f"{k} {100 * v:+.0f}%" for k, v in r["residuals"].items())
+            print(f"{r['eta_range']:<10} {r['cones'] or 'none':<11} {r['angle_range']:>5g} {r['z_floor']:>7g} "
+                  f"{r['volume']:>9.3g} {r['TI_1']:>8.4g} {r['TI_2']:>8.4g}  {res}")
+        return 0
+    cols = [a["key"] for a in out["assumptions"]]
+    print(f"The paper's claims beside ours (h = {out['voxel']:g}; scan ±{out['scan']['angle_range']:g}°, steps "
+          f"{out['scan']['angle_step']:g}° / {out['scan']['position_step']:g})")
+    for a in out["assumptions"]:
+        print(f"  column {a['key']:<15} {a['label']}")
+    short = {"holds": "holds", "fails": "FAILS"}
+    print(f"{'claim':<19} " + " ".join(f"{c[:9]:<9}" for c in cols) + " value (paper's model) / quote")
+    for r in out["claims"]:
+        marks = " ".join(f"{short.get(r['by_assumption'][c]['verdict'], 'n/t'):<9}" for c in cols)
+        print(f"{r['id']:<19} {marks} {r['value']}")
+        print(f"{'':<19} {' ' * (10 * len(cols))}\"{r['quote']}\"")
+    print("verdict counts: " + "; ".join(f"{c}: {n['holds']} hold, {n['fails']} fail, {n['not testable']} n/t"
+                                         for c, n in out["counts"].items()))
+    for key, rv in out["reported_vs_ours"].items():
+        verdict = (f"holds under {rv['closest']}" if abs(rv["closest_gap"]) <= out["words"]["reported"]
+                   else "fails under every column")
+        print(f"{key}: paper {rv['paper']:.6g}: {verdict}; smallest gap {100 * rv['closest_gap']:+.0f} % "
+              f"(column {rv['closest']}, the paper's design)")
+    print("tuned on the paper's nine designs: " + " | ".join(out["tuned"]))
     print(out["summary"])
     return 0
 
@@ -723,9 +770,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_optimize_parser(sub)
 
-    pp = sub.add_parser("paper", help="the paper's reported numbers and Sec. III claims beside ours")
+    pp = sub.add_parser("paper", help="every checkable claim of the paper with its verdict under each assumption")
     pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")
     pp.add_argument("--json", action="store_true")
+    pp.add_argument("--assumptions", metavar="K[,K]",
+                    help="only these columns (paper, from_zero, cones30_home, cones45_normal, scan180, scan_coarse, "
+                         "legs10; default all)")
+    pp.add_argument("--fit", action="store_true",
+                    help="fit the unstated assumptions (arc range, cones, scan range, z floor) to V, TI_1, TI_2")
+    _add_scan_flags(pp)
     pp.set_defaults(func=cmd_paper)
 
     k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")

@@ -440,20 +440,22 @@ class OrientationResult:
         return out
 
     def saturation_note(self) -> str:
-        """One sentence naming the saturated angle Δ's of TI_1 and TI_2 ('' when none is)."""
-        sat = self.saturated
+        """One sentence naming, per index, the rotations and lines whose angle Δ spans the whole scan
+        ``[-angle_range, angle_range]`` ('' when none does), e.g. "TI_1: φ on the z, y', x lines"."""
         a = self.settings.angle_range
-        ti1 = [k for k in sat if sat[k] and k.startswith("Δφ_")]
-        ti2 = [k for k in sat if sat[k] and (k.startswith("Δτ_") or k.startswith("Δψ_"))]
         parts = []
-        if ti1:
-            parts.append(f"TI_1: {', '.join(ti1)}")
-        if ti2:
-            parts.append(f"TI_2: {', '.join(ti2)}")
+        for index, rots in (("TI_1", ("phi_z",)), ("TI_2", ("tau_yprime", "psi_x"))):
+            what = []
+            for rt in rots:
+                lines = [LINE_SYMBOL[ln] for ln in LINES if self.regions[(ln, rt)].angle_saturated]
+                if lines:
+                    what.append(f"{ROTATION_SYMBOL[rt]} on the {', '.join(lines)} line{'s' if len(lines) > 1 else ''}")
+            if what:
+                parts.append(f"{index}: {'; '.join(what)}")
         if not parts:
             return ""
-        return (f"limited by the scan range ±{a:g}°, not by the mechanism ({'; '.join(parts)}); "
-                "set joint cones or widen the scan")
+        return (f"limited by the scan range ±{a:g}°, not by the mechanism: the angle reaches both bounds "
+                f"-{a:g}° and {a:g}° for {'; '.join(parts)}; set joint cones or widen the scan (--angle-range)")
 
     def to_dict(self, include_grids: bool = False) -> dict[str, Any]:
         """JSON-serializable: ``"TI_1"``, ``"TI_2"``, ``"deltas"``, ``"saturated"`` (per Δ),

@@ -386,3 +386,39 @@ def test_typing_never_applies_a_prefix(browser: Browser, explorer: Explorer) -> 
     text = page.locator("body").inner_text()
     assert "d_s = 120 is invalid; valid range [0, r=100]. The design keeps d_s = 50." in text, text[-800:]
     assert s.state.design.d_s == 50.0 and s.state.design.a == 80.0
+
+
+def test_paper_tab_is_readable_at_1440x900(browser: Browser, explorer: Explorer) -> None:
+    """Issue 21: the Paper tab at 1440 x 900 shows every claim (one list item each, with its verdict),
+    the reported numbers' table and no text wider than the panel (nothing cut off on the right)."""
+    from paraspace.app.explorer import paper_panel
+    from paraspace.kinematics.paper import paper_comparison
+
+    out = paper_comparison(voxel=10.0, assumptions=("paper", "from_zero", "cones30_home"), angle_step=3.0,
+                           position_step=6.0)
+    explorer.paper_results.put(paper_panel.PAPER_VOXEL, out)
+    before = set(explorer.sessions)
+    ctx = browser.new_context(viewport={"width": 1440, "height": 900})
+    page = ctx.new_page()
+    page.goto(explorer.url)
+    page.wait_for_function("() => !document.body.innerText.includes('Connecting...')", timeout=30000)
+    wait_for(lambda: next((s for cid, s in list(explorer.sessions.items()) if cid not in before and s.ready.is_set()),
+                          None), 30, "session")
+    page.get_by_role("tab", name="Paper").click()
+    wait_for(lambda: "differs under" in page.locator("body").inner_text(), 30, "the claims on screen")
+    body = page.locator("body").inner_text()
+    assert body.count("differs under:") == len(out["claims"]) >= 40
+    assert "3.47e+06" in body and "fails" in body
+    item = page.get_by_text("fig3-V", exact=True).first
+    item.scroll_into_view_if_needed()
+    seen, wide = page.evaluate("""() => {
+        const els = [...document.querySelectorAll('li, table')]
+            .filter(e => e.innerText.includes('differs under') || e.innerText.includes('TI₁'));
+        const panel = document.querySelector('li').closest('[class*="ScrollArea"], [style*="overflow"]');
+        const right = panel ? panel.getBoundingClientRect().right : window.innerWidth;
+        return [els.length, els.filter(e => e.scrollWidth > e.clientWidth + 1
+                                        || e.getBoundingClientRect().right > right + 1).length];
+    }""")
+    assert seen >= len(out["claims"]) and wide == 0
+    screenshot_not_blank(page, SHOTS / "paper_tab.png")
+    ctx.close()

@@ -143,3 +143,19 @@ def test_cli_joint_flags_echo_and_one_message():
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert "saturated" in out and out["settings"]["joints"]["theta_u"] == 30.0
+
+
+def test_workspace_text_leads_with_the_stable_measures():
+    """Issue 21 item 4: pieces, stable genus and fragments come first (labelled stable in h); the raw
+    voxel counts come after them, labelled as such; the numbers are the measures' own."""
+    from paraspace.kinematics.measures import measure_workspace
+
+    lines = run("workspace", "--voxel", "8", "--a", "15").stdout.splitlines()
+    keys = [ln.split()[0] for ln in lines]
+    assert keys.index("pieces") < keys.index("stable_genus") < keys.index("fragments") < keys.index("voxel-level")
+    m = measure_workspace(compute_workspace(Design(a=15.0), WorkspaceSettings(voxel=8.0)))
+    text = dict((ln.split()[0], ln) for ln in lines)
+    assert text["pieces"].split()[1] == str(m.pieces) and "stable in h" in text["pieces"]
+    assert text["stable_genus"].split()[1] == str(m.stable_genus)
+    assert f"components {m.components}, genus {m.genus}" in text["voxel-level"]
+    assert "change with h" in text["voxel-level"]

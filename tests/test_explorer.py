@@ -584,13 +584,16 @@ def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, mon
     from paraspace.app.explorer import paper_panel
 
     monkeypatch.setattr(paper_panel, "PAPER_VOXEL", 10.0)
+    monkeypatch.setattr(paper_panel, "PAPER_SCAN", {"angle_step": 3.0, "position_step": 6.0})
+    monkeypatch.setattr(paper_panel, "PAPER_ASSUMPTIONS", ("paper", "from_zero"))
     b = browsers("voxel=6")
     s = b.session
     explorer.paper_results.clear()
     b.click(s.paper.run)
-    wait_for(lambda: "Sec. III claims" in s.paper.result.content, 120.0, "the comparison")
-    text = s.paper.result.content
-    assert "3.47e+06" in text.replace("\\", "") and "holds" in text
+    wait_for(lambda: "**Claims**" in s.paper.result.content, 120.0, "the comparison")
+    text = s.paper.result.content.replace("\\", "")
+    assert "3.47e+06" in text and "holds" in text and "**fails**" in text and "from_zero" in text
+    assert text.count("differs under:") == text.count("\n- ") >= 40  # one list item per claim
     assert 10.0 in explorer.paper_results
 
 

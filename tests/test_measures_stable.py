@@ -180,3 +180,64 @@ def test_paper_designs_keep_their_classification(h):
         m = measure_workspace(compute_workspace(Design(**kw), WorkspaceSettings(voxel=h)))
         assert m.boundary_complete == complete, (name, m.completeness_reason)
         assert (m.pieces, m.stable_genus, m.boundary_closed_stable) == (1, 0, True), name
+
+
+# ----------------------------------------------------------------------------- issue 21, item 4
+
+
+def dome(r_out, r_in, z0):
+    """Hemispherical shell open downward, its rim at height z0."""
+    def f(x, y, z):
+        rr = x ** 2 + y ** 2 + (z - z0) ** 2
+        return (rr <= r_out ** 2) & (rr > r_in ** 2) & (z >= z0)
+    return f
+
+
+@pytest.mark.parametrize("h", [1.0, 0.5])
+def test_cavity_and_completeness_definitions_on_known_shapes(h):
+    """The four shapes whose answer is known, under both completeness readings: a hollow sphere (one
+    enclosed void of volume 4/3 pi r^3, complete), a solid torus (genus 1: incomplete), a dome open
+    below (cavity not enclosed: 'sealed' incomplete, 'topological' complete) and the same dome standing
+    on the base (cavity 2/3 pi r^3 enclosed with the base: complete)."""
+    r1, r2 = 9.0, 16.0
+    hollow = measure_workspace(grid_result(lambda x, y, z: ball(r2)(x, y, z) & ~ball(r1)(x, y, z), h))
+    assert hollow.voids == 1 and hollow.void_volume == pytest.approx(4 / 3 * np.pi * r1 ** 3, rel=0.1)
+    assert hollow.boundary_complete and hollow.stable_genus == 0
+    tor = grid_result(torus(12.0, 5.0), h)
+    for mode in ("sealed", "topological"):
+        m = measure_workspace(tor, completeness=mode)
+        assert m.voids == 0 and m.stable_genus == 1 and not m.boundary_complete
+    floor = -L / 2
+    open_dome = grid_result(dome(r2, r1, floor + 4.0), h, z_floor=floor)  # rim 4 above the base: it leaks
+    m = measure_workspace(open_dome)
+    assert m.voids == 0 and m.sealed_cavity_volume == 0.0 and not m.boundary_complete
+    assert m.hollowness == pytest.approx((r1 / r2) ** 3, rel=0.1)
+    assert measure_workspace(open_dome, completeness="topological").boundary_complete
+    sealed_dome = grid_result(dome(r2, r1, floor), h, z_floor=floor)  # standing on the base
+    for mode in ("sealed", "topological"):
+        m = measure_workspace(sealed_dome, completeness=mode)
+        assert m.voids == 0 and m.boundary_complete
+        assert m.sealed_cavity_volume == pytest.approx(2 / 3 * np.pi * r1 ** 3, rel=0.1)
+
+
+#: Five designs outside the paper's nine (default, a 10/80, d_s 10/80, eta_s 10/60, l_s 20/80), three
+#: of them with raw counts that move with h (thin sheets), one small enough that r < h at h = 4.
+OUTSIDE = ({"a": 15.0}, {"d_s": 20.0}, {"l_s": 25.0}, {"a": 90.0},
+           {"a": 20.0, "d_s": 20.0, "eta_s": 45.0, "l_s": 40.0})
+
+
+@pytest.mark.parametrize("kw", OUTSIDE, ids=lambda kw: ",".join(f"{k}={v:g}" for k, v in kw.items()))
+def test_stable_measures_do_not_move_with_h_outside_the_papers_designs(kw):
+    """h = 4, 2.5, 1.5: pieces, stable genus, stable components and boundary_closed_stable are the same
+    wherever the filter is resolved (feature radius >= one voxel), the volume within 1 %; the fragments'
+    share of the volume shrinks with h (1.6 % at h = 4 for d_s = 20, below 1 % at h = 1.5) while their
+    number grows; where r < h the measure says so (feature_radius_voxels < 1)."""
+    rows = {h: measure_workspace(compute_workspace(Design(**kw), WorkspaceSettings(voxel=h))) for h in (4.0, 2.5, 1.5)}
+    resolved = {h: m for h, m in rows.items() if m.feature_radius_voxels >= 1.0}
+    assert len(resolved) >= 2
+    assert len({(m.pieces, m.stable_genus, m.stable_components, m.boundary_closed_stable)
+                for m in resolved.values()}) == 1
+    vols = [m.volume for m in rows.values()]
+    assert max(vols) <= 1.01 * min(vols)
+    frac = [m.fragment_volume_fraction for m in rows.values()]
+    assert all(b <= a + 1e-3 for a, b in zip(frac, frac[1:])) and frac[-1] < 0.01  # 1e-3: a new speck

@@ -335,3 +335,22 @@ def test_progress_and_cancel() -> None:
 def test_oversized_grid_is_refused() -> None:
     with pytest.raises(ParameterError, match="position_step"):
         orientation_workspace(Design(), OrientationSettings(angle_step=0.01, position_step=0.01))
+
+
+def test_saturation_note_names_the_rotations_lines_and_bounds():
+    """Issue 21 item 5: the note names, per index, each rotation and line whose angle Δ spans the whole
+    scan (checked against the regions' own Δα = 2A), and the scan's bounds."""
+    from paraspace.kinematics.orientation import LINE_SYMBOL, LINES, ROTATION_SYMBOL
+
+    for a in (10.0, 90.0):
+        o = orientation_workspace(Design(), OrientationSettings(angle_range=a, angle_step=2.0, position_step=6.0))
+        note = o.saturation_note()
+        for rt in ("phi_z", "tau_yprime", "psi_x"):
+            lines = [LINE_SYMBOL[ln] for ln in LINES if o.regions[(ln, rt)].delta_angle == pytest.approx(2 * a)]
+            if lines:
+                assert f"{ROTATION_SYMBOL[rt]} on the {', '.join(lines)} line" in note
+            else:
+                assert f"{ROTATION_SYMBOL[rt]} on the" not in note
+        assert (f"-{a:g}° and {a:g}°" in note) == bool(note)
+    assert "τ on the" in orientation_workspace(Design(), OrientationSettings(angle_range=10.0, angle_step=2.0,
+                                                                             position_step=6.0)).saturation_note()

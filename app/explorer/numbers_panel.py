@@ -74,19 +74,20 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                          "(psi, theta, phi) with this design.")
         elif m is not None:
-            lines.append(f"**{hover('Voids', 'voids')}** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
-            lines.append(f"**{hover('Hollowness', 'hollowness')}** {fmt(m.hollowness, 3)}  ")
-            if m.boundary_complete:
-                lines.append(f"**{hover('Boundary', 'boundary')}** complete: one closed surface standing on the base  ")
-            else:
-                lines.append(f"**{hover('Boundary', 'boundary')}** incomplete: {md_text(m.completeness_reason)}  ")
+            # the measures that do not change with h lead; the raw voxel counts come last, labelled
             closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
             frag = (f" + {m.fragments} fragment{'s' if m.fragments != 1 else ''} "
                     f"({100 * m.fragment_volume_fraction:.2f} % of volume)" if m.fragments else "")
             pieces = f"{m.pieces} piece{'s' if m.pieces != 1 else ''}"
-            lines.append(f"**{hover('Topology', 'topology')}** surface {closed}, {pieces}{frag}, genus "
+            lines.append(f"**{hover('Topology', 'topology')}** (stable in h) surface {closed}, {pieces}{frag}, genus "
                          f"{m.stable_genus} ({hover('ignoring features narrower than', 'features')} "
                          f"{fmt(2 * m.feature_radius, 3)} units)  ")
+            if m.boundary_complete:
+                lines.append(f"**{hover('Boundary', 'boundary')}** complete: one closed surface standing on the base  ")
+            else:
+                lines.append(f"**{hover('Boundary', 'boundary')}** incomplete: {md_text(m.completeness_reason)}  ")
+            lines.append(f"**{hover('Hollowness', 'hollowness')}** {fmt(m.hollowness, 3)}  ")
+            lines.append(f"**{hover('Voids', 'voids')}** {m.voids} ({100 * m.void_ratio:.2f} % of volume)  ")
             lines.append(f"<small>raw voxel counts (change with h): genus {m.genus}, {m.components} "
                          f"component{'s' if m.components != 1 else ''}</small>  ")
         elif info.stopped:
