@@ -228,9 +228,10 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if ns.json:
         _emit(out)
     else:
-        print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
+        print(f"volume          {significant(out['volume'], 4)} units³  ({out['voxels']:,} voxels of edge "
+              f"{out['voxel_size']:g})")
         if ns.bracket:
-            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
+            print(f"certified       {significant(out['volume_inner'], 4)} <= V <= {significant(out['volume_outer'], 4)}"
                   "  (continuous workspace)")
         if out["voxels"]:
             # the measures that do not change with h lead (kinematics.measures, "Stable measures")
@@ -241,25 +242,31 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
                   f"{2 * out['feature_radius']:.3g}; stable in h)")
             print(f"fragments       {out['fragments']}{frag}  (specks of thin sheets; their number grows as h "
                   "shrinks, their volume does not)")
-            print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}  "
-                  f"({out['completeness_reason']})")
-            print(f"hollowness      {out['hollowness']:.4g}  (underside cavity ratio)")
-            print(f"voids           {out['voids']}  (enclosed cavities; void ratio {out['void_ratio']:.4g})")
+            why = "" if out["boundary_complete"] else f"  ({out['completeness_reason']})"
+            print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}{why}")
+            print(f"hollowness      {significant(out['hollowness'], 3)}  (underside cavity ratio)")
+            print(f"voids           {out['voids']}  (enclosed cavities; void ratio "
+                  f"{significant(out['void_ratio'], 3)})")
             print(f"voxel-level     components {out['components']}, genus {out['genus']}, boundary_closed "
                   f"{out['boundary_closed']}  (raw voxel counts: they change with h)")
-        print(f"bounds          {out.get('bounds')}")
+        b = out.get("bounds")
+        if b:
+            print("bounds          " + ", ".join(f"{ax} [{significant(lo, 4)}, {significant(hi, 4)}]"
+                                                 for ax, lo, hi in zip("xyz", b["min"], b["max"])))
         if ns.diagnostics:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
             print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
         if dexterity:
             d = out["dexterity"]
-            print(f"gci             {d['gci']:.6g}  (mean 1/kappa of eq. (26), {d['dexterity_mode']} carriages; "
+            print(f"gci             {significant(d['gci'], 4)}  (mean 1/kappa of eq. (26), "
+                  f"{d['dexterity_mode']} carriages; "
                   f"range {d['inverse_condition_min']:.3g} .. {d['inverse_condition_max']:.3g})")
-            print(f"well_cond_volume {d['well_conditioned_volume']:.6g}  (1/kappa >= {d['kappa_min']:g})")
+            print(f"well_cond_volume {significant(d['well_conditioned_volume'], 4)}  (1/kappa >= {d['kappa_min']:g})")
         if total:
             t = out["total_orientation"]
-            print(f"total_orient_vol {t['volume']:.6g}  (tilt <= {t['tilt']:g}, |torsion| <= {t['torsion']:g} deg; "
+            print(f"total_orient_vol {significant(t['volume'], 4)}  (tilt <= {t['tilt']:g}, "
+                  f"|torsion| <= {t['torsion']:g} deg; "
                   f"{t['orientations']} orientations, step {t['angle_step']:g} deg; {t['seconds']:.1f} s)")
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
