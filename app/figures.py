@@ -628,6 +628,9 @@ def to_plotly(spec: FigureSpec) -> go.Figure:
             fig.update_yaxes(title_text=_esc(p.y_title), row=row, col=col, showgrid=True, gridcolor="#E5E5E5",
                              zeroline=False, ticks="outside", mirror=True, showline=True, linecolor="#888888",
                              exponentformat="power")
+            if not compact:  # at least five labelled ticks per axis, also in a narrow panel
+                fig.update_xaxes(nticks=8, row=row, col=col)
+                fig.update_yaxes(nticks=8, row=row, col=col)
             if compact:
                 pm = p.mask
                 ticks = [pm.scan[0], 0.0, pm.scan[1]] if pm is not None and pm.scan[0] < 0 < pm.scan[1] else None

@@ -100,9 +100,12 @@ WEBGL_NOTICE = (
     "if(seen){close(n);return;}seen=true;try{localStorage.setItem(K,'1');}catch(e){}"
     "setTimeout(function(){close(n);}," + str(WEBGL_NOTICE_MS) + ");});})"
     ".observe(document.documentElement,{childList:true,subtree:true});})();</script>").encode()
+#: Put into the page's head: viser's modal windows (the plots' "Open large") as wide as the window
+#: allows instead of Mantine's 440 px.
+WIDE_MODALS = b"<style>.mantine-Modal-content{flex:0 0 min(92vw,1400px)!important;max-width:92vw!important}</style>"
 #: Replacements applied to viser's page (its HTML is otherwise served as is).
 PAGE_EDITS: tuple[tuple[bytes, bytes], ...] = (
-    (b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT + TYPING_GATE + WEBGL_NOTICE),)
+    (b"<title>Viser</title>", b"<title>paraspace</title>" + PANEL_WAIT + TYPING_GATE + WEBGL_NOTICE + WIDE_MODALS),)
 
 _KNOWN = frozenset(link_keys())
 
