@@ -11,12 +11,15 @@
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
+    paraspace task        [design flags] [joint flags] --box CX,CY,CZ,LX,LY,LZ | --cylinder CX,CY,CZ,R,H |
+                          --sphere CX,CY,CZ,R | --points FILE.csv [--tilt DEG] [--torsion DEG] [--voxel H]
+                          [--json] [--csv OUT]
     paraspace paper       [--voxel H] [--json]   (the paper's numbers and claims beside ours)
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
-Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``ik``): ``--u-cone DEG --s-cone DEG
+Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
 [--cone-axis normal|home] --leg-diameter W [--clearance C]``.
 Scan flags (``orientation``, ``sweep``, ``optimize``; TI_1 and TI_2): ``--angle-range DEG --angle-step DEG
 --position-step S`` (ranges: ``kinematics.settings.ORIENTATION``).
@@ -310,6 +313,142 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
         sat = " (scan limit)" if any(out["torsion_saturated"]) else ""
         print(f"torsion (zero tilt): {out['torsion_range'][0]:.4g} .. {out['torsion_range'][1]:.4g} deg{sat}")
     return 0
+
+
+def _task_of(ns: argparse.Namespace) -> Any:
+    """The task of ``--box`` / ``--cylinder`` / ``--sphere`` / ``--points`` (exactly one)."""
+    from paraspace.kinematics.task import MAX_CSV_BYTES, Region, read_pose_csv
+
+    given = [s for s in ("box", "cylinder", "sphere", "points") if getattr(ns, s, None) is not None]
+    if len(given) != 1:
+        raise ParameterError("task", ",".join(given) or None,
+                             "exactly one of --box CX,CY,CZ,LX,LY,LZ, --cylinder CX,CY,CZ,R,H, --sphere CX,CY,CZ,R "
+                             "or --points FILE.csv")
+    kind = given[0]
+    if kind == "points":
+        path = ns.points
+        if not os.path.isfile(path):
+            raise ParameterError("points", path, "an existing CSV file with the header x,y,z,psi,theta,phi[,t]")
+        size = os.path.getsize(path)
+        if size > MAX_CSV_BYTES:
+            raise ParameterError("points", f"{size:,} bytes", f"at most {MAX_CSV_BYTES:,} bytes (at most "
+                                 f"{MAX_CSV_BYTES // 100:,} poses)")
+        with open(path, "rb") as fh:
+            return read_pose_csv(fh.read())
+    return Region.parse(kind, _floats(kind, getattr(ns, kind)))
+
+
+def _task_orientations(ns: argparse.Namespace) -> Any:
+    from paraspace.kinematics.task import OrientationSet
+
+    fixed = tuple(_floats("orientation", ns.orientation, 3)) if ns.orientation else (0.0, 0.0, 0.0)
+    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=fixed, step=ns.angle_step)  # type: ignore[arg-type]
+
+
+def _task_settings(ns: argparse.Namespace) -> Any:
+    from paraspace.kinematics.task import TaskSettings
+
+    return TaskSettings(voxel=ns.voxel, eta_step=ns.eta_step, margin_range=ns.margin_range,
+                        carriage_margin=ns.carriage_margin, joints=_joints(ns))
+
+
+def task_csv(out: dict[str, Any]) -> str:
+    """A pose list's answer one pose per row (index, t, reachable, leg slack, the 12 actuator values), or a
+    region's answer as one row of its scalars."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    if out["kind"] == "poses":
+        names = out["actuator_names"]
+        w.writerow(["index", "t", "reachable", "leg_slack", *names])
+        for r in out["poses"]:
+            w.writerow([r["index"], r.get("t", ""), int(r["reachable"]), repr(r["leg_slack"]), *map(repr, r["q"])])
+    else:
+        keys = ["fraction", "contained", "certified", "margin", "margin_saturated", "sample_points",
+                "reachable_points", "orientation_samples", "seconds"]
+        w.writerow(keys + ["binding"])
+        w.writerow([out[k] for k in keys] + [out["binding"]["message"]])
+    return buf.getvalue()
+
+
+def cmd_task(ns: argparse.Namespace) -> int:
+    """``paraspace task``: does the design hold a region or follow a pose list, by what margin."""
+    from paraspace.kinematics.task import evaluate_task
+    from paraspace.kinematics.workspace import warm_up
+
+    design = _design(ns)
+    task = _task_of(ns)
+    oset = _task_orientations(ns)
+    settings = _task_settings(ns)
+    if ns.points is not None and (ns.tilt is not None or ns.torsion is not None or ns.orientation):
+        raise ParameterError("tilt", ns.tilt if ns.tilt is not None else ns.torsion,
+                             "not with --points (each pose carries its orientation)")
+    warm_up()
+    progress, done = progress_line("task")
+    try:
+        res = evaluate_task(design, task, oset, settings, progress)
+    finally:
+        done()
+    from paraspace.kinematics.serialize import jsonable
+
+    out = jsonable(res.to_dict())
+    if ns.csv:
+        write_atomic(ns.csv, task_csv(out))
+    if ns.json:
+        _emit(out)
+        return 0
+    what = (f"{out['count']} poses" if out["kind"] == "poses" else
+            f"{out['region']['shape']} of {out['sample_points']} sample points x {out['orientation_samples']} "
+            f"orientations")
+    print(f"task            {what}")
+    print(f"fraction        {out['fraction']:.4g}  (contained: {'yes' if out['contained'] else 'no'})")
+    print(f"certified       {out['certified']}")
+    sat = " (at least: no unreachable point within margin_range)" if out.get("margin_saturated") else ""
+    print(f"margin          {out['margin']:.4g}{sat}")
+    print(f"binding         {out['binding']['message']}")
+    if out["kind"] == "poses":
+        car = out["carriage"]
+        print(f"carriage travel d {car['travel_d']:.4g}, eta {car['travel_eta']:.4g} deg"
+              + (f"; max speed d {car['max_speed_d']:.4g}/s, eta {car['max_speed_eta']:.4g} deg/s"
+                 if "max_speed_d" in car else ""))
+        jumps = sorted({j["index"] for j in out["discontinuities"]})
+        print(f"discontinuities {', '.join(map(str, jumps)) if jumps else 'none'}")
+        if out["unreachable"]:
+            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
+                  + (" ..." if len(out["unreachable"]) > 20 else ""))
+        for a in out["actuators"]:
+            print(f"  {a['name']:<7} {a['min']:9.3f} .. {a['max']:9.3f}  of [{a['stroke'][0]:g}, {a['stroke'][1]:g}]"
+                  f"  ({100 * a['used_fraction']:.0f} % used)")
+    print(f"seconds         {out['seconds']:.2f}")
+    return 0
+
+
+def _add_task_parser(sub: Any) -> None:
+    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
+
+    t = sub.add_parser("task", help="does the design hold a region (with an orientation set) or follow a pose list")
+    _add_design_flags(t)
+    g = t.add_argument_group("the task (exactly one)")
+    size = TASK["size"].range_text()
+    g.add_argument("--box", metavar="CX,CY,CZ,LX,LY,LZ", help=f"a box: centre and edges (edges {size})")
+    g.add_argument("--cylinder", metavar="CX,CY,CZ,R,H", help=f"a cylinder with a vertical axis (R, H {size})")
+    g.add_argument("--sphere", metavar="CX,CY,CZ,R", help=f"a sphere (R {size})")
+    g.add_argument("--points", metavar="FILE.csv",
+                   help="a pose list: header x,y,z,psi,theta,phi[,t], degrees and seconds; at most "
+                        f"{int(TASK['max_poses'].hi):,} poses")
+    o = t.add_argument_group("orientation set of a region (default: the home orientation)")
+    for name in ("tilt", "torsion"):
+        spec = TOTAL_ORIENTATION[name]
+        o.add_argument(f"--{name}", metavar="DEG", help=f"{spec.label}; valid range {spec.range_text()}")
+    o.add_argument("--orientation", metavar="PSI,THETA,PHI", help="one fixed orientation instead (eq. (2), degrees)")
+    for name in ("voxel", "angle_step", "eta_step", "margin_range", "carriage_margin"):
+        spec = TASK[name]
+        t.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
+                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
+    t.add_argument("--json", action="store_true", help="one JSON object: fraction, contained, certified, margin, "
+                                                      "worst, binding (and poses, discontinuities for a pose list)")
+    t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
+    _add_joint_flags(t)
+    t.set_defaults(func=cmd_task)
 
 
 def cmd_paper(ns: argparse.Namespace) -> int:
@@ -722,6 +861,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_sweep)
 
     _add_optimize_parser(sub)
+    _add_task_parser(sub)
 
     pp = sub.add_parser("paper", help="the paper's reported numbers and Sec. III claims beside ours")
     pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")

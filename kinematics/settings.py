@@ -11,7 +11,8 @@ Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPA
 :class:`~kinematics.optimize.OptimizeSettings`, :data:`TOTAL_ORIENTATION` for the total-orientation
 workspace (:func:`~kinematics.dexterous.total_orientation_workspace`) and :data:`TILT_TORSION` for
 :class:`~kinematics.tilt_torsion.TiltTorsionSettings` and :data:`TASK` for
-:class:`~kinematics.task.TaskSettings` (a task's sampling and its region's numbers). The core's validation, the URL parser's ranges,
+:class:`~kinematics.task.TaskSettings` (a task's sampling and its region's numbers). The core's
+validation, the URL parser's ranges,
 the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
 slider specs are all derived from these entries, so a bound is written once and the message
 (:meth:`Setting.range_text`) is the same everywhere. The design parameters' table is

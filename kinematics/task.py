@@ -120,11 +120,14 @@ from .tilt_torsion import tt_rotations
 from .workspace import chain_masks_at, reachable_pairs, rotation_tables
 
 __all__ = ["Region", "OrientationSet", "TaskSettings", "PoseList", "TaskResult", "SHAPES", "MAX_POSES",
-           "MAX_POINTS", "region_task", "pose_list_task", "read_pose_csv", "cover_angle", "evaluate_task"]
+           "MAX_CSV_BYTES", "MAX_POINTS", "region_task", "pose_list_task", "read_pose_csv", "cover_angle",
+           "evaluate_task", "poses_reachable", "pose_binding"]
 
 SHAPES: dict[str, tuple[str, ...]] = {"box": ("LX", "LY", "LZ"), "cylinder": ("R", "H"), "sphere": ("R",)}
 #: Largest pose list (rows of a CSV), the same everywhere.
 MAX_POSES = int(TASK["max_poses"].hi)
+#: Largest pose-list CSV text (bytes): about 100 bytes per row of :data:`MAX_POSES`.
+MAX_CSV_BYTES = 100 * MAX_POSES
 #: Largest number of lattice points of a region (with its margin shell) times orientation samples.
 MAX_POINTS = 50_000_000
 #: Rail values of the carriage grid of a pose list.
@@ -134,7 +137,11 @@ BATCH = 16
 
 
 def _num(field: str, value: Any, key: str) -> float:
-    return float(TASK[key].parse(value))
+    """``value`` checked by the :data:`kinematics.settings.TASK` entry ``key``, named ``field``."""
+    try:
+        return float(TASK[key].parse(value))
+    except ParameterError as err:
+        raise ParameterError(field, value, err.valid) from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -336,6 +343,9 @@ class PoseList:
 def read_pose_csv(text: str | bytes) -> PoseList:
     """A pose list from CSV text with the header ``x,y,z,psi,theta,phi[,t]`` (any column order;
     angles in degrees, ``t`` in seconds); at most :data:`MAX_POSES` rows."""
+    if len(text) > MAX_CSV_BYTES:
+        raise ParameterError("points", f"{len(text):,} bytes", f"at most {MAX_CSV_BYTES:,} bytes (at most "
+                             f"{MAX_POSES:,} poses)")
     if isinstance(text, bytes):
         try:
             text = text.decode("utf-8-sig")
@@ -666,19 +676,27 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
         margin = float(sdf[qi])
     # certification
     check(cancel)
+    outside: dict[str, Any] | None = None
     reach_xy = float(np.hypot(np.abs(pts[:, 0]).max(), np.abs(pts[:, 1]).max())) + delta
     cert = _Certifier(design, rots, settings.joints, settings.eta_step, reach_xy)
     alpha = cover_angle(orientations)
     if not contained:
+        # the deepest unreachable sample points first, at the orientation each failed first
         cand = np.flatnonzero(inside & ~ok)
-        mids = np.array([_first_failure(design, pts[c], rots, int(failed_at[c]), settings) for c in cand[:64]])
-        proven = cert.proven_outside(pts[cand[:64]], mids) if cand.size else np.zeros(0, bool)
-        if not proven.any() and cand.size > 64:  # every failing pair of the rest
+        cand = cand[np.argsort(sdf[cand], kind="stable")]
+        head = cand[:64]
+        mids = np.array([_first_failure(design, pts[c], rots, int(failed_at[c]), settings) for c in head], np.int64)
+        proven = cert.proven_outside(pts[head], mids)
+        hit = (int(head[np.argmax(proven)]), int(mids[np.argmax(proven)])) if proven.any() else None
+        if hit is None and cand.size > 64:  # every orientation of the rest
             rest = cand[64:]
-            pi, mi = np.meshgrid(np.arange(rest.size), np.arange(rots.shape[0]), indexing="ij")
-            proven = cert.run(pts[rest], np.full(rest.size, 1e300), np.ones(rest.size, bool), pi.ravel(),
-                              mi.ravel()) == 2
-        certified = "not contained" if proven.any() else "undecided"
+            pi, mi = (a.ravel() for a in np.meshgrid(np.arange(rest.size), np.arange(rots.shape[0]), indexing="ij"))
+            res = cert.run(pts[rest], np.full(rest.size, 1e300), np.ones(rest.size, bool), pi, mi) == 2
+            if res.any():
+                hit = (int(rest[pi[np.argmax(res)]]), int(mi[np.argmax(res)]))
+        certified = "not contained" if hit is not None else "undecided"
+        if hit is not None:
+            outside = {"position": pts[hit[0]].tolist(), "orientation": _rot_of(orientations, hit[1], rots)}
     elif settings.joints.min_distance > 0.0:
         certified = "undecided"
     else:
@@ -715,7 +733,8 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
                "joints": settings.joints.to_dict(), "voxel": settings.voxel, "margin_range": settings.margin_range,
                "margin_saturated": bool(saturated), "sample_points": n_in, "reachable_points": n_ok,
                "lattice_points": int(pts.shape[0]), "orientation_samples": int(rots.shape[0]),
-               "volume": region.volume, "cell_half_diagonal": delta, "cover_angle": math.degrees(alpha)}
+               "volume": region.volume, "cell_half_diagonal": delta, "cover_angle": math.degrees(alpha),
+               "outside_pose": outside}
     rep(1.0, "task done")
     return TaskResult(kind="region", fraction=fraction, contained=contained, certified=certified, margin=margin,
                       worst=worst, binding=binding, slack=slack, details=details, seconds=time.perf_counter() - t0)
@@ -874,13 +893,16 @@ def pose_list_task(design: Design, poses: PoseList, settings: TaskSettings = Tas
     w = int(np.argmin(key))
     fraction = float(reach.mean())
     contained = bool(reach.all())
+    outside_index = None
     if contained:
         certified = "contained"
     else:
         cert = _Certifier(design, rots, joints, settings.eta_step,
                           float(np.hypot(np.abs(P[:, 0]).max(), np.abs(P[:, 1]).max())))
         bad = np.flatnonzero(~reach)
-        certified = "not contained" if cert.proven_outside(P[bad, :3], bad).any() else "undecided"
+        proven = cert.proven_outside(P[bad, :3], bad)
+        certified = "not contained" if proven.any() else "undecided"
+        outside_index = int(bad[np.argmax(proven)]) if proven.any() else None
     if reach[w]:
         sl = slacks[w]
         i, j = sl["leg_at"]
@@ -920,7 +942,7 @@ def pose_list_task(design: Design, poses: PoseList, settings: TaskSettings = Tas
     worst = {"index": w, "pose": P[w].tolist(), "reachable": bool(reach[w])}
     details = {"design": design.to_dict(), "joints": joints.to_dict(), "count": n,
                "unreachable": np.flatnonzero(~reach).tolist(), "carriage": carriage, "actuators": actuators,
-               "actuator_names": names}
+               "actuator_names": names, "outside_index": outside_index}
     rep(1.0, "task done")
     return TaskResult(kind="poses", fraction=fraction, contained=contained, certified=certified,
                       margin=float(leg[w]), worst=worst, binding=binding, slack=smin, details=details,
