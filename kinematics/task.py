@@ -121,7 +121,7 @@ from .workspace import chain_masks_at, reachable_pairs, rotation_tables
 
 __all__ = ["Region", "OrientationSet", "TaskSettings", "PoseList", "TaskResult", "SHAPES", "MAX_POSES",
            "MAX_CSV_BYTES", "MAX_POINTS", "region_task", "pose_list_task", "read_pose_csv", "cover_angle",
-           "evaluate_task", "poses_reachable", "pose_binding"]
+           "evaluate_task", "poses_reachable", "pose_binding", "region_samples"]
 
 SHAPES: dict[str, tuple[str, ...]] = {"box": ("LX", "LY", "LZ"), "cylinder": ("R", "H"), "sphere": ("R",)}
 #: Largest pose list (rows of a CSV), the same everywhere.
@@ -641,6 +641,14 @@ def _lattice(region: Region, h: float, grow: float) -> tuple[np.ndarray, np.ndar
     return axes, count, half  # type: ignore[return-value]
 
 
+def region_samples(region: Region, orientations: OrientationSet = OrientationSet(),
+                   settings: TaskSettings = TaskSettings()) -> int:
+    """Lattice points of the region's box with its margin shell times orientation samples: the size
+    of the work (an upper bound; checked against :data:`MAX_POINTS` before anything runs)."""
+    _, count, _ = _lattice(region, settings.voxel, settings.margin_range)
+    return count * int(orientations.rotations().shape[0])
+
+
 def region_task(design: Design, region: Region, orientations: OrientationSet = OrientationSet(),
                 settings: TaskSettings = TaskSettings(), progress: ProgressFn | None = None,
                 cancel: CancelToken = None) -> TaskResult:
@@ -651,8 +659,8 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
     axes, count, half = _lattice(region, settings.voxel, settings.margin_range)
     if count * rots.shape[0] > MAX_POINTS:
         raise ParameterError("task", f"{count:,} lattice points x {rots.shape[0]} orientations",
-                             f"at most {MAX_POINTS:,} (a coarser voxel, a smaller region, margin_range or "
-                             "a larger angle_step)")
+                             f"at most {MAX_POINTS:,} samples (a coarser voxel, a smaller region or margin_range, "
+                             "or a larger angle_step)")
     gx, gy, gz = np.meshgrid(*axes, indexing="ij")
     pts = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
     sdf = region.sdf(pts)

@@ -262,3 +262,81 @@ def test_pose_csv_and_bad_input_name_the_field():
         OrientationSet(tilt=120.0)
     with pytest.raises(ParameterError, match="voxel"):
         TaskSettings(voxel=0.0)
+
+
+def test_cli_task_json_and_csv(tmp_path, capsys):
+    import json
+
+    from paraspace.app import cli
+
+    assert cli.main(["task", "--box", "0,0,150,30,30,20", "--tilt", "5", "--voxel", "5", "--margin-range", "5",
+                     "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for key in ("fraction", "contained", "certified", "margin", "worst", "binding"):
+        assert key in out
+    region = Region("box", (0.0, 0.0, 150.0), (30.0, 30.0, 20.0))
+    ok = _brute_points(Design(), _cells(region, 5.0), OrientationSet(tilt=5.0), Joints())
+    assert out["fraction"] == pytest.approx(ok.mean())
+    f = tmp_path / "p.csv"
+    f.write_text("x,y,z,psi,theta,phi,t\n0,0,130,0,0,0,0\n5,0,132,2,0,0,0.5\n0,0,400,0,0,0,1\n")
+    assert cli.main(["task", "--points", str(f), "--u-cone", "50", "--json", "--csv", str(tmp_path / "o.csv")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["reachable"] for p in out["poses"]] == [True, True, False] and "discontinuities" in out
+    assert len(out["poses"][0]["q"]) == 12
+    rows = (tmp_path / "o.csv").read_text().splitlines()
+    assert len(rows) == 4 and rows[0].startswith("index,t,reachable,leg_slack,l_1^1")
+    assert cli.main(["task", "--sphere", "0,0,150,-3"]) == 2
+    assert "R = -3.0 is invalid: valid range [0, 10000]" in capsys.readouterr().err
+    assert cli.main(["task", "--sphere", "0,0,150,10", "--tilt", "100"]) == 2
+    assert "tilt = 100.0 is invalid: valid range [0, 90] degrees" in capsys.readouterr().err
+    assert cli.main(["task", "--box", "0,0,150,1,1,1", "--sphere", "0,0,150,1"]) == 2
+    assert "exactly one of" in capsys.readouterr().err
+
+
+def test_rest_task_over_http():
+    import time
+
+    import httpx
+
+    from paraspace.app.api import API_PREFIX, ApiLimits, create_api
+    from paraspace.app.jobs import JobManager
+    from paraspace.app.serve import start_api
+
+    jobs = JobManager(max_workers=1, max_jobs_total=4, max_jobs_per_client=4, max_seconds=120)
+    srv = start_api(create_api(jobs, limits=ApiLimits(max_task_samples=200_000)), "127.0.0.1", 0)
+    try:
+        with httpx.Client(base_url=srv.url, timeout=60.0) as http:
+            body = {"region": {"shape": "cylinder", "center": [0, 0, 145], "sizes": [15, 10]},
+                    "settings": {"voxel": 5, "margin_range": 5}}
+            r = http.post(f"{API_PREFIX}/task", params={"wait": 60}, json=body)
+            assert r.status_code in (200, 202), r.text
+            job = r.json()["job_id"]
+            deadline = time.monotonic() + 60
+            while http.get(f"{API_PREFIX}/jobs/{job}").json()["status"] not in ("done", "failed"):
+                assert time.monotonic() < deadline
+                time.sleep(0.05)
+            res = http.get(f"{API_PREFIX}/jobs/{job}/result").json()["result"]
+            region = Region("cylinder", (0.0, 0.0, 145.0), (15.0, 10.0))
+            ok = reachable(Design(), _cells(region, 5.0))
+            assert res["fraction"] == pytest.approx(ok.mean()) and res["contained"] == bool(ok.all())
+            r = http.post(f"{API_PREFIX}/task", params={"wait": 60},
+                          json={"csv": "x,y,z,psi,theta,phi\n0,0,130,0,0,0\n0,0,400,0,0,0\n"})
+            job = r.json()["job_id"]
+            while http.get(f"{API_PREFIX}/jobs/{job}").json()["status"] not in ("done", "failed"):
+                time.sleep(0.05)
+            res = http.get(f"{API_PREFIX}/jobs/{job}/result").json()["result"]
+            assert [p["reachable"] for p in res["poses"]] == [True, False]
+            r = http.post(f"{API_PREFIX}/task", json={"region": {"shape": "sphere", "center": [0, 0, 140],
+                                                                 "sizes": [-2]}})
+            assert r.status_code == 422 and "R = -2.0 is invalid: valid range [0, 10000]" in r.text
+            r = http.post(f"{API_PREFIX}/task", json={"region": {"shape": "box", "center": [0, 0, 140],
+                                                                 "sizes": [300, 300, 300]}})
+            assert r.status_code == 413 and "max_task_samples" in r.json()["detail"]
+            r = http.post(f"{API_PREFIX}/task", json={"settings": {"voxel": 0.1},
+                                                      "region": {"shape": "sphere", "center": [0, 0, 1], "sizes": [1]}})
+            assert r.status_code == 422 and "[0.25, 100]" in r.text
+            r = http.post(f"{API_PREFIX}/task", json={})
+            assert r.status_code == 422 and "exactly one of region, poses or csv" in r.text
+    finally:
+        jobs.shutdown(wait=False)
+        srv.stop()
