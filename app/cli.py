@@ -11,6 +11,7 @@
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
+                          [joint flags] [--box ... | --cylinder ... | --sphere ... | --points F [--tilt --torsion]]
     paraspace task        [design flags] [joint flags] --box CX,CY,CZ,LX,LY,LZ | --cylinder CX,CY,CZ,R,H |
                           --sphere CX,CY,CZ,R | --points FILE.csv [--tilt DEG] [--torsion DEG] [--voxel H]
                           [--json] [--csv OUT]
@@ -427,14 +428,7 @@ def _add_task_parser(sub: Any) -> None:
 
     t = sub.add_parser("task", help="does the design hold a region (with an orientation set) or follow a pose list")
     _add_design_flags(t)
-    g = t.add_argument_group("the task (exactly one)")
-    size = TASK["size"].range_text()
-    g.add_argument("--box", metavar="CX,CY,CZ,LX,LY,LZ", help=f"a box: centre and edges (edges {size})")
-    g.add_argument("--cylinder", metavar="CX,CY,CZ,R,H", help=f"a cylinder with a vertical axis (R, H {size})")
-    g.add_argument("--sphere", metavar="CX,CY,CZ,R", help=f"a sphere (R {size})")
-    g.add_argument("--points", metavar="FILE.csv",
-                   help="a pose list: header x,y,z,psi,theta,phi[,t], degrees and seconds; at most "
-                        f"{int(TASK['max_poses'].hi):,} poses")
+    _add_task_flags(t, "the task (exactly one)")
     o = t.add_argument_group("orientation set of a region (default: the home orientation)")
     for name in ("tilt", "torsion"):
         spec = TOTAL_ORIENTATION[name]
@@ -699,7 +693,14 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
     joints = _joints(ns)
+    spec = None
+    if any(getattr(ns, k, None) is not None for k in ("box", "cylinder", "sphere", "points")):
+        from paraspace.kinematics.task import OrientationSet, TaskSettings, TaskSpec
+
+        spec = TaskSpec(_task_of(ns), OrientationSet(tilt=ns.tilt, torsion=ns.torsion, step=ns.task_angle_step),
+                        TaskSettings(voxel=_voxel(ns), margin_range=ns.margin_range, joints=joints))
     return OptimizeSettings(
+        task=spec,
         params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
@@ -785,7 +786,32 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
     _add_scan_flags(z)
     _add_joint_flags(z)
+    _add_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
+    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
+
+    for name in ("tilt", "torsion"):
+        spec = TOTAL_ORIENTATION[name]
+        z.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label}; valid range "
+                                                        f"{spec.range_text()}")
+    z.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
+                   help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
+    z.add_argument("--margin-range", dest="margin_range", default=TASK["margin_range"].default, metavar="V",
+                   help=f"the task's {TASK['margin_range'].label}; valid range {TASK['margin_range'].range_text()}")
     z.set_defaults(func=cmd_optimize)
+
+
+def _add_task_flags(p: argparse.ArgumentParser, title: str) -> None:
+    """``--box | --cylinder | --sphere | --points`` (``task`` and ``optimize``)."""
+    from paraspace.kinematics.settings import TASK
+
+    g = p.add_argument_group(title)
+    size = TASK["size"].range_text()
+    g.add_argument("--box", metavar="CX,CY,CZ,LX,LY,LZ", help=f"a box: centre and edges (edges {size})")
+    g.add_argument("--cylinder", metavar="CX,CY,CZ,R,H", help=f"a cylinder with a vertical axis (R, H {size})")
+    g.add_argument("--sphere", metavar="CX,CY,CZ,R", help=f"a sphere (R {size})")
+    g.add_argument("--points", metavar="FILE.csv",
+                   help="a pose list: header x,y,z,psi,theta,phi[,t], degrees and seconds; at most "
+                        f"{int(TASK['max_poses'].hi):,} poses")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -46,7 +46,8 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
-                    orientation: OrientationSettings | None = None, cancel: CancelToken = None) -> dict:
+                    orientation: OrientationSettings | None = None, cancel: CancelToken = None,
+                    task: Any = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
@@ -57,6 +58,8 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         The workspace computation (:func:`compute_workspace` then :func:`measure_workspace`).
     orientation : OrientationSettings, optional
         Also compute the indices TI_1, TI_2 of eq. (28).
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` and ``task_binding`` of the task.
     cancel : threading.Event or callable, optional
         Stops the computation when set.
 
@@ -96,6 +99,8 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         out["orientation_deltas"] = dict(ori.deltas)
         out["saturation_note"] = ori.saturation_note()
         out["TI_saturated"] = bool(out["saturation_note"])
+    if task is not None:  # a kinematics.task.TaskSpec: task_fraction, task_margin, contains_task
+        out.update(task.measures(design, cancel=cancel))
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
@@ -130,15 +135,17 @@ def _canon(obj: Any) -> Any:
 
 
 def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
-              version: str | None = None) -> str:
-    """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields
-    and the code version."""
+              version: str | None = None, task: Any = None) -> str:
+    """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields,
+    the task (when given) and the code version."""
     payload = {
         "design": design.to_dict(),
         "settings": dataclasses.asdict(settings),
         "orientation": None if orientation is None else dataclasses.asdict(orientation),
         "version": code_version() if version is None else version,
     }
+    if task is not None:
+        payload["task"] = task.to_dict()
     text = json.dumps(_canon(payload), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -168,9 +175,9 @@ class ResultCache:
         self.misses = 0
 
     def key(self, design: Design, settings: WorkspaceSettings,
-            orientation: OrientationSettings | None = None) -> str:
+            orientation: OrientationSettings | None = None, task: Any = None) -> str:
         """:func:`cache_key` with this cache's version."""
-        return cache_key(design, settings, orientation, self.version)
+        return cache_key(design, settings, orientation, self.version, task)
 
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"

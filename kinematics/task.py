@@ -121,7 +121,7 @@ from .workspace import chain_masks_at, reachable_pairs, rotation_tables
 
 __all__ = ["Region", "OrientationSet", "TaskSettings", "PoseList", "TaskResult", "SHAPES", "MAX_POSES",
            "MAX_CSV_BYTES", "MAX_POINTS", "region_task", "pose_list_task", "read_pose_csv", "cover_angle",
-           "evaluate_task", "poses_reachable", "pose_binding", "region_samples"]
+           "evaluate_task", "poses_reachable", "pose_binding", "region_samples", "TaskSpec"]
 
 SHAPES: dict[str, tuple[str, ...]] = {"box": ("LX", "LY", "LZ"), "cylinder": ("R", "H"), "sphere": ("R",)}
 #: Largest pose list (rows of a CSV), the same everywhere.
@@ -651,8 +651,9 @@ def region_samples(region: Region, orientations: OrientationSet = OrientationSet
 
 def region_task(design: Design, region: Region, orientations: OrientationSet = OrientationSet(),
                 settings: TaskSettings = TaskSettings(), progress: ProgressFn | None = None,
-                cancel: CancelToken = None) -> TaskResult:
-    """The answers of the module docstring for a region with an orientation set."""
+                cancel: CancelToken = None, certify: bool = True) -> TaskResult:
+    """The answers of the module docstring for a region with an orientation set (``certify=False``:
+    ``certified`` is ``"undecided"`` without running the certification, for studies)."""
     rep = Reporter(progress)
     t0 = time.perf_counter()
     rots = orientations.rotations()
@@ -688,7 +689,9 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
     reach_xy = float(np.hypot(np.abs(pts[:, 0]).max(), np.abs(pts[:, 1]).max())) + delta
     cert = _Certifier(design, rots, settings.joints, settings.eta_step, reach_xy)
     alpha = cover_angle(orientations)
-    if not contained:
+    if not certify:
+        certified = "undecided"
+    elif not contained:
         # the deepest unreachable sample points first, at the orientation each failed first
         cand = np.flatnonzero(inside & ~ok)
         cand = cand[np.argsort(sdf[cand], kind="stable")]
@@ -964,4 +967,35 @@ def evaluate_task(design: Design, task: Region | PoseList, orientations: Orienta
     if isinstance(task, PoseList):
         return pose_list_task(design, task, settings, progress, cancel)
     return region_task(design, task, orientations, settings, progress, cancel)
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskSpec:
+    """A task as the studies and the optimiser take it: the task, its orientation set and sampling.
+    :meth:`measures` gives the measures ``task_fraction``, ``task_margin`` and ``contains_task``
+    (``fraction``, ``margin`` and ``contained`` of :func:`evaluate_task`, without certification)."""
+
+    task: Region | PoseList
+    orientations: OrientationSet = OrientationSet()
+    settings: TaskSettings = TaskSettings()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.task, (Region, PoseList)):
+            raise ParameterError("task", type(self.task).__name__, "a Region or a PoseList")
+
+    def measures(self, design: Design, cancel: CancelToken = None) -> dict[str, Any]:
+        if isinstance(self.task, PoseList):
+            res = pose_list_task(design, self.task, self.settings, cancel=cancel)
+        else:
+            res = region_task(design, self.task, self.orientations, self.settings, cancel=cancel, certify=False)
+        return {"task_fraction": res.fraction, "task_margin": res.margin, "contains_task": res.contained,
+                "task_binding": res.binding.get("limit")}
+
+    def to_dict(self) -> dict[str, Any]:
+        task = (self.task.to_dict() if isinstance(self.task, Region) else
+                {"poses": self.task.poses.tolist(), "t": None if self.task.t is None else self.task.t.tolist()})
+        return {"task": task, "orientations": self.orientations.to_dict(),
+                "settings": {**{k: getattr(self.settings, k) for k in ("voxel", "eta_step", "margin_range",
+                                                                         "carriage_margin")},
+                             "joints": self.settings.joints.to_dict()}}
 

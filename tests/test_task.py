@@ -340,3 +340,27 @@ def test_rest_task_over_http():
     finally:
         jobs.shutdown(wait=False)
         srv.stop()
+
+
+def test_optimiser_task_measures_and_constraint_match_brute_force():
+    from kinematics.optimize import MEASURES, OptimizeSettings, optimize, parse_constraint
+    from kinematics.task import TaskSpec
+    from kinematics.workspace import WorkspaceSettings
+
+    region = Region("box", (0.0, 0.0, 140.0), (20.0, 20.0, 10.0))
+    spec = TaskSpec(region, OrientationSet(tilt=5.0), TaskSettings(voxel=H, margin_range=5.0))
+    with pytest.raises(ParameterError, match="task"):
+        OptimizeSettings(objectives="-l_s", constraints=["contains_task"])
+    assert MEASURES["contains_task"].flag and parse_constraint("task_margin>=2").measure == "task_margin"
+    s = OptimizeSettings(params=("l_s",), bounds={"l_s": (10.0, 60.0)}, objectives="-l_s,task_margin",
+                         constraints=["contains_task"], workspace=WorkspaceSettings(voxel=10.0), task=spec,
+                         population=4, generations=1, seed=3)
+    res = optimize(s).to_dict()
+    rows = res["front"]
+    assert rows
+    pts = _cells(region, H)
+    for e in rows:
+        d = Design(**e["design"])
+        ok = _brute_points(d, pts, OrientationSet(tilt=5.0), Joints())
+        assert ok.all()  # the constraint holds by brute force
+        assert e["measures"]["l_s"] == d.l_s
