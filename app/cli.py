@@ -434,8 +434,10 @@ def _add_task_parser(sub: Any) -> None:
         spec = TOTAL_ORIENTATION[name]
         o.add_argument(f"--{name}", metavar="DEG", help=f"{spec.label}; valid range {spec.range_text()}")
     o.add_argument("--orientation", metavar="PSI,THETA,PHI", help="one fixed orientation instead (eq. (2), degrees)")
+    from paraspace.kinematics.settings import WORKSPACE
+
     for name in ("voxel", "angle_step", "eta_step", "margin_range", "carriage_margin"):
-        spec = TASK[name]
+        spec = WORKSPACE[name] if name in ("voxel", "eta_step") else TASK[name]
         t.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
                        help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
     t.add_argument("--json", action="store_true", help="one JSON object: fraction, contained, certified, margin, "

@@ -133,11 +133,10 @@ TILT_TORSION: dict[str, Setting] = _table(
 
 
 #: :class:`~kinematics.task.TaskSettings`'s numbers and the task region's (:mod:`kinematics.task`); the
-#: orientation set's tilt and torsion are :data:`TOTAL_ORIENTATION`'s.
+#: orientation set's tilt and torsion are :data:`TOTAL_ORIENTATION`'s, the sample spacing ``voxel`` (a
+#: region's cells are voxels) and ``eta_step`` are :data:`WORKSPACE`'s.
 TASK: dict[str, Setting] = _table(
-    Setting("voxel", 2.0, 0.25, 100.0, "sample spacing h of a region (largest)", slider=(1.0, 10.0, 0.5)),
     Setting("angle_step", 5.0, 0.25, 30.0, "orientation sample spacing", "degrees", slider=(2.5, 15.0, 2.5)),
-    Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
     Setting("margin_range", 10.0, 0.0, 1000.0, "how far outside a region its margin is searched"),
     Setting("carriage_margin", 1.0, 0.0, 1000.0, "leg/cone slack the carriage choice keeps when it can"),
     Setting("center", 0.0, -1e4, 1e4, "a region's centre coordinate"),

@@ -115,7 +115,7 @@ from .pose import POSE_FIELDS, POSE_LIMITS, Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .redundancy import _chain_margins, _engine_carriage, resolve_redundancy
 from .rotation import euler_zyx_deg
-from .settings import TASK, TOTAL_ORIENTATION
+from .settings import TASK, TOTAL_ORIENTATION, WORKSPACE
 from .tilt_torsion import tt_rotations
 from .workspace import chain_masks_at, reachable_pairs, rotation_tables
 
@@ -296,7 +296,8 @@ def cover_angle(oset: OrientationSet) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class TaskSettings:
-    """How a task is sampled (ranges: :data:`kinematics.settings.TASK`)."""
+    """How a task is sampled (ranges: :data:`kinematics.settings.TASK`; ``voxel`` and ``eta_step``:
+    :data:`kinematics.settings.WORKSPACE`)."""
 
     voxel: float = 2.0
     eta_step: float = 0.5
@@ -306,7 +307,8 @@ class TaskSettings:
 
     def __post_init__(self) -> None:
         for name in ("voxel", "eta_step", "margin_range", "carriage_margin"):
-            object.__setattr__(self, name, float(TASK[name].parse(getattr(self, name))))
+            table = WORKSPACE if name in ("voxel", "eta_step") else TASK
+            object.__setattr__(self, name, float(table[name].parse(getattr(self, name))))
         if not isinstance(self.joints, Joints):
             raise ParameterError("joints", self.joints, "a Joints value")
 

@@ -364,3 +364,17 @@ def test_optimiser_task_measures_and_constraint_match_brute_force():
         ok = _brute_points(d, pts, OrientationSet(tilt=5.0), Joints())
         assert ok.all()  # the constraint holds by brute force
         assert e["measures"]["l_s"] == d.l_s
+
+
+def test_patched_task_bound_reaches_core_and_cli(monkeypatch, capsys):
+    import dataclasses
+
+    from paraspace.app import cli
+    from paraspace.kinematics.settings import TASK
+
+    assert TaskSettings(margin_range=50.0).margin_range == 50.0
+    monkeypatch.setitem(TASK, "margin_range", dataclasses.replace(TASK["margin_range"], hi=20.0))
+    with pytest.raises(ParameterError, match=r"margin_range = 50.0 is invalid: valid range \[0, 20\]"):
+        TaskSettings(margin_range=50.0)
+    assert cli.main(["task", "--sphere", "0,0,140,5", "--margin-range", "50"]) == 2
+    assert "margin_range = 50.0 is invalid: valid range [0, 20]" in capsys.readouterr().err

@@ -13,7 +13,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-from paraspace.kinematics.settings import OPTIMIZE, TASK, TOTAL_ORIENTATION
+from paraspace.kinematics.settings import OPTIMIZE, TASK, TOTAL_ORIENTATION, WORKSPACE
 from paraspace.kinematics.task import MAX_CSV_BYTES, MAX_POSES
 
 from ..schema import (  # noqa: F401 - the input models, shared with the link parser (app/schema.py)
@@ -163,12 +163,13 @@ class RegionIn(BaseModel):
 
 
 class TaskSettingsIn(BaseModel):
-    """How a task is sampled (:data:`kinematics.settings.TASK`), and the joint options."""
+    """How a task is sampled (:data:`kinematics.settings.TASK`; ``voxel`` and ``eta_step`` are the
+    workspace's entries), and the joint options."""
 
     model_config = _MODEL
-    voxel: float = _setting("settings", TASK["voxel"])
+    voxel: float = _setting("settings", WORKSPACE["voxel"])
     angle_step: float = _setting("settings", TASK["angle_step"])
-    eta_step: float = _setting("settings", TASK["eta_step"])
+    eta_step: float = _setting("settings", WORKSPACE["eta_step"])
     margin_range: float = _setting("settings", TASK["margin_range"])
     carriage_margin: float = _setting("settings", TASK["carriage_margin"])
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
