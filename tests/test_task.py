@@ -370,7 +370,9 @@ def test_patched_task_bound_reaches_core_and_cli(monkeypatch, capsys):
     import dataclasses
 
     from paraspace.app import cli
+    from paraspace.kinematics.design import ParameterError
     from paraspace.kinematics.settings import TASK
+    from paraspace.kinematics.task import TaskSettings
 
     assert TaskSettings(margin_range=50.0).margin_range == 50.0
     monkeypatch.setitem(TASK, "margin_range", dataclasses.replace(TASK["margin_range"], hi=20.0))
