@@ -380,3 +380,14 @@ def test_patched_task_bound_reaches_core_and_cli(monkeypatch, capsys):
         TaskSettings(margin_range=50.0)
     assert cli.main(["task", "--sphere", "0,0,140,5", "--margin-range", "50"]) == 2
     assert "margin_range = 50.0 is invalid: valid range [0, 20]" in capsys.readouterr().err
+
+
+def test_rest_optimize_takes_a_task():
+    from paraspace.app.api.models import OptimizeRequest
+
+    req = OptimizeRequest(params=["l_s"], objectives=["-l_s"], constraints=["contains_task"],
+                          settings={"voxel": 10.0, "joints": {"theta_u": 60.0}},
+                          task={"region": {"shape": "sphere", "center": [0, 0, 140], "sizes": [5]}, "tilt": 5})
+    s = req.build()
+    assert s.task_used is not None and s.task.settings.joints.theta_u == 60.0
+    assert s.task.orientations.tilt == 5.0 and s.to_dict()["task"]["task"]["shape"] == "sphere"

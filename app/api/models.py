@@ -133,6 +133,9 @@ class OptimizeRequest(BaseModel):
     orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed); "
                           "its joints are settings.joints when not given here")
+    task: TaskRequest | None = Field(
+        None, description="the task of the measures task_fraction, task_margin and the constraint contains_task "
+                          "(as POST /task takes it, without design; its joints are settings.joints)")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
@@ -142,7 +145,16 @@ class OptimizeRequest(BaseModel):
             if len(text) > 100:
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
         workspace, orientation = study_settings(self.settings, self.orientation)
+        spec = None
+        if self.task is not None:
+            import dataclasses
+
+            from paraspace.kinematics.task import TaskSpec
+
+            _, task, oset, tsettings = self.task.build()
+            spec = TaskSpec(task, oset, dataclasses.replace(tsettings, joints=workspace.joints))
         return OptimizeSettings(
+            task=spec,
             params=tuple(self.params),
             bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(self.objectives),
             constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
@@ -228,6 +240,9 @@ class TaskRequest(BaseModel):
         else:
             task = call_core("body", lambda: read_pose_csv(self.csv or ""))
         return design, task, oset, settings
+
+
+OptimizeRequest.model_rebuild()
 
 
 class LinkRequest(BaseModel):
