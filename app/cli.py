@@ -353,6 +353,32 @@ def _task_settings(ns: argparse.Namespace) -> Any:
                         carriage_margin=ns.carriage_margin, joints=_joints(ns))
 
 
+def _study_task(ns: argparse.Namespace, joints: Any) -> Any:
+    """The ``TaskSpec`` of a study's task flags (``sweep``, ``optimize``), or ``None`` when none is given."""
+    if not any(getattr(ns, k, None) is not None for k in ("box", "cylinder", "sphere", "points")):
+        return None
+    from paraspace.kinematics.task import OrientationSet, TaskSettings, TaskSpec
+
+    return TaskSpec(_task_of(ns), OrientationSet(tilt=ns.tilt, torsion=ns.torsion, step=ns.task_angle_step),
+                    TaskSettings(voxel=_voxel(ns), margin_range=ns.margin_range, joints=joints))
+
+
+def _add_study_task_flags(p: argparse.ArgumentParser, title: str) -> None:
+    """The task flags of a study (``sweep``, ``optimize``): the region or pose list, its orientation set
+    and sampling (the task's cells are the study's voxels)."""
+    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
+
+    _add_task_flags(p, title)
+    for name in ("tilt", "torsion"):
+        spec = TOTAL_ORIENTATION[name]
+        p.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label}; valid range "
+                                                        f"{spec.range_text()}")
+    p.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
+                   help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
+    p.add_argument("--margin-range", dest="margin_range", default=TASK["margin_range"].default, metavar="V",
+                   help=f"the task's {TASK['margin_range'].label}; valid range {TASK['margin_range'].range_text()}")
+
+
 def task_csv(out: dict[str, Any]) -> str:
     """A pose list's answer one pose per row (index, t, reachable, leg slack, the 12 actuator values), or a
     region's answer as one row of its scalars."""
@@ -492,6 +518,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     if (ns.param2 is None) != (ns.values2 is None):
         raise ParameterError("param2", ns.param2, "given together with --values2")
     orientation = _sweep_orientation(ns)
+    task = _study_task(ns, settings.joints)
     if ns.plot:
         from paraspace.app.figures import export_format
 
@@ -507,6 +534,9 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         sys.stderr.write(f"paraspace: --workers {ns.workers} exceeds this machine's {cores} cores; running the "
                          f"sweep serially instead (it uses all {cores} cores)\n")
         distributed = False
+    if task is not None and distributed:
+        raise ParameterError("workers" if ns.workers is not None else "scheduler", ns.workers or ns.scheduler,
+                             "omit it with a task (task sweeps run in this process)")
     warm_up()
     progress, done = progress_line("sweep")
     try:
@@ -519,14 +549,15 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
                                   scheduler=ns.scheduler, n_workers=ns.workers, progress=progress)
             else:
                 rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, orientation=orientation,
-                                progress=progress)["points"]
+                                progress=progress, task=task)["points"]
         elif distributed:
             from paraspace.kinematics.distributed import sweep_grid
 
             rows = sweep_grid(design, {ns.param: values}, settings, orientation=orientation, scheduler=ns.scheduler,
                               n_workers=ns.workers, progress=progress)
         else:
-            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress)
+            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress,
+                            task=task)
     finally:
         done()
     rows = [_with_value(r, ns.param, ns.param2) for r in rows]
@@ -695,12 +726,7 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
     joints = _joints(ns)
-    spec = None
-    if any(getattr(ns, k, None) is not None for k in ("box", "cylinder", "sphere", "points")):
-        from paraspace.kinematics.task import OrientationSet, TaskSettings, TaskSpec
-
-        spec = TaskSpec(_task_of(ns), OrientationSet(tilt=ns.tilt, torsion=ns.torsion, step=ns.task_angle_step),
-                        TaskSettings(voxel=_voxel(ns), margin_range=ns.margin_range, joints=joints))
+    spec = _study_task(ns, joints)
     return OptimizeSettings(
         task=spec,
         params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
@@ -788,17 +814,7 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
     _add_scan_flags(z)
     _add_joint_flags(z)
-    _add_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
-    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
-
-    for name in ("tilt", "torsion"):
-        spec = TOTAL_ORIENTATION[name]
-        z.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label}; valid range "
-                                                        f"{spec.range_text()}")
-    z.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
-                   help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
-    z.add_argument("--margin-range", dest="margin_range", default=TASK["margin_range"].default, metavar="V",
-                   help=f"the task's {TASK['margin_range'].label}; valid range {TASK['margin_range'].range_text()}")
+    _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
     z.set_defaults(func=cmd_optimize)
 
 
@@ -886,6 +902,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
     _add_scan_flags(s)
     _add_joint_flags(s)
+    _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")
     s.set_defaults(func=cmd_sweep)
 
     _add_optimize_parser(sub)

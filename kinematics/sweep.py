@@ -254,13 +254,13 @@ def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design
 
 
 def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None,
-                     cancel: CancelToken, cache: ResultCache | None) -> dict:
-    key = cache.key(design, settings, orientation) if cache is not None else None
+                     cancel: CancelToken, cache: ResultCache | None, task: Any = None) -> dict:
+    key = cache.key(design, settings, orientation, task) if cache is not None else None
     if cache is not None:
         hit = cache.get(key)  # type: ignore[arg-type]
         if hit is not None:
             return hit
-    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel)
+    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task)
     if cache is not None:
         cache.put(key, value)  # type: ignore[arg-type]
     return value
@@ -268,7 +268,7 @@ def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: O
 
 def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
              orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
-             cancel: CancelToken = None, cache: ResultCache | None = None) -> list[dict]:
+             cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None) -> list[dict]:
     """Measures against one design parameter (paper Fig. 4).
 
     Parameters
@@ -289,6 +289,8 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
         Stops the sweep when set.
     cache : ResultCache, optional
         Points computed before are taken from it.
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
 
     Returns
     -------
@@ -318,7 +320,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
     for i, dsg in enumerate(designs):
         check(cancel)
         rep(i / n, f"{param} = {getattr(dsg, param):g} ({i + 1}/{n})")
-        res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
         out.append({"param": param, "value": float(getattr(dsg, param)), **res})
     rep(1.0, "done")
     return out
@@ -327,7 +329,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
 def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
              settings: WorkspaceSettings, *, orientation: OrientationSettings | None = None,
              progress: ProgressFn | None = None, cancel: CancelToken = None,
-             cache: ResultCache | None = None) -> dict:
+             cache: ResultCache | None = None, task: Any = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
     Parameters
@@ -348,6 +350,8 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
         Stops the sweep when set.
     cache : ResultCache, optional
         Points computed before are taken from it.
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
 
     Returns
     -------
@@ -386,7 +390,7 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
             check(cancel)
             k = iy * len(xs) + ix
             rep(k / max(n, 1), f"{param_x} = {xs[ix]:g}, {param_y} = {ys[iy]:g} ({k + 1}/{n})")
-            res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
             points.append({"param_x": param_x, "param_y": param_y, "x": xs[ix], "y": ys[iy],
                            "ix": ix, "iy": iy, **res})
     rep(1.0, "done")

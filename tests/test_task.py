@@ -391,3 +391,17 @@ def test_rest_optimize_takes_a_task():
     s = req.build()
     assert s.task_used is not None and s.task.settings.joints.theta_u == 60.0
     assert s.task.orientations.tilt == 5.0 and s.to_dict()["task"]["task"]["shape"] == "sphere"
+
+
+def test_sweep_rows_carry_the_task_measures():
+    from kinematics.sweep import sweep_1d
+    from kinematics.task import TaskSpec
+    from kinematics.workspace import WorkspaceSettings
+
+    region = Region("sphere", (0.0, 0.0, 140.0), (12.0,))
+    spec = TaskSpec(region, OrientationSet(), TaskSettings(voxel=H, margin_range=4.0))
+    rows = sweep_1d(Design(), "l_s", [20.0, 50.0], WorkspaceSettings(voxel=10.0), task=spec)
+    pts = _cells(region, H)
+    for row in rows:
+        ok = reachable(Design(l_s=row["value"]), pts)
+        assert row["task_fraction"] == pytest.approx(ok.mean()) and row["contains_task"] == bool(ok.all())
