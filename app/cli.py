@@ -343,7 +343,7 @@ def _task_orientations(ns: argparse.Namespace) -> Any:
     from paraspace.kinematics.task import OrientationSet
 
     fixed = tuple(_floats("orientation", ns.orientation, 3)) if ns.orientation else (0.0, 0.0, 0.0)
-    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=fixed, step=ns.angle_step)  # type: ignore[arg-type]
+    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=fixed, step=ns.angle_step)
 
 
 def _task_settings(ns: argparse.Namespace) -> Any:

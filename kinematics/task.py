@@ -503,7 +503,7 @@ def _stroke_end(design: Design, d: float, eta: float) -> str | None:
     return None
 
 
-def pose_binding(design: Design, position: Sequence[float], rotation: np.ndarray, joints: Joints,
+def pose_binding(design: Design, position: Sequence[float] | np.ndarray, rotation: np.ndarray, joints: Joints,
                  eta_step: float = 0.5) -> dict[str, Any]:
     """Which limit fails at an unreachable pose (:mod:`kinematics.diagnostics`' names), or, at a
     reachable one, the limit nearest at the redundancy resolution's carriage pose."""
@@ -623,7 +623,7 @@ def _first_failure(design: Design, p: np.ndarray, rots: np.ndarray, start: int, 
     return start + int(bad[0]) if bad.size else start
 
 
-def _lattice(region: Region, h: float, grow: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _lattice(region: Region, h: float, grow: float) -> tuple[list[np.ndarray], int, np.ndarray]:
     """Lattice points (N, 3) of the region's cells continued ``grow`` outward, their signed
     distances, and the cells' half-extent per axis (3,)."""
     ext = region.extent
@@ -640,7 +640,7 @@ def _lattice(region: Region, h: float, grow: float) -> tuple[np.ndarray, np.ndar
             g = int(math.ceil(grow / h - 1e-9))
             axes.append(region.center[a] + h * np.arange(-g, g + 1))
     count = int(np.prod([len(x) for x in axes]))
-    return axes, count, half  # type: ignore[return-value]
+    return axes, count, half
 
 
 def region_samples(region: Region, orientations: OrientationSet = OrientationSet(),
@@ -719,8 +719,8 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
         for s in range(0, rots.shape[0], BATCH):
             check(cancel)
             m = np.arange(s, min(s + BATCH, rots.shape[0]))
-            pi, mi = np.meshgrid(np.arange(cover.size), m, indexing="ij")
-            res = cert.run(pts[cover], np.full(cover.size, e), np.zeros(cover.size, bool), pi.ravel(), mi.ravel())
+            gp, gm = np.meshgrid(np.arange(cover.size), m, indexing="ij")
+            res = cert.run(pts[cover], np.full(cover.size, e), np.zeros(cover.size, bool), gp.ravel(), gm.ravel())
             if not np.all(res == 1):
                 certified = "undecided"
                 break
@@ -759,7 +759,8 @@ def _resolved_slack(design: Design, position: np.ndarray, rot: np.ndarray, joint
     from .rotation import euler_zyx_from_matrix
 
     psi, theta, phi = euler_zyx_from_matrix(rot)
-    res = resolve_redundancy(design, Pose(*[float(v) for v in position], psi, theta, phi), joints, eta_step)
+    x, y, z = (float(v) for v in position)
+    res = resolve_redundancy(design, Pose(x, y, z, psi, theta, phi), joints, eta_step)
     return _slacks(design, joints, np.asarray(position, float), rot, res.d, res.eta)
 
 
@@ -889,21 +890,21 @@ def pose_list_task(design: Design, poses: PoseList, settings: TaskSettings = Tas
                 prev[i] = None
     rep(0.92, "task: actuator values")
     # actuator values and slacks
-    q = np.zeros((n, 12))
+    qv = np.zeros((n, 12))
     rows: list[dict[str, Any]] = []
     slacks = []
     for k in range(n):
         b = P[k, :3] + pts_local @ rots[k].T
         dp = base_points(design, d[k], eta[k])
         lengths = np.linalg.norm(b - dp, axis=-1)
-        q[k] = np.concatenate([lengths.reshape(6), d[k], eta[k]])
+        qv[k] = np.concatenate([lengths.reshape(6), d[k], eta[k]])
         sl = _slacks(design, joints, P[k, :3], rots[k], d[k], eta[k])
         slacks.append(sl)
-        rows.append({"index": k, "reachable": bool(reach[k]), "q": [float(v) for v in q[k]],
+        rows.append({"index": k, "reachable": bool(reach[k]), "q": [float(v) for v in qv[k]],
                      "leg_slack": sl["leg"], **({"t": float(poses.t[k])} if poses.t is not None else {})})
     leg = np.array([s["leg"] for s in slacks])
-    key = np.where(reach, leg, leg - 1e12)  # an unreachable pose first
-    w = int(np.argmin(key))
+    order = np.where(reach, leg, leg - 1e12)  # an unreachable pose first
+    w = int(np.argmin(order))
     fraction = float(reach.mean())
     contained = bool(reach.all())
     outside_index = None
@@ -928,7 +929,7 @@ def pose_list_task(design: Design, poses: PoseList, settings: TaskSettings = Tas
         [f"eta_{i + 1}" for i in range(3)]
     lo_eta, hi_eta = design.eta_limits
     strokes = [(design.l_min, design.l_max)] * 6 + [(0.0, design.d_s)] * 3 + [(lo_eta, hi_eta)] * 3
-    used = q[reach] if reach.any() else q
+    used = qv[reach] if reach.any() else qv
     actuators = []
     for a, name in enumerate(names):
         lo, hi = strokes[a]
