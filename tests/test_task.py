@@ -126,21 +126,25 @@ def test_margin_of_a_contained_sphere_is_the_distance_to_the_nearest_unreachable
     assert res.worst["at"]["position"] == pytest.approx(lat[~ok][np.argmin(s[~ok])].tolist())
 
 
-def test_certified_contained_never_contradicts_dense_sampling():
+@pytest.mark.parametrize("joints,size,tilt,step", [
+    (Joints(), (16.0, 16.0, 8.0), 4.0, 2.0),
+    (Joints(theta_u=40.0, theta_s=40.0, cone_axis="home"), (12.0, 12.0, 6.0), 2.0, 1.0),
+])
+def test_certified_contained_never_contradicts_dense_sampling(joints, size, tilt, step):
     design = Design()
-    region = Region("box", (0.0, 0.0, 140.0), (16.0, 16.0, 8.0))
-    oset = OrientationSet(tilt=4.0, torsion=4.0, step=2.0)
-    res = region_task(design, region, oset, TaskSettings(voxel=4.0, margin_range=0.0))
+    region = Region("box", (0.0, 0.0, 140.0), size)
+    oset = OrientationSet(tilt=tilt, torsion=tilt, step=step)
+    res = region_task(design, region, oset, TaskSettings(voxel=size[2] / 2, margin_range=0.0, joints=joints))
     assert res.certified == "contained"
     rng = np.random.default_rng(7)
     pts = np.asarray(region.center) + (rng.random((400, 3)) - 0.5) * np.asarray(region.sizes)
     corners = np.asarray(region.center) + 0.5 * np.asarray(region.sizes) * np.array(
         [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
     pts = np.concatenate([pts, corners])
-    az, tilt, tor = rng.uniform(0, 360, 30), 4.0 * np.sqrt(rng.random(30)), rng.uniform(-4, 4, 30)
-    tilt[:8], tor[:8] = 4.0, np.where(np.arange(8) % 2, 4.0, -4.0)  # the set's edges
-    for R in tt_rotations(az, tilt, tor):
-        assert reachable(design, pts, R, 0.1).all()
+    az, tl, tor = rng.uniform(0, 360, 30), tilt * np.sqrt(rng.random(30)), rng.uniform(-tilt, tilt, 30)
+    tl[:8], tor[:8] = tilt, np.where(np.arange(8) % 2, tilt, -tilt)  # the set's edges
+    for R in tt_rotations(az, tl, tor):
+        assert reachable(design, pts, R, 0.1, joints).all()
 
 
 def test_certified_not_contained_for_a_region_partly_outside():
