@@ -409,3 +409,19 @@ def test_sweep_rows_carry_the_task_measures():
     for row in rows:
         ok = reachable(Design(l_s=row["value"]), pts)
         assert row["task_fraction"] == pytest.approx(ok.mean()) and row["contains_task"] == bool(ok.all())
+
+
+def test_patched_task_bound_reaches_the_rest_model():
+    import json
+    import subprocess
+    import sys
+
+    script = (
+        "import dataclasses, json\n"
+        "from paraspace.kinematics.settings import TASK\n"
+        "TASK['margin_range'] = dataclasses.replace(TASK['margin_range'], hi=20.0)\n"
+        "from paraspace.app.api import errors, models\n"
+        "p = models.TaskSettingsIn.model_json_schema()['properties']['margin_range']\n"
+        "print(json.dumps([p['maximum'], errors.RANGES[('settings', 'margin_range')]]))\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, check=True)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [20.0, "[0, 20]"]
