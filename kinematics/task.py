@@ -113,7 +113,7 @@ from .kernel_args import kernel_args
 from .parallel import KERNEL_LOCK
 from .pose import POSE_FIELDS, POSE_LIMITS, Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
-from .redundancy import _chain_margins, _engine_carriage, resolve_redundancy
+from .redundancy import _best_carriage, _chain_margins, _engine_carriage, resolve_redundancy
 from .rotation import euler_zyx_deg
 from .settings import TASK, TOTAL_ORIENTATION, WORKSPACE
 from .tilt_torsion import tt_rotations
@@ -505,8 +505,10 @@ def _stroke_end(design: Design, d: float, eta: float) -> str | None:
 
 def pose_binding(design: Design, position: Sequence[float] | np.ndarray, rotation: np.ndarray, joints: Joints,
                  eta_step: float = 0.5) -> dict[str, Any]:
-    """Which limit fails at an unreachable pose (:mod:`kinematics.diagnostics`' names), or, at a
-    reachable one, the limit nearest at the redundancy resolution's carriage pose."""
+    """Which limit fails at a pose (:mod:`kinematics.diagnostics`' names): the first chain that fails,
+    with ``l_max`` / ``l_min`` / ``sampling`` at its least-violation carriage pose (and the stroke end
+    that pose sits at), or the cone that stops it; ``interference`` when the chains pass alone; ``limit
+    None`` ("reachable") at a reachable pose."""
     p = np.asarray(position, float).reshape(1, 3)
     rot = np.asarray(rotation, float)
     plain = int(chain_masks_at(design, p, rot, eta_step, Joints())[0])
@@ -518,8 +520,6 @@ def pose_binding(design: Design, position: Sequence[float] | np.ndarray, rotatio
             continue
         if not (plain >> i) & 1:
             limit = _violated_limit(design, B[i], i)
-            from .redundancy import _best_carriage
-
             d, eta = _best_carriage(design, B[i], i)
             lengths = np.linalg.norm(B[i] - base_points(design, [d] * 3, [eta] * 3)[i], axis=1)
             j = int(np.argmin(np.minimum(lengths - design.l_min, design.l_max - lengths)))

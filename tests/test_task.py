@@ -425,3 +425,19 @@ def test_patched_task_bound_reaches_the_rest_model():
         "print(json.dumps([p['maximum'], errors.RANGES[('settings', 'margin_range')]]))\n")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, check=True)
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [20.0, "[0, 20]"]
+
+
+def test_binding_names_the_cone_or_the_leg_limit():
+    from kinematics.task import pose_binding
+
+    design, p, R = Design(), np.array([[0.0, 0.0, 130.0]]), np.eye(3)
+    tight = Joints(theta_u=5.0)
+    assert reachable(design, p, R) and not reachable(design, p, R, 0.5, tight)[0]
+    assert pose_binding(design, p[0], R, tight)["limit"] == "u_cone"
+    tight_s = Joints(theta_s=5.0)
+    if not reachable(design, p, R, 0.5, tight_s)[0]:
+        assert pose_binding(design, p[0], R, tight_s)["limit"] == "s_cone"
+    high = np.array([0.0, 0.0, 200.0])
+    b = pose_binding(design, high, R, Joints())
+    assert b["limit"] == "l_max" and b["chain"] == 1  # every leg is too long: the first chain reports it
+    assert pose_binding(design, p[0], R, Joints())["limit"] is None
