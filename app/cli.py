@@ -371,7 +371,8 @@ def _add_study_task_flags(p: argparse.ArgumentParser, title: str) -> None:
     _add_task_flags(p, title)
     for name in ("tilt", "torsion"):
         spec = TOTAL_ORIENTATION[name]
-        p.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label}; valid range "
+        p.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label} (optimize: also the "
+                                                        f"orientation set of total_orientation_volume); valid range "
                                                         f"{spec.range_text()}")
     p.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
                    help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
@@ -727,8 +728,11 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
     joints = _joints(ns)
     spec = _study_task(ns, joints)
+    total = None
+    if ns.tilt is not None or ns.torsion is not None:
+        total = (0.0 if ns.tilt is None else ns.tilt, 0.0 if ns.torsion is None else ns.torsion, ns.task_angle_step)
     return OptimizeSettings(
-        task=spec,
+        task=spec, total_orientation=total,
         params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),

@@ -95,6 +95,9 @@ class Measure:
         flag: a boolean measure (usable as a constraint only).
         needs_orientation: the row must be evaluated with orientation settings (TI_1, TI_2).
         needs_task: the row must be evaluated with a task (``OptimizeSettings.task``).
+        needs_dexterity: the row must be evaluated with the dexterity field (``gci``).
+        needs_total_orientation: the row must be evaluated with the total-orientation workspace
+            (``OptimizeSettings.total_orientation``).
     """
 
     name: str
@@ -104,6 +107,8 @@ class Measure:
     flag: bool = False
     needs_orientation: bool = False
     needs_task: bool = False
+    needs_dexterity: bool = False
+    needs_total_orientation: bool = False
 
     def value(self, row: Mapping[str, Any]) -> float | None:
         """The measure of an evaluated row (``None`` when the row lacks it or it is not finite)."""
@@ -176,6 +181,10 @@ for _m in (
     Measure("task_margin", "how far the task region could grow (< 0: must shrink), or a pose list's smallest leg "
             "slack (kinematics.task)", needs_task=True),
     Measure("contains_task", "the task is reachable everywhere (kinematics.task)", flag=True, needs_task=True),
+    Measure("gci", "global conditioning index: mean 1/kappa over the workspace (kinematics.dexterity)",
+            needs_dexterity=True),
+    Measure("total_orientation_volume", "volume of the total-orientation workspace (kinematics.dexterous; "
+            "OptimizeSettings.total_orientation)", needs_total_orientation=True),
 ):
     register_measure(_m)
 
@@ -328,6 +337,8 @@ class OptimizeSettings:
             ``"nsga3"`` or ``"agemoea"``.
         task: a :class:`kinematics.task.TaskSpec` for the measures ``task_fraction``,
             ``task_margin`` and the constraint ``contains_task`` (its joints must be the workspace's).
+        total_orientation: ``(tilt, torsion, angle_step)`` of ``total_orientation_volume`` (degrees;
+            ``None``: the defaults of :data:`kinematics.settings.TOTAL_ORIENTATION`).
     """
 
     params: tuple[str, ...] = DEFAULT_PARAMS
@@ -343,6 +354,7 @@ class OptimizeSettings:
     step: float = 0.01
     algorithm: str = "auto"
     task: Any = None
+    total_orientation: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
@@ -409,6 +421,16 @@ class OptimizeSettings:
             if self.task.settings.joints != self.workspace.joints:
                 raise ParameterError("task.joints", self.task.settings.joints.to_dict(),
                                      f"the workspace's joints {self.workspace.joints.to_dict()}")
+        if self.total_orientation is not None:
+            from .dexterous import orientation_samples
+
+            try:
+                tilt, torsion, step = (float(v) for v in self.total_orientation)
+            except (TypeError, ValueError):
+                raise ParameterError("total_orientation", self.total_orientation,
+                                     "three numbers tilt, torsion, angle_step (degrees)") from None
+            orientation_samples(tilt, torsion, step)  # validates them
+            set_("total_orientation", (tilt, torsion, step))
         needs = [o.measure for o in objectives] + [c.measure for c in cons]
         if self.task is None and any(MEASURES[n].needs_task for n in needs):
             raise ParameterError("task", None, "a task (--box, --cylinder, --sphere or --points) for "
@@ -474,6 +496,7 @@ class OptimizeSettings:
             "population": self.population, "generations": self.generations, "seed": self.seed,
             "step": self.step, "algorithm": self.algorithm_used,
             "task": None if self.task_used is None else self.task_used.to_dict(),
+            **({"extra": self.extra_used} if self.extra_used else {}),
         })
 
     @property
@@ -481,6 +504,21 @@ class OptimizeSettings:
         """The task evaluations run with (``None`` when no measure needs it)."""
         names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
         return self.task if any(MEASURES[n].needs_task for n in names) else None
+
+    @property
+    def extra_used(self) -> dict[str, Any]:
+        """Further keyword arguments of :func:`kinematics.sweep.evaluate_design` the measures need
+        (``dexterity``, ``total_orientation``); empty when none."""
+        from .settings import TOTAL_ORIENTATION
+
+        names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
+        out: dict[str, Any] = {}
+        if any(MEASURES[n].needs_dexterity for n in names):
+            out["dexterity"] = True
+        if any(MEASURES[n].needs_total_orientation for n in names):
+            out["total_orientation"] = self.total_orientation or tuple(
+                float(TOTAL_ORIENTATION[k].default) for k in ("tilt", "torsion", "angle_step"))
+        return out
 
     def key(self) -> tuple:
         """Hashable identity of the run (equal settings give the same front)."""
@@ -504,7 +542,7 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
                         client: Any = None, evaluate: Callable[..., dict] | None = None, retries: int = 1,
                         cancel: CancelToken = None,
                         on_point: Callable[[int, int], None] | None = None,
-                        task: Any = None) -> tuple[list[dict], int]:
+                        task: Any = None, extra: Mapping[str, Any] | None = None) -> tuple[list[dict], int]:
     """Evaluate a batch of designs with the sweep unit of work, each distinct design at most once.
 
     Cached designs (``cache``: a :class:`~kinematics.sweep.ResultCache`) are taken from the cache;
@@ -521,8 +559,9 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
     """
     from .sweep import evaluate_design
 
-    keys = [cache.key(d, settings, orientation, task) if cache is not None else None for d in designs]
-    extra: dict[str, Any] = {} if task is None else {"task": task}  # a custom unit of work may not take it
+    more = dict(extra or {})
+    keys = [cache.key(d, settings, orientation, task, **more) if cache is not None else None for d in designs]
+    extra = {**more, **({} if task is None else {"task": task})}  # a custom unit of work may not take them
     results: dict[int, dict] = {}
     todo: dict[Any, int] = {}  # distinct key -> first index
     dup: dict[int, int] = {}
@@ -841,7 +880,7 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
             got, n_run = evaluate_population([d for d in designs if d is not None], settings.workspace,
                                              orientation=ori, cache=cache, client=client, evaluate=evaluate,
                                              retries=retries, cancel=cancel, on_point=on_point,
-                                             task=settings.task_used)
+                                             task=settings.task_used, extra=settings.extra_used)
             for i, row in zip(valid, got):
                 rows[i] = row
             computed += n_run

@@ -47,7 +47,8 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
                     orientation: OrientationSettings | None = None, cancel: CancelToken = None,
-                    task: Any = None) -> dict:
+                    task: Any = None, dexterity: bool = False,
+                    total_orientation: tuple[float, float, float] | None = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
@@ -60,6 +61,12 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         Also compute the indices TI_1, TI_2 of eq. (28).
     task : kinematics.task.TaskSpec, optional
         Also ``task_fraction``, ``task_margin``, ``contains_task`` and ``task_binding`` of the task.
+    dexterity : bool, optional
+        Also ``gci``: the mean ``1/kappa`` over the workspace (:mod:`kinematics.dexterity`, resolved
+        carriages).
+    total_orientation : (tilt, torsion, angle_step), optional
+        Also ``total_orientation_volume``: the volume of the total-orientation workspace
+        (:mod:`kinematics.dexterous`) on the same grid.
     cancel : threading.Event or callable, optional
         Stops the computation when set.
 
@@ -101,6 +108,16 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         out["TI_saturated"] = bool(out["saturation_note"])
     if task is not None:  # a kinematics.task.TaskSpec: task_fraction, task_margin, contains_task
         out.update(task.measures(design, cancel=cancel))
+    if dexterity:
+        from .dexterity import dexterity_field
+
+        out["gci"] = dexterity_field(result, cancel=cancel).summary()["gci"]
+    if total_orientation is not None:
+        from .dexterous import total_orientation_workspace
+
+        tilt, torsion, step = total_orientation
+        out["total_orientation_volume"] = total_orientation_workspace(design, tilt, torsion, step, settings,
+                                                                      position=result, cancel=cancel).volume
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
@@ -135,7 +152,7 @@ def _canon(obj: Any) -> Any:
 
 
 def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
-              version: str | None = None, task: Any = None) -> str:
+              version: str | None = None, task: Any = None, **extra: Any) -> str:
     """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields,
     the task (when given) and the code version."""
     payload = {
@@ -146,6 +163,9 @@ def cache_key(design: Design, settings: WorkspaceSettings, orientation: Orientat
     }
     if task is not None:
         payload["task"] = task.to_dict()
+    for name, value in sorted(extra.items()):  # further measures asked of evaluate_design (dexterity...)
+        if value not in (None, False):
+            payload[name] = value
     text = json.dumps(_canon(payload), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -175,9 +195,9 @@ class ResultCache:
         self.misses = 0
 
     def key(self, design: Design, settings: WorkspaceSettings,
-            orientation: OrientationSettings | None = None, task: Any = None) -> str:
+            orientation: OrientationSettings | None = None, task: Any = None, **extra: Any) -> str:
         """:func:`cache_key` with this cache's version."""
-        return cache_key(design, settings, orientation, self.version, task)
+        return cache_key(design, settings, orientation, self.version, task, **extra)
 
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"

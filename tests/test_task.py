@@ -441,3 +441,24 @@ def test_binding_names_the_cone_or_the_leg_limit():
     b = pose_binding(design, high, R, Joints())
     assert b["limit"] == "l_max" and b["chain"] == 1  # every leg is too long: the first chain reports it
     assert pose_binding(design, p[0], R, Joints())["limit"] is None
+
+
+def test_optimiser_offers_gci_and_total_orientation_volume():
+    from kinematics.dexterity import dexterity_field
+    from kinematics.optimize import OptimizeSettings
+    from kinematics.sweep import evaluate_design
+    from kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    s = OptimizeSettings(params=("l_s",), objectives="gci,total_orientation_volume", total_orientation=(10, 0, 5))
+    assert s.extra_used == {"dexterity": True, "total_orientation": (10.0, 0.0, 5.0)}
+    with pytest.raises(ParameterError, match="tilt"):
+        OptimizeSettings(objectives="total_orientation_volume", total_orientation=(100, 0, 5))
+    design, ws = Design(), WorkspaceSettings(voxel=10.0)
+    row = evaluate_design(design, ws, **s.extra_used)
+    res = compute_workspace(design, ws)
+    assert row["gci"] == pytest.approx(dexterity_field(res).summary()["gci"])
+    pts = res.grid.points()[res.occupancy]  # brute force: reachable at every orientation sample
+    ok = np.ones(len(pts), bool)
+    for az, tilt, tor in orientation_samples(10.0, 0.0, 5.0):
+        ok &= reachable(design, pts, tt_rotation(az, tilt, tor))
+    assert row["total_orientation_volume"] == pytest.approx(ok.sum() * 10.0 ** 3)

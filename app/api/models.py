@@ -136,6 +136,9 @@ class OptimizeRequest(BaseModel):
     task: TaskRequest | None = Field(
         None, description="the task of the measures task_fraction, task_margin and the constraint contains_task "
                           "(as POST /task takes it, without design; its joints are settings.joints)")
+    total_orientation: tuple[Num, Num, Num] | None = Field(
+        None, description="tilt, torsion, angle_step (degrees) of the measure total_orientation_volume "
+                          "(null: 15, 15, 5)")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
@@ -154,7 +157,7 @@ class OptimizeRequest(BaseModel):
             _, task, oset, tsettings = self.task.build()
             spec = TaskSpec(task, oset, dataclasses.replace(tsettings, joints=workspace.joints))
         return OptimizeSettings(
-            task=spec,
+            task=spec, total_orientation=self.total_orientation,
             params=tuple(self.params),
             bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(self.objectives),
             constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
