@@ -353,6 +353,13 @@ def read_pose_csv(text: str | bytes) -> PoseList:
             text = text.decode("utf-8-sig")
         except UnicodeDecodeError:
             raise ParameterError("points", "file", "UTF-8 CSV text") from None
+    try:
+        return _read_rows(text)
+    except csv.Error as err:
+        raise ParameterError("points", "CSV", f"readable CSV text ({err})") from None
+
+
+def _read_rows(text: str) -> PoseList:
     reader = csv.reader(io.StringIO(text))
     header = None
     rows: list[list[float]] = []

@@ -253,6 +253,8 @@ def test_pose_csv_and_bad_input_name_the_field():
         read_pose_csv("x,y,z,psi,theta,phi\n0,0,130,0,95,0\n")
     with pytest.raises(ParameterError, match="line 2"):
         read_pose_csv("x,y,z,psi,theta,phi\n0,0,x,0,0,0\n")
+    with pytest.raises(ParameterError, match="readable CSV"):
+        read_pose_csv("x,y,z,psi,theta,phi\n\"" + "9" * 140_000 + "\",0,0,0,0,0\n")  # over csv's field limit
     with pytest.raises(ParameterError, match="strictly increasing"):
         read_pose_csv("x,y,z,psi,theta,phi,t\n0,0,130,0,0,0,1\n0,0,130,0,0,0,1\n")
     big = "x,y,z,psi,theta,phi\n" + "0,0,130,0,0,0\n" * (MAX_POSES + 1)
