@@ -464,3 +464,33 @@ def test_optimiser_offers_gci_and_total_orientation_volume():
     for az, tilt, tor in orientation_samples(10.0, 0.0, 5.0):
         ok &= reachable(design, pts, tt_rotation(az, tilt, tor))
     assert row["total_orientation_volume"] == pytest.approx(ok.sum() * 10.0 ** 3)
+
+
+def test_actuator_usage_maps_against_per_voxel_brute_force():
+    from kinematics.usage import actuator_usage, usage_summary
+    from kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    design, joints = Design(), Joints(theta_u=60.0, cone_axis="home")
+    res = compute_workspace(design, WorkspaceSettings(voxel=10.0, joints=joints))
+    maps = actuator_usage(res, n_eta=9, n_rho=7)
+    assert np.isnan(maps.leg_use[~res.occupancy]).all() and np.isfinite(maps.leg_use[res.occupancy]).all()
+    idx = np.argwhere(res.occupancy)[np.random.default_rng(3).choice(int(res.occupancy.sum()), 4, replace=False)]
+    lo, hi = design.eta_limits
+    etas, ds = np.linspace(lo, hi, 9), design.r - np.linspace(design.r - design.d_s, design.r, 7)
+    for ix, iy, iz in idx:
+        p = res.grid.points()[ix, iy, iz]
+        pose = Pose(*p)
+        d, eta = maps.d[:, ix, iy, iz], maps.eta[:, ix, iy, iz]
+        for i in range(3):  # the chosen carriage is the grid's best (leg lengths recomputed)
+            best = max(min(np.minimum(L - design.l_min, design.l_max - L))
+                       for L in (leg_lengths(design, pose, [dd] * 3, [ee] * 3)[i] for ee in etas for dd in ds))
+            L = leg_lengths(design, pose, d, eta)[i]
+            assert min(np.minimum(L - design.l_min, design.l_max - L)) == pytest.approx(best)
+        L = leg_lengths(design, pose, d, eta)
+        mid, half = design.l_min + design.l_s / 2, design.l_s / 2
+        assert maps.leg_use[ix, iy, iz] == pytest.approx(np.abs(L - mid).max() / half)
+        ang = cone_angles(design, joints, np.eye(3), platform_points(design, p, np.eye(3)),
+                          base_points(design, d, eta), eta)
+        assert maps.joint_angle[ix, iy, iz] == pytest.approx(ang.max())
+    summary = usage_summary(maps)
+    assert sum(summary["leg_use"]["counts"]) <= int(res.occupancy.sum())
