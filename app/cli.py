@@ -11,12 +11,17 @@
     paraspace optimize    [design flags] --params a,d_s,eta_s,l_s --objectives volume,-footprint
                           [--constraint C] [--bounds l_s=20:100,...] [--population N] [--generations G]
                           [--seed S] [--voxel H] [--json] [--csv F] [--plot F.png] [--scheduler ADDR | --workers N]
+                          [joint flags] [--box ... | --cylinder ... | --sphere ... | --points F [--tilt --torsion]]
+    paraspace task        [design flags] [joint flags] --box CX,CY,CZ,LX,LY,LZ | --cylinder CX,CY,CZ,R,H |
+                          --sphere CX,CY,CZ,R | --points FILE.csv [--tilt DEG] [--torsion DEG] [--voxel H]
+                          [--json] [--csv OUT]
     paraspace paper       [--voxel H] [--assumptions K,..] [scan flags] [--fit] [--json]   (every claim, verdicts)
+    paraspace report      [design flags] [joint flags] [--compare NAME=V,..]... [--voxel H] --out FILE.html
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
-Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``ik``): ``--u-cone DEG --s-cone DEG
+Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
 [--cone-axis normal|home] --leg-diameter W [--clearance C]``.
 Scan flags (``orientation``, ``sweep``, ``optimize``, ``paper``; TI_1 and TI_2): ``--angle-range DEG --angle-step DEG
 --position-step S`` (ranges: ``kinematics.settings.ORIENTATION``).
@@ -331,6 +336,164 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
     return 0
 
 
+def _task_of(ns: argparse.Namespace) -> Any:
+    """The task of ``--box`` / ``--cylinder`` / ``--sphere`` / ``--points`` (exactly one)."""
+    from paraspace.kinematics.task import MAX_CSV_BYTES, Region, read_pose_csv
+
+    given = [s for s in ("box", "cylinder", "sphere", "points") if getattr(ns, s, None) is not None]
+    if len(given) != 1:
+        raise ParameterError("task", ",".join(given) or None,
+                             "exactly one of --box CX,CY,CZ,LX,LY,LZ, --cylinder CX,CY,CZ,R,H, --sphere CX,CY,CZ,R "
+                             "or --points FILE.csv")
+    kind = given[0]
+    if kind == "points":
+        path = ns.points
+        if not os.path.isfile(path):
+            raise ParameterError("points", path, "an existing CSV file with the header x,y,z,psi,theta,phi[,t]")
+        size = os.path.getsize(path)
+        if size > MAX_CSV_BYTES:
+            raise ParameterError("points", f"{size:,} bytes", f"at most {MAX_CSV_BYTES:,} bytes (at most "
+                                 f"{MAX_CSV_BYTES // 100:,} poses)")
+        with open(path, "rb") as fh:
+            return read_pose_csv(fh.read())
+    return Region.parse(kind, _floats(kind, getattr(ns, kind)))
+
+
+def _task_orientations(ns: argparse.Namespace) -> Any:
+    from paraspace.kinematics.task import OrientationSet
+
+    fixed = tuple(_floats("orientation", ns.orientation, 3)) if ns.orientation else (0.0, 0.0, 0.0)
+    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=fixed, step=ns.angle_step)
+
+
+def _task_settings(ns: argparse.Namespace) -> Any:
+    from paraspace.kinematics.task import TaskSettings
+
+    return TaskSettings(voxel=ns.voxel, eta_step=ns.eta_step, margin_range=ns.margin_range,
+                        carriage_margin=ns.carriage_margin, joints=_joints(ns))
+
+
+def _study_task(ns: argparse.Namespace, joints: Any) -> Any:
+    """The ``TaskSpec`` of a study's task flags (``sweep``, ``optimize``), or ``None`` when none is given."""
+    if not any(getattr(ns, k, None) is not None for k in ("box", "cylinder", "sphere", "points")):
+        return None
+    from paraspace.kinematics.task import OrientationSet, TaskSettings, TaskSpec
+
+    return TaskSpec(_task_of(ns), OrientationSet(tilt=ns.tilt, torsion=ns.torsion, step=ns.task_angle_step),
+                    TaskSettings(voxel=_voxel(ns), margin_range=ns.margin_range, joints=joints))
+
+
+def _add_study_task_flags(p: argparse.ArgumentParser, title: str) -> None:
+    """The task flags of a study (``sweep``, ``optimize``): the region or pose list, its orientation set
+    and sampling (the task's cells are the study's voxels)."""
+    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
+
+    _add_task_flags(p, title)
+    for name in ("tilt", "torsion"):
+        spec = TOTAL_ORIENTATION[name]
+        p.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label} (optimize: also the "
+                                                        f"orientation set of total_orientation_volume); valid range "
+                                                        f"{spec.range_text()}")
+    p.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
+                   help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
+    p.add_argument("--margin-range", dest="margin_range", default=TASK["margin_range"].default, metavar="V",
+                   help=f"the task's {TASK['margin_range'].label}; valid range {TASK['margin_range'].range_text()}")
+
+
+def task_csv(out: dict[str, Any]) -> str:
+    """A pose list's answer one pose per row (index, t, reachable, leg slack, the 12 actuator values), or a
+    region's answer as one row of its scalars."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    if out["kind"] == "poses":
+        names = out["actuator_names"]
+        w.writerow(["index", "t", "reachable", "leg_slack", *names])
+        for r in out["poses"]:
+            w.writerow([r["index"], r.get("t", ""), int(r["reachable"]), repr(r["leg_slack"]), *map(repr, r["q"])])
+    else:
+        keys = ["fraction", "contained", "certified", "margin", "margin_saturated", "sample_points",
+                "reachable_points", "orientation_samples", "seconds"]
+        w.writerow(keys + ["binding"])
+        w.writerow([out[k] for k in keys] + [out["binding"]["message"]])
+    return buf.getvalue()
+
+
+def cmd_task(ns: argparse.Namespace) -> int:
+    """``paraspace task``: does the design hold a region or follow a pose list, by what margin."""
+    from paraspace.kinematics.task import evaluate_task
+    from paraspace.kinematics.workspace import warm_up
+
+    design = _design(ns)
+    task = _task_of(ns)
+    oset = _task_orientations(ns)
+    settings = _task_settings(ns)
+    if ns.points is not None and (ns.tilt is not None or ns.torsion is not None or ns.orientation):
+        raise ParameterError("tilt", ns.tilt if ns.tilt is not None else ns.torsion,
+                             "not with --points (each pose carries its orientation)")
+    warm_up()
+    progress, done = progress_line("task")
+    try:
+        res = evaluate_task(design, task, oset, settings, progress)
+    finally:
+        done()
+    from paraspace.kinematics.serialize import jsonable
+
+    out = jsonable(res.to_dict())
+    if ns.csv:
+        write_atomic(ns.csv, task_csv(out))
+    if ns.json:
+        _emit(out)
+        return 0
+    what = (f"{out['count']} poses" if out["kind"] == "poses" else
+            f"{out['region']['shape']} of {out['sample_points']} sample points x {out['orientation_samples']} "
+            f"orientations")
+    print(f"task            {what}")
+    print(f"fraction        {out['fraction']:.4g}  (contained: {'yes' if out['contained'] else 'no'})")
+    print(f"certified       {out['certified']}")
+    sat = " (at least: no unreachable point within margin_range)" if out.get("margin_saturated") else ""
+    print(f"margin          {out['margin']:.4g}{sat}")
+    print(f"binding         {out['binding']['message']}")
+    if out["kind"] == "poses":
+        car = out["carriage"]
+        print(f"carriage travel d {car['travel_d']:.4g}, eta {car['travel_eta']:.4g} deg"
+              + (f"; max speed d {car['max_speed_d']:.4g}/s, eta {car['max_speed_eta']:.4g} deg/s"
+                 if "max_speed_d" in car else ""))
+        jumps = sorted({j["index"] for j in out["discontinuities"]})
+        print(f"discontinuities {', '.join(map(str, jumps)) if jumps else 'none'}")
+        if out["unreachable"]:
+            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
+                  + (" ..." if len(out["unreachable"]) > 20 else ""))
+        for a in out["actuators"]:
+            print(f"  {a['name']:<7} {a['min']:9.3f} .. {a['max']:9.3f}  of [{a['stroke'][0]:g}, {a['stroke'][1]:g}]"
+                  f"  ({100 * a['used_fraction']:.0f} % used)")
+    print(f"seconds         {out['seconds']:.2f}")
+    return 0
+
+
+def _add_task_parser(sub: Any) -> None:
+    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
+
+    t = sub.add_parser("task", help="does the design hold a region (with an orientation set) or follow a pose list")
+    _add_design_flags(t)
+    _add_task_flags(t, "the task (exactly one)")
+    o = t.add_argument_group("orientation set of a region (default: the home orientation)")
+    for name in ("tilt", "torsion"):
+        spec = TOTAL_ORIENTATION[name]
+        o.add_argument(f"--{name}", metavar="DEG", help=f"{spec.label}; valid range {spec.range_text()}")
+    o.add_argument("--orientation", metavar="PSI,THETA,PHI", help="one fixed orientation instead (eq. (2), degrees)")
+    from paraspace.kinematics.settings import WORKSPACE
+
+    for name in ("voxel", "angle_step", "eta_step", "margin_range", "carriage_margin"):
+        spec = WORKSPACE[name] if name in ("voxel", "eta_step") else TASK[name]
+        t.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
+                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
+    t.add_argument("--json", action="store_true", help="one JSON object: fraction, contained, certified, margin, "
+                                                      "worst, binding (and poses, discontinuities for a pose list)")
+    t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
+    _add_joint_flags(t)
+    t.set_defaults(func=cmd_task)
+
+
 def cmd_paper(ns: argparse.Namespace) -> int:
     """``paraspace paper``: every checkable claim of the paper with its verdict under each assumption;
     ``--fit``: the bounded fit of the unstated assumptions toward V, TI_1 and TI_2."""
@@ -411,6 +574,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
     if (ns.param2 is None) != (ns.values2 is None):
         raise ParameterError("param2", ns.param2, "given together with --values2")
     orientation = _sweep_orientation(ns)
+    task = _study_task(ns, settings.joints)
     if ns.plot:
         from paraspace.app.figures import export_format
 
@@ -426,6 +590,9 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         sys.stderr.write(f"paraspace: --workers {ns.workers} exceeds this machine's {cores} cores; running the "
                          f"sweep serially instead (it uses all {cores} cores)\n")
         distributed = False
+    if task is not None and distributed:
+        raise ParameterError("workers" if ns.workers is not None else "scheduler", ns.workers or ns.scheduler,
+                             "omit it with a task (task sweeps run in this process)")
     warm_up()
     progress, done = progress_line("sweep")
     try:
@@ -438,14 +605,15 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
                                   scheduler=ns.scheduler, n_workers=ns.workers, progress=progress)
             else:
                 rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, orientation=orientation,
-                                progress=progress)["points"]
+                                progress=progress, task=task)["points"]
         elif distributed:
             from paraspace.kinematics.distributed import sweep_grid
 
             rows = sweep_grid(design, {ns.param: values}, settings, orientation=orientation, scheduler=ns.scheduler,
                               n_workers=ns.workers, progress=progress)
         else:
-            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress)
+            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress,
+                            task=task)
     finally:
         done()
     rows = [_with_value(r, ns.param, ns.param2) for r in rows]
@@ -614,7 +782,12 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
     joints = _joints(ns)
+    spec = _study_task(ns, joints)
+    total = None
+    if ns.tilt is not None or ns.torsion is not None:
+        total = (0.0 if ns.tilt is None else ns.tilt, 0.0 if ns.torsion is None else ns.torsion, ns.task_angle_step)
     return OptimizeSettings(
+        task=spec, total_orientation=total,
         params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
         objectives=ns.objectives, constraints=constraints, design=_design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
@@ -700,7 +873,22 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
     _add_scan_flags(z)
     _add_joint_flags(z)
+    _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
     z.set_defaults(func=cmd_optimize)
+
+
+def _add_task_flags(p: argparse.ArgumentParser, title: str) -> None:
+    """``--box | --cylinder | --sphere | --points`` (``task`` and ``optimize``)."""
+    from paraspace.kinematics.settings import TASK
+
+    g = p.add_argument_group(title)
+    size = TASK["size"].range_text()
+    g.add_argument("--box", metavar="CX,CY,CZ,LX,LY,LZ", help=f"a box: centre and edges (edges {size})")
+    g.add_argument("--cylinder", metavar="CX,CY,CZ,R,H", help=f"a cylinder with a vertical axis (R, H {size})")
+    g.add_argument("--sphere", metavar="CX,CY,CZ,R", help=f"a sphere (R {size})")
+    g.add_argument("--points", metavar="FILE.csv",
+                   help="a pose list: header x,y,z,psi,theta,phi[,t], degrees and seconds; at most "
+                        f"{int(TASK['max_poses'].hi):,} poses")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -773,9 +961,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
     _add_scan_flags(s)
     _add_joint_flags(s)
+    _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")
     s.set_defaults(func=cmd_sweep)
 
     _add_optimize_parser(sub)
+    _add_task_parser(sub)
 
     pp = sub.add_parser("paper", help="every checkable claim of the paper with its verdict under each assumption")
     pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")

@@ -84,6 +84,8 @@ MEASURES: dict[str, tuple[str, str]] = {
     "genus": ("genus of the outer surface", "count"),
     "euler_characteristic": ("Euler characteristic", "count"),
     "voxels": ("reachable voxels", "count"),
+    "task_fraction": ("task fraction (share of the task reachable)", "ratio 0-1"),
+    "task_margin": ("task margin (growth of the task region)", LENGTH),
 }
 
 # Okabe-Ito colours (distinguishable with the common colour-vision deficiencies)

@@ -21,8 +21,14 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      (chunks, and one thread while other tasks fill every core): medians of alternating runs, the
      1-thread/2-thread ratio of each and the 2-thread speed-up of today's default.
 
+  7. a task (kinematics/task.py) against the plain workspace at h = 2 in the same run: a 50 x 50 x 40
+     box centred at (0, 0, 130) with every tilt up to 15 degrees (all azimuths, 61 orientations) at
+     h = 2 on the default design (fraction, margin with margin_range 10, certification; and without
+     the certification, as the optimiser evaluates it), and a 1,000-pose trajectory (a helix with tilt and
+     time stamps: reachability, continuous carriage motion, actuator values): medians, ratios.
+
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
-                                            [--options] [--threads]
+                                            [--options] [--threads] [--task]
 """
 
 from __future__ import annotations
@@ -129,6 +135,35 @@ def option_rows(design: Design, runs: int = 5) -> None:
               f"[{res.volume_inner:.5g}, {res.volume_outer:.5g}]")
 
 
+def task_rows(design: Design, runs: int = 5) -> None:
+    """Item 7 of the module docstring."""
+    import numpy as np
+
+    from paraspace.kinematics.task import OrientationSet, PoseList, Region, TaskSettings, pose_list_task, region_task
+
+    box = Region("box", (0.0, 0.0, 130.0), (50.0, 50.0, 40.0))
+    tilt = OrientationSet(tilt=15.0, torsion=0.0)
+    st = TaskSettings(voxel=2.0)
+    s = np.linspace(0.0, 1.0, 1000)
+    path = np.stack([30 * np.cos(6 * np.pi * s), 30 * np.sin(6 * np.pi * s), 120 + 30 * s, 10 * np.sin(4 * np.pi * s),
+                     8 * np.cos(2 * np.pi * s), 5 * np.sin(2 * np.pi * s)], 1)
+    poses = PoseList(path, 20.0 * s)
+    region_task(design, box, tilt, st)  # compile
+    pose_list_task(design, PoseList(path[:20]), st)
+    base, _ = _median_time(lambda: compute_workspace(design, WorkspaceSettings(voxel=2.0)), runs)
+    print(f"  plain workspace h = 2 (derived bounds)  {base * 1e3:9.1f} ms  x 1.00")
+    for name, fn in (("box 50x50x40, tilt <= 15, certified", lambda: region_task(design, box, tilt, st)),
+                     ("  the same, not certified", lambda: region_task(design, box, tilt, st, certify=False)),
+                     ("1,000-pose trajectory", lambda: pose_list_task(design, poses, st))):
+        t, res = _median_time(fn, runs)
+        extra = (f"fraction {res.fraction:.4f}, margin {res.margin:.3g}, {res.certified}, "
+                 f"{res.details.get('sample_points', len(poses))} points x {res.details.get('orientation_samples', 1)}"
+                 if res.kind == "region" else
+                 f"fraction {res.fraction:.4f}, {len(res.discontinuities)} jumps, travel d "
+                 f"{res.details['carriage']['travel_d']:.4g}")
+        print(f"  {name:<38} {t * 1e3:9.1f} ms  x{t / base:5.2f}  {extra}")
+
+
 POLICIES = ("equal split", "chunks", "chunks+load")
 
 
@@ -206,9 +241,14 @@ def main() -> None:
     ap.add_argument("--only-v2", action="store_true", help="only the engine-v2 rows")
     ap.add_argument("--options", action="store_true", help="only the option-cost rows (item 5)")
     ap.add_argument("--threads", action="store_true", help="only the thread rows (item 6)")
+    ap.add_argument("--task", action="store_true", help="only the task rows (item 7)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
+    if ns.task:
+        print(f"\ntask against the plain workspace, default design (load average {os.getloadavg()[0]:.2f}):")
+        task_rows(design)
+        return
     if ns.options or ns.threads:
         if ns.options:
             print(f"\noption costs at h = 2, default design (load average {os.getloadavg()[0]:.2f}):")

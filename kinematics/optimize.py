@@ -94,6 +94,10 @@ class Measure:
         derive: instead of ``key``: ``f(row) -> value`` (the row holds ``"design"``).
         flag: a boolean measure (usable as a constraint only).
         needs_orientation: the row must be evaluated with orientation settings (TI_1, TI_2).
+        needs_task: the row must be evaluated with a task (``OptimizeSettings.task``).
+        needs_dexterity: the row must be evaluated with the dexterity field (``gci``).
+        needs_total_orientation: the row must be evaluated with the total-orientation workspace
+            (``OptimizeSettings.total_orientation``).
     """
 
     name: str
@@ -102,6 +106,9 @@ class Measure:
     derive: Callable[[dict], Any] | None = None
     flag: bool = False
     needs_orientation: bool = False
+    needs_task: bool = False
+    needs_dexterity: bool = False
+    needs_total_orientation: bool = False
 
     def value(self, row: Mapping[str, Any]) -> float | None:
         """The measure of an evaluated row (``None`` when the row lacks it or it is not finite)."""
@@ -169,11 +176,28 @@ for _m in (
     Measure("stable_genus", "genus of the open-close filtered solid (kinematics.measures, stable in h)"),
     Measure("boundary_closed_stable", "one piece, not cut by the box (kinematics.measures, stable in h)",
             flag=True),
+    Measure("task_fraction", "share of the task reachable (kinematics.task: volume of a region, poses of a list)",
+            needs_task=True),
+    Measure("task_margin", "how far the task region could grow (< 0: must shrink), or a pose list's smallest leg "
+            "slack (kinematics.task)", needs_task=True),
+    Measure("contains_task", "the task is reachable everywhere (kinematics.task)", flag=True, needs_task=True),
+    Measure("gci", "global conditioning index: mean 1/kappa over the workspace (kinematics.dexterity)",
+            needs_dexterity=True),
+    Measure("total_orientation_volume", "volume of the total-orientation workspace (kinematics.dexterous; "
+            "OptimizeSettings.total_orientation)", needs_total_orientation=True),
 ):
     register_measure(_m)
-# Measures other work adds (GCI, total-orientation volume, joint cones) become available with one
-# line each once evaluate_design reports them, e.g.
-#     register_measure(Measure("GCI", "global conditioning index (kinematics.conditioning)"))
+
+
+def _param(name: str) -> Callable[[dict], float]:
+    def f(row: dict) -> float:
+        return float(row["design"][name])
+    return f
+
+
+for _p in PARAMS:  # the design's own sizes, for size objectives (minimise l_s, d_s, eta_s, r...)
+    if _p not in MEASURES:
+        register_measure(Measure(_p, f"the design parameter {_p} ({PARAMS[_p].description})", derive=_param(_p)))
 
 
 def _measure(name: str, field: str) -> Measure:
@@ -311,6 +335,10 @@ class OptimizeSettings:
         step: parameter resolution (see module docstring), [1e-6, 10].
         algorithm: ``"auto"`` (NSGA-II up to 2 objectives, NSGA-III from 3), ``"nsga2"``,
             ``"nsga3"`` or ``"agemoea"``.
+        task: a :class:`kinematics.task.TaskSpec` for the measures ``task_fraction``,
+            ``task_margin`` and the constraint ``contains_task`` (its joints must be the workspace's).
+        total_orientation: ``(tilt, torsion, angle_step)`` of ``total_orientation_volume`` (degrees;
+            ``None``: the defaults of :data:`kinematics.settings.TOTAL_ORIENTATION`).
     """
 
     params: tuple[str, ...] = DEFAULT_PARAMS
@@ -325,6 +353,8 @@ class OptimizeSettings:
     seed: int = 1
     step: float = 0.01
     algorithm: str = "auto"
+    task: Any = None
+    total_orientation: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
@@ -383,6 +413,28 @@ class OptimizeSettings:
         set_("step", float(OPTIMIZE["step"].parse(self.step)))  # a number or its text (the CLI's)
         if self.algorithm not in ALGORITHMS:
             raise ParameterError("algorithm", self.algorithm, " or ".join(ALGORITHMS))
+        if self.task is not None:
+            from .task import TaskSpec
+
+            if not isinstance(self.task, TaskSpec):
+                raise ParameterError("task", self.task, "a TaskSpec")
+            if self.task.settings.joints != self.workspace.joints:
+                raise ParameterError("task.joints", self.task.settings.joints.to_dict(),
+                                     f"the workspace's joints {self.workspace.joints.to_dict()}")
+        if self.total_orientation is not None:
+            from .dexterous import orientation_samples
+
+            try:
+                tilt, torsion, step = (float(v) for v in self.total_orientation)
+            except (TypeError, ValueError):
+                raise ParameterError("total_orientation", self.total_orientation,
+                                     "three numbers tilt, torsion, angle_step (degrees)") from None
+            orientation_samples(tilt, torsion, step)  # validates them
+            set_("total_orientation", (tilt, torsion, step))
+        needs = [o.measure for o in objectives] + [c.measure for c in cons]
+        if self.task is None and any(MEASURES[n].needs_task for n in needs):
+            raise ParameterError("task", None, "a task (--box, --cylinder, --sphere or --points) for "
+                                 + ", ".join(n for n in needs if MEASURES[n].needs_task))
 
     # ----- derived ---------------------------------------------------------------------------
     def bounds_of(self, param: str) -> tuple[float, float]:
@@ -443,7 +495,30 @@ class OptimizeSettings:
             "orientation": None if self.orientation_used is None else dataclasses.asdict(self.orientation_used),
             "population": self.population, "generations": self.generations, "seed": self.seed,
             "step": self.step, "algorithm": self.algorithm_used,
+            "task": None if self.task_used is None else self.task_used.to_dict(),
+            **({"extra": self.extra_used} if self.extra_used else {}),
         })
+
+    @property
+    def task_used(self) -> Any:
+        """The task evaluations run with (``None`` when no measure needs it)."""
+        names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
+        return self.task if any(MEASURES[n].needs_task for n in names) else None
+
+    @property
+    def extra_used(self) -> dict[str, Any]:
+        """Further keyword arguments of :func:`kinematics.sweep.evaluate_design` the measures need
+        (``dexterity``, ``total_orientation``); empty when none."""
+        from .settings import TOTAL_ORIENTATION
+
+        names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
+        out: dict[str, Any] = {}
+        if any(MEASURES[n].needs_dexterity for n in names):
+            out["dexterity"] = True
+        if any(MEASURES[n].needs_total_orientation for n in names):
+            out["total_orientation"] = self.total_orientation or tuple(
+                float(TOTAL_ORIENTATION[k].default) for k in ("tilt", "torsion", "angle_step"))
+        return out
 
     def key(self) -> tuple:
         """Hashable identity of the run (equal settings give the same front)."""
@@ -466,7 +541,8 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
                         orientation: OrientationSettings | None = None, cache: Any = None,
                         client: Any = None, evaluate: Callable[..., dict] | None = None, retries: int = 1,
                         cancel: CancelToken = None,
-                        on_point: Callable[[int, int], None] | None = None) -> tuple[list[dict], int]:
+                        on_point: Callable[[int, int], None] | None = None,
+                        task: Any = None, extra: Mapping[str, Any] | None = None) -> tuple[list[dict], int]:
     """Evaluate a batch of designs with the sweep unit of work, each distinct design at most once.
 
     Cached designs (``cache``: a :class:`~kinematics.sweep.ResultCache`) are taken from the cache;
@@ -483,7 +559,9 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
     """
     from .sweep import evaluate_design
 
-    keys = [cache.key(d, settings, orientation) if cache is not None else None for d in designs]
+    more = dict(extra or {})
+    keys = [cache.key(d, settings, orientation, task, **more) if cache is not None else None for d in designs]
+    extra = {**more, **({} if task is None else {"task": task})}  # a custom unit of work may not take them
     results: dict[int, dict] = {}
     todo: dict[Any, int] = {}  # distinct key -> first index
     dup: dict[int, int] = {}
@@ -515,9 +593,9 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
             check(cancel)
             try:
                 if evaluate is None:
-                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel)
+                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel, **extra)
                 else:
-                    row = evaluate(designs[i], settings, orientation=orientation)
+                    row = evaluate(designs[i], settings, orientation=orientation, **extra)
             except Cancelled:
                 raise
             except Exception as e:  # noqa: BLE001 - a failed point is reported, not fatal
@@ -529,7 +607,7 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
 
         fn = evaluate if evaluate is not None else evaluate_design
         futures = client.map(fn, [designs[i] for i in run], settings=settings, orientation=orientation,
-                             retries=retries, pure=False)
+                             retries=retries, pure=False, **extra)
         where = {f.key: i for f, i in zip(futures, run)}
         pending = set(where)
         ac = as_completed(futures)
@@ -806,7 +884,8 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
 
             got, n_run = evaluate_population([d for d in designs if d is not None], settings.workspace,
                                              orientation=ori, cache=cache, client=client, evaluate=evaluate,
-                                             retries=retries, cancel=cancel, on_point=on_point)
+                                             retries=retries, cancel=cancel, on_point=on_point,
+                                             task=settings.task_used, extra=settings.extra_used)
             for i, row in zip(valid, got):
                 rows[i] = row
             computed += n_run

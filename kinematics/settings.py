@@ -10,7 +10,9 @@ Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPA
 :class:`~kinematics.orientation.OrientationSettings`, :data:`OPTIMIZE` for
 :class:`~kinematics.optimize.OptimizeSettings`, :data:`TOTAL_ORIENTATION` for the total-orientation
 workspace (:func:`~kinematics.dexterous.total_orientation_workspace`) and :data:`TILT_TORSION` for
-:class:`~kinematics.tilt_torsion.TiltTorsionSettings`. The core's validation, the URL parser's ranges,
+:class:`~kinematics.tilt_torsion.TiltTorsionSettings` and :data:`TASK` for
+:class:`~kinematics.task.TaskSettings` (a task's sampling and its region's numbers). The core's
+validation, the URL parser's ranges,
 the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
 slider specs are all derived from these entries, so a bound is written once and the message
 (:meth:`Setting.range_text`) is the same everywhere. The design parameters' table is
@@ -127,4 +129,17 @@ TILT_TORSION: dict[str, Setting] = _table(
     Setting("tilt_limit", 90.0, 0.0, 180.0, "largest tilt searched", "degrees", lo_open=True),
     Setting("torsion_limit", 180.0, 0.0, 180.0, "largest torsion searched", "degrees", lo_open=True),
     Setting("eta_step", 0.5, 0.01, 10.0, "arc-stroke sample spacing", "degrees"),
+)
+
+
+#: :class:`~kinematics.task.TaskSettings`'s numbers and the task region's (:mod:`kinematics.task`); the
+#: orientation set's tilt and torsion are :data:`TOTAL_ORIENTATION`'s, the sample spacing ``voxel`` (a
+#: region's cells are voxels) and ``eta_step`` are :data:`WORKSPACE`'s.
+TASK: dict[str, Setting] = _table(
+    Setting("angle_step", 5.0, 0.25, 30.0, "orientation sample spacing", "degrees", slider=(2.5, 15.0, 2.5)),
+    Setting("margin_range", 10.0, 0.0, 1000.0, "how far outside a region its margin is searched"),
+    Setting("carriage_margin", 1.0, 0.0, 1000.0, "leg/cone slack the carriage choice keeps when it can"),
+    Setting("center", 0.0, -1e4, 1e4, "a region's centre coordinate"),
+    Setting("size", 10.0, 0.0, 1e4, "a region's edge, radius or height"),
+    Setting("max_poses", 10000, 1, 10000, "poses of a pose list", integer=True),
 )

@@ -46,7 +46,9 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 
 
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
-                    orientation: OrientationSettings | None = None, cancel: CancelToken = None) -> dict:
+                    orientation: OrientationSettings | None = None, cancel: CancelToken = None,
+                    task: Any = None, dexterity: bool = False,
+                    total_orientation: tuple[float, float, float] | None = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
@@ -57,6 +59,14 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         The workspace computation (:func:`compute_workspace` then :func:`measure_workspace`).
     orientation : OrientationSettings, optional
         Also compute the indices TI_1, TI_2 of eq. (28).
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` and ``task_binding`` of the task.
+    dexterity : bool, optional
+        Also ``gci``: the mean ``1/kappa`` over the workspace (:mod:`kinematics.dexterity`, resolved
+        carriages).
+    total_orientation : (tilt, torsion, angle_step), optional
+        Also ``total_orientation_volume``: the volume of the total-orientation workspace
+        (:mod:`kinematics.dexterous`) on the same grid.
     cancel : threading.Event or callable, optional
         Stops the computation when set.
 
@@ -96,6 +106,18 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         out["orientation_deltas"] = dict(ori.deltas)
         out["saturation_note"] = ori.saturation_note()
         out["TI_saturated"] = bool(out["saturation_note"])
+    if task is not None:  # a kinematics.task.TaskSpec: task_fraction, task_margin, contains_task
+        out.update(task.measures(design, cancel=cancel))
+    if dexterity:
+        from .dexterity import dexterity_field
+
+        out["gci"] = dexterity_field(result, cancel=cancel).summary()["gci"]
+    if total_orientation is not None:
+        from .dexterous import total_orientation_workspace
+
+        tilt, torsion, step = total_orientation
+        out["total_orientation_volume"] = total_orientation_workspace(design, tilt, torsion, step, settings,
+                                                                      position=result, cancel=cancel).volume
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
@@ -130,15 +152,20 @@ def _canon(obj: Any) -> Any:
 
 
 def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
-              version: str | None = None) -> str:
-    """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields
-    and the code version."""
+              version: str | None = None, task: Any = None, **extra: Any) -> str:
+    """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields,
+    the task (when given) and the code version."""
     payload = {
         "design": design.to_dict(),
         "settings": dataclasses.asdict(settings),
         "orientation": None if orientation is None else dataclasses.asdict(orientation),
         "version": code_version() if version is None else version,
     }
+    if task is not None:
+        payload["task"] = task.to_dict()
+    for name, value in sorted(extra.items()):  # further measures asked of evaluate_design (dexterity...)
+        if value not in (None, False):
+            payload[name] = value
     text = json.dumps(_canon(payload), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -168,9 +195,9 @@ class ResultCache:
         self.misses = 0
 
     def key(self, design: Design, settings: WorkspaceSettings,
-            orientation: OrientationSettings | None = None) -> str:
+            orientation: OrientationSettings | None = None, task: Any = None, **extra: Any) -> str:
         """:func:`cache_key` with this cache's version."""
-        return cache_key(design, settings, orientation, self.version)
+        return cache_key(design, settings, orientation, self.version, task, **extra)
 
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"
@@ -247,13 +274,13 @@ def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design
 
 
 def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None,
-                     cancel: CancelToken, cache: ResultCache | None) -> dict:
-    key = cache.key(design, settings, orientation) if cache is not None else None
+                     cancel: CancelToken, cache: ResultCache | None, task: Any = None) -> dict:
+    key = cache.key(design, settings, orientation, task) if cache is not None else None
     if cache is not None:
         hit = cache.get(key)  # type: ignore[arg-type]
         if hit is not None:
             return hit
-    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel)
+    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task)
     if cache is not None:
         cache.put(key, value)  # type: ignore[arg-type]
     return value
@@ -261,7 +288,7 @@ def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: O
 
 def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
              orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
-             cancel: CancelToken = None, cache: ResultCache | None = None) -> list[dict]:
+             cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None) -> list[dict]:
     """Measures against one design parameter (paper Fig. 4).
 
     Parameters
@@ -282,6 +309,8 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
         Stops the sweep when set.
     cache : ResultCache, optional
         Points computed before are taken from it.
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
 
     Returns
     -------
@@ -311,7 +340,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
     for i, dsg in enumerate(designs):
         check(cancel)
         rep(i / n, f"{param} = {getattr(dsg, param):g} ({i + 1}/{n})")
-        res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
         out.append({"param": param, "value": float(getattr(dsg, param)), **res})
     rep(1.0, "done")
     return out
@@ -320,7 +349,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
 def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
              settings: WorkspaceSettings, *, orientation: OrientationSettings | None = None,
              progress: ProgressFn | None = None, cancel: CancelToken = None,
-             cache: ResultCache | None = None) -> dict:
+             cache: ResultCache | None = None, task: Any = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
     Parameters
@@ -341,6 +370,8 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
         Stops the sweep when set.
     cache : ResultCache, optional
         Points computed before are taken from it.
+    task : kinematics.task.TaskSpec, optional
+        Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
 
     Returns
     -------
@@ -379,7 +410,7 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
             check(cancel)
             k = iy * len(xs) + ix
             rep(k / max(n, 1), f"{param_x} = {xs[ix]:g}, {param_y} = {ys[iy]:g} ({k + 1}/{n})")
-            res = _evaluate_cached(dsg, settings, orientation, cancel, cache)
+            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
             points.append({"param_x": param_x, "param_y": param_y, "x": xs[ix], "y": ys[iy],
                            "ix": ix, "iy": iy, **res})
     rep(1.0, "done")

@@ -10,7 +10,8 @@ fixtures call it before they send a request.
 workspace engines (blocks and dense, with diagnostics, the certified bracket and the mirror), the
 per-point test with and without joint cones about both axes and with leg interference, the
 redundancy resolution with joints (the explorer's pose panel and ``/ik``), the orientation line
-scan, the dexterity field and the measures and shell of a result.
+scan, the task answers (region and pose list: the certification and pose kernels), the dexterity
+field and the measures and shell of a result.
 """
 
 from __future__ import annotations
@@ -63,6 +64,13 @@ def warm_up() -> float:
             resolve_redundancy(d, Pose(z=130.0), joints)
             compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=box, joints=joints))
         orientation_workspace(d, OrientationSettings(angle_step=30.0, position_step=40.0))
+        from .task import OrientationSet, PoseList, Region, TaskSettings, pose_list_task, region_task
+
+        coarse = TaskSettings(voxel=8.0, margin_range=8.0)
+        region_task(d, Region("sphere", (0.0, 0.0, 130.0), (4.0,)), OrientationSet(tilt=5.0), coarse)
+        region_task(d, Region("box", (0.0, 0.0, 165.0), (10.0, 10.0, 10.0)), OrientationSet(), coarse)
+        pose_list_task(d, PoseList(np.array([[0.0, 0.0, 130.0, 0.0, 0.0, 0.0], [0.0, 0.0, 400.0, 0.0, 0.0, 0.0]])),
+                       coarse)
         dexterity_field(res)
         measure_workspace(res)
         workspace_shell(res)

@@ -63,3 +63,9 @@ def test_explorer_starts_and_stops(capsys):
     url = _main("05_explorer")(port=0, serve=False)
     port = int(re.fullmatch(r"http://127\.0\.0\.1:(\d+)/", url).group(1))
     assert port > 0 and f"paraspace explorer: {url}" in capsys.readouterr().out
+
+
+def test_design_for_a_task(capsys):
+    region, traj = _main("06_design_for_a_task")(voxel=8.0, poses=20)
+    assert 0.0 <= region.fraction <= 1.0 and len(traj.poses) == 20
+    assert "fraction" in capsys.readouterr().out

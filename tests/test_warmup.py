@@ -1,6 +1,6 @@
 """No request compiles (trust item 9): after kinematics.warmup.warm_up(), requests over real HTTP
 that reach every engine option (joint cones about both axes, leg interference, the bracket, the
-dense engine, orientation, inverse kinematics) add no compiled signature to any numba kernel."""
+dense engine, orientation, inverse kinematics, tasks) add no compiled signature to any numba kernel."""
 
 from __future__ import annotations
 
@@ -61,6 +61,14 @@ def test_requests_after_warm_up_compile_nothing() -> None:
             r = http.post(f"{API_PREFIX}/orientation", json={"settings": {"angle_step": 15, "position_step": 20}})
             assert r.status_code == 202, r.text
             assert _wait(http, r.json()["job_id"])["status"] == "done"
+            for body in ({"region": {"shape": "box", "center": [0, 0, 140], "sizes": [10, 10, 6]}, "tilt": 5,
+                          "settings": {"voxel": 5, "margin_range": 5, "joints": {"theta_u": 45}}},
+                         {"region": {"shape": "sphere", "center": [0, 0, 170], "sizes": [8]},
+                          "settings": {"voxel": 8, "margin_range": 0}},
+                         {"csv": "x,y,z,psi,theta,phi\n0,0,130,0,0,0\n5,0,132,3,0,0\n0,0,400,0,0,0\n"}):
+                r = http.post(f"{API_PREFIX}/task", json=body)
+                assert r.status_code == 202, r.text
+                assert _wait(http, r.json()["job_id"])["status"] == "done"
     finally:
         jobs.shutdown(wait=False)
         srv.stop()

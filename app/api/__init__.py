@@ -12,6 +12,7 @@ Everything lives under ``/api/v1`` (OpenAPI docs at ``/docs``, schema at ``/open
 ``POST /api/v1/orientation``                orientation workspace / tilt indices -> job
 ``POST /api/v1/sweep``                      1-D or 2-D parameter study -> job
 ``POST /api/v1/optimize``                   multi-objective optimisation (Pareto front) -> job
+``POST /api/v1/task``                       a region or pose list: contained, margin, binding -> job
 ``GET  /api/v1/jobs``                       the caller's unfinished jobs
 ``GET  /api/v1/jobs/{id}``                  status and progress of a job
 ``DELETE /api/v1/jobs/{id}``                cancel a job
@@ -33,7 +34,7 @@ Layout: ``models`` (request models), ``errors`` (the error model and handlers), 
 (:class:`ApiLimits`), ``body_limit`` (the body-size middleware), ``tokens`` (short-link tokens),
 ``context`` (:class:`ApiContext`: the job manager, limits and caches the routers share) and one
 router per resource: ``meta`` (health, design defaults, landing page), ``ik``, ``workspace``,
-``orientation``, ``sweep``, ``optimize``, ``jobs``, ``links``.
+``orientation``, ``sweep``, ``optimize``, ``task``, ``jobs``, ``links``.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from fastapi_offline import FastAPIOffline
 
 from ..hostcheck import HostPolicy
 from ..jobs import JobManager
-from . import ik, links, meta, optimize, orientation, sweep, workspace
+from . import ik, links, meta, optimize, orientation, sweep, task, workspace
 from . import jobs as jobs_routes
 from .body_limit import BodyLimit
 from .context import API_PREFIX, API_VERSION, ApiContext
@@ -56,7 +57,7 @@ __all__ = ["ApiLimits", "create_api", "API_PREFIX", "encode_link_token", "decode
 
 #: The routers in the order their routes are matched and listed in the OpenAPI document.
 ROUTERS = (meta.router, ik.router, workspace.router, orientation.router, sweep.router, optimize.router,
-           jobs_routes.router, links.router, links.short_links, meta.site)
+           task.router, jobs_routes.router, links.router, links.short_links, meta.site)
 
 
 def create_api(jobs: JobManager, *, explorer_url: str | None = None,

@@ -88,7 +88,7 @@ class ApiContext:
         self.caches: dict[str, ByteLRU] = {
             "workspace": ByteLRU(limits.cache_bytes, on_evict=_drop_raw),
             "orientation": ByteLRU(limits.cache_bytes), "sweep": ByteLRU(limits.cache_bytes),
-            "optimize": ByteLRU(limits.cache_bytes)}
+            "optimize": ByteLRU(limits.cache_bytes), "task": ByteLRU(limits.cache_bytes)}
         self.shells = ByteLRU(limits.shell_cache_bytes)
         self.shell_builds = threading.BoundedSemaphore(2)  # marching cubes at most twice at a time
         self._shell_locks = [threading.Lock() for _ in range(32)]  # one build per shell file at a time

@@ -20,6 +20,8 @@ class ApiLimits:
             an upper bound). Over it: 413.
         max_orientation_samples: position x angle samples of an orientation request (3 lines x
             3 rotations), per design point. Over it: 413.
+        max_task_samples: lattice points x orientation samples of a region task (its box and margin
+            shell). Over it: 413.
         max_jobs_per_client: unfinished API jobs per client. Over it: 429.
         max_jobs_total: unfinished API jobs over all clients. Over it: 429.
         max_job_seconds: run time of one job; after it the job is stopped and reported failed.
@@ -40,6 +42,7 @@ class ApiLimits:
     max_sweep_points: int = 64
     max_sweep_voxels: int = 200_000_000
     max_orientation_samples: int = 20_000_000
+    max_task_samples: int = 20_000_000
     max_jobs_per_client: int = 4
     max_jobs_total: int = 16
     max_job_seconds: float = 300.0

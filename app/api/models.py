@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, Field
 
-from paraspace.kinematics.settings import OPTIMIZE
+from paraspace.kinematics.settings import OPTIMIZE, TASK, TOTAL_ORIENTATION, WORKSPACE
+from paraspace.kinematics.task import MAX_CSV_BYTES, MAX_POSES
 
 from ..schema import (  # noqa: F401 - the input models, shared with the link parser (app/schema.py)
     _MODEL,
@@ -131,6 +133,12 @@ class OptimizeRequest(BaseModel):
     orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2 (null: the defaults, used only when needed); "
                           "its joints are settings.joints when not given here")
+    task: TaskRequest | None = Field(
+        None, description="the task of the measures task_fraction, task_margin and the constraint contains_task "
+                          "(as POST /task takes it, without design; its joints are settings.joints)")
+    total_orientation: tuple[Num, Num, Num] | None = Field(
+        None, description="tilt, torsion, angle_step (degrees) of the measure total_orientation_volume "
+                          "(null: 15, 15, 5)")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
@@ -140,7 +148,16 @@ class OptimizeRequest(BaseModel):
             if len(text) > 100:
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
         workspace, orientation = study_settings(self.settings, self.orientation)
+        spec = None
+        if self.task is not None:
+            import dataclasses
+
+            from paraspace.kinematics.task import TaskSpec
+
+            _, task, oset, tsettings = self.task.build()
+            spec = TaskSpec(task, oset, dataclasses.replace(tsettings, joints=workspace.joints))
         return OptimizeSettings(
+            task=spec, total_orientation=self.total_orientation,
             params=tuple(self.params),
             bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(self.objectives),
             constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
@@ -149,6 +166,86 @@ class OptimizeRequest(BaseModel):
             algorithm=self.algorithm)
 
 
+
+class RegionIn(BaseModel):
+    """A task region: a box (sizes LX, LY, LZ), a cylinder with a vertical axis (R, H) or a sphere (R)."""
+
+    model_config = _MODEL
+    shape: Literal["box", "cylinder", "sphere"] = Field(description="box, cylinder (axis z) or sphere")
+    center: tuple[Num, Num, Num] = Field(description=f"centre (x, y, z); each in {TASK['center'].range_text()}")
+    sizes: list[Num] = Field(min_length=1, max_length=3,
+                             description=f"box LX,LY,LZ; cylinder R,H; sphere R; each in {TASK['size'].range_text()}")
+
+
+class TaskSettingsIn(BaseModel):
+    """How a task is sampled (:data:`kinematics.settings.TASK`; ``voxel`` and ``eta_step`` are the
+    workspace's entries), and the joint options."""
+
+    model_config = _MODEL
+    voxel: float = _setting("settings", WORKSPACE["voxel"])
+    angle_step: float = _setting("settings", TASK["angle_step"])
+    eta_step: float = _setting("settings", WORKSPACE["eta_step"])
+    margin_range: float = _setting("settings", TASK["margin_range"])
+    carriage_margin: float = _setting("settings", TASK["carriage_margin"])
+    joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
+
+
+RANGES[("body", "tilt")] = TOTAL_ORIENTATION["tilt"].range_text()
+RANGES[("body", "torsion")] = TOTAL_ORIENTATION["torsion"].range_text()
+RANGES[("body", "poses")] = f"at most {MAX_POSES:,} poses"
+RANGES[("body", "csv")] = f"at most {MAX_CSV_BYTES:,} bytes (at most {MAX_POSES:,} poses)"
+
+
+class TaskRequest(BaseModel):
+    """A task (``kinematics.task``): a ``region`` with an orientation set (``tilt``/``torsion``, or one
+    fixed ``orientation``), or a pose list (``poses`` rows x,y,z,psi,theta,phi in degrees with optional
+    times ``t``, or the same as ``csv`` text with the header x,y,z,psi,theta,phi[,t])."""
+
+    model_config = _MODEL
+    design: DesignIn = Field(default_factory=DesignIn)
+    region: RegionIn | None = None
+    tilt: float | None = Field(None, ge=TOTAL_ORIENTATION["tilt"].lo, le=TOTAL_ORIENTATION["tilt"].hi,
+                               allow_inf_nan=False, description=TOTAL_ORIENTATION["tilt"].label + "; valid range "
+                               + TOTAL_ORIENTATION["tilt"].range_text())
+    torsion: float | None = Field(None, ge=TOTAL_ORIENTATION["torsion"].lo, le=TOTAL_ORIENTATION["torsion"].hi,
+                                  allow_inf_nan=False, description=TOTAL_ORIENTATION["torsion"].label
+                                  + "; valid range " + TOTAL_ORIENTATION["torsion"].range_text())
+    orientation: AnglesIn | None = Field(None, description="one fixed orientation of the region instead")
+    poses: list[tuple[Num, Num, Num, Num, Num, Num]] | None = Field(
+        None, min_length=1, max_length=MAX_POSES, description=f"pose list; at most {MAX_POSES:,} poses")
+    t: list[Num] | None = Field(None, max_length=MAX_POSES, description="times of the poses (s), increasing")
+    csv: str | None = Field(None, max_length=MAX_CSV_BYTES, description="a pose list as CSV text")
+    settings: TaskSettingsIn = Field(default_factory=TaskSettingsIn)
+
+    def build(self) -> tuple[Any, Any, Any, Any]:
+        """``(design, task, orientation set, task settings)`` of the core (ParameterError: 422)."""
+        from paraspace.kinematics.task import OrientationSet, PoseList, Region, TaskSettings, read_pose_csv
+
+        given = [k for k in ("region", "poses", "csv") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise FieldError("region", "give exactly one of region, poses or csv")
+        design = self.design.build()
+        s = self.settings
+        settings = call_core("settings", lambda: TaskSettings(
+            voxel=s.voxel, eta_step=s.eta_step, margin_range=s.margin_range, carriage_margin=s.carriage_margin,
+            joints=s.joints.build()))
+        fixed = (0.0, 0.0, 0.0) if self.orientation is None else (
+            self.orientation.psi, self.orientation.theta, self.orientation.phi)
+        oset = call_core("body", lambda: OrientationSet(tilt=self.tilt, torsion=self.torsion, fixed=fixed,
+                                                        step=s.angle_step))
+        task: Any
+        if self.region is not None:
+            r = self.region
+            task = call_core("region", lambda: Region(r.shape, r.center, tuple(r.sizes)))
+        elif self.poses is not None:
+            task = call_core("body", lambda: PoseList(np.array(self.poses, float),
+                                                      None if self.t is None else np.array(self.t, float)))
+        else:
+            task = call_core("body", lambda: read_pose_csv(self.csv or ""))
+        return design, task, oset, settings
+
+
+OptimizeRequest.model_rebuild()
 
 
 class LinkRequest(BaseModel):

@@ -73,6 +73,14 @@ def optimize_limits_check(settings: Any, limits: ApiLimits) -> None:
     if n_ori > limits.max_orientation_samples:
         raise ApiError(413, f"orientation part of {n_ori} samples per design exceeds the limit "
                             f"max_orientation_samples = {limits.max_orientation_samples}")
+    task = getattr(settings, "task_used", None)
+    if task is not None and not hasattr(task.task, "poses"):
+        from paraspace.kinematics.task import region_samples
+
+        n_task = region_samples(task.task, task.orientations, task.settings)
+        if n_task > limits.max_task_samples:
+            raise ApiError(413, f"task part of {n_task:,} samples per design exceeds the limit "
+                                f"max_task_samples = {limits.max_task_samples:,}")
 
 
 def optimize_compute(settings: Any, progress: Any, cancel: Any, cache: Any = None) -> ApiResult:
