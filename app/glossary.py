@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import html
 
+from paraspace.kinematics.design import PARAMS
+
 __all__ = ["DEFINITIONS", "define", "hover"]
 
 #: name -> one-paragraph definition (plain text; units in words).
@@ -89,6 +91,20 @@ DEFINITIONS: dict[str, str] = {
     "features": "Features narrower than this size (twice the filter radius, in length units) are "
                 "ignored by the stable topology: thinner necks and slots do not count as tunnels.",
 }
+
+
+DEFINITIONS.update({
+    "task_fraction": "Share of the task that is reachable: of the region's sample points (each reachable at "
+                     "every required orientation), or of the poses of a pose list (kinematics.task).",
+    "task_margin": "How far the task region could grow (positive) or must shrink (negative) and stay in the "
+                   "workspace, units; for a pose list the smallest leg slack (kinematics.task).",
+    "contains_task": "1 when every sample of the task is reachable (task_fraction = 1), else 0.",
+    "total_orientation_volume": "Volume of the positions from which every tilt up to T (all azimuths) and every "
+                                "torsion within ±Q is reachable, units³ (kinematics.dexterous).",
+})
+# a design parameter offered as a measure (a size to minimise) is defined by its own description
+DEFINITIONS.update({name: f"{spec.description} ({spec.unit or 'length units'}): a design parameter, offered as a "
+                          "size to minimise" for name, spec in PARAMS.items()})
 
 
 def define(name: str) -> str:

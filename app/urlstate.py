@@ -13,6 +13,7 @@ URL format (keys are the CLI's names)::
      [&voxel=2&z0=130&angle_range=90&angle_step=0.5&view=iso&cut=1&cut_z=80&cut_keep=below&opacity=0.6]
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
      [&pin=10,14,50,100,114.5,50,30,centered[;80,14,50,100,114.5,50,30,centered...]]
+     [&task=box,0,0,130,40,40,30,15,0]
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -46,6 +47,8 @@ from paraspace.kinematics.joints import CONE_AXES, Joints, check_joint_value
 from paraspace.kinematics.orientation import OrientationSettings
 from paraspace.kinematics.pose import POSE_LIMITS, Pose
 from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
+from paraspace.kinematics.task import SHAPES as TASK_SHAPES
+from paraspace.kinematics.task import OrientationSet, Region
 
 from .schema import LINK_FIELDS, link_number_error
 
@@ -144,6 +147,54 @@ SETTING_SLIDERS: Mapping[str, Range] = _SettingRanges(
 JOINT_KEYS: tuple[str, ...] = ("theta_u", "theta_s", "cone_axis", "leg_diameter", "clearance")
 
 
+@dataclasses.dataclass(frozen=True)
+class TaskLink:
+    """The Task tab's region task as a link carries it: ``task=SHAPE,CX,CY,CZ,SIZES...,TILT,TORSION``
+    (``box``: LX,LY,LZ; ``cylinder``: R,H; ``sphere``: R; tilt and torsion in degrees, 0 for the
+    fixed home orientation). A pose list is not carried (it is pasted or uploaded)."""
+
+    region: Region
+    tilt: float = 0.0
+    torsion: float = 0.0
+
+    def orientations(self, step: float | None = None) -> OrientationSet:
+        """The orientation set: every tilt up to ``tilt`` and torsion within ``torsion``, or the home
+        orientation when both are 0."""
+        if self.tilt == 0.0 and self.torsion == 0.0:
+            return OrientationSet() if step is None else OrientationSet(step=step)
+        return OrientationSet(tilt=self.tilt, torsion=self.torsion, **({} if step is None else {"step": step}))
+
+
+def encode_task(task: TaskLink) -> str:
+    """The ``task`` value of :class:`TaskLink`."""
+    r = task.region
+    return ",".join([r.shape, *(format_number(v) for v in (*r.center, *r.sizes, task.tilt, task.torsion))])
+
+
+def parse_task(raw: str) -> tuple[TaskLink | None, str | None]:
+    """:func:`encode_task` read back, or ``(None, message)`` naming what is wrong."""
+    parts = [p.strip() for p in raw.split(",")]
+    shape = parts[0] if parts else ""
+    sizes = TASK_SHAPES.get(shape)
+    if sizes is None:
+        return None, f"task = {_quote(raw)} is invalid; expected box, cylinder or sphere first"
+    names = ("CX", "CY", "CZ", *sizes, "TILT", "TORSION")
+    if len(parts) != 1 + len(names):
+        return None, f"task = {_quote(raw)} is invalid; expected {shape},{','.join(names)}"
+    try:
+        vals = [float(v) for v in parts[1:]]
+    except ValueError:
+        return None, f"task = {_quote(raw)} is invalid; expected numbers after the shape ({','.join(names)})"
+    try:
+        region = Region(shape, tuple(vals[:3]), tuple(vals[3:-2]))  # type: ignore[arg-type]
+        tilt, torsion = vals[-2:]
+        link = TaskLink(region, tilt, torsion)
+        link.orientations()  # checks the tilt and torsion ranges
+    except ParameterError as exc:
+        return None, f"task: {exc}"
+    return link, None
+
+
 #: Most designs pinned at once (Compare tab, and the link's ``pin`` key).
 MAX_PINS = 4
 
@@ -226,6 +277,7 @@ class ExplorerState:
         joints: joint cones and leg interference (:mod:`kinematics.joints`).
         pins: the pinned designs shown beside the current one (Compare tab), at most
             :data:`MAX_PINS`; the link writes them in one ``pin`` key, separated by ``;``.
+        task: the Task tab's region and orientation set (:class:`TaskLink`), or ``None``.
     """
 
     design: Design = dataclasses.field(default_factory=Design)
@@ -244,6 +296,7 @@ class ExplorerState:
     opacity: float = 0.6
     joints: Joints = dataclasses.field(default_factory=Joints)
     pins: tuple[Design, ...] = ()
+    task: TaskLink | None = None
 
     def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
@@ -340,7 +393,7 @@ def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
             + ("voxel", "z0", "angle_range", "angle_step", "view", "cut", "cut_z", "cut_keep", "opacity")
-            + JOINT_KEYS + ("pin",))
+            + JOINT_KEYS + ("pin", "task"))
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -494,8 +547,14 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
             elif pin is not None and pin not in pins:
                 pins.append(pin)
 
+    task = None
+    if "task" in values:
+        task, msg = parse_task(values["task"])
+        if msg:
+            messages.append(msg)
+
     state = ExplorerState(
-        design=design, pose=pose, carriages=carriages, joints=joints, pins=tuple(pins),
+        design=design, pose=pose, carriages=carriages, joints=joints, pins=tuple(pins), task=task,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
         angle_range=numbers.get("angle_range", DEFAULT_STATE.angle_range),
@@ -535,6 +594,8 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
         pairs.append(("opacity", format_number(state.opacity)))
     if state.pins:
         pairs.append(("pin", ";".join(encode_pin(d) for d in state.pins)))
+    if state.task is not None:
+        pairs.append(("task", encode_task(state.task)))
     j = state.joints
     for key in JOINT_KEYS:
         v = getattr(j, key)

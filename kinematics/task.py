@@ -588,6 +588,10 @@ class TaskResult:
     seconds: float
     poses: list[dict[str, Any]] | None = None
     discontinuities: list[dict[str, Any]] | None = None
+    #: a region's sample points (N, 3) and whether each is reachable at every orientation sample
+    #: (for drawing; not in ``to_dict``)
+    cells: np.ndarray | None = None
+    cells_ok: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = {"kind": self.kind, "fraction": self.fraction, "contained": self.contained,
@@ -757,7 +761,8 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
                "outside_pose": outside}
     rep(1.0, "task done")
     return TaskResult(kind="region", fraction=fraction, contained=contained, certified=certified, margin=margin,
-                      worst=worst, binding=binding, slack=slack, details=details, seconds=time.perf_counter() - t0)
+                      worst=worst, binding=binding, slack=slack, details=details, seconds=time.perf_counter() - t0,
+                      cells=pts[inside], cells_ok=ok[inside])
 
 
 def _resolved_slack(design: Design, position: np.ndarray, rot: np.ndarray, joints: Joints,

@@ -690,6 +690,46 @@ def test_several_pins_each_in_its_colour_with_one_table_and_undo(explorer, brows
     assert not s.compare.undo_button.visible
 
 
+def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
+    """Issue 22's Task tab: a region task restored from the link is checked on the design on screen
+    (the same answer as the core's, its sample points drawn in two colours, the worst pose marked);
+    a pasted pose list gives the actuator plot and a slider that moves the platform along the path;
+    a bad field is named."""
+    from paraspace.kinematics.task import OrientationSet, Region, TaskSettings, region_task
+
+    b = browsers("voxel=6&task=box,0,0,130,40,40,30,10,0")
+    s = b.session
+    wait_idle(explorer, s)
+    t = s.task
+    assert str(t.kind.value) == "box" and str(t.sizes.value) == "40,40,30" and t.tilt.value == 10.0
+    b.click(t.run)
+    wait_for(lambda: t.result is not None, 60.0, "the task's answer")
+    ref = region_task(Design(), Region("box", (0.0, 0.0, 130.0), (40.0, 40.0, 30.0)),
+                      OrientationSet(tilt=10.0, torsion=0.0), TaskSettings(voxel=6.0))
+    assert t.result.fraction == ref.fraction and t.result.margin == ref.margin
+    assert t.result.certified == ref.certified
+    assert len(t.result.cells) == ref.details["sample_points"]
+    assert "Reachable:" in t.answer.content and "Binding limit:" in t.answer.content
+    assert any(getattr(h, "name", "") == "/task/worst" for h in t.nodes)
+    wait_for(lambda: "task=box,0,0,130,40,40,30,10,0" in urllib.parse.unquote(b.search), 5.0, "the task in the link")
+    # a bad size is named, nothing runs
+    b.set(t.sizes, "40,x,30")
+    b.click(t.run)
+    wait_for(lambda: "sizes" in t.answer.content and "numbers" in t.answer.content, 10.0, "the message")
+    # a path: the actuator plot and the slider along it
+    b.set(t.kind, "pose list (CSV)")
+    wait_for(lambda: t.csv.visible and not t.sizes.visible, 5.0, "the CSV box")
+    b.set(t.csv, "x,y,z,psi,theta,phi\n-20,0,130,0,0,0\n0,0,135,0,5,0\n20,0,130,0,0,0\n")
+    b.click(t.run)
+    wait_for(lambda: t.result is not None and t.result.kind == "poses", 60.0, "the path's answer")
+    assert t.path_folder.visible and t.plot.figure is not None and t.path_slider.max == 3
+    assert len(t.plot.figure.data) == 12  # the 12 actuators
+    b.set(t.path_slider, 3)
+    wait_for(lambda: s.state.pose.x == 20.0 and s.state.pose.z == 130.0, 10.0, "the platform at pose 3")
+    b.click(t.clear_button)
+    wait_for(lambda: s.state.task is None and not t.nodes, 5.0, "cleared")
+
+
 def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):
     from paraspace.kinematics.tilt_torsion import tilt_torsion_at
 

@@ -153,6 +153,22 @@ class PoseController:
             ctx.state = ctx.state.replace(pose=pose)
         self._after_pose(old, pose, orientation_changed)
 
+    def set_pose(self, pose: Pose) -> None:
+        """Move the platform to ``pose`` from elsewhere (the Task tab's path slider): the pose
+        sliders, the state, the mechanism and the link follow, as for a slider move."""
+        ctx = self.ctx
+        with ctx.lock:
+            old = ctx.state.pose
+            ctx.state = ctx.state.replace(pose=pose)
+            design = ctx.state.design
+        with ctx.programmatic():
+            for k in POSE_KEYS:
+                h = ctx.panels.pose[k]
+                v = float(getattr(pose, k))
+                h.min, h.max = pose_slider_span(k, design, v)
+                h.value = v
+        self._after_pose(old, pose, True)
+
     def _after_pose(self, old: Pose, pose: Pose, orientation_may_change: bool) -> None:
         self.update_mechanism()
         if orientation_may_change and (old.psi, old.theta, old.phi) != (pose.psi, pose.theta, pose.phi):

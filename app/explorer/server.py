@@ -50,7 +50,7 @@ from ..hostcheck import HostPolicy
 from ..jobs import JobManager
 from ..limits import MAX_VOXELS
 from ..textsafe import md_text, plain_text
-from ..urlstate import ExplorerState, panel_pairs, parse_query
+from ..urlstate import ExplorerState, TaskLink, panel_pairs, parse_query
 from . import jsbridge, pagehook
 from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
@@ -66,6 +66,7 @@ from .scene import MechanismScene, ShellScene
 from .session import SessionContext
 from .share_controller import ShareController
 from .studies_controller import StudiesController
+from .task_panel import TaskHooks, TaskPanel
 from .tilt_panel import TiltPanel
 from .view_controller import ViewController
 from .workspace_controller import WorkspaceController
@@ -151,6 +152,11 @@ class ClientSession:
                                                      load_design=self.design_controller.load_design, notify=notify,
                                                      current_indices=self._current_indices))
         self.orientation_controller.on_shown = self.compare.refresh
+        with ctx.panels.tabs.add_tab("Task", viser.Icon.TARGET):
+            self.task = TaskPanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
+                                  TaskHooks(get_input=lambda: (ctx.state.design, ctx.state.joints, ctx.state.voxel),
+                                            get_task=lambda: ctx.state.task, set_task=self._set_task,
+                                            move_to=self.pose_controller.set_pose, notify=notify))
         with ctx.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
             self.paper = PaperPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                     cache=self.explorer.paper_results, notify=notify)
@@ -195,6 +201,11 @@ class ClientSession:
     def _set_pins(self, designs: tuple[Design, ...]) -> None:
         """The Compare tab's pinned designs changed: they go into the state and the link."""
         self.ctx.update_state(pins=tuple(designs))
+        self.share_controller.schedule_url()
+
+    def _set_task(self, task: TaskLink | None) -> None:
+        """The Task tab's region task (or none): it goes into the state and the link."""
+        self.ctx.update_state(task=task)
         self.share_controller.schedule_url()
 
     def _current_indices(self) -> tuple[float, float, bool, bool] | None:
