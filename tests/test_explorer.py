@@ -763,6 +763,33 @@ def test_total_orientation_workspace_shown_on_request(explorer, browsers):
     wait_for(lambda: s.dexterous.handle is None, 5.0, "hidden")
 
 
+def test_shell_coloured_by_the_actuator_usage_maps(explorer, browsers):
+    """Issue 22: the leg-stroke-use and joint-angle maps (kinematics.usage) as shell colour modes;
+    the colours are viridis of the map sampled at the vertices over its range on the workspace."""
+    from paraspace.app.explorer.dexterity_colour import DEXTERITY_VOXEL, field_values_at
+    from paraspace.kinematics.shell import viridis
+    from paraspace.kinematics.usage import actuator_usage
+
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    res = compute_workspace(s.state.design, WorkspaceSettings(voxel=DEXTERITY_VOXEL))
+    maps = actuator_usage(res)
+    for mode, field in (("leg stroke use", maps.leg_use), ("tightest joint angle", maps.joint_angle)):
+        b.set(s.panels.shell_colour, mode)
+        wait_for(lambda mode=mode: s.panels.legend.colorbar.label == f"shell colour = {mode}"
+                 and "mean over the workspace" in s.panels.legend.caption.content, 60.0, f"{mode} colours")
+        shown = s.shell.source
+        lo, hi = np.nanmin(field), np.nanmax(field)
+        assert hi > lo
+        vals = field_values_at(field, res.grid.origin, res.grid.h, shown.vertices)
+        expect = viridis((vals - lo) / (hi - lo))
+        assert np.array_equal(np.asarray(shown.visual.vertex_colors)[:, :3], expect[:, :3])
+        assert f"{np.nanmean(field):.3g}" in s.panels.legend.caption.content
+    b.set(s.panels.shell_colour, "height z")
+    wait_for(lambda: s.panels.legend.colorbar.label == "shell colour = height z", 10.0, "back to height")
+
+
 def test_shell_coloured_by_dexterity(explorer, browsers):
     """Issue 9: the shell coloured by 1/kappa; the colours are the field's at the vertices."""
     from paraspace.app.explorer.dexterity_colour import DEXTERITY_VOXEL

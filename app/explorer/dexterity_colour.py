@@ -5,7 +5,9 @@ coarser grid, h = :data:`DEXTERITY_VOXEL`) at the shell's vertices: every grid c
 workspace takes the value of its nearest reachable cell (a Euclidean distance transform), and a
 vertex takes the value of the cell it lies in. Colours: viridis over the field's range on the
 workspace. :func:`binding_labels` names the limit that bounds the workspace at each surface point.
-The explorer's View tab switches between "height z", "dexterity 1/kappa" and "binding limit".
+The explorer's View tab switches between "height z", "dexterity 1/kappa", "binding limit" and the
+actuator-usage maps of :mod:`kinematics.usage` ("leg stroke use", "tightest joint angle";
+:func:`values_colours`, on the dexterity field's grid).
 """
 
 from __future__ import annotations
@@ -19,7 +21,28 @@ from paraspace.kinematics.shell import viridis
 
 #: Voxel edge of the dexterity field shown on the shell (about 1 s on two cores for the default design).
 DEXTERITY_VOXEL = 6.0
-COLOUR_MODES: tuple[str, ...] = ("height z", "dexterity 1/kappa", "binding limit")
+COLOUR_MODES: tuple[str, ...] = ("height z", "dexterity 1/kappa", "binding limit", "leg stroke use",
+                                  "tightest joint angle")
+#: The usage-map colour modes (:mod:`kinematics.usage`): mode -> (field of ``UsageMaps``, colour-bar
+#: label, what the caption says).
+USAGE_MODES: dict[str, tuple[str, str, str]] = {
+    "leg stroke use": ("leg_use", "leg stroke use (0 mid-stroke, 1 at a limit)",
+                       "the largest |l - l_mid| / (l_s/2) over the six legs at the resolved carriages"),
+    "tightest joint angle": ("joint_angle", "largest joint angle (deg)",
+                             "the largest angle between a leg and its U or S mount axis at the resolved carriages"),
+}
+
+
+def values_colours(mesh: Any, values: np.ndarray, origin: Any, h: float) -> tuple[Any, float, float]:
+    """A copy of ``mesh`` coloured (viridis) by a grid field ``values`` (NaN outside the workspace)
+    sampled at its vertices, and the field's range over the workspace."""
+    vals = field_values_at(values, origin, h, mesh.vertices)
+    finite = values[np.isfinite(values)]
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    u = (vals - lo) / (hi - lo) if hi > lo else np.zeros_like(vals)
+    out = mesh.copy()
+    out.visual.vertex_colors = viridis(np.nan_to_num(u))
+    return out, lo, hi
 
 
 def field_values_at(field: np.ndarray, origin: Any, h: float, points: np.ndarray) -> np.ndarray:

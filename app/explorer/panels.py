@@ -244,8 +244,10 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         cut_keep = gui.add_dropdown("keep", CUT_KEEPS, initial_value=state.cut_keep,
                                     hint="which side of the cut plane stays visible")
         shell_colour = gui.add_dropdown("shell colour", COLOUR_MODES, initial_value=COLOUR_MODES[0],
-                                        hint="height z, or the local dexterity 1/kappa (eq. (26)) computed at "
-                                             "h = 6 in the background")
+                                        hint="height z; the local dexterity 1/kappa (eq. (26)); the limit that "
+                                             "bounds the workspace there; how much of the leg stroke, or how "
+                                             "large a joint angle, the resolved carriages use (computed at h = 6 "
+                                             "in the background)")
         rng = SETTING_SLIDERS["opacity"]
         opacity = gui.add_slider("shell opacity", *slider_span(rng.lo, rng.hi, state.opacity), step=rng.step,
                                  initial_value=state.opacity)

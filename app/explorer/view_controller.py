@@ -26,8 +26,10 @@ from .dexterity_colour import (
     DEXTERITY_VOXEL,
     LIMIT_COLOUR_NAMES,
     LIMIT_COLOURS,
+    USAGE_MODES,
     binding_labels,
     field_colours,
+    values_colours,
 )
 from .session import SessionContext
 from .workspace_job import ShellBundle, ws_settings
@@ -184,6 +186,9 @@ class ViewController:
             ctx.panels.legend.show_computing("shell colour = binding limit", "Shell colour = binding limit")
             self._colour_by_limit(bundle, s)
             return
+        if mode in USAGE_MODES:
+            self._colour_by_usage(bundle, s, mode)
+            return
         ctx.panels.legend.show_computing("shell colour = dexterity 1/kappa", "Shell colour = dexterity 1/kappa")
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
@@ -195,7 +200,7 @@ class ViewController:
 
         def done(job: Job) -> None:
             if job.status != "done" or ctx.bundle is not bundle or \
-                    str(ctx.panels.shell_colour.value) == COLOUR_MODES[0]:
+                    str(ctx.panels.shell_colour.value) != COLOUR_MODES[1]:
                 return
             mesh, lo, hi, dex = job.result
             self._show_mesh(mesh)
@@ -205,6 +210,33 @@ class ViewController:
                 f"(h = {DEXTERITY_VOXEL:g}); GCI (mean) {dex.gci:.3g}")
 
         self._submit_colours(fn, done, "Dexterity colours not started")
+
+    def _colour_by_usage(self, bundle: ShellBundle, s: ExplorerState, mode: str) -> None:
+        """The shell coloured by an actuator-usage map (kinematics.usage) on a coarse grid, in the
+        background; the Legend gives the map's range and its mean over the workspace."""
+        ctx = self.ctx
+        key, label, what = USAGE_MODES[mode]
+        ctx.panels.legend.show_computing(f"shell colour = {mode}", f"Shell colour = {mode}")
+
+        def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
+            from paraspace.kinematics.usage import actuator_usage
+
+            res = compute_workspace(s.design, ws_settings(s, DEXTERITY_VOXEL), cancel=cancel)
+            values = getattr(actuator_usage(res, cancel=cancel), key)
+            mesh, lo, hi = values_colours(bundle.mesh, values, res.grid.origin, res.grid.h)
+            finite = values[np.isfinite(values)]
+            return mesh, lo, hi, float(finite.mean()) if finite.size else float("nan")
+
+        def done(job: Job) -> None:
+            if job.status != "done" or ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != mode:
+                return
+            mesh, lo, hi, mean = job.result
+            self._show_mesh(mesh)
+            ctx.panels.legend.show_field_range(
+                lo, hi, label, f"Shell colour = {what}, from {lo:.3g} to {hi:.3g} (h = {DEXTERITY_VOXEL:g}); "
+                f"mean over the workspace {mean:.3g}", title=f"shell colour = {mode}")
+
+        self._submit_colours(fn, done, f"{mode} colours not started")
 
     def _colour_by_limit(self, bundle: ShellBundle, s: ExplorerState) -> None:
         """The shell coloured by the limit that bounds the workspace there (background job)."""
