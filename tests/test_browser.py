@@ -268,7 +268,7 @@ def test_the_explorer_explains_itself(browser: Browser, explorer: Explorer) -> N
              "the table and the measures on screen")
     assert page.evaluate("() => !!window.__viserMutable.nodeRefFromName['/workspace/pinned']")  # the ghost
     page.mouse.move(5, 5)  # no tooltip over the panel
-    page.get_by_text("Pinned:").scroll_into_view_if_needed()
+    page.get_by_text("Pin 1").first.scroll_into_view_if_needed()
     time.sleep(1.0)
     screenshot_not_blank(page, SHOTS / "compare_a10_a80.png")
     page.context.close()
