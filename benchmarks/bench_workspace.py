@@ -21,8 +21,12 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      (chunks, and one thread while other tasks fill every core): medians of alternating runs, the
      1-thread/2-thread ratio of each and the 2-thread speed-up of today's default.
 
+  7. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
+     design, measured in the same run (medians of alternating runs), with the load average: every
+     row that issue 24's work touched, the new path beside the old one it replaced.
+
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
-                                            [--options] [--threads]
+                                            [--options] [--threads] [--throughput]
 """
 
 from __future__ import annotations
@@ -129,6 +133,51 @@ def option_rows(design: Design, runs: int = 5) -> None:
               f"[{res.volume_inner:.5g}, {res.volume_outer:.5g}]")
 
 
+def _alternating(fns: dict, runs: int) -> dict:
+    """Median seconds of each callable of ``fns``, called in turn ``runs`` times (drift hits all)."""
+    times: dict = {k: [] for k in fns}
+    for _ in range(runs):
+        for k, f in fns.items():
+            t = time.perf_counter()
+            f()
+            times[k].append(time.perf_counter() - t)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def _row(name: str, t: float, base: float, note: str = "") -> None:
+    print(f"  {name:<44} {t * 1e3:9.1f} ms  x{t / base:6.2f} engine  {note}")
+
+
+def shell_rows(design: Design, runs: int = 5) -> None:
+    """Target 9: the explorer's display shell (block re-mesh) at h = 1 with the block means from one
+    summed-volume table, and with the former per-size means (``_block_mean`` for each k tried)."""
+    from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
+    from paraspace.kinematics import shell
+
+    res = compute_workspace(design, WorkspaceSettings(voxel=1.0))
+    fast_call = shell._BlockMeans.__call__
+
+    def old():
+        shell._BlockMeans.__call__ = lambda self, k: shell._block_mean(self.field, k)  # type: ignore[method-assign]
+        try:
+            return make_shell(res, FULL_FACES)
+        finally:
+            shell._BlockMeans.__call__ = fast_call  # type: ignore[method-assign]
+
+    med = _alternating({"engine": lambda: compute_workspace(design, WorkspaceSettings(voxel=1.0)),
+                        "new": lambda: make_shell(res, FULL_FACES), "old": old}, runs)
+    print(f"  target 9, make_shell h=1 (load average {os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms):")
+    _row("make_shell, block means from one table", med["new"], med["engine"], "(target <= 2x)")
+    _row("make_shell, block means per size (before)", med["old"], med["engine"])
+
+
+def throughput_rows(design: Design) -> None:
+    """Item 7 of the module docstring."""
+    print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
+          f"{os.cpu_count()} CPUs):")
+    shell_rows(design)
+
+
 POLICIES = ("equal split", "chunks", "chunks+load")
 
 
@@ -206,9 +255,13 @@ def main() -> None:
     ap.add_argument("--only-v2", action="store_true", help="only the engine-v2 rows")
     ap.add_argument("--options", action="store_true", help="only the option-cost rows (item 5)")
     ap.add_argument("--threads", action="store_true", help="only the thread rows (item 6)")
+    ap.add_argument("--throughput", action="store_true", help="only the issue-24 throughput rows (item 7)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
+    if ns.throughput:
+        throughput_rows(design)
+        return
     if ns.options or ns.threads:
         if ns.options:
             print(f"\noption costs at h = 2, default design (load average {os.getloadavg()[0]:.2f}):")
@@ -250,6 +303,8 @@ def main() -> None:
     print(f"  numpy brute force: {t_ref:8.3f} s   volume={v_ref:.6g}")
     print(f"  engine           : {t_eng:8.3f} s   volume={eng.volume:.6g}")
     print(f"  speed-up ratio   : {t_ref / t_eng:8.0f}x   identical voxels: {bool((ref.reshape(grid.shape) == eng.occupancy).all())}")
+
+    throughput_rows(design)
 
     if not ns.skip_converged:
         conv = compute_workspace(design, WorkspaceSettings(voxel=1.0, eta_step=0.125, bounds=BOX))
