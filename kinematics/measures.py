@@ -648,6 +648,178 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     >>> m.voids, m.genus, m.boundary_closed
     (0, 0, True)
     """
+    return WorkspaceMeasures(**measure_fields(
+        result, None, connectivity=connectivity, hollowness=hollowness, floor_closes=floor_closes,
+        completeness=completeness, open_cavity_tolerance=open_cavity_tolerance, piece_fraction=piece_fraction,
+        feature_radius=feature_radius, feature_radius_extent=feature_radius_extent, cancel=cancel))
+
+
+#: every field of :class:`WorkspaceMeasures`, in its order
+MEASURE_FIELDS: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(WorkspaceMeasures))
+
+
+class _Steps:
+    """The steps of :func:`measure_fields`, each computed on first use and kept: a field computes
+    only the steps its definition needs (``components`` a labelling, ``hollowness`` the hull...),
+    and every step gives the number it gives in a full :func:`measure_workspace`."""
+
+    def __init__(self, occ: np.ndarray, n: int, vv: float, opts: dict, cancel: CancelToken) -> None:
+        self.occ, self.n, self.vv, self.o, self.cancel = occ, n, vv, opts, cancel
+        self._memo: dict[str, Any] = {}
+
+    def get(self, name: str) -> Any:
+        if name not in self._memo:
+            check(self.cancel)
+            self._memo[name] = getattr(self, "_" + name)()
+        return self._memo[name]
+
+    def _labels(self):
+        occ, n, conn = self.occ, self.n, self.o["connectivity"]
+        labels, components = ndi.label(occ, structure=_structure(conn))
+        sizes = np.bincount(labels.ravel())[1:]
+        largest = float(sizes.max() / n)
+        is_piece = sizes >= self.o["piece_fraction"] * n
+        n_pieces = int(is_piece.sum())
+        fragment_fraction = float(sizes[~is_piece].sum() / n)
+        piece_set = occ if n_pieces == components else np.concatenate([[False], is_piece])[labels]
+        return int(components), largest, n_pieces, fragment_fraction, piece_set
+
+    def _voids(self):
+        voids_m = void_mask(self.occ, self.o["connectivity"])
+        _, n_voids = ndi.label(voids_m, structure=_structure(dual_connectivity(self.o["connectivity"])))
+        return voids_m, int(n_voids), int(voids_m.sum()) * self.vv
+
+    def _chi_w(self):
+        return int(euler_number(self.occ, connectivity=self.o["connectivity"]))
+
+    def _filled(self):
+        """``(b0(F), chi(F))`` of the filled solid."""
+        conn = self.o["connectivity"]
+        voids_m, n_voids, _ = self.get("voids")
+        if n_voids:
+            filled = self.occ | voids_m
+            _, filled_components = ndi.label(filled, structure=_structure(conn))
+            return int(filled_components), int(euler_number(filled, connectivity=conn))
+        return self.get("labels")[0], self.get("chi_w")
+
+    def _hull(self):
+        hull = hull_mask(self.occ)
+        return hull, int(hull.sum()) * self.vv
+
+    def _under(self):
+        under = hollow_mask(self.occ, "hull", self.get("hull")[0])
+        return under, int(under.sum())
+
+    def _hollow_volume(self):
+        if self.o["hollowness_mode"] == "hull":
+            return self.get("under")[1] * self.vv
+        return int(hollow_mask(self.occ, self.o["hollowness_mode"]).sum()) * self.vv
+
+    def _gap_volume(self):
+        return int(column_gap_mask(self.occ).sum()) * self.vv
+
+    def _cavities(self):
+        """``(open_cavity_ratio, sealed_cavity_volume)``."""
+        under, n_under = self.get("under")
+        if n_under:
+            sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None)
+        else:
+            sealed = self.get("voids")[0]
+        n_open = int((under & ~sealed).sum())
+        open_ratio = n_open / (n_under + self.n) if n_under else 0.0
+        return float(open_ratio), int((under & sealed).sum()) * self.vv
+
+    def _pieces_filled(self):
+        components, _, n_pieces, _, piece_set = self.get("labels")
+        if n_pieces != components:
+            return filled_genus(piece_set, self.o["connectivity"])[0]
+        return self.get("filled")[0]
+
+    def _piece_clipped(self):
+        piece_set = self.get("labels")[4]
+        return [f for f in touched_faces(piece_set) if not (self.o["floor_closes"] and f == self.o["floor_face"])]
+
+    def _stable(self):
+        """``(stable_components, stable_genus, stable_volume_fraction)``."""
+        stable = feature_filter(self.get("labels")[4], self.o["r"] / self.o["h"], self.cancel)
+        check(self.cancel)
+        stable_components, stable_genus = filled_genus(stable, self.o["connectivity"])
+        return stable_components, stable_genus, float(stable.sum() / self.n)
+
+    def _reasons(self):
+        o = self.o
+        reasons = []
+        pieces_filled = self.get("pieces_filled")
+        if pieces_filled != 1:
+            reasons.append(f"{pieces_filled} separate pieces of at least {100 * o['piece_fraction']:g}% of the "
+                           f"volume (the largest holds {100 * self.get('labels')[1]:.1f}%)")
+        piece_clipped = self.get("piece_clipped")
+        if piece_clipped:
+            reasons.append("cut by the computation box at " + ", ".join(piece_clipped))
+        stable_genus = self.get("stable")[1]
+        if stable_genus:
+            reasons.append(f"genus {stable_genus} (tunnels or windows through the surface, wider than and "
+                           f"walled by material thicker than about {2 * o['r']:.3g})")
+        if o["completeness_mode"] == "sealed":
+            open_ratio = self.get("cavities")[0]
+            if open_ratio > o["open_cavity_tolerance"]:
+                reasons.append(f"underside cavity not enclosed by the workspace and the base "
+                               f"(open cavity ratio {open_ratio:.2f})")
+        return reasons
+
+
+#: each field of :class:`WorkspaceMeasures` that needs a step of :class:`_Steps`, as ``f(steps, volume)``
+_FIELD_OF: dict[str, Any] = {
+    "components": lambda st, v: st.get("labels")[0],
+    "largest_component_fraction": lambda st, v: st.get("labels")[1],
+    "pieces": lambda st, v: st.get("labels")[2],
+    "fragments": lambda st, v: st.get("labels")[0] - st.get("labels")[2],
+    "fragment_volume_fraction": lambda st, v: st.get("labels")[3],
+    "voids": lambda st, v: st.get("voids")[1],
+    "void_volume": lambda st, v: st.get("voids")[2],
+    "void_ratio": lambda st, v: _ratio(st.get("voids")[2], v),
+    "euler_characteristic": lambda st, v: st.get("chi_w"),
+    "filled_components": lambda st, v: st.get("filled")[0],
+    "genus": lambda st, v: st.get("filled")[0] - st.get("filled")[1],
+    "boundary_closed": lambda st, v: bool(st.get("filled")[0] == 1 and not st.o["clipped"]),
+    "hull_volume": lambda st, v: st.get("hull")[1],
+    "solidity": lambda st, v: float(v / st.get("hull")[1]) if st.get("hull")[1] else 1.0,
+    "hollow_volume": lambda st, v: st.get("hollow_volume"),
+    "hollowness": lambda st, v: _ratio(st.get("hollow_volume"), v),
+    "column_gap_ratio": lambda st, v: _ratio(st.get("gap_volume"), v),
+    "open_cavity_ratio": lambda st, v: st.get("cavities")[0],
+    "sealed_cavity_volume": lambda st, v: st.get("cavities")[1],
+    "stable_components": lambda st, v: st.get("stable")[0],
+    "stable_genus": lambda st, v: st.get("stable")[1],
+    "stable_volume_fraction": lambda st, v: st.get("stable")[2],
+    "boundary_closed_stable": lambda st, v: bool(st.get("pieces_filled") == 1 and not st.get("piece_clipped")),
+    "boundary_complete": lambda st, v: not st.get("reasons"),
+    "completeness_reason": lambda st, v: "; ".join(st.get("reasons")) if st.get("reasons") else "complete",
+}
+#: the order a full evaluation computes the steps in (the order of measure_workspace's cancel checks)
+_FULL_ORDER = ("components", "voids", "euler_characteristic", "genus", "hull_volume", "hollowness",
+               "column_gap_ratio", "open_cavity_ratio", "boundary_closed_stable", "stable_genus")
+
+
+def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: int = 1, hollowness: str = "hull",
+                   floor_closes: bool = True, completeness: str = "sealed", open_cavity_tolerance: float = 0.02,
+                   piece_fraction: float = 0.01, feature_radius: float | None = None,
+                   feature_radius_extent: float = 0.02, cancel: CancelToken = None) -> dict[str, Any]:
+    """The fields ``names`` of :func:`measure_workspace` (every field when ``None``) as a dict, each
+    with the value a full :func:`measure_workspace` gives, computing only the steps those fields
+    need (a sweep point or an optimiser evaluation asks only for what it uses: ``volume`` alone costs
+    a count, ``hollowness`` the hull, ``boundary_complete`` every step but the column gaps). The
+    size and box fields (``volume``, ``voxels``, ``voxel_size``, ``bounds``, ``extents``,
+    ``touched_faces``, ``clipped_faces``, ``floor_face`` and the options) are always included; the
+    other arguments are :func:`measure_workspace`'s.
+
+    Raises:
+        ValueError: an invalid option, or a name that is not a field of :class:`WorkspaceMeasures`.
+    """
+    wanted = MEASURE_FIELDS if names is None else tuple(dict.fromkeys(names))
+    unknown = [f for f in wanted if f not in MEASURE_FIELDS]
+    if unknown:
+        raise ValueError(f"names = {unknown!r} are invalid: valid values the fields of WorkspaceMeasures")
     dual_connectivity(connectivity)  # validates
     if not 0.0 <= piece_fraction <= 1.0:
         raise ValueError(f"piece_fraction = {piece_fraction!r} is invalid: valid values [0, 1]")
@@ -671,18 +843,24 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
     if z_floor is not None and abs(grid.lo[2] - float(z_floor)) <= 0.5 * h + 1e-9 * max(1.0, h):
         floor_face = "z-"
     clipped = [f for f in touched if not (floor_closes and f == floor_face)]
-    binding = (chain_binding(result.chain_mask, h, occ) if result.chain_mask is not None else None)
+    binding = (chain_binding(result.chain_mask, h, occ) if result.chain_mask is not None
+               and "chain_binding" in wanted else None)
     options: dict[str, Any] = dict(connectivity=connectivity, hollowness_mode=hollowness,
                                    completeness_mode=completeness, floor_face=floor_face,
                                    piece_fraction=float(piece_fraction))
 
+    always = dict(volume=volume, voxels=n, voxel_size=h, touched_faces=touched, clipped_faces=clipped, **options)
     if n == 0:
-        return WorkspaceMeasures(
-            volume=0.0, voxels=0, voxel_size=h, bounds=None, extents=[0.0, 0.0, 0.0], components=0,
+        empty = dict(
+            bounds=None, extents=[0.0, 0.0, 0.0], components=0,
             voids=0, void_volume=0.0, void_ratio=0.0, hollowness=0.0, column_gap_ratio=0.0,
             boundary_closed=False, genus=0, euler_characteristic=0, box_contact_fraction=0.0,
-            boundary_complete=False, chain_binding=binding, completeness_reason="empty workspace",
-            **options)
+            boundary_complete=False, chain_binding=binding, completeness_reason="empty workspace")
+        defaults = {f.name: f.default for f in dataclasses.fields(WorkspaceMeasures)
+                    if f.default is not dataclasses.MISSING}
+        defaults.update(touched_faces=[], clipped_faces=[])
+        out = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
+        return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **out}
 
     any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
@@ -691,98 +869,34 @@ def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollown
         hi_i = len(m) - 1 - int(np.argmax(m[::-1]))
         bmin.append(float(grid.origin[a] + h * lo_i - 0.5 * h))
         bmax.append(float(grid.origin[a] + h * hi_i + 0.5 * h))
+    extents = [b - a for a, b in zip(bmin, bmax)]
+    always.update(bounds={"min": bmin, "max": bmax}, extents=extents)
 
     # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
     # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
     lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
     hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    occ = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
-
-    # topology
-    check(cancel)
-    labels, components = ndi.label(occ, structure=_structure(connectivity))
-    sizes = np.bincount(labels.ravel())[1:]
-    largest = float(sizes.max() / n)
-    is_piece = sizes >= piece_fraction * n
-    n_pieces = int(is_piece.sum())
-    fragment_fraction = float(sizes[~is_piece].sum() / n)
-    piece_set = occ if n_pieces == components else np.concatenate([[False], is_piece])[labels]
-    del labels
-    check(cancel)
-    voids_m = void_mask(occ, connectivity)
-    _, n_voids = ndi.label(voids_m, structure=_structure(dual_connectivity(connectivity)))
-    void_volume = int(voids_m.sum()) * vv
-    check(cancel)
-    chi_w = int(euler_number(occ, connectivity=connectivity))
-    if n_voids:
-        filled = occ | voids_m
-        _, filled_components = ndi.label(filled, structure=_structure(connectivity))
-        chi_f = int(euler_number(filled, connectivity=connectivity))
-    else:
-        filled_components, chi_f = components, chi_w
-    genus = int(filled_components - chi_f)
-
-    # cavities
-    check(cancel)
-    hull = hull_mask(occ)
-    hull_volume = int(hull.sum()) * vv
-    check(cancel)
-    under = hollow_mask(occ, "hull", hull)
-    n_under = int(under.sum())
-    hollow_volume = (n_under if hollowness == "hull" else int(hollow_mask(occ, hollowness).sum())) * vv
-    check(cancel)
-    gap_volume = int(column_gap_mask(occ).sum()) * vv
-    check(cancel)
-    sealed = sealed_mask(occ, connectivity, floor=floor_face is not None) if n_under else voids_m
-    n_open = int((under & ~sealed).sum())
-    open_ratio = n_open / (n_under + n) if n_under else 0.0
-
-    # stable topology: pieces, and the genus of the open-close filtered solid
-    check(cancel)
-    pieces_filled = (filled_genus(piece_set, connectivity)[0] if n_pieces != components
-                     else int(filled_components))
-    piece_clipped = [f for f in touched_faces(piece_set) if not (floor_closes and f == floor_face)]
-    extent = max(b - a for a, b in zip(bmin, bmax))
+    crop = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
+    extent = max(extents)
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
-    stable = feature_filter(piece_set, r / h, cancel)
-    check(cancel)
-    stable_components, stable_genus = filled_genus(stable, connectivity)
-    stable_fraction = float(stable.sum() / n)
-    del stable
-    closed_stable = bool(pieces_filled == 1 and not piece_clipped)
-
-    # boundary
-    closed = bool(filled_components == 1 and not clipped)
-    reasons = []
-    if pieces_filled != 1:
-        reasons.append(f"{pieces_filled} separate pieces of at least {100 * piece_fraction:g}% of the volume "
-                       f"(the largest holds {100 * largest:.1f}%)")
-    if piece_clipped:
-        reasons.append("cut by the computation box at " + ", ".join(piece_clipped))
-    if stable_genus:
-        reasons.append(f"genus {stable_genus} (tunnels or windows through the surface, wider than and "
-                       f"walled by material thicker than about {2 * r:.3g})")
-    if completeness == "sealed" and open_ratio > open_cavity_tolerance:
-        reasons.append(f"underside cavity not enclosed by the workspace and the base "
-                       f"(open cavity ratio {open_ratio:.2f})")
-    complete = not reasons
-
-    return WorkspaceMeasures(
-        volume=volume, voxels=n, voxel_size=h,
-        bounds={"min": bmin, "max": bmax}, extents=[b - a for a, b in zip(bmin, bmax)],
-        components=int(components), voids=int(n_voids), void_volume=void_volume,
-        void_ratio=_ratio(void_volume, volume),
-        hollowness=_ratio(hollow_volume, volume), column_gap_ratio=_ratio(gap_volume, volume),
-        boundary_closed=closed, genus=genus, euler_characteristic=chi_w,
-        box_contact_fraction=box_contact_fraction(result.occupancy),
-        boundary_complete=complete, chain_binding=binding,
-        hollow_volume=hollow_volume, filled_components=int(filled_components),
-        touched_faces=touched, clipped_faces=clipped, hull_volume=hull_volume,
-        solidity=float(volume / hull_volume) if hull_volume else 1.0,
-        open_cavity_ratio=float(open_ratio), sealed_cavity_volume=int((under & sealed).sum()) * vv,
-        completeness_reason="; ".join(reasons) if reasons else "complete",
-        largest_component_fraction=largest, pieces=n_pieces, fragments=int(components - n_pieces),
-        fragment_volume_fraction=fragment_fraction, feature_radius=r, feature_radius_voxels=r / h,
-        stable_components=stable_components, stable_genus=stable_genus, stable_volume_fraction=stable_fraction,
-        boundary_closed_stable=closed_stable, **options)
+    steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,
+                                     floor_closes=floor_closes, clipped=clipped, r=r, h=h,
+                                     open_cavity_tolerance=open_cavity_tolerance), cancel)
+    out: dict[str, Any] = {}
+    for name in _FULL_ORDER if names is None else ():
+        _FIELD_OF[name](steps, volume)
+    for name in wanted:
+        if name in always:
+            continue
+        if name in _FIELD_OF:
+            out[name] = _FIELD_OF[name](steps, volume)
+        elif name == "box_contact_fraction":
+            out[name] = box_contact_fraction(result.occupancy)
+        elif name == "chain_binding":
+            out[name] = binding
+        elif name == "feature_radius":
+            out[name] = r
+        elif name == "feature_radius_voxels":
+            out[name] = r / h
+    return {**always, **out}

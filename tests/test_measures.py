@@ -345,3 +345,26 @@ def test_measures_do_not_depend_on_empty_space_around_the_workspace(a):
                 "completeness_reason"):
         m0.pop(key), m1.pop(key)
     assert m0 == m1
+
+
+def test_each_measure_alone_equals_the_full_measurement_and_computes_only_its_steps(monkeypatch):
+    """Issue 24 target 2: ``measure_fields`` with one field computes only the steps that field needs
+    and gives the number the full ``measure_workspace`` gives, on several designs (chain masks too)
+    and both connectivities; ``volume`` alone labels nothing and builds no hull."""
+    from paraspace.kinematics import measures as mod
+
+    for design in (Design(), Design(a=10), Design(l_s=20)):
+        res = compute_workspace(design, WorkspaceSettings(voxel=6.0, diagnostics=True))
+        for kw in ({}, {"connectivity": 3, "hollowness": "shadow", "completeness": "topological"}):
+            full = measure_workspace(res, **kw).to_dict()
+            for name in mod.MEASURE_FIELDS:
+                one = mod.measure_fields(res, [name], **kw)
+                assert json.loads(json.dumps(mod.jsonable(one[name]))) == full[name], name
+    calls = []
+    monkeypatch.setattr(mod, "hull_mask", lambda *a: calls.append("hull"))
+    monkeypatch.setattr(mod.ndi, "label", lambda *a, **k: calls.append("label"))
+    one = mod.measure_fields(res, ["volume", "extents"])
+    assert one["volume"] == full["volume"] and one["extents"] == full["extents"] and calls == []
+    assert "components" not in one and "hollowness" not in one
+    with pytest.raises(ValueError, match="names"):
+        mod.measure_fields(res, ["volumes"])
