@@ -192,12 +192,69 @@ def evaluation_rows(design: Design, runs: int = 5) -> None:
         _row("volume,-hollowness: " + ",".join(hull), med["hull"], med["engine"])
 
 
+@contextlib.contextmanager
+def _former_measures():
+    """kinematics.measures on its former path (before issue 24): skimage's Euler number, voids by
+    labelling the whole padded complement, int32 dilations of the whole grid, every hull facet at
+    every column, column gaps and cover by cumulative ors (the tests' slow path)."""
+    import numpy as np
+    from scipy import ndimage as ndi
+    from skimage.measure import euler_number
+
+    from paraspace.kinematics import measures as mod
+
+    def voids(occ, conn):
+        v = mod.void_mask_labelled(occ, conn)
+        return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
+
+    def dilate(mask, r, complement=False, symmetric=False):
+        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
+
+    hull = mod.hull_mask
+
+    def hollow(occ, mode="hull", hull_=None):
+        u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
+        return u & (hull(occ, tiled=False) if hull_ is None else hull_)
+
+    patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
+             "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
+             "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum())}
+    saved = {k: getattr(mod, k) for k in patch}
+    for k, v in patch.items():
+        setattr(mod, k, v)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            setattr(mod, k, v)
+
+
+def measure_rows(design: Design, runs: int = 3) -> None:
+    """Target 1: measure_workspace (every measure) at h = 2 and h = 1, and on its former path."""
+    from paraspace.kinematics.measures import measure_workspace
+
+    for h in (2.0, 1.0):
+        res = compute_workspace(design, WorkspaceSettings(voxel=h))
+
+        def old(res=res):
+            with _former_measures():
+                return measure_workspace(res)
+
+        med = _alternating({"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h)),
+                            "new": lambda res=res: measure_workspace(res), "old": old}, runs)
+        print(f"  target 1, measure_workspace h={h:g} (load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms):")
+        _row("measure_workspace", med["new"], med["engine"], "(target <= 1x)")
+        _row("measure_workspace, former path (before)", med["old"], med["engine"])
+
+
 def throughput_rows(design: Design) -> None:
     """Item 7 of the module docstring."""
     print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
           f"{os.cpu_count()} CPUs):")
     shell_rows(design)
     evaluation_rows(design)
+    measure_rows(design)
 
 
 POLICIES = ("equal split", "chunks", "chunks+load")
