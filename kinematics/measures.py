@@ -785,41 +785,75 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, d1, out):
+def _set_blocks_kernel(m, inv, bs, blk):
+    """``blk[a, b, c]``: the block of ``bs^3`` voxels at ``(a, b, c) * bs`` holds a voxel of the set
+    (``m != inv``); each block's scan stops at its first such voxel."""
+    nx, ny, nz = m.shape
+    nb1, nb2 = blk.shape[1], blk.shape[2]
+    for q in prange(blk.shape[0] * nb1 * nb2):
+        a = q // (nb1 * nb2)
+        b = (q // nb2) % nb1
+        c = q % nb2
+        hit = False
+        for i in range(a * bs, min(nx, (a + 1) * bs)):
+            for j in range(b * bs, min(ny, (b + 1) * bs)):
+                for k in range(c * bs, min(nz, (c + 1) * bs)):
+                    if m[i, j, k] != inv:
+                        hit = True
+                        break
+                if hit:
+                    break
+            if hit:
+                break
+        blk[a, b, c] = hit
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
     """:func:`_ball_dilate_kernel`'s set, in fewer bytes and passes: the squared distances are kept
     in ``d1`` (uint8, capped at 255 > ``r2``: a capped distance stays beyond the ball, and the
     searches stop at ``w`` before a cap could matter), the y and z searches are fused per x slice
     through a slice buffer, the mask is read complemented when ``inv_in`` and written complemented
     when ``inv_out`` (an erosion is the complement of the complement's dilation), and with ``half``
     (a mask symmetric under ``j -> ny - 1 - j``) only the rows ``j >= ny // 2`` are computed and
-    mirrored (the result is symmetric too)."""
+    mirrored (the result is symmetric too). A voxel whose block of ``bs >= w`` voxels has no set
+    voxel in itself or in the 26 blocks around it (``near`` false) has none within ``w`` along any
+    axis: its distances are beyond ``r2`` (the cap) without a search, and no result changes (any
+    distance beyond ``r2`` plays the part of the cap)."""
     nx, ny, nz = m.shape
     j0 = ny // 2 if half else 0
     cap = 255
     for j in prange(j0, ny):
         # the distance along x to the nearest set voxel, by a forward and a backward sweep
-        near = np.empty(nz, np.int64)
+        near_i = np.empty(nz, np.int64)
         for k in range(nz):
-            near[k] = -(1 << 40)
+            near_i[k] = -(1 << 40)
         for i in range(nx):
             for k in range(nz):
                 if m[i, j, k] != inv_in:
-                    near[k] = i
-                d = i - near[k]
+                    near_i[k] = i
+                d = i - near_i[k]
                 d1[i, j, k] = d * d if d <= w else cap
         for k in range(nz):
-            near[k] = 1 << 40
+            near_i[k] = 1 << 40
         for i in range(nx - 1, -1, -1):
             for k in range(nz):
                 if m[i, j, k] != inv_in:
-                    near[k] = i
-                d = near[k] - i
+                    near_i[k] = i
+                d = near_i[k] - i
                 if d <= w and d * d < d1[i, j, k]:
                     d1[i, j, k] = d * d
+    kb = np.empty(nz, np.int64)
+    for k in range(nz):
+        kb[k] = k // bs
     for i in prange(nx):
         d2 = np.empty(nz, np.int32)
         for j in range(j0, ny):
+            row = near[i // bs, j // bs]
             for k in range(nz):
+                if not row[kb[k]]:
+                    d2[k] = cap
+                    continue
                 best = np.int32(d1[i, j, k])
                 for dj in range(1, w + 1):
                     c = dj * dj
@@ -840,14 +874,15 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, d1, out):
                 d2[k] = best
             for k in range(nz):
                 best = d2[k]
-                for dk in range(1, w + 1):
-                    c = dk * dk
-                    if c >= best or c > r2:
-                        break
-                    if k + dk < nz and d2[k + dk] + c < best:
-                        best = d2[k + dk] + c
-                    if k - dk >= 0 and d2[k - dk] + c < best:
-                        best = d2[k - dk] + c
+                if row[kb[k]]:
+                    for dk in range(1, w + 1):
+                        c = dk * dk
+                        if c >= best or c > r2:
+                            break
+                        if k + dk < nz and d2[k + dk] + c < best:
+                            best = d2[k + dk] + c
+                        if k - dk >= 0 and d2[k - dk] + c < best:
+                            best = d2[k - dk] + c
                 val = (best <= r2) != inv_out
                 out[i, j, k] = val
                 if half:
@@ -871,8 +906,13 @@ def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = Fa
     out = np.empty(m.shape, np.bool_)
     if r2 < 255:
         d1 = np.empty(m.shape, np.uint8)
+        bs = max(w, 4)
+        blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
         with KERNEL_LOCK:
-            _ball_dilate_fast_kernel(m, w, r2, complement, complement, symmetric, d1, out)
+            _set_blocks_kernel(m, complement, bs, blk)
+        near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
+        with KERNEL_LOCK:
+            _ball_dilate_fast_kernel(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
         return out
     if complement:
         m = ~m
