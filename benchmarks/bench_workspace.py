@@ -248,6 +248,40 @@ def measure_rows(design: Design, runs: int = 3) -> None:
         _row("measure_workspace, former path (before)", med["old"], med["engine"])
 
 
+def tail_rows(design: Design, runs: int = 3) -> None:
+    """Target 7: the engine's serial tail at h = 1 and 0.5: the former numpy mirror fill and ``== 7``
+    test against the fused parallel pass on the same chain masks."""
+    import numpy as np
+
+    from paraspace.kinematics import workspace
+
+    for h in (1.0, 0.5):
+        ws = WorkspaceSettings(voxel=h)
+        res = compute_workspace(design, WorkspaceSettings(voxel=h, diagnostics=True))
+        ny = res.grid.shape[1]
+        ny_eval = (ny + 1) // 2
+        half = res.chain_mask.copy()
+        half[:, ny_eval:] = 0
+        occ = np.empty(half.shape, bool)
+
+        def old_tail():
+            out = half.copy()
+            out[:, ny_eval:] = workspace._MIRROR_BITS[out[:, : ny - ny_eval]][:, ::-1]
+            return out == workspace.ALL_CHAINS
+
+        def new_tail():
+            out = half.copy()
+            workspace._finish_kernel(out, ny_eval, True, workspace._MIRROR_BITS, occ)
+            return occ
+
+        med = _alternating({"engine": lambda ws=ws: compute_workspace(design, ws),
+                            "copy": lambda: half.copy(), "old": old_tail, "new": new_tail}, runs)
+        print(f"  target 7, serial tail h={h:g} ({res.grid.size:,} voxels; load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms):")
+        _row("mirror fill + == 7, one parallel pass", med["new"] - med["copy"], med["engine"])
+        _row("mirror fill + == 7, numpy (before)", med["old"] - med["copy"], med["engine"])
+
+
 def throughput_rows(design: Design) -> None:
     """Item 7 of the module docstring."""
     print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
@@ -255,6 +289,7 @@ def throughput_rows(design: Design) -> None:
     shell_rows(design)
     evaluation_rows(design)
     measure_rows(design)
+    tail_rows(design)
 
 
 POLICIES = ("equal split", "chunks", "chunks+load")
