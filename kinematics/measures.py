@@ -372,9 +372,9 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
             _enclosed_kernel(occ, cand)
     if not cand.any():
         return cand, 0
-    any_x, any_y, any_z = (cand.any(axis=a) for a in ((1, 2), (0, 2), (0, 1)))
-    lo = [int(np.argmax(m)) for m in (any_x, any_y, any_z)]
-    hi = [len(m) - int(np.argmax(m[::-1])) for m in (any_x, any_y, any_z)]
+    flags = [np.asarray(cand.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1))]
+    lo = [int(np.argmax(m)) for m in flags]
+    hi = [len(m) - int(np.argmax(m[::-1])) for m in flags]
     # one voxel of margin: the neighbours the test looks at (candidates never lie on the grid's edge)
     box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
     sub = cand[box]
@@ -607,6 +607,23 @@ def hull_columns(nx: int, ny: int, eq: np.ndarray, tol: float, tiled: bool = Tru
     return zlo, zhi
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _column_ends_kernel(occ, kbot, ktop):
+    """Per column the lowest and highest reachable index (``-1`` in both for an empty column)."""
+    nx, ny, nz = occ.shape
+    for i in prange(nx):
+        for j in range(ny):
+            lo = -1
+            hi = -1
+            for k in range(nz):
+                if occ[i, j, k]:
+                    if lo < 0:
+                        lo = k
+                    hi = k
+            kbot[i, j] = lo
+            ktop[i, j] = hi
+
+
 def hull_mask(occupancy: np.ndarray, tiled: bool = True) -> np.ndarray:
     """Voxels whose centre lies in the convex hull of the reachable voxels' centres.
 
@@ -619,9 +636,11 @@ def hull_mask(occupancy: np.ndarray, tiled: bool = True) -> np.ndarray:
     if not occ.any():
         return np.zeros_like(occ)
     nx, ny, nz = occ.shape
-    col = occ.any(axis=2)
-    kbot = np.argmax(occ, axis=2)
-    ktop = nz - 1 - np.argmax(occ[:, :, ::-1], axis=2)
+    kbot = np.empty((nx, ny), np.int64)
+    ktop = np.empty((nx, ny), np.int64)
+    with KERNEL_LOCK:
+        _column_ends_kernel(np.ascontiguousarray(occ), kbot, ktop)
+    col = ktop >= 0
     ii, jj = np.nonzero(col)
     kb, kt = kbot[ii, jj], ktop[ii, jj]
     two = kt != kb
@@ -1317,8 +1336,8 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         defaults = {f.name: f.default for f in dataclasses.fields(WorkspaceMeasures)
                     if f.default is not dataclasses.MISSING}
         defaults.update(touched_faces=[], clipped_faces=[])
-        out = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
-        return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **out}
+        rest = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
+        return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **rest}
 
     any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
