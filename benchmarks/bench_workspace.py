@@ -187,7 +187,7 @@ def evaluation_rows(design: Design, runs: int = 5) -> None:
                             "hull": lambda ws=ws, n=hull: evaluate_design(design, ws, measures=n)}, runs)
         print(f"  target 2, one evaluation at h={h:g} (load average {os.getloadavg()[0]:.2f}; "
               f"engine {med['engine'] * 1e3:.0f} ms):")
-        _row("every measure (before)", med["all"], med["engine"])
+        _row("every measure (what each evaluation computed before)", med["all"], med["engine"])
         _row("volume,-footprint: " + ",".join(names), med["named"], med["engine"], "(target <= 2x at h = 4)")
         _row("volume,-hollowness: " + ",".join(hull), med["hull"], med["engine"])
 
