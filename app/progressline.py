@@ -2,8 +2,8 @@
 
 :func:`progress_line` returns a ``progress(fraction, message)`` callback (the core's
 ``kinematics.progress`` convention) that moves a tqdm bar ``label [#####.....]  42 %, message`` on
-stderr (redrawn at most every 0.1 s), and a ``close()`` that clears it. It draws only when stderr is
-a terminal, or when asked to (``force``, e.g. ``paraspace optimize --progress``): piped or
+stderr (redrawn at most every 0.1 s), and a ``close()`` that draws the last state and clears it.
+It draws only when stderr is a terminal, or when asked to (``force``, e.g. ``paraspace optimize --progress``): piped or
 redirected stderr, and therefore CI logs, stay clean, and stdout (where ``--json`` writes) is never
 touched.
 """
@@ -45,6 +45,7 @@ def progress_line(label: str, stream: TextIO | None = None, *,
 
     def close() -> None:
         if bars:
+            bars[0].refresh()  # the last state, even when it came within 0.1 s of the one drawn before
             bars[0].close()
 
     return progress, close

@@ -27,8 +27,13 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      the certification, as the optimiser evaluates it), and a 1,000-pose trajectory (a helix with tilt and
      time stamps: reachability, continuous carriage motion, actuator values): medians, ratios.
 
+  8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
+     design, measured in the same run (medians of alternating runs), with the load average: every
+     row that issue 24's work touched, the new path beside the old one it replaced.
+
+
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
-                                            [--options] [--threads] [--task]
+                                            [--options] [--threads] [--task] [--throughput]
 """
 
 from __future__ import annotations
@@ -164,6 +169,165 @@ def task_rows(design: Design, runs: int = 5) -> None:
         print(f"  {name:<38} {t * 1e3:9.1f} ms  x{t / base:5.2f}  {extra}")
 
 
+def _alternating(fns: dict, runs: int) -> dict:
+    """Median seconds of each callable of ``fns``, called in turn ``runs`` times (drift hits all)."""
+    times: dict = {k: [] for k in fns}
+    for _ in range(runs):
+        for k, f in fns.items():
+            t = time.perf_counter()
+            f()
+            times[k].append(time.perf_counter() - t)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def _row(name: str, t: float, base: float, note: str = "") -> None:
+    print(f"  {name:<44} {t * 1e3:9.1f} ms  x{t / base:6.2f} engine  {note}")
+
+
+def shell_rows(design: Design, runs: int = 5) -> None:
+    """Target 9: the explorer's display shell (block re-mesh) at h = 1 with the block means from one
+    summed-volume table, and with the former per-size means (``_block_mean`` for each k tried)."""
+    from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
+    from paraspace.kinematics import shell
+
+    res = compute_workspace(design, WorkspaceSettings(voxel=1.0))
+    fast_call = shell._BlockMeans.__call__
+
+    def old():
+        shell._BlockMeans.__call__ = lambda self, k: shell._block_mean(self.field, k)  # type: ignore[method-assign]
+        try:
+            return make_shell(res, FULL_FACES)
+        finally:
+            shell._BlockMeans.__call__ = fast_call  # type: ignore[method-assign]
+
+    med = _alternating({"engine": lambda: compute_workspace(design, WorkspaceSettings(voxel=1.0)),
+                        "new": lambda: make_shell(res, FULL_FACES), "old": old}, runs)
+    print(f"  target 9, make_shell h=1 (load average {os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms):")
+    _row("make_shell, block means from one table", med["new"], med["engine"], "(target <= 2x)")
+    _row("make_shell, block means per size (before)", med["old"], med["engine"])
+
+
+def evaluation_rows(design: Design, runs: int = 5) -> None:
+    """Target 2: one sweep point at h = 2 (every measure, and volume alone), and one optimiser
+    evaluation at h = 4 of ``volume,-footprint`` (the measures it names) against every measure."""
+    from paraspace.kinematics.optimize import OptimizeSettings
+    from paraspace.kinematics.sweep import evaluate_design
+
+    for h in (2.0, 4.0):
+        ws = WorkspaceSettings(voxel=h)
+        names = OptimizeSettings(objectives="volume,-footprint", workspace=ws).measure_fields
+        hull = OptimizeSettings(objectives="volume,-hollowness", workspace=ws).measure_fields
+        med = _alternating({"engine": lambda ws=ws: compute_workspace(design, ws),
+                            "all": lambda ws=ws: evaluate_design(design, ws),
+                            "named": lambda ws=ws, n=names: evaluate_design(design, ws, measures=n),
+                            "hull": lambda ws=ws, n=hull: evaluate_design(design, ws, measures=n)}, runs)
+        print(f"  target 2, one evaluation at h={h:g} (load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms):")
+        _row("every measure (what each evaluation computed before)", med["all"], med["engine"])
+        _row("volume,-footprint: " + ",".join(names), med["named"], med["engine"], "(target <= 2x at h = 4)")
+        _row("volume,-hollowness: " + ",".join(hull), med["hull"], med["engine"])
+
+
+@contextlib.contextmanager
+def _former_measures():
+    """kinematics.measures on its former path (before issue 24): skimage's Euler number, voids by
+    labelling the whole padded complement, int32 dilations of the whole grid, every hull facet at
+    every column, column gaps and cover by cumulative ors (the tests' slow path)."""
+    import numpy as np
+    from scipy import ndimage as ndi
+    from skimage.measure import euler_number
+
+    from paraspace.kinematics import measures as mod
+
+    def voids(occ, conn):
+        v = mod.void_mask_labelled(occ, conn)
+        return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
+
+    def dilate(mask, r, complement=False, symmetric=False):
+        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
+
+    hull = mod.hull_mask
+
+    def hollow(occ, mode="hull", hull_=None):
+        u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
+        return u & (hull(occ, tiled=False) if hull_ is None else hull_)
+
+    patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
+             "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
+             "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum())}
+    saved = {k: getattr(mod, k) for k in patch}
+    for k, v in patch.items():
+        setattr(mod, k, v)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            setattr(mod, k, v)
+
+
+def measure_rows(design: Design, runs: int = 3) -> None:
+    """Target 1: measure_workspace (every measure) at h = 2 and h = 1, and on its former path."""
+    from paraspace.kinematics.measures import measure_workspace
+
+    for h in (2.0, 1.0):
+        res = compute_workspace(design, WorkspaceSettings(voxel=h))
+
+        def old(res=res):
+            with _former_measures():
+                return measure_workspace(res)
+
+        med = _alternating({"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h)),
+                            "new": lambda res=res: measure_workspace(res), "old": old}, runs)
+        print(f"  target 1, measure_workspace h={h:g} (load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms):")
+        _row("measure_workspace", med["new"], med["engine"], "(target <= 1x)")
+        _row("measure_workspace, former path (before)", med["old"], med["engine"])
+
+
+def tail_rows(design: Design, runs: int = 3) -> None:
+    """Target 7: the engine's serial tail at h = 1 and 0.5: the former numpy mirror fill and ``== 7``
+    test against the fused parallel pass on the same chain masks."""
+    import numpy as np
+
+    from paraspace.kinematics import workspace
+
+    for h in (1.0, 0.5):
+        ws = WorkspaceSettings(voxel=h)
+        res = compute_workspace(design, WorkspaceSettings(voxel=h, diagnostics=True))
+        ny = res.grid.shape[1]
+        ny_eval = (ny + 1) // 2
+        half = res.chain_mask.copy()
+        half[:, ny_eval:] = 0
+        occ = np.empty(half.shape, bool)
+
+        def old_tail():
+            out = half.copy()
+            out[:, ny_eval:] = workspace._MIRROR_BITS[out[:, : ny - ny_eval]][:, ::-1]
+            return out == workspace.ALL_CHAINS
+
+        def new_tail():
+            out = half.copy()
+            workspace._finish_kernel(out, ny_eval, True, workspace._MIRROR_BITS, occ)
+            return occ
+
+        med = _alternating({"engine": lambda ws=ws: compute_workspace(design, ws),
+                            "copy": lambda: half.copy(), "old": old_tail, "new": new_tail}, runs)
+        print(f"  target 7, serial tail h={h:g} ({res.grid.size:,} voxels; load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms):")
+        _row("mirror fill + == 7, one parallel pass", med["new"] - med["copy"], med["engine"])
+        _row("mirror fill + == 7, numpy (before)", med["old"] - med["copy"], med["engine"])
+
+
+def throughput_rows(design: Design) -> None:
+    """Item 7 of the module docstring."""
+    print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
+          f"{os.cpu_count()} CPUs):")
+    shell_rows(design)
+    evaluation_rows(design)
+    measure_rows(design)
+    tail_rows(design)
+
+
 POLICIES = ("equal split", "chunks", "chunks+load")
 
 
@@ -242,12 +406,16 @@ def main() -> None:
     ap.add_argument("--options", action="store_true", help="only the option-cost rows (item 5)")
     ap.add_argument("--threads", action="store_true", help="only the thread rows (item 6)")
     ap.add_argument("--task", action="store_true", help="only the task rows (item 7)")
+    ap.add_argument("--throughput", action="store_true", help="only the issue-24 throughput rows (item 8)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
     if ns.task:
         print(f"\ntask against the plain workspace, default design (load average {os.getloadavg()[0]:.2f}):")
         task_rows(design)
+    if ns.throughput:
+        throughput_rows(design)
+    if ns.task or ns.throughput:
         return
     if ns.options or ns.threads:
         if ns.options:
@@ -290,6 +458,8 @@ def main() -> None:
     print(f"  numpy brute force: {t_ref:8.3f} s   volume={v_ref:.6g}")
     print(f"  engine           : {t_eng:8.3f} s   volume={eng.volume:.6g}")
     print(f"  speed-up ratio   : {t_ref / t_eng:8.0f}x   identical voxels: {bool((ref.reshape(grid.shape) == eng.occupancy).all())}")
+
+    throughput_rows(design)
 
     if not ns.skip_converged:
         conv = compute_workspace(design, WorkspaceSettings(voxel=1.0, eta_step=0.125, bounds=BOX))

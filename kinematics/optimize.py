@@ -98,6 +98,10 @@ class Measure:
         needs_dexterity: the row must be evaluated with the dexterity field (``gci``).
         needs_total_orientation: the row must be evaluated with the total-orientation workspace
             (``OptimizeSettings.total_orientation``).
+        fields: the fields of ``WorkspaceMeasures`` the value is made of (an evaluation computes
+            only those its objectives and constraints name); ``None``: ``key`` (or ``name``) when
+            that is such a field and there is no ``derive``, none for an orientation measure, else
+            every field (a derived measure that says nothing may read anything).
     """
 
     name: str
@@ -109,6 +113,18 @@ class Measure:
     needs_task: bool = False
     needs_dexterity: bool = False
     needs_total_orientation: bool = False
+    fields: tuple[str, ...] | None = None
+
+    def measure_fields(self) -> tuple[str, ...] | None:
+        """The ``WorkspaceMeasures`` fields this measure needs (``None``: all of them)."""
+        from .measures import MEASURE_FIELDS
+
+        if self.fields is not None:
+            return self.fields
+        if self.needs_orientation or self.needs_task or self.needs_dexterity or self.needs_total_orientation:
+            return ()  # its value comes from the row's own step (orientation maps, task, ...), not the measures
+        own = self.key or self.name
+        return (own,) if self.derive is None and own in MEASURE_FIELDS else None
 
     def value(self, row: Mapping[str, Any]) -> float | None:
         """The measure of an evaluated row (``None`` when the row lacks it or it is not finite)."""
@@ -162,13 +178,13 @@ for _m in (
     Measure("genus", "total genus of the outer boundary (kinematics.measures)"),
     Measure("largest_component_fraction", "volume fraction of the largest connected component"),
     Measure("box_contact_fraction", "fraction of the grid box's face voxels that are reachable"),
-    Measure("height", "z extent of the workspace's bounding box", derive=_extent(2)),
-    Measure("width", "x extent of the workspace's bounding box", derive=_extent(0)),
+    Measure("height", "z extent of the workspace's bounding box", derive=_extent(2), fields=("extents",)),
+    Measure("width", "x extent of the workspace's bounding box", derive=_extent(0), fields=("extents",)),
     Measure("TI_1", "tilt index TI_1 of eq. (28) (kinematics.orientation)", needs_orientation=True),
     Measure("TI_2", "tilt index TI_2 of eq. (28) (kinematics.orientation)", needs_orientation=True),
     Measure("footprint", "r + l_min + l_s: base radius plus the longest leg (our size proxy)",
-            derive=_footprint),
-    Measure("l_max", "longest leg l_min + l_s", derive=_l_max),
+            derive=_footprint, fields=()),
+    Measure("l_max", "longest leg l_min + l_s", derive=_l_max, fields=()),
     Measure("boundary_complete", "the workspace boundary is complete (kinematics.measures)", flag=True),
     Measure("boundary_closed", "the workspace boundary is closed (kinematics.measures)", flag=True),
     Measure("pieces", "components holding >= 1 % of the volume (kinematics.measures, stable in h)"),
@@ -197,7 +213,8 @@ def _param(name: str) -> Callable[[dict], float]:
 
 for _p in PARAMS:  # the design's own sizes, for size objectives (minimise l_s, d_s, eta_s, r...)
     if _p not in MEASURES:
-        register_measure(Measure(_p, f"the design parameter {_p} ({PARAMS[_p].description})", derive=_param(_p)))
+        register_measure(Measure(_p, f"the design parameter {_p} ({PARAMS[_p].description})", derive=_param(_p),
+                                 fields=()))
 
 
 def _measure(name: str, field: str) -> Measure:
@@ -451,6 +468,18 @@ class OptimizeSettings:
         return any(MEASURES[n].needs_orientation for n in names)
 
     @property
+    def measure_fields(self) -> tuple[str, ...] | None:
+        """The ``WorkspaceMeasures`` fields an evaluation computes: those the objectives and
+        constraints name (``None``: every field, when a measure does not say what it reads)."""
+        out: list[str] = []
+        for name in [o.measure for o in self.objectives] + [c.measure for c in self.constraints]:
+            got = MEASURES[name].measure_fields()
+            if got is None:
+                return None
+            out.extend(got)
+        return tuple(sorted(set(out)))
+
+    @property
     def orientation_used(self) -> OrientationSettings | None:
         """The orientation settings evaluations run with (``None`` when no measure needs them)."""
         if not self.needs_orientation:
@@ -542,8 +571,12 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
                         client: Any = None, evaluate: Callable[..., dict] | None = None, retries: int = 1,
                         cancel: CancelToken = None,
                         on_point: Callable[[int, int], None] | None = None,
-                        task: Any = None, extra: Mapping[str, Any] | None = None) -> tuple[list[dict], int]:
+                        task: Any = None, extra: Mapping[str, Any] | None = None,
+                        measures: Sequence[str] | None = None) -> tuple[list[dict], int]:
     """Evaluate a batch of designs with the sweep unit of work, each distinct design at most once.
+
+    ``measures``: only these fields of ``WorkspaceMeasures`` (:func:`kinematics.sweep.evaluate_design`;
+    default every one; not passed to a custom ``evaluate``).
 
     Cached designs (``cache``: a :class:`~kinematics.sweep.ResultCache`) are taken from the cache;
     the rest run serially in this process (``client=None``; numba's kernels use every core) or on
@@ -560,8 +593,10 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
     from .sweep import evaluate_design
 
     more = dict(extra or {})
-    keys = [cache.key(d, settings, orientation, task, **more) if cache is not None else None for d in designs]
-    extra = {**more, **({} if task is None else {"task": task})}  # a custom unit of work may not take them
+    keys = [cache.key(d, settings, orientation, task, measures, **more) if cache is not None else None
+            for d in designs]
+    extra = {**more, **({} if task is None else {"task": task})}  # every unit of work takes these
+    fields = {} if measures is None else {"measures": tuple(measures)}  # only evaluate_design takes this
     results: dict[int, dict] = {}
     todo: dict[Any, int] = {}  # distinct key -> first index
     dup: dict[int, int] = {}
@@ -571,6 +606,8 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
             dup[i] = todo[k]
             continue
         hit = cache.get(keys[i]) if cache is not None else None
+        if hit is None and cache is not None and measures is not None:
+            hit = cache.get(cache.key(d, settings, orientation, task, **more))  # a full row holds every measure
         if hit is not None:
             results[i] = {**hit, "ok": True}
             todo[k] = i
@@ -593,7 +630,8 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
             check(cancel)
             try:
                 if evaluate is None:
-                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel, **extra)
+                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel, **extra,
+                                          **fields)
                 else:
                     row = evaluate(designs[i], settings, orientation=orientation, **extra)
             except Cancelled:
@@ -607,7 +645,7 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
 
         fn = evaluate if evaluate is not None else evaluate_design
         futures = client.map(fn, [designs[i] for i in run], settings=settings, orientation=orientation,
-                             retries=retries, pure=False, **extra)
+                             retries=retries, pure=False, **extra, **(fields if evaluate is None else {}))
         where = {f.key: i for f, i in zip(futures, run)}
         pending = set(where)
         ac = as_completed(futures)
@@ -825,6 +863,7 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
     t0 = time.perf_counter()
     ori = settings.orientation_used
     objs, cons = settings.objectives, settings.constraints
+    fields = settings.measure_fields if evaluate is None else None
     lows = np.array([settings.bounds_of(p)[0] for p in settings.params])
     highs = np.array([settings.bounds_of(p)[1] for p in settings.params])
     problem = Problem(n_var=len(settings.params), n_obj=len(objs), n_ieq_constr=1 + len(cons), xl=lows, xu=highs)
@@ -885,7 +924,7 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
             got, n_run = evaluate_population([d for d in designs if d is not None], settings.workspace,
                                              orientation=ori, cache=cache, client=client, evaluate=evaluate,
                                              retries=retries, cancel=cancel, on_point=on_point,
-                                             task=settings.task_used, extra=settings.extra_used)
+                                             task=settings.task_used, extra=settings.extra_used, measures=fields)
             for i, row in zip(valid, got):
                 rows[i] = row
             computed += n_run
@@ -925,6 +964,16 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
                    f"generation {gen}/{G}, {evaluations} evaluations, best: {best_text(best) or 'none feasible'}")
             if on_generation is not None:
                 on_generation({**info, "front": _front_entries(archive_rows, AF, front_idx)})
+        if fields is not None and len(front_idx):
+            # the front's designs with every measure (the evaluations computed only the named ones)
+            front_rows = [archive_rows[i] for i in front_idx]
+            full, n_full = evaluate_population([Design.from_dict(r["design"]) for r in front_rows],
+                                               settings.workspace, orientation=ori, cache=cache, client=client,
+                                               retries=retries, cancel=cancel)
+            for i, row in zip(front_idx, full):
+                if row.get("ok"):
+                    archive_rows[i] = row
+            computed += n_full
     finally:
         if own_client is not None:
             try:

@@ -48,7 +48,8 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 def evaluate_design(design: Design, settings: WorkspaceSettings, *,
                     orientation: OrientationSettings | None = None, cancel: CancelToken = None,
                     task: Any = None, dexterity: bool = False,
-                    total_orientation: tuple[float, float, float] | None = None) -> dict:
+                    total_orientation: tuple[float, float, float] | None = None,
+                    measures: Sequence[str] | None = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
@@ -69,12 +70,16 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         (:mod:`kinematics.dexterous`) on the same grid.
     cancel : threading.Event or callable, optional
         Stops the computation when set.
+    measures : sequence of str, optional
+        Only these fields of ``WorkspaceMeasures`` (and the size and box fields that are always
+        there, :func:`kinematics.measures.measure_fields`), each computed with only the steps it
+        needs and equal to the full evaluation's; ``None`` (default): every field.
 
     Returns
     -------
     dict
-        JSON-serializable: every field of ``WorkspaceMeasures.to_dict()`` (``volume``, ``voids``,
-        ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
+        JSON-serializable: every field of ``WorkspaceMeasures.to_dict()`` (or those of ``measures``)
+        (``volume``, ``voids``, ``genus``...), ``"design"`` (the design's fields), with ``orientation`` also ``"TI_1"``,
         ``"TI_2"``, ``"orientation_deltas"`` (the 18 Deltas and 9 products, named as in the paper),
         ``"TI_saturated"`` (an angle Delta of TI_1 or TI_2 equals the scan range: the index measures
         the scan, not the mechanism) and ``"saturation_note"`` (which Deltas; '' when none), and
@@ -92,13 +97,15 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     >>> row["volume"], row["voids"], row["design"]["d_s"]
     (5116000.0, 0, 50.0)
     """
-    from .measures import measure_workspace  # imported here: a sibling module of the core
+    from .measures import measure_fields, measure_workspace  # imported here: a sibling module of the core
 
+    names = _measure_names(measures)
     t0 = time.perf_counter()
     check(cancel)
     result = compute_workspace(design, settings, cancel=cancel)
     check(cancel)
-    out: dict[str, Any] = dict(measure_workspace(result, cancel=cancel).to_dict())
+    out: dict[str, Any] = (dict(measure_workspace(result, cancel=cancel).to_dict()) if names is None
+                           else dict(measure_fields(result, names, cancel=cancel)))
     if orientation is not None:
         ori = orientation_workspace(design, orientation, cancel=cancel)
         out["TI_1"] = ori.ti1
@@ -121,6 +128,20 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
+
+
+def _measure_names(measures: Sequence[str] | None) -> tuple[str, ...] | None:
+    """``measures`` validated (fields of ``WorkspaceMeasures``), without repeats, sorted; ``None`` stays."""
+    if measures is None:
+        return None
+    from .measures import MEASURE_FIELDS
+
+    if isinstance(measures, str) or not all(isinstance(m, str) for m in measures):
+        raise ParameterError("measures", measures, "a sequence of WorkspaceMeasures field names")
+    bad = [m for m in measures if m not in MEASURE_FIELDS]
+    if bad:
+        raise ParameterError("measures", bad[0], "fields of WorkspaceMeasures: " + ", ".join(MEASURE_FIELDS))
+    return tuple(sorted(set(measures)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -152,10 +173,12 @@ def _canon(obj: Any) -> Any:
 
 
 def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
-              version: str | None = None, task: Any = None, **extra: Any) -> str:
+              version: str | None = None, task: Any = None, measures: Sequence[str] | None = None,
+              **extra: Any) -> str:
     """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields,
-    the task (when given) and the code version."""
-    payload = {
+    the task (when given), the code version and, when only some measures are asked for
+    (``measures``), their names."""
+    payload: dict[str, Any] = {
         "design": design.to_dict(),
         "settings": dataclasses.asdict(settings),
         "orientation": None if orientation is None else dataclasses.asdict(orientation),
@@ -166,6 +189,9 @@ def cache_key(design: Design, settings: WorkspaceSettings, orientation: Orientat
     for name, value in sorted(extra.items()):  # further measures asked of evaluate_design (dexterity...)
         if value not in (None, False):
             payload[name] = value
+    names = _measure_names(measures)
+    if names is not None:
+        payload["measures"] = list(names)
     text = json.dumps(_canon(payload), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -195,9 +221,10 @@ class ResultCache:
         self.misses = 0
 
     def key(self, design: Design, settings: WorkspaceSettings,
-            orientation: OrientationSettings | None = None, task: Any = None, **extra: Any) -> str:
+            orientation: OrientationSettings | None = None, task: Any = None,
+            measures: Sequence[str] | None = None, **extra: Any) -> str:
         """:func:`cache_key` with this cache's version."""
-        return cache_key(design, settings, orientation, self.version, task, **extra)
+        return cache_key(design, settings, orientation, self.version, task, measures, **extra)
 
     def _path(self, key: str) -> pathlib.Path | None:
         return None if self.directory is None else self.directory / f"{key}.json"
@@ -274,13 +301,16 @@ def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design
 
 
 def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None,
-                     cancel: CancelToken, cache: ResultCache | None, task: Any = None) -> dict:
-    key = cache.key(design, settings, orientation, task) if cache is not None else None
+                     cancel: CancelToken, cache: ResultCache | None, task: Any = None,
+                     measures: Sequence[str] | None = None) -> dict:
+    key = cache.key(design, settings, orientation, task, measures) if cache is not None else None
     if cache is not None:
         hit = cache.get(key)  # type: ignore[arg-type]
+        if hit is None and measures is not None:
+            hit = cache.get(cache.key(design, settings, orientation, task))  # a full row holds every measure
         if hit is not None:
             return hit
-    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task)
+    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task, measures=measures)
     if cache is not None:
         cache.put(key, value)  # type: ignore[arg-type]
     return value
@@ -288,7 +318,8 @@ def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: O
 
 def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
              orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
-             cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None) -> list[dict]:
+             cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None,
+             measures: Sequence[str] | None = None) -> list[dict]:
     """Measures against one design parameter (paper Fig. 4).
 
     Parameters
@@ -311,6 +342,8 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
         Points computed before are taken from it.
     task : kinematics.task.TaskSpec, optional
         Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
+    measures : sequence of str, optional
+        Only these measures at each point (:func:`evaluate_design`); default every one.
 
     Returns
     -------
@@ -333,6 +366,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
     [(40.0, 3800000.0), (60.0, 6216000.0)]
     """
     _check_param(param)
+    _measure_names(measures)
     designs = _designs(design, param, values)
     rep = Reporter(progress)
     out: list[dict] = []
@@ -340,7 +374,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
     for i, dsg in enumerate(designs):
         check(cancel)
         rep(i / n, f"{param} = {getattr(dsg, param):g} ({i + 1}/{n})")
-        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
+        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures)
         out.append({"param": param, "value": float(getattr(dsg, param)), **res})
     rep(1.0, "done")
     return out
@@ -349,7 +383,7 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
 def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
              settings: WorkspaceSettings, *, orientation: OrientationSettings | None = None,
              progress: ProgressFn | None = None, cancel: CancelToken = None,
-             cache: ResultCache | None = None, task: Any = None) -> dict:
+             cache: ResultCache | None = None, task: Any = None, measures: Sequence[str] | None = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
     Parameters
@@ -372,6 +406,8 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
         Points computed before are taken from it.
     task : kinematics.task.TaskSpec, optional
         Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
+    measures : sequence of str, optional
+        Only these measures at each point (:func:`evaluate_design`); default every one.
 
     Returns
     -------
@@ -399,6 +435,7 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
     _check_param(param_y, "param_y")
     if param_x == param_y:
         raise ParameterError("param_y", param_y, f"a parameter other than param_x={param_x!r}")
+    _measure_names(measures)
     xs = [float(getattr(d, param_x)) for d in _designs(design, param_x, values_x)]
     ys = [float(getattr(d, param_y)) for d in _designs(design, param_y, values_y)]
     grid_designs = [[design.replace(**{param_x: x, param_y: y}) for x in xs] for y in ys]
@@ -410,7 +447,7 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
             check(cancel)
             k = iy * len(xs) + ix
             rep(k / max(n, 1), f"{param_x} = {xs[ix]:g}, {param_y} = {ys[iy]:g} ({k + 1}/{n})")
-            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task)
+            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures)
             points.append({"param_x": param_x, "param_y": param_y, "x": xs[ix], "y": ys[iy],
                            "ix": ix, "iy": iy, **res})
     rep(1.0, "done")

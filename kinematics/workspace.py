@@ -223,6 +223,22 @@ def _pairs_kernel(points, us, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax
         out[p, m] = ok
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _finish_kernel(out, ny_eval, mirror, bits, occ):
+    """The engine's last pass, parallel over x slices: with ``mirror`` the rows ``j >= ny_eval`` get
+    the chain masks of their mirror rows ``ny - 1 - j`` (all below ``ny_eval``, so never written
+    here) with the bits of :data:`_MIRROR_BITS`; and ``occ = out == 7`` everywhere."""
+    nx, ny, nz = out.shape
+    for i in prange(nx):
+        for j in range(ny):
+            if mirror and j >= ny_eval:
+                src = ny - 1 - j
+                for k in range(nz):
+                    out[i, j, k] = bits[out[i, src, k]]
+            for k in range(nz):
+                occ[i, j, k] = out[i, j, k] == ALL_CHAINS
+
+
 # --------------------------------------------------------------------------------------------
 # Python drivers
 
@@ -360,7 +376,7 @@ def default_bounds(design: Design, settings: WorkspaceSettings, cancel: CancelTo
     hs = max(4.0 * settings.voxel, ext / 48.0)
     scout = GridSpec.from_bounds(alo, ahi, hs)
     check(cancel)
-    occ = _run_grid(design, settings, scout, None, cancel)[0] == ALL_CHAINS
+    occ = _run_grid(design, settings, scout, None, cancel)[2]
     if not occ.any():
         return _symmetric_box(alo, ahi, settings.voxel, settings.z_floor)
     idx = np.argwhere(occ)
@@ -410,19 +426,21 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
             if progress is not None:
                 frac = min(1.0, (s + step) / n)
                 progress(frac, f"computing the workspace, {100 * frac:.0f} %")
-    if mirror:
-        # rows that have mirror images, with chains 2 and 3 swapped
-        out[:, ny_eval:] = _MIRROR_BITS[out[:, : ny - ny_eval]][:, ::-1]
+    # one parallel pass: the rows that have mirror images (chains 2 and 3 swapped) and out == 7
+    occ = np.empty(grid.shape, np.bool_)
+    with KERNEL_LOCK:
+        _finish_kernel(out, ny_eval, mirror, _MIRROR_BITS, occ)
     if settings.joints.min_distance > 0.0:
         check(cancel)
-        idx = np.argwhere(out == ALL_CHAINS)
+        idx = np.argwhere(occ)
         if idx.size:
             pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
             rot = euler_zyx_deg(*settings.orientation)
             ok = interference_free(design, settings.joints, pts, rot[None], n_eta)[:, 0]
             bad = idx[~ok]
             out[bad[:, 0], bad[:, 1], bad[:, 2]] |= INTERFERENCE
-    return out, n_eta
+            occ[bad[:, 0], bad[:, 1], bad[:, 2]] = False
+    return out, n_eta, occ
 
 
 def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSettings(),
@@ -474,9 +492,8 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
     alo, ahi = _padded_reach_box(design, settings)
     for _attempt in range(4):
         grid = GridSpec.from_bounds(lo, hi, settings.voxel)
-        mask, n_eta = _run_grid(design, settings, grid, rep.sub(0.05, 1.0), cancel,
-                                all_chains=settings.diagnostics)
-        occ = mask == ALL_CHAINS
+        mask, n_eta, occ = _run_grid(design, settings, grid, rep.sub(0.05, 1.0), cancel,
+                                     all_chains=settings.diagnostics)
         if explicit:
             break
         grow = _touching_faces(occ)

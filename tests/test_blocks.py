@@ -59,3 +59,29 @@ def test_method_is_validated():
         WorkspaceSettings(method="fast")
     assert e.value.field == "method"
     assert dataclasses.replace(WorkspaceSettings(), method="dense").method == "dense"
+
+
+def test_fused_finish_equals_the_numpy_mirror_fill_and_completion_test():
+    """Issue 24 target 7: the fused last pass of ``_run_grid`` (mirror rows and ``== 7`` in one
+    parallel kernel) equals the numpy steps it replaced, on several designs with and without the
+    mirror."""
+    import numpy as np
+
+    from paraspace.kinematics import workspace
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+    for design, orientation in ((Design(), (0.0, 0.0, 0.0)), (Design(a=10), (0.0, 0.0, 0.0)),
+                                (Design(l_s=20), (10.0, 5.0, 0.0))):
+        res = compute_workspace(design, WorkspaceSettings(voxel=6.0, orientation=orientation, diagnostics=True))
+        half = res.chain_mask.copy()
+        ny = half.shape[1]
+        mirror = workspace._use_mirror(design, res.settings, res.grid)
+        ny_eval = (ny + 1) // 2 if mirror else ny
+        half[:, ny_eval:] = 0
+        ref = half.copy()
+        if mirror:
+            ref[:, ny_eval:] = workspace._MIRROR_BITS[ref[:, : ny - ny_eval]][:, ::-1]
+        occ = np.empty(half.shape, bool)
+        workspace._finish_kernel(half, ny_eval, mirror, workspace._MIRROR_BITS, occ)
+        assert np.array_equal(half, ref) and np.array_equal(occ, ref == 7) and np.array_equal(occ, res.occupancy)

@@ -403,3 +403,26 @@ def test_front_pictures(tmp_path, objectives, trace):
         assert len(fig.data[0].dimensions) == 4
         assert list(fig.data[0].dimensions[1].values) == [e["measures"]["volume"] for e in res["front"]]
     assert front_csv(res).count("\n") == 1 + len(res["front"])
+
+
+def test_evaluations_compute_only_the_named_measures_and_the_front_is_the_full_one():
+    """Issue 24 target 2: an optimiser evaluation computes the measures its objectives and
+    constraints name (a generation's front rows hold nothing else), and the final front is the one
+    a run evaluating every measure gives (its entries completed with every measure)."""
+    s = OptimizeSettings(params=("a", "l_s"), objectives="volume,-footprint", constraints=["hollowness<=0.9"],
+                         workspace=COARSE, population=6, generations=2, seed=3)
+    assert s.measure_fields == ("hollowness", "volume")
+    seen: list[dict] = []
+    fast = optimize(s, on_generation=lambda info: seen.extend(info["front"]))
+    slow = optimize(s, evaluate=evaluate_design)  # a custom unit of work: every measure
+    assert seen and all("genus" not in e["measures"] and "hollowness" in e["measures"] for e in seen)
+    assert _strip_front(fast.front) == _strip_front(slow.front) and fast.hypervolume == slow.hypervolume
+    assert all("genus" in e["measures"] for e in fast.front)
+    assert OptimizeSettings(objectives="volume,-footprint", workspace=COARSE).measure_fields == ("volume",)
+    assert OptimizeSettings(objectives="volume", constraints=["boundary_complete"]).measure_fields == (
+        "boundary_complete", "volume")
+    row = evaluate_design(Design(), COARSE, measures=["genus"])
+    full = evaluate_design(Design(), COARSE)
+    assert row["genus"] == full["genus"] and "hollowness" not in row
+    with pytest.raises(ParameterError, match="measures"):
+        evaluate_design(Design(), COARSE, measures=["nope"])

@@ -328,3 +328,26 @@ def test_explorer_display_shell_encloses_the_voxel_volume_and_stays_close_to_the
         exact = workspace_shell(res)  # binary field, no reduction: vertices on voxel edges
         dist, _ = cKDTree(exact.vertices).query(shown.vertices)
         assert float(np.median(dist)) < res.grid.h and float(dist.max()) < 3.0 * res.grid.h
+
+
+def test_block_means_from_one_table_equal_the_per_size_means_and_the_same_display_shell(monkeypatch):
+    """Issue 24 target 9: the block re-mesh sums the binary field once (summed-volume table) and reads
+    every block size from it; the means are bit-identical to the strided adds of ``_block_mean`` for
+    every k tried, on several designs and a random field, and the explorer's display shell is the same."""
+    import paraspace.kinematics.shell as shell_mod
+    from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
+
+    rng = np.random.default_rng(24)
+    fields = [np.pad(compute_workspace(d, WorkspaceSettings(voxel=5.0)).occupancy.astype(np.float32), 1)
+              for d in (Design(), Design(a=10), Design(l_s=20))]
+    fields.append(np.pad((rng.random((23, 17, 30)) < 0.4).astype(np.float32), 1))
+    for field in fields:
+        means = shell_mod._BlockMeans(field, binary=True)
+        for k in range(2, shell_mod._MAX_BLOCK + 1):
+            assert np.array_equal(means(k), shell_mod._block_mean(field, k)), k
+    res = compute_workspace(Design(a=10), WorkspaceSettings(voxel=4.0))
+    fast = make_shell(res, FULL_FACES // 20)
+    monkeypatch.setattr(shell_mod._BlockMeans, "__call__", lambda self, k: shell_mod._block_mean(self.field, k))
+    slow = make_shell(res, FULL_FACES // 20)
+    assert "block re-mesh" in fast.metadata["paraspace"]["reduction"]
+    assert np.array_equal(fast.faces, slow.faces) and np.array_equal(fast.vertices, slow.vertices)
