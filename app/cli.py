@@ -362,8 +362,8 @@ def _task_of(ns: argparse.Namespace) -> Any:
 def _task_orientations(ns: argparse.Namespace) -> Any:
     from paraspace.kinematics.task import OrientationSet
 
-    fixed = tuple(_floats("orientation", ns.orientation, 3)) if ns.orientation else (0.0, 0.0, 0.0)
-    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=fixed, step=ns.angle_step)
+    o = _floats("orientation", ns.orientation, 3) if ns.orientation else [0.0, 0.0, 0.0]
+    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=(o[0], o[1], o[2]), step=ns.angle_step)
 
 
 def _task_settings(ns: argparse.Namespace) -> Any:

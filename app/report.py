@@ -157,7 +157,8 @@ def mechanism_png(design: Design) -> bytes:
     for i in range(3):
         ax.plot(*rails["arcs"][i, :, :2].T, color="#0072B2", lw=3, label="arc stroke" if i == 0 else None)
         ax.plot(*rails["radials"][i, :, :2].T, color="#D55E00", lw=2, label="radial stroke" if i == 0 else None)
-        ax.annotate(f"chain {i + 1}", rails["arcs"][i, len(rails["arcs"][i]) // 2, :2] * 1.12, fontsize=7,
+        mid = rails["arcs"][i, len(rails["arcs"][i]) // 2, :2] * 1.12
+        ax.annotate(f"chain {i + 1}", (float(mid[0]), float(mid[1])), fontsize=7,
                     ha="center", va="center")
     base = base_points(design, np.zeros(3), np.zeros(3)).reshape(-1, 3)
     ax.plot(base[:, 0], base[:, 1], "ks", ms=3, label="U joints (d = 0, eta = 0)")

@@ -162,7 +162,9 @@ class TaskLink:
         orientation when both are 0."""
         if self.tilt == 0.0 and self.torsion == 0.0:
             return OrientationSet() if step is None else OrientationSet(step=step)
-        return OrientationSet(tilt=self.tilt, torsion=self.torsion, **({} if step is None else {"step": step}))
+        if step is None:
+            return OrientationSet(tilt=self.tilt, torsion=self.torsion)
+        return OrientationSet(tilt=self.tilt, torsion=self.torsion, step=step)
 
 
 def encode_task(task: TaskLink) -> str:

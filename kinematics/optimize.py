@@ -595,8 +595,8 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
     more = dict(extra or {})
     keys = [cache.key(d, settings, orientation, task, measures, **more) if cache is not None else None
             for d in designs]
-    extra = {**more, **({} if task is None else {"task": task})}  # every unit of work takes these
-    fields = {} if measures is None else {"measures": tuple(measures)}  # only evaluate_design takes this
+    given: dict[str, Any] = {**more, **({} if task is None else {"task": task})}  # every unit of work takes these
+    fields: dict[str, Any] = {} if measures is None else {"measures": tuple(measures)}  # only evaluate_design
     results: dict[int, dict] = {}
     todo: dict[Any, int] = {}  # distinct key -> first index
     dup: dict[int, int] = {}
@@ -630,10 +630,10 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
             check(cancel)
             try:
                 if evaluate is None:
-                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel, **extra,
+                    row = evaluate_design(designs[i], settings, orientation=orientation, cancel=cancel, **given,
                                           **fields)
                 else:
-                    row = evaluate(designs[i], settings, orientation=orientation, **extra)
+                    row = evaluate(designs[i], settings, orientation=orientation, **given)
             except Cancelled:
                 raise
             except Exception as e:  # noqa: BLE001 - a failed point is reported, not fatal
@@ -645,7 +645,7 @@ def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, 
 
         fn = evaluate if evaluate is not None else evaluate_design
         futures = client.map(fn, [designs[i] for i in run], settings=settings, orientation=orientation,
-                             retries=retries, pure=False, **extra, **(fields if evaluate is None else {}))
+                             retries=retries, pure=False, **given, **(fields if evaluate is None else {}))
         where = {f.key: i for f, i in zip(futures, run)}
         pending = set(where)
         ac = as_completed(futures)

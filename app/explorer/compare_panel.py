@@ -210,7 +210,7 @@ class ComparePanel:
         gui.add_markdown(f"Pin up to {MAX_PINS} designs: each keeps its workspace as a ghost in its own colour "
                          "(height contours over a faint surface) and its numbers beside the current design's.")
         self.pin_button = gui.add_button("Pin this design", icon=viser.Icon.PIN)
-        self.unpin_choice = gui.add_dropdown("pin to remove", ("pin 1",), initial_value="pin 1", disabled=True)
+        self.unpin_choice: Any = gui.add_dropdown("pin to remove", ("pin 1",), initial_value="pin 1", disabled=True)
         self.unpin_button = gui.add_button("Unpin", icon=viser.Icon.PINNED_OFF, disabled=True)
         self.unpin_all_button = gui.add_button("Unpin all", icon=viser.Icon.PINNED_OFF, disabled=True)
         self.show_ghost = gui.add_checkbox("show the pinned workspaces", True)

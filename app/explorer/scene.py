@@ -284,7 +284,7 @@ class MechanismScene:
                 continue
             j = next(j for j in range(2) if self._leg_status[i][j] != "inside")
             lab.text = text
-            lab.position = tuple(float(v) for v in self._leg_top[2 * i + j])
+            lab.position = np.asarray(self._leg_top[2 * i + j], float)
             lab.visible = True
 
     def set_reachable(self, reachable: bool) -> None:

@@ -222,7 +222,9 @@ class ShareController:
             bracket = b.bracket if b.bracket is not None or s.joints.min_distance > 0 else bracket_of(b.result,
                                                                                                     cancel=cancel)
             o = ori_now if ori_now is not None else orientation_workspace(s.design, osettings, cancel=cancel)
-            entries = [ReportEntry("the design on screen", s.design, b.result, b.measures, bracket, o, link)]
+            measures = b.measures
+            assert measures is not None  # checked before the job was submitted
+            entries = [ReportEntry("the design on screen", s.design, b.result, measures, bracket, o, link)]
             settings = WorkspaceSettings(voxel=b.result.grid.h, joints=s.joints)
             for k, pin in enumerate(pins):
                 progress(0.3 + 0.5 * k / len(pins), f"pinned design {k + 1}")

@@ -26,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import trimesh
@@ -181,29 +181,29 @@ class TaskPanel:
         self.nodes: list[Any] = []
         gui.add_markdown("Does this design hold a region with the orientations your job needs, or follow a "
                          "path of poses? The answer is computed on the design, joints and voxel edge on screen.")
-        self.kind = gui.add_dropdown("task", KINDS, initial_value="box")
-        self.center = gui.add_text("centre x,y,z", "0,0,130", hint="the region's centre, length units")
-        self.sizes = gui.add_text("sizes", DEFAULT_SIZES["box"], hint=SIZE_HINTS["box"])
+        self.kind: Any = gui.add_dropdown("task", KINDS, initial_value="box")
+        self.center: Any = gui.add_text("centre x,y,z", "0,0,130", hint="the region's centre, length units")
+        self.sizes: Any = gui.add_text("sizes", DEFAULT_SIZES["box"], hint=SIZE_HINTS["box"])
         tilt, torsion = TOTAL_ORIENTATION["tilt"], TOTAL_ORIENTATION["torsion"]
         assert tilt.slider is not None and torsion.slider is not None
-        self.tilt = gui.add_slider("tilt ≤ (deg)", min=tilt.slider[0], max=tilt.slider[1], step=tilt.slider[2],
+        self.tilt: Any = gui.add_slider("tilt ≤ (deg)", min=tilt.slider[0], max=tilt.slider[1], step=tilt.slider[2],
                                    initial_value=0.0, hint=f"{tilt.label} at every point; 0 with torsion 0: the "
                                                            "home orientation only")
-        self.torsion = gui.add_slider("torsion ± (deg)", min=torsion.slider[0], max=torsion.slider[1],
+        self.torsion: Any = gui.add_slider("torsion ± (deg)", min=torsion.slider[0], max=torsion.slider[1],
                                       step=torsion.slider[2], initial_value=0.0, hint=torsion.label)
-        self.csv = gui.add_text("poses (CSV)", EXAMPLE_CSV, multiline=True, visible=False,
+        self.csv: Any = gui.add_text("poses (CSV)", EXAMPLE_CSV, multiline=True, visible=False,
                                 hint="header x,y,z,psi,theta,phi[,t]; angles in degrees, t in seconds")
-        self.upload = gui.add_upload_button("Upload CSV", icon=viser.Icon.UPLOAD, mime_type="text/csv")
+        self.upload: Any = gui.add_upload_button("Upload CSV", icon=viser.Icon.UPLOAD, mime_type="text/csv")
         self.upload.visible = False
-        self.run = gui.add_button("Check the task", icon=viser.Icon.PLAYER_PLAY)
-        self.stop = gui.add_button("Stop", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
-        self.progress = gui.add_progress_bar(0.0, visible=False)
-        self.answer = gui.add_markdown("")
+        self.run: Any = gui.add_button("Check the task", icon=viser.Icon.PLAYER_PLAY)
+        self.stop: Any = gui.add_button("Stop", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
+        self.progress: Any = gui.add_progress_bar(0.0, visible=False)
+        self.answer: Any = gui.add_markdown("")
         with gui.add_folder("Along the path", expand_by_default=True, visible=False) as self.path_folder:
-            self.path_slider = gui.add_slider("pose", min=1, max=2, step=1, initial_value=1,
+            self.path_slider: Any = gui.add_slider("pose", min=1, max=2, step=1, initial_value=1,
                                               hint="moves the mechanism to this pose of the path")
             self.plot = LazyPlot(gui, self.path_folder, "", visible=True)
-        self.clear_button = gui.add_button("Clear the task", icon=viser.Icon.TRASH, disabled=True)
+        self.clear_button: Any = gui.add_button("Clear the task", icon=viser.Icon.TRASH, disabled=True)
         self.kind.on_update(lambda _e: self._on_kind())
         self.upload.on_upload(lambda e: self._on_upload(e))
         self.run.on_click(lambda _e: self.start())
@@ -305,7 +305,7 @@ class TaskPanel:
                 return pose_list_task(design, task, settings, progress=progress, cancel=cancel)
 
         def on_progress(job: Job) -> None:
-            self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (stub says read-only)
+            self.progress.value = 100.0 * float(job.progress)
             self.answer.content = f"checking the task, {100 * job.progress:.0f} %"
 
         def done(job: Job) -> None:
@@ -330,7 +330,7 @@ class TaskPanel:
             self.job = job
         self.run.disabled = True
         self.stop.visible = True
-        self.progress.value = 0.0  # type: ignore[misc]
+        self.progress.value = 0.0
         self.progress.visible = True
         self.answer.content = "checking the task..."
 
@@ -367,9 +367,11 @@ class TaskPanel:
         if res.kind == "region" and isinstance(task, TaskLink):
             mesh = region_mesh(task.region)
             colour = REGION_OK if res.contained else REGION_BAD
-            mesh.visual.vertex_colors = np.tile(np.array(colour, np.uint8), (len(mesh.vertices), 1))
-            self.nodes.append(sc.add_glb(f"{self.NODE}/region", glb_with_material(
-                mesh.export(file_type="glb", include_normals=True), 0.22), cast_shadow=False, receive_shadow=False))
+            visual: Any = mesh.visual
+            visual.vertex_colors = np.tile(np.array(colour, np.uint8), (len(mesh.vertices), 1))
+            glb = cast(bytes, mesh.export(file_type="glb", include_normals=True))
+            self.nodes.append(sc.add_glb(f"{self.NODE}/region", glb_with_material(glb, 0.22), cast_shadow=False,
+                                         receive_shadow=False))
             if res.cells is not None and res.cells_ok is not None and len(res.cells):
                 ok = np.asarray(res.cells_ok, bool)
                 cols = np.where(ok[:, None], np.array(OK_COLOUR), np.array(BAD_COLOUR)).astype(np.uint8)
@@ -399,10 +401,11 @@ class TaskPanel:
             text = f"worst: margin {significant(res.margin, 3)}"
             if res.binding and res.binding.get("limit"):
                 text += f" ({res.binding.get('limit')})"
-            self.nodes.append(sc.add_label(f"{self.NODE}/worst", text, position=tuple(float(v) for v in at[:3]),
-                                           font_size_mode="screen", font_screen_scale=0.75))
+            where = np.asarray(at[:3], float)
+            self.nodes.append(sc.add_label(f"{self.NODE}/worst", text, position=where, font_size_mode="screen",
+                                           font_screen_scale=0.75))
             self.nodes.append(sc.add_icosphere(f"{self.NODE}/worst_marker", radius=2.5, color=(20, 20, 20),
-                                               position=tuple(float(v) for v in at[:3])))
+                                               position=where))
         self.result = res
 
     def _on_path_slider(self) -> None:
