@@ -40,6 +40,7 @@ from paraspace.kinematics.workspace import WorkspaceSettings
 
 from ..jobs import Job, JobManager, LimitExceeded
 from ..optimize_plots import front_figure
+from ..textsafe import md_text
 from .session import SessionJobs
 
 if TYPE_CHECKING:  # pragma: no cover - types only
@@ -64,6 +65,24 @@ def _design_label(i: int, entry: dict, params: list[str], labels: list[str]) -> 
     ps = ", ".join(f"{p}={entry['design'][p]:g}" for p in params)
     ms = ", ".join(f"{lb.lstrip('-')}={entry['measures'].get(lb.lstrip('-'), float('nan')):.4g}" for lb in labels)
     return f"#{i}: {ps} | {ms}"
+
+
+class StatusLine:
+    """The run's status as a markdown line that wraps in the panel (a text box cut it off); its
+    ``value`` is the plain text, shown escaped."""
+
+    def __init__(self, handle: Any) -> None:
+        self._handle = handle
+        self._value = "not run"
+
+    @property
+    def value(self) -> str:
+        return self._value
+
+    @value.setter
+    def value(self, text: str) -> None:
+        self._value = str(text)
+        self._handle.content = f"**status:** {md_text(self._value, 600)}"
 
 
 class OptimizePanel:
@@ -94,10 +113,17 @@ class OptimizePanel:
                        "Objectives: measures, comma-separated; a leading `-` minimises "
                        "(`volume`, `-footprint`, `-hollowness`, `TI_1`...). "
                        "TI_1/TI_2 are sampled every 2 deg x 4 here (the CLI and API default to 0.5 deg x 1).")
-        self.params = g.add_text("free parameters", initial_value=DEFAULTS["params"])
-        self.objectives = g.add_text("objectives", initial_value=DEFAULTS["objectives"])
+        from paraspace.kinematics.design import PARAMS
+        from paraspace.kinematics.optimize import MEASURES
+
+        self.params = g.add_text("free parameters", initial_value=DEFAULTS["params"],
+                                 hint="comma-separated, from: " + ", ".join(PARAMS))
+        objective_names = [m for m, spec in MEASURES.items() if not spec.flag]
+        self.objectives = g.add_text("objectives", initial_value=DEFAULTS["objectives"],
+                                     hint="comma-separated, a leading - minimises; from: " + ", ".join(objective_names))
         self.constraints = g.add_text("constraints", initial_value=DEFAULTS["constraints"],
-                                      hint="e.g. boundary_complete, volume>=2e6")
+                                      hint="e.g. boundary_complete, volume>=2e6; flags: "
+                                           + ", ".join(m for m, spec in MEASURES.items() if spec.flag))
         self.population = g.add_slider("population", min=4, max=32, step=1, initial_value=DEFAULTS["population"])
         self.generations = g.add_slider("generations", min=1, max=20, step=1, initial_value=DEFAULTS["generations"])
         self.voxel = g.add_slider("voxel h", min=MIN_VOXEL, max=12.0, step=1.0, initial_value=DEFAULTS["voxel"])
@@ -105,7 +131,7 @@ class OptimizePanel:
         self.run_button = g.add_button("Run optimisation", icon=viser.Icon.PLAYER_PLAY)
         self.stop_button = g.add_button("Stop", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
         self.progress = g.add_progress_bar(0.0, visible=False)
-        self.status = g.add_text("status", initial_value="not run", disabled=True)
+        self.status = StatusLine(g.add_markdown("**status:** not run"))
         self.plot_folder = g.add_folder("Pareto front")
         self.designs = g.add_dropdown("front design", ("(no front yet)",), initial_value="(no front yet)")
         self.load_button = g.add_button("Load this design", icon=viser.Icon.DOWNLOAD, disabled=True)
