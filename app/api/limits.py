@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+from paraspace.kinematics.task import MAX_CSV_BYTES
+
 from ..limits import MAX_VOXELS
 
 
@@ -25,7 +27,9 @@ class ApiLimits:
         max_jobs_per_client: unfinished API jobs per client. Over it: 429.
         max_jobs_total: unfinished API jobs over all clients. Over it: 429.
         max_job_seconds: run time of one job; after it the job is stopped and reported failed.
-        max_body_bytes: size of a request body. Over it: 413.
+        max_body_bytes: size of a request body. Over it: 413. The default holds the largest pose
+            list a task takes (:data:`kinematics.task.MAX_CSV_BYTES`) with 64 KiB to spare, so the
+            REST API takes the same pose lists as the CLI.
         max_shell_faces: largest ``max_faces`` accepted for shell downloads.
         client_header: take the client identity from this request header (set it only behind a
             proxy you control that overwrites the header); ``None``: the connection's peer address
@@ -46,7 +50,7 @@ class ApiLimits:
     max_jobs_per_client: int = 4
     max_jobs_total: int = 16
     max_job_seconds: float = 300.0
-    max_body_bytes: int = 262_144
+    max_body_bytes: int = MAX_CSV_BYTES + 65_536
     max_shell_faces: int = 2_000_000
     client_header: str | None = None
     cache_bytes: int = 256 << 20
