@@ -1,0 +1,626 @@
+"""Constant-orientation position workspace and inverse kinematics of any
+:class:`~kinematics.mechanism.Mechanism` (a description: chains of carriage joints carrying U-P-S legs).
+
+**Definition.** With the carriage transform ``T_c(q)`` of (M1) and the legs of (M2), a platform
+position ``P`` at the fixed rotation ``R`` is reachable when every chain ``c`` has carriage values
+``q`` in its box with every leg ``j`` of the chain in ``[lmin_j, lmax_j]`` and inside its joint
+cones (:mod:`kinematics.joints` (J1), about the leg's own axes). The voxel grid, the result and
+the default-bounds guarantee (the box never clips the workspace) are those of
+:mod:`kinematics.workspace`; ``R = Rot(reference) Rz(psi) Ry(theta) Rx(phi)``.
+
+**Exact in one prismatic joint.** In chain ``c`` take the prismatic joint ``m*`` of longest stroke
+(the later one on a tie) with value ``s`` in ``[s_lo, s_hi]``. With ``(A, a) = T_1 ... T_{m*-1}``
+(the joints before it, at their values) every leg's base joint moves on a line along the SAME
+unit direction ``w = A u_{m*}``:
+
+    D_j(q) = D_j(q|s=0) + s w .                                                          (G1)
+
+With ``v_j = B_j - D_j(q|s=0)``, ``p_j = v_j . w`` and ``q_j = |v_j|^2 - p_j^2``
+
+    l_j(s)^2 = (s - p_j)^2 + q_j ,                                                       (G2)
+
+quadratic in ``s`` as the paper's (F1) is in ``rho``: ``lmin^2 <= l^2 <= lmax^2`` holds on the
+closed interval ``|s - p_j| <= sqrt(lmax^2 - q_j)`` minus the open gap ``|s - p_j| <
+sqrt(lmin^2 - q_j)`` (no gap when ``q_j >= lmin^2``; a fixed-length leg leaves the two end points).
+A joint cone ``a . (v_j - s w) >= cos(theta) l_j(s)`` (``a`` the U axis turned by the carriage or
+the S axis turned by ``R``) is one interval of ``s`` (:func:`kinematics.feasibility.cone_interval`).
+The chain is feasible at given values of its other joints iff ``[s_lo, s_hi]`` cut by every leg's
+interval and cones, minus every leg's gap, is non-empty: the smallest point of such a set is its
+lower end or a gap's upper end, so these at most seven candidates decide it exactly.
+
+**Sampled in the others.** The chain's other joints take equally spaced values including both ends:
+``ceil(range / eta_step) + 1`` for a revolute joint (degrees) and ``ceil(range / length_step) + 1``
+for a second prismatic joint. As in :mod:`kinematics.feasibility` the error is one-sided (an inner
+approximation, confined to poses whose feasible set of those joints is narrower than a step). A
+chain without a prismatic joint (a fixed base, or a revolute only) is sampled in every joint and
+tested at ``s = 0`` (``[s_lo, s_hi] = [0, 0]``).
+
+**Whole-chain bound.** Over the chain's samples and both ends of ``[s_lo, s_hi]`` every base joint
+``D_j`` stays in a ball ``(c_j, rho_j)`` (the segment of (G1) lies in the ball of its end points), so
+``|B_j - c_j| > lmax_j + rho_j`` or ``|B_j - c_j| < lmin_j - rho_j`` rejects the chain without
+sampling (both relaxed by a rounding margin so the bound never contradicts the sample test). The
+same balls give the default box: ``P`` in ``c_j - R u_j +- (lmax_j + rho_j)`` for every leg.
+
+**The paper's mechanism** (a description equal to :func:`kinematics.presets.paper` of some
+:class:`~kinematics.design.Design`, reference zero) is routed to :func:`kinematics.workspace.
+compute_workspace` with that design: voxel-identical to today's model at today's speed. The general
+engine decides the same arc samples and the same exact test in ``d`` on it (``d = s``), so it agrees
+with that engine up to floating-point rounding at voxel centres lying on a leg limit (tested).
+
+What the general engine does not compute (refused by name): the certified volume bracket, leg
+interference (a leg ``diameter``), per-chain diagnostics, and :class:`~kinematics.joints.Joints`
+options (a description carries its own cones).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit, prange
+
+from .design import Design, ParameterError
+from .feasibility import cone_interval
+from .grid import GridSpec
+from .joints import Joints
+from .mechanism import Chain, Mechanism, _axis_rotation
+from .parallel import KERNEL_LOCK
+from .presets import paper
+from .progress import CancelToken, ProgressFn, Reporter, check
+from .rotation import euler_zyx_deg
+from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
+
+#: Valid range of ``length_step``, the spacing of a sampled (second) prismatic joint's values.
+LENGTH_STEP_RANGE = (0.01, 100.0)
+#: Most carriage samples of one chain (the product of its sampled joints' counts).
+MAX_CHAIN_SAMPLES = 200_000
+#: Relative rounding margin of the whole-chain bound.
+_BOUND_EPS = 1e-9
+
+
+def check_length_step(value: float) -> float:
+    """Validate ``length_step`` (the message names the field and its range)."""
+    lo, hi = LENGTH_STEP_RANGE
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or not lo <= value <= hi:
+        raise ParameterError("length_step", value, f"[{lo:g}, {hi:g}] (length units)")
+    return float(value)
+
+
+def platform_rotation(mech: Mechanism, orientation: Sequence[float] | np.ndarray) -> np.ndarray:
+    """``R = Rot(reference) Rz(psi) Ry(theta) Rx(phi)``: ``orientation`` is ``(psi, theta, phi)`` in
+    degrees or a 3x3 matrix (used as the rotation from the reference frame)."""
+    o = np.asarray(orientation, float)
+    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
+    if any(mech.reference):
+        rot = euler_zyx_deg(*mech.reference) @ rot
+    return rot
+
+
+def exact_joint(chain: Chain) -> int | None:
+    """Index of the chain's exactly-solved prismatic joint: longest stroke, the later one on a tie
+    (``None`` without a prismatic joint)."""
+    best = None
+    for m, joint in enumerate(chain.carriage):
+        if joint.type == "prismatic" and (best is None or
+                                          joint.range[1] - joint.range[0] >= chain.carriage[best].range[1]
+                                          - chain.carriage[best].range[0]):
+            best = m
+    return best
+
+
+def joint_sample_values(chain: Chain, eta_step: float, length_step: float) -> list[np.ndarray]:
+    """The values each joint takes: ``[0]`` for the exact joint, equally spaced (both ends) for the others."""
+    m_star = exact_joint(chain)
+    out = []
+    for m, joint in enumerate(chain.carriage):
+        lo, hi = joint.range
+        if m == m_star:
+            out.append(np.zeros(1))
+            continue
+        step = eta_step if joint.type == "revolute" else length_step
+        n = int(math.ceil((hi - lo) / step - 1e-12)) + 1 if hi > lo else 1
+        out.append(np.linspace(lo, hi, n) if n > 1 else np.array([lo]))
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class ChainTables:
+    """One chain's samples: the joint values ``q`` (K, k) (the exact joint at 0), the legs' base
+    joints ``D_j(q|s=0)`` (K, n, 3), the exact joint's direction ``w`` (K, 3), the carriage rotations
+    (K, 3, 3), the exact joint's index and stroke ``[s_lo, s_hi]`` (``[0, 0]`` without one)."""
+
+    q: np.ndarray
+    base: np.ndarray
+    w: np.ndarray
+    rot: np.ndarray
+    exact: int | None
+    s_range: tuple[float, float]
+
+
+def chain_tables(chain: Chain, eta_step: float, length_step: float) -> ChainTables:
+    """(G1) on the chain's sample grid (see the module docstring)."""
+    values = joint_sample_values(chain, eta_step, length_step)
+    count = int(np.prod([len(v) for v in values])) if values else 1
+    if count > MAX_CHAIN_SAMPLES:
+        raise ParameterError("eta_step/length_step", (eta_step, length_step),
+                             f"steps giving at most {MAX_CHAIN_SAMPLES:,} carriage samples per chain "
+                             f"(these give {count:,})")
+    if values:
+        mesh = np.meshgrid(*values, indexing="ij")
+        combos = np.stack([g.ravel() for g in mesh], axis=1)
+    else:
+        combos = np.zeros((1, 0))
+    m_star = exact_joint(chain)
+    legs = np.array([leg.base for leg in chain.legs], float)
+    base = np.empty((len(combos), len(chain.legs), 3))
+    w = np.zeros((len(combos), 3))
+    rots = np.empty((len(combos), 3, 3))
+    for k, q in enumerate(combos):
+        rot, trans = np.eye(3), np.zeros(3)
+        for m, (joint, value) in enumerate(zip(chain.carriage, q)):
+            if m == m_star:
+                w[k] = rot @ np.asarray(joint.axis, float)
+            if joint.type == "revolute":
+                rot = rot @ _axis_rotation(np.asarray(joint.axis, float), math.radians(float(value)))
+            else:
+                trans = trans + rot @ (float(value) * np.asarray(joint.axis, float))
+        rots[k] = rot
+        base[k] = legs @ rot.T + trans
+    if m_star is None:
+        w[:, 0] = 1.0
+        s_range = (0.0, 0.0)
+    else:
+        s_range = chain.carriage[m_star].range
+    return ChainTables(combos, base, w, rots, m_star, s_range)
+
+
+@dataclasses.dataclass(frozen=True)
+class KernelTables:
+    """The compiled test's constants for one mechanism at one platform rotation (flattened over
+    chains: chain ``c`` owns samples ``k0[c] .. k0[c] + nk[c]`` and legs ``l0[c] .. l0[c] + nl[c]``)."""
+
+    k0: np.ndarray
+    nk: np.ndarray
+    l0: np.ndarray
+    nl: np.ndarray
+    s_lo: np.ndarray
+    s_hi: np.ndarray
+    w: np.ndarray        # (K, 3)
+    base: np.ndarray     # (K, 6, 3): D_j(q|s=0), legs of other chains unused
+    u_axis: np.ndarray   # (K, 6, 3): U-cone axes turned by the carriage
+    k_u: np.ndarray      # (6,): cos(theta_U), -1 for none
+    plat: np.ndarray     # (6, 3): R u_j
+    s_axis: np.ndarray   # (6, 3): S-cone axes turned by R
+    k_s: np.ndarray      # (6,)
+    lmin2: np.ndarray
+    lmax2: np.ndarray
+    centre: np.ndarray   # (6, 3): the whole-chain bound's balls
+    out2: np.ndarray     # (6,): reject when |B - c|^2 > out2
+    in2: np.ndarray      # (6,): reject when |B - c|^2 < in2
+    chains: tuple[ChainTables, ...]
+
+    def args(self) -> tuple:
+        return (self.k0, self.nk, self.l0, self.nl, self.s_lo, self.s_hi, self.w, self.base, self.u_axis,
+                self.k_u, self.plat, self.s_axis, self.k_s, self.lmin2, self.lmax2, self.centre, self.out2,
+                self.in2)
+
+
+def kernel_tables(mech: Mechanism, rotation: np.ndarray, eta_step: float = 0.5,
+                  length_step: float = 1.0) -> KernelTables:
+    """Build :class:`KernelTables` (the sample grids of every chain, (G1), cones and bounds)."""
+    rotation = np.asarray(rotation, float)
+    chains = tuple(chain_tables(c, eta_step, length_step) for c in mech.chains)
+    n_legs = len(mech.legs)
+    total = sum(len(t.q) for t in chains)
+    k0 = np.zeros(len(chains), np.int64)
+    nk = np.zeros(len(chains), np.int64)
+    l0 = np.zeros(len(chains), np.int64)
+    nl = np.zeros(len(chains), np.int64)
+    s_lo = np.zeros(len(chains))
+    s_hi = np.zeros(len(chains))
+    w = np.zeros((total, 3))
+    base = np.zeros((total, n_legs, 3))
+    u_axis = np.zeros((total, n_legs, 3))
+    k_u = -np.ones(n_legs)
+    k_s = -np.ones(n_legs)
+    s_axis = np.zeros((n_legs, 3))
+    plat = np.array([leg.platform for _, _, leg in mech.legs], float) @ rotation.T
+    lmin = np.array([leg.length[0] for _, _, leg in mech.legs])
+    lmax = np.array([leg.length[1] for _, _, leg in mech.legs])
+    centre = np.zeros((n_legs, 3))
+    radius = np.zeros(n_legs)
+    k, j = 0, 0
+    for c, (chain, tab) in enumerate(zip(mech.chains, chains)):
+        K, n = len(tab.q), len(chain.legs)
+        k0[c], nk[c], l0[c], nl[c] = k, K, j, n
+        s_lo[c], s_hi[c] = tab.s_range
+        w[k:k + K] = tab.w
+        base[k:k + K, j:j + n] = tab.base
+        for jj, leg in enumerate(chain.legs):
+            if leg.u_cone is not None:
+                u_axis[k:k + K, j + jj] = tab.rot @ np.asarray(leg.u_cone.axis, float)
+                k_u[j + jj] = math.cos(math.radians(leg.u_cone.angle))
+            if leg.s_cone is not None:
+                s_axis[j + jj] = rotation @ np.asarray(leg.s_cone.axis, float)
+                k_s[j + jj] = math.cos(math.radians(leg.s_cone.angle))
+            ends = np.concatenate([tab.base[:, jj] + tab.s_range[0] * tab.w, tab.base[:, jj] + tab.s_range[1] * tab.w])
+            lo_, hi_ = ends.min(axis=0), ends.max(axis=0)
+            centre[j + jj] = 0.5 * (lo_ + hi_)
+            radius[j + jj] = float(np.sqrt(((ends - centre[j + jj]) ** 2).sum(axis=1)).max())
+        k, j = k + K, j + n
+    scale = 1.0 + float(np.abs(base).max(initial=0.0)) + float(lmax.max()) + float(np.abs(plat).max())
+    eps = _BOUND_EPS * scale
+    out2 = (lmax + radius + eps) ** 2
+    inner = lmin - radius - eps
+    in2 = np.where(inner > 0.0, inner, 0.0) ** 2
+    c_ = np.ascontiguousarray
+    return KernelTables(k0, nk, l0, nl, s_lo, s_hi, c_(w), c_(base), c_(u_axis), k_u, c_(plat), c_(s_axis), k_s,
+                        lmin ** 2, lmax ** 2, c_(centre), out2, in2, chains)
+
+
+# --------------------------------------------------------------------------------------------
+# compiled test
+
+
+@njit(cache=True, inline="always")
+def _free(x, gap_lo, gap_hi, ng):
+    for g in range(ng):
+        if gap_lo[g] < x < gap_hi[g]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _sample_feasible(px, py, pz, k, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
+                     lmin2, lmax2, gap_lo, gap_hi):
+    """The exact test in ``s`` of one chain at its carriage sample ``k`` (module docstring)."""
+    wx, wy, wz = w[k, 0], w[k, 1], w[k, 2]
+    lo, hi = s_lo, s_hi
+    ng = 0
+    for jj in range(nl):
+        j = l0 + jj
+        vx = px + plat[j, 0] - base[k, j, 0]
+        vy = py + plat[j, 1] - base[k, j, 1]
+        vz = pz + plat[j, 2] - base[k, j, 2]
+        p = vx * wx + vy * wy + vz * wz
+        q = vx * vx + vy * vy + vz * vz - p * p
+        if q < 0.0:
+            q = 0.0
+        if q > lmax2[j]:
+            return False
+        ro = math.sqrt(lmax2[j] - q)
+        lo = max(lo, p - ro)
+        hi = min(hi, p + ro)
+        if lo > hi:
+            return False
+        if lmin2[j] > q:
+            ri = math.sqrt(lmin2[j] - q)
+            gap_lo[ng] = p - ri
+            gap_hi[ng] = p + ri
+            ng += 1
+        if k_u[j] > -1.0:
+            ax, ay, az = u_axis[k, j, 0], u_axis[k, j, 1], u_axis[k, j, 2]
+            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz, -(ax * wx + ay * wy + az * wz), k_u[j], p, q)
+            lo = max(lo, a0)
+            hi = min(hi, a1)
+            if lo > hi:
+                return False
+        if k_s[j] > -1.0:
+            ax, ay, az = s_axis[j, 0], s_axis[j, 1], s_axis[j, 2]
+            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz, -(ax * wx + ay * wy + az * wz), k_s[j], p, q)
+            lo = max(lo, a0)
+            hi = min(hi, a1)
+            if lo > hi:
+                return False
+    if _free(lo, gap_lo, gap_hi, ng):
+        return True
+    for g in range(ng):
+        x = gap_hi[g]
+        if lo <= x <= hi and _free(x, gap_lo, gap_hi, ng):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
+              lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
+    """Whether chain ``c`` serves ``P``: the whole-chain bound, then the samples searched outward
+    from ``start[c]`` (updated to the sample that served)."""
+    for jj in range(nl[c]):
+        j = l0[c] + jj
+        dx = px + plat[j, 0] - centre[j, 0]
+        dy = py + plat[j, 1] - centre[j, 1]
+        dz = pz + plat[j, 2] - centre[j, 2]
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 > out2[j] or d2 < in2[j]:
+            return False
+    n = nk[c]
+    s0 = start[c]
+    for step in range(2 * n):
+        off = (step + 1) // 2
+        kk = s0 + off if step % 2 == 1 else s0 - off
+        if kk < 0 or kk >= n:
+            if off > n:
+                break
+            continue
+        if _sample_feasible(px, py, pz, k0[c] + kk, l0[c], nl[c], s_lo[c], s_hi[c], w, base, u_axis, k_u, plat,
+                            s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
+            start[c] = kk
+            return True
+    return False
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _columns_kernel(col_ix, col_iy, xs, ys, zs, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat,
+                    s_axis, k_s, lmin2, lmax2, centre, out2, in2, out):
+    """Occupancy of the columns ``(col_ix, col_iy)``, each walked upward with a warm start per chain;
+    the chain that failed last is tested first."""
+    n_chains = k0.shape[0]
+    for col in prange(col_ix.shape[0]):
+        ix = col_ix[col]
+        iy = col_iy[col]
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+        first = 0
+        for iz in range(zs.shape[0]):
+            ok = True
+            for cc in range(n_chains):
+                c = (first + cc) % n_chains
+                if not _chain_ok(xs[ix], ys[iy], zs[iz], c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
+                                 k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
+                    ok = False
+                    first = c
+                    break
+            out[ix, iy, iz] = ok
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _points_kernel(points, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
+                   lmin2, lmax2, centre, out2, in2, out):
+    n_chains = k0.shape[0]
+    for p in prange(points.shape[0]):
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+        ok = True
+        for c in range(n_chains):
+            if not _chain_ok(points[p, 0], points[p, 1], points[p, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
+                             base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
+                ok = False
+                break
+        out[p] = ok
+
+
+# --------------------------------------------------------------------------------------------
+# Python drivers
+
+
+def paper_design(mech: Mechanism) -> Design | None:
+    """The :class:`Design` whose :func:`kinematics.presets.paper` equals ``mech`` (chains and a zero
+    reference), or ``None``: the test that routes a description to the paper's engine."""
+    if any(mech.reference) or len(mech.chains) != 3:
+        return None
+    try:
+        chain = mech.chains[0]
+        if len(chain.carriage) != 2 or len(chain.legs) != 2:
+            return None
+        arc, radial = chain.carriage
+        leg = chain.legs[0]
+        lo, hi = arc.range
+        eta_range = "centered" if lo == -hi else "from-zero" if lo == 0.0 else None
+        if eta_range is None:
+            return None
+        design = Design(a=2.0 * leg.platform[1], b=2.0 * leg.base[1], d_s=radial.range[1], r=leg.base[0],
+                        l_min=leg.length[0], l_s=leg.length[1] - leg.length[0], eta_s=hi - lo,
+                        eta_range=eta_range)  # type: ignore[arg-type]
+    except (ParameterError, IndexError, TypeError):
+        return None
+    built = paper(**design.to_dict())
+    return design if built.chains == mech.chains else None
+
+
+@dataclasses.dataclass
+class MechanismWorkspaceResult(WorkspaceResult):
+    """A :class:`~kinematics.workspace.WorkspaceResult` of a description: ``design`` is the
+    equivalent :class:`Design` when the paper's engine computed it (``engine == "paper"``), else
+    ``None``; ``samples`` is the number of carriage samples per chain (the general engine)."""
+
+    mechanism: Mechanism | None = None
+    engine: str = "general"
+    samples: tuple[int, ...] = ()
+    length_step: float = 1.0
+
+
+def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
+    if settings.bracket:
+        raise ParameterError("bracket", True, "not available for a general mechanism (only the paper preset)")
+    if settings.diagnostics:
+        raise ParameterError("diagnostics", True, "not available for a general mechanism (only the paper preset)")
+    if settings.joints != Joints():
+        raise ParameterError("joints", settings.joints.to_dict(),
+                             "none for a mechanism description: its legs carry their own u_cone/s_cone")
+    for c, j, leg in mech.legs:
+        if leg.diameter > 0.0:
+            raise ParameterError(f"chains[{c}].legs[{j}].diameter", leg.diameter,
+                                 "0: leg interference is not computed for a general mechanism yet")
+
+
+def reach_box_general(tables: KernelTables, z_floor: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The analytical box of the module docstring (``P`` within ``lmax_j + rho_j`` of ``c_j - R u_j``
+    for every leg), its bottom raised to ``z_floor``; may be empty (``lo > hi`` on an axis)."""
+    reach = np.sqrt(tables.out2)[:, None]
+    centre = tables.centre - tables.plat
+    lo = np.max(centre - reach, axis=0)
+    hi = np.min(centre + reach, axis=0)
+    lo[2] = max(lo[2], z_floor)
+    return tuple(float(x) for x in lo), tuple(float(x) for x in hi)
+
+
+def _grid_for(tables: KernelTables, settings: WorkspaceSettings) -> GridSpec:
+    h = settings.voxel
+    if settings.bounds is not None:
+        return GridSpec.from_bounds(settings.bounds[0], settings.bounds[1], h)
+    lo, hi = reach_box_general(tables, settings.z_floor)
+    if any(a > b for a, b in zip(lo, hi)):  # nothing reachable: one voxel at the floor
+        lo, hi = (0.0, 0.0, settings.z_floor), (h, h, settings.z_floor + h)
+    # snapped outward to multiples of h and grown by a voxel (the bottom stays at the floor):
+    # the outermost layer lies beyond the reach, so the box never clips the workspace
+    glo = [h * math.floor(lo[a] / h + 1e-9) - h for a in range(2)]
+    ghi = [h * math.ceil(hi[a] / h - 1e-9) + h for a in range(2)]
+    zlo = h * math.floor(lo[2] / h + 1e-9)
+    if zlo < settings.z_floor <= lo[2] + 1e-9:
+        zlo = float(settings.z_floor)
+    elif zlo > settings.z_floor:
+        zlo = max(zlo - h, settings.z_floor)
+    zhi = h * math.ceil(hi[2] / h - 1e-9) + h
+    return GridSpec.from_bounds((glo[0], glo[1], zlo), (ghi[0], ghi[1], max(zhi, zlo + h)), h)
+
+
+def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),
+                              length_step: float = 1.0, progress: ProgressFn | None = None,
+                              cancel: CancelToken = None) -> MechanismWorkspaceResult:
+    """The general engine on any description (never routed; see :func:`compute_mechanism_workspace`).
+
+    Both ``settings.method`` values give the same voxels: the general engine evaluates every voxel.
+    """
+    _check_general(mech, settings)
+    length_step = check_length_step(length_step)
+    rep = Reporter(progress)
+    t0 = time.perf_counter()
+    rot = platform_rotation(mech, settings.orientation)
+    tables = kernel_tables(mech, rot, settings.eta_step, length_step)
+    grid = _grid_for(tables, settings)
+    xs, ys, zs = grid.axes()
+    nx, ny, nz = grid.shape
+    out = np.zeros(grid.shape, np.bool_)
+    gx, gy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+    ix, iy = gx.ravel().astype(np.int64), gy.ravel().astype(np.int64)
+    step = max(64, int(65536 // max(nz, 1)))
+    sub = rep.sub(0.0, 1.0)
+    for s in range(0, ix.size, step):
+        check(cancel)
+        with KERNEL_LOCK:
+            _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *tables.args(), out)
+        frac = min(1.0, (s + step) / ix.size)
+        sub(frac, f"computing the workspace, {100 * frac:.0f} %")
+    seconds = time.perf_counter() - t0
+    rep(1.0, "voxels computed")
+    return MechanismWorkspaceResult(
+        design=None, settings=settings, grid=grid, occupancy=out, chain_mask=None,  # type: ignore[arg-type]
+        compute_seconds=seconds, n_eta=int(max(len(t.q) for t in tables.chains)), mechanism=mech,
+        engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step)
+
+
+def compute_mechanism_workspace(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),
+                                length_step: float = 1.0, progress: ProgressFn | None = None,
+                                cancel: CancelToken = None) -> MechanismWorkspaceResult:
+    """The constant-orientation position workspace of ``mech`` (module docstring): the paper's engine
+    for the paper's mechanism (:func:`paper_design`), the general engine otherwise.
+
+    ``settings`` are :class:`~kinematics.workspace.WorkspaceSettings` (``eta_step`` spaces every
+    revolute joint's samples); ``length_step`` spaces a sampled (second) prismatic joint's values.
+    """
+    design = paper_design(mech)
+    if design is None:
+        return compute_general_workspace(mech, settings, length_step, progress, cancel)
+    res = compute_workspace(design, settings, progress, cancel)
+    fields = {f.name: getattr(res, f.name) for f in dataclasses.fields(WorkspaceResult)}
+    return MechanismWorkspaceResult(**fields, mechanism=mech, engine="paper", samples=(res.n_eta,) * 3,
+                                    length_step=check_length_step(length_step))
+
+
+def reachable_general(mech: Mechanism, points: np.ndarray,
+                      orientation: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+                      eta_step: float = 0.5, length_step: float = 1.0) -> np.ndarray:
+    """The general engine's test at arbitrary points ``(N, 3)`` (bool ``(N,)``), never routed."""
+    _check_general(mech, WorkspaceSettings())
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    tables = kernel_tables(mech, platform_rotation(mech, orientation), eta_step, check_length_step(length_step))
+    out = np.zeros(len(pts), np.bool_)
+    if len(pts):
+        with KERNEL_LOCK:
+            _points_kernel(pts, *tables.args(), out)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# inverse kinematics with redundancy resolution
+
+
+@dataclasses.dataclass
+class ChainIK:
+    """One chain's carriage values (degrees for a revolute joint), the leg lengths there, the
+    smallest length margin ``min_j min(l_j - lmin_j, lmax_j - l_j)`` and whether it is feasible."""
+
+    chain: int
+    q: list[float]
+    lengths: list[float]
+    margin: float
+    feasible: bool
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def _margins(tab: ChainTables, lo: np.ndarray, hi: np.ndarray, plat: np.ndarray, p: np.ndarray,
+             s: np.ndarray) -> np.ndarray:
+    """Length margins (K, S) at samples ``K`` of the chain and exact-joint values ``s`` (S,) or (K, S)."""
+    v0 = (p + plat)[None, :, :] - tab.base                                # (K, n, 3)
+    pj = np.einsum("knc,kc->kn", v0, tab.w)                              # (K, n)
+    qj = np.maximum(np.einsum("knc,knc->kn", v0, v0) - pj ** 2, 0.0)
+    s = np.broadcast_to(s, (tab.base.shape[0], s.shape[-1]))
+    length = np.sqrt((s[:, None, :] - pj[:, :, None]) ** 2 + qj[:, :, None])  # (K, n, S)
+    return np.minimum(length - lo[None, :, None], hi[None, :, None] - length).min(axis=1)
+
+
+def mechanism_ik(mech: Mechanism, position: Sequence[float],
+                 orientation: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+                 eta_step: float = 0.5, length_step: float = 1.0, s_samples: int = 401) -> list[ChainIK]:
+    """Redundancy resolution of a description: per chain the carriage values that keep its legs
+    furthest inside their length ranges (maximise the smallest margin).
+
+    The chain's non-exact joints take the engine's samples (``eta_step``, ``length_step``); the
+    exact joint ``s`` is searched on ``s_samples`` values over its stroke, then refined by two
+    zoom-ins of the same size around the best value (the margin is 1-Lipschitz in ``s``, so the
+    result is within ``stroke / (s_samples - 1)^3`` of the best over ``s`` at that sample). Cones
+    are not part of the margin.
+    """
+    rot = platform_rotation(mech, orientation)
+    p = np.asarray(position, float)
+    out = []
+    for c, chain in enumerate(mech.chains):
+        tab = chain_tables(chain, eta_step, check_length_step(length_step))
+        plat = np.array([leg.platform for leg in chain.legs], float) @ rot.T
+        lo = np.array([leg.length[0] for leg in chain.legs])
+        hi = np.array([leg.length[1] for leg in chain.legs])
+        s_lo, s_hi = tab.s_range
+        n = s_samples if s_hi > s_lo else 1
+        s = np.linspace(s_lo, s_hi, n)
+        marg = _margins(tab, lo, hi, plat, p, s)
+        k, i = np.unravel_index(int(np.argmax(marg)), marg.shape)
+        best_s, best_m = float(s[i]), float(marg[k, i])
+        width = (s_hi - s_lo) / max(n - 1, 1)
+        one = ChainTables(tab.q[k:k + 1], tab.base[k:k + 1], tab.w[k:k + 1], tab.rot[k:k + 1], tab.exact, tab.s_range)
+        for _ in range(2 if n > 1 else 0):
+            s = np.linspace(max(s_lo, best_s - width), min(s_hi, best_s + width), n)
+            m = _margins(one, lo, hi, plat, p, s)[0]
+            i = int(np.argmax(m))
+            if m[i] > best_m:
+                best_s, best_m = float(s[i]), float(m[i])
+            width = 2.0 * width / (n - 1)
+        q = [float(x) for x in tab.q[k]]
+        if tab.exact is not None:
+            q[tab.exact] = best_s
+        base = tab.base[k] + best_s * tab.w[k]
+        lengths = np.linalg.norm(p + plat - base, axis=1)
+        out.append(ChainIK(c, q, [float(x) for x in lengths], best_m, best_m >= -1e-9))
+    return out
