@@ -244,3 +244,44 @@ def test_refusals_name_the_field() -> None:
         compute_mechanism_workspace(parse_mechanism(data), WorkspaceSettings(voxel=H))
     # the paper's mechanism keeps every option of the paper's engine
     assert compute_mechanism_workspace(paper(), WorkspaceSettings(voxel=H, bracket=True)).volume_inner is not None
+
+
+def _table_mechanism():
+    """Three chains on a turntable with an x-y table (revolute + two prismatic joints), two legs each:
+    the y joint (the longer stroke) is solved exactly, the x joint and the turntable sampled."""
+    chains = []
+    for gamma in (0.0, 120.0, 240.0):
+        c, s = math.cos(math.radians(gamma)), math.sin(math.radians(gamma))
+        legs = []
+        for sign in (1.0, -1.0):
+            bx, by = 90.0, sign * 10.0
+            px, py = 40.0, sign * 20.0
+            legs.append({"base": [c * bx - s * by, s * bx + c * by, 0.0],
+                         "platform": [c * px - s * py, s * px + c * py, 0.0], "length": [110.0, 160.0]})
+        chains.append({"carriage": [
+            {"type": "revolute", "axis": [0, 0, 1], "range": [-10.0, 10.0]},
+            {"type": "prismatic", "axis": [c, s, 0], "range": [-10.0, 10.0]},
+            {"type": "prismatic", "axis": [-s, c, 0.2], "range": [-15.0, 15.0]},
+        ], "legs": legs})
+    return parse_mechanism({"name": "x-y tables", "chains": chains})
+
+
+def test_two_prismatic_joints_equal_the_brute_force() -> None:
+    mech = _table_mechanism()
+    orientation = (5.0, 0.0, 3.0)
+    res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, orientation=orientation, eta_step=1.0),
+                                    length_step=1.0)
+    assert res.samples == (21 * 21,) * 3
+    pts, idx = _sample_voxels(res, 60, 20)
+    engine = res.occupancy[idx[:, 0], idx[:, 1], idx[:, 2]]
+    # the brute force's turntable and x values are the engine's samples; its y values lie in the
+    # exactly-solved stroke
+    brute = reachable_brute_force(mech, pts, platform_rotation(mech, orientation),
+                                  samples={"revolute": 21, "prismatic": 21})
+    assert 10 < engine.sum() < len(pts) - 10
+    assert not np.any(brute & ~engine)
+    for i in np.flatnonzero(engine & ~brute):
+        sol = mechanism_ik(mech, pts[i], orientation, eta_step=1.0, length_step=1.0)
+        rot = platform_rotation(mech, orientation)
+        lengths = mech.leg_lengths([c.q for c in sol], pts[i], rot)
+        assert np.all((lengths >= 110.0 - 1e-6) & (lengths <= 160.0 + 1e-6)), pts[i]
