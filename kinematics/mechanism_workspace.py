@@ -66,7 +66,7 @@ from .design import Design, ParameterError
 from .feasibility import cone_interval
 from .grid import GridSpec
 from .joints import Joints
-from .mechanism import Chain, Mechanism, _axis_rotation
+from .mechanism import Chain, Mechanism
 from .parallel import KERNEL_LOCK
 from .presets import paper
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -156,26 +156,28 @@ def chain_tables(chain: Chain, eta_step: float, length_step: float) -> ChainTabl
         combos = np.zeros((1, 0))
     m_star = exact_joint(chain)
     legs = np.array([leg.base for leg in chain.legs], float)
-    base = np.empty((len(combos), len(chain.legs), 3))
+    # (M1) for every sample at once, T <- T T_m; w = the rotation before m* times its axis (G1)
+    rots = np.broadcast_to(np.eye(3), (len(combos), 3, 3)).copy()
+    trans = np.zeros((len(combos), 3))
     w = np.zeros((len(combos), 3))
-    rots = np.empty((len(combos), 3, 3))
-    for k, q in enumerate(combos):
-        rot, trans = np.eye(3), np.zeros(3)
-        for m, (joint, value) in enumerate(zip(chain.carriage, q)):
-            if m == m_star:
-                w[k] = rot @ np.asarray(joint.axis, float)
-            if joint.type == "revolute":
-                rot = rot @ _axis_rotation(np.asarray(joint.axis, float), math.radians(float(value)))
-            else:
-                trans = trans + rot @ (float(value) * np.asarray(joint.axis, float))
-        rots[k] = rot
-        base[k] = legs @ rot.T + trans
+    for m, joint in enumerate(chain.carriage):
+        axis = np.asarray(joint.axis, float)
+        if m == m_star:
+            w = rots @ axis
+        if joint.type == "revolute":
+            ang = np.radians(combos[:, m])
+            kx = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+            rots = rots @ (np.eye(3)[None] + np.sin(ang)[:, None, None] * kx[None]
+                           + (1.0 - np.cos(ang))[:, None, None] * (kx @ kx)[None])
+        else:
+            trans = trans + combos[:, m, None] * (rots @ axis)
+    base = np.einsum("lc,kdc->kld", legs, rots) + trans[:, None, :]
     if m_star is None:
         w[:, 0] = 1.0
         s_range = (0.0, 0.0)
     else:
         s_range = chain.carriage[m_star].range
-    return ChainTables(combos, base, w, rots, m_star, s_range)
+    return ChainTables(combos, base, np.ascontiguousarray(w), rots, m_star, s_range)
 
 
 @dataclasses.dataclass(frozen=True)
