@@ -22,7 +22,9 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      1-thread/2-thread ratio of each and the 2-thread speed-up of today's default.
 
   7. a row per mechanism preset (kinematics/presets.py) at h = 2 with derived bounds, against the
-     paper engine on the paper's default design in the same run (medians of alternating runs): the
+     paper engine on the paper's default design in the same run (medians of alternating runs; its
+     dense method too, which like the general engine evaluates every voxel, though it computes half the
+     columns by the mirror y -> -y): the
      paper preset (routed to the paper engine: its ratio must stay 1.00), the general engine
      (kinematics/mechanism_workspace.py) on the paper preset's grid (with whether its voxels are the
      paper engine's), and the gough-stewart, 6-pups and 6-pss presets.
@@ -147,6 +149,7 @@ def preset_rows(h: float = 2.0, runs: int = 5) -> None:
     ref = compute_workspace(design, plain)
     on_grid = WorkspaceSettings(voxel=h, bounds=(ref.grid.lo, ref.grid.hi))
     rows = {"paper engine, default design": lambda: compute_workspace(design, plain)}
+    rows["paper engine, dense"] = lambda: compute_workspace(design, WorkspaceSettings(voxel=h, method="dense"))
     rows["paper preset (routed)"] = lambda: compute_mechanism_workspace(preset("paper"), plain)
     rows["paper preset, general engine"] = lambda: compute_general_workspace(preset("paper"), on_grid)
     for name in PRESETS:
@@ -164,7 +167,7 @@ def preset_rows(h: float = 2.0, runs: int = 5) -> None:
     for k in rows:
         t, res = statistics.median(times[k]), out[k]
         extra = ""
-        if k.startswith("paper preset"):
+        if k.startswith("paper preset") or k == "paper engine, dense":
             extra = f"  identical voxels: {bool(np.array_equal(res.occupancy, ref.occupancy))}"
         samples = getattr(res, "samples", ())
         print(f"  {k:<30} {t * 1e3:8.1f} ms  x{t / base:5.2f}  {res.grid.size:>10,} voxels in the box  "

@@ -39,7 +39,8 @@ tested at ``s = 0`` (``[s_lo, s_hi] = [0, 0]``).
 ``D_j`` stays in a ball ``(c_j, rho_j)`` (the segment of (G1) lies in the ball of its end points), so
 ``|B_j - c_j| > lmax_j + rho_j`` or ``|B_j - c_j| < lmin_j - rho_j`` rejects the chain without
 sampling (both relaxed by a rounding margin so the bound never contradicts the sample test). The
-same balls give the default box: ``P`` in ``c_j - R u_j +- (lmax_j + rho_j)`` for every leg.
+same bound over each block of :data:`BLOCK` consecutive samples skips whole blocks of the search.
+The chain's balls give the default box: ``P`` in ``c_j - R u_j +- (lmax_j + rho_j)`` for every leg.
 
 **The paper's mechanism** (a description equal to :func:`kinematics.presets.paper` of some
 :class:`~kinematics.design.Design`, reference zero) is routed to :func:`kinematics.workspace.
@@ -79,6 +80,8 @@ LENGTH_STEP_RANGE = (0.01, 100.0)
 MAX_CHAIN_SAMPLES = 200_000
 #: Relative rounding margin of the whole-chain bound.
 _BOUND_EPS = 1e-9
+#: Consecutive carriage samples sharing one bound (a block the search skips when its balls reject).
+BLOCK = 8
 
 
 def check_length_step(value: float) -> float:
@@ -203,12 +206,16 @@ class KernelTables:
     centre: np.ndarray   # (6, 3): the whole-chain bound's balls
     out2: np.ndarray     # (6,): reject when |B - c|^2 > out2
     in2: np.ndarray      # (6,): reject when |B - c|^2 < in2
+    kb0: np.ndarray      # (C,): chain c's first block
+    blk_centre: np.ndarray  # (blocks, 6, 3): the same bound per block of BLOCK samples
+    blk_out2: np.ndarray    # (blocks, 6)
+    blk_in2: np.ndarray     # (blocks, 6)
     chains: tuple[ChainTables, ...]
 
     def args(self) -> tuple:
         return (self.k0, self.nk, self.l0, self.nl, self.s_lo, self.s_hi, self.w, self.base, self.u_axis,
                 self.k_u, self.plat, self.s_axis, self.k_s, self.lmin2, self.lmax2, self.centre, self.out2,
-                self.in2)
+                self.in2, self.kb0, self.blk_centre, self.blk_out2, self.blk_in2)
 
 
 def kernel_tables(mech: Mechanism, rotation: np.ndarray, eta_step: float = 0.5,
@@ -235,6 +242,12 @@ def kernel_tables(mech: Mechanism, rotation: np.ndarray, eta_step: float = 0.5,
     lmax = np.array([leg.length[1] for _, _, leg in mech.legs])
     centre = np.zeros((n_legs, 3))
     radius = np.zeros(n_legs)
+    n_blocks = [-(-len(t.q) // BLOCK) for t in chains]
+    kb0 = np.concatenate([[0], np.cumsum(n_blocks)[:-1]]).astype(np.int64)
+    blk_centre = np.zeros((sum(n_blocks), n_legs, 3))
+    blk_radius = np.zeros((sum(n_blocks), n_legs))
+    blk_lmin = np.zeros((sum(n_blocks), n_legs))
+    blk_lmax = np.zeros((sum(n_blocks), n_legs))
     k, j = 0, 0
     for c, (chain, tab) in enumerate(zip(mech.chains, chains)):
         K, n = len(tab.q), len(chain.legs)
@@ -253,15 +266,30 @@ def kernel_tables(mech: Mechanism, rotation: np.ndarray, eta_step: float = 0.5,
             lo_, hi_ = ends.min(axis=0), ends.max(axis=0)
             centre[j + jj] = 0.5 * (lo_ + hi_)
             radius[j + jj] = float(np.sqrt(((ends - centre[j + jj]) ** 2).sum(axis=1)).max())
+            # per block of BLOCK samples (the last block padded with its last sample)
+            nb = n_blocks[c]
+            pad = np.concatenate([np.arange(K), np.full(nb * BLOCK - K, K - 1)])
+            d = tab.base[pad, jj].reshape(nb, BLOCK, 3)
+            ww = tab.w[pad].reshape(nb, BLOCK, 3)
+            ends_b = np.concatenate([d + tab.s_range[0] * ww, d + tab.s_range[1] * ww], axis=1)
+            mid = 0.5 * (ends_b.min(axis=1) + ends_b.max(axis=1))
+            blk_centre[kb0[c]:kb0[c] + nb, j + jj] = mid
+            blk_radius[kb0[c]:kb0[c] + nb, j + jj] = np.sqrt(((ends_b - mid[:, None]) ** 2).sum(axis=2)).max(axis=1)
+            blk_lmin[kb0[c]:kb0[c] + nb, j + jj] = leg.length[0]
+            blk_lmax[kb0[c]:kb0[c] + nb, j + jj] = leg.length[1]
         k, j = k + K, j + n
     scale = 1.0 + float(np.abs(base).max(initial=0.0)) + float(lmax.max()) + float(np.abs(plat).max())
     eps = _BOUND_EPS * scale
     out2 = (lmax + radius + eps) ** 2
     inner = lmin - radius - eps
     in2 = np.where(inner > 0.0, inner, 0.0) ** 2
+    blk_out2 = (blk_lmax + blk_radius + eps) ** 2
+    blk_inner = blk_lmin - blk_radius - eps
+    blk_in2 = np.where(blk_inner > 0.0, blk_inner, 0.0) ** 2
     c_ = np.ascontiguousarray
     return KernelTables(k0, nk, l0, nl, s_lo, s_hi, c_(w), c_(base), c_(u_axis), k_u, c_(plat), c_(s_axis), k_s,
-                        lmin ** 2, lmax ** 2, c_(centre), out2, in2, chains)
+                        lmin ** 2, lmax ** 2, c_(centre), out2, in2, kb0, c_(blk_centre), c_(blk_out2),
+                        c_(blk_in2), chains)
 
 
 # --------------------------------------------------------------------------------------------
@@ -327,11 +355,26 @@ def _sample_feasible(px, py, pz, k, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, pl
     return False
 
 
+@njit(cache=True, inline="always")
+def _balls_reject(px, py, pz, g, l0, nl, plat, centre, out2, in2):
+    """The bound of ball row ``g`` (a chain's, or a block's): True when some leg's ball rejects ``P``."""
+    for jj in range(nl):
+        j = l0 + jj
+        dx = px + plat[j, 0] - centre[g, j, 0]
+        dy = py + plat[j, 1] - centre[g, j, 1]
+        dz = pz + plat[j, 2] - centre[g, j, 2]
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 > out2[g, j] or d2 < in2[g, j]:
+            return True
+    return False
+
+
 @njit(cache=True)
 def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
-              lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
-    """Whether chain ``c`` serves ``P``: the whole-chain bound, then the samples searched outward
-    from ``start[c]`` (updated to the sample that served)."""
+              lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+    """Whether chain ``c`` serves ``P``: the whole-chain bound, the sample ``start[c]`` that served
+    last, then the blocks of samples outward from its block, each skipped when its bound rejects
+    (``start[c]`` is updated to the sample that served)."""
     for jj in range(nl[c]):
         j = l0[c] + jj
         dx = px + plat[j, 0] - centre[j, 0]
@@ -342,23 +385,31 @@ def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
             return False
     n = nk[c]
     s0 = start[c]
-    for step in range(2 * n):
+    if _sample_feasible(px, py, pz, k0[c] + s0, l0[c], nl[c], s_lo[c], s_hi[c], w, base, u_axis, k_u, plat,
+                        s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
+        return True
+    nb = (n + BLOCK - 1) // BLOCK
+    b0 = s0 // BLOCK
+    for step in range(2 * nb):
         off = (step + 1) // 2
-        kk = s0 + off if step % 2 == 1 else s0 - off
-        if kk < 0 or kk >= n:
-            if off > n:
+        b = b0 + off if step % 2 == 1 else b0 - off
+        if b < 0 or b >= nb:
+            if off > nb:
                 break
             continue
-        if _sample_feasible(px, py, pz, k0[c] + kk, l0[c], nl[c], s_lo[c], s_hi[c], w, base, u_axis, k_u, plat,
-                            s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
-            start[c] = kk
-            return True
+        if _balls_reject(px, py, pz, kb0[c] + b, l0[c], nl[c], plat, blk_centre, blk_out2, blk_in2):
+            continue
+        for kk in range(b * BLOCK, min(b * BLOCK + BLOCK, n)):
+            if kk != s0 and _sample_feasible(px, py, pz, k0[c] + kk, l0[c], nl[c], s_lo[c], s_hi[c], w, base,
+                                             u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
+                start[c] = kk
+                return True
     return False
 
 
 @njit(parallel=True, cache=True, nogil=True)
 def _columns_kernel(col_ix, col_iy, xs, ys, zs, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat,
-                    s_axis, k_s, lmin2, lmax2, centre, out2, in2, out):
+                    s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, out):
     """Occupancy of the columns ``(col_ix, col_iy)``, each walked upward with a warm start per chain;
     the chain that failed last is tested first."""
     n_chains = k0.shape[0]
@@ -376,7 +427,8 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, k0, nk, l0, nl, s_lo, s_hi, w, b
             for cc in range(n_chains):
                 c = (first + cc) % n_chains
                 if not _chain_ok(xs[ix], ys[iy], zs[iz], c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
-                                 k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
+                                 k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
+                                 blk_out2, blk_in2, gap_lo, gap_hi):
                     ok = False
                     first = c
                     break
@@ -385,7 +437,7 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, k0, nk, l0, nl, s_lo, s_hi, w, b
 
 @njit(parallel=True, cache=True, nogil=True)
 def _points_kernel(points, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
-                   lmin2, lmax2, centre, out2, in2, out):
+                   lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, out):
     n_chains = k0.shape[0]
     for p in prange(points.shape[0]):
         gap_lo = np.empty(8)
@@ -396,7 +448,8 @@ def _points_kernel(points, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, pla
         ok = True
         for c in range(n_chains):
             if not _chain_ok(points[p, 0], points[p, 1], points[p, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
-                             base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, gap_lo, gap_hi):
+                             base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0,
+                             blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
                 ok = False
                 break
         out[p] = ok
