@@ -227,12 +227,13 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     """``paraspace workspace --mechanism`` for a general mechanism: the position workspace, its measures
     and the shell (kinematics/mechanism_workspace.py)."""
     from paraspace.kinematics.measures import measure_workspace
-    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
+    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method)
     length_step = _length_step(ns)
     fmt = _export_format(ns)
+    warm_up_general()
     progress, done = progress_line("workspace")
     try:
         result = compute_mechanism_workspace(mech, settings, length_step, progress)

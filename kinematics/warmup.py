@@ -10,7 +10,8 @@ fixtures call it before they send a request.
 workspace engines (blocks and dense, with diagnostics, the certified bracket and the mirror), the
 per-point test with and without joint cones about both axes and with leg interference, the
 redundancy resolution with joints (the explorer's pose panel and ``/ik``), the orientation line
-scan, the dexterity field and the measures and shell of a result.
+scan, the dexterity field and the measures and shell of a result, and the general engine of a
+mechanism description (:mod:`kinematics.mechanism_workspace`).
 """
 
 from __future__ import annotations
@@ -66,5 +67,8 @@ def warm_up() -> float:
         dexterity_field(res)
         measure_workspace(res)
         workspace_shell(res)
+        from .mechanism_workspace import warm_up_general
+
+        warm_up_general()
         _warm = True
     return time.perf_counter() - t0
