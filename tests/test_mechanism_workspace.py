@@ -285,3 +285,71 @@ def test_two_prismatic_joints_equal_the_brute_force() -> None:
         rot = platform_rotation(mech, orientation)
         lengths = mech.leg_lengths([c.q for c in sol], pts[i], rot)
         assert np.all((lengths >= 110.0 - 1e-6) & (lengths <= 160.0 + 1e-6)), pts[i]
+
+
+def _reference_mechanism():
+    data = preset("6-pups").to_dict()
+    data["reference"] = [10.0, -5.0, 3.0]
+    return parse_mechanism(data)
+
+
+@pytest.mark.parametrize("name", ["paper", "gough-stewart", "6-pups", "6-pss", "x-y tables", "reference"])
+def test_jacobians_match_finite_differences(name) -> None:
+    """dl/dx = J_x (x = [P, phi, theta, psi], radians) and dl/dq = -C (J_q = [I | C]) by central
+    differences of the description's own forward model (Mechanism.leg_lengths)."""
+    from paraspace.kinematics.mechanism_jacobian import mechanism_jacobians
+
+    mech = {"x-y tables": _table_mechanism, "reference": _reference_mechanism}.get(name, lambda: preset(name))()
+    rng = np.random.default_rng(7)
+    position = np.array([4.0, -6.0, 140.0])
+    angles = np.array([7.0, -4.0, 5.0])  # psi, theta, phi (degrees)
+    q = [[float(rng.uniform(*j.range)) for j in chain.carriage] for chain in mech.chains]
+    jac = mechanism_jacobians(mech, position, angles, q)
+
+    def lengths(pos, ang, qq):
+        return mech.leg_lengths(qq, pos, platform_rotation(mech, ang))
+
+    eps = 1e-6
+    fd_x = np.zeros((6, 6))
+    for k in range(3):
+        dp = np.zeros(3)
+        dp[k] = eps
+        fd_x[:, k] = (lengths(position + dp, angles, q) - lengths(position - dp, angles, q)) / (2 * eps)
+    for k, idx in enumerate((2, 1, 0)):  # Theta = [phi, theta, psi]; angles = (psi, theta, phi)
+        da = np.zeros(3)
+        da[idx] = np.degrees(eps)
+        fd_x[:, 3 + k] = (lengths(position, angles + da, q) - lengths(position, angles - da, q)) / (2 * eps)
+    np.testing.assert_allclose(jac.J_x, fd_x, atol=1e-6)
+    col = 6
+    for c, chain in enumerate(mech.chains):
+        for m, joint in enumerate(chain.carriage):
+            step = np.degrees(eps) if joint.type == "revolute" else eps
+            qp = [list(x) for x in q]
+            qm = [list(x) for x in q]
+            qp[c][m] += step
+            qm[c][m] -= step
+            fd = (lengths(position, angles, qp) - lengths(position, angles, qm)) / (2 * eps)
+            np.testing.assert_allclose(-jac.J_q[:, col], fd, atol=1e-6)
+            col += 1
+    assert col == jac.J_q.shape[1]
+    np.testing.assert_allclose(jac.J_q[:, :6], np.eye(6))
+    assert np.isfinite(jac.condition_number) and jac.condition_number >= 1.0
+
+
+def test_paper_preset_jacobians_are_the_papers() -> None:
+    """The paper preset's Jacobians are kinematics/jacobian.py's (eqs. (22)-(26), columns reordered:
+    the paper's q is [l, d_1..d_3, eta_1..eta_3], the description's [l, eta_1, d_1, eta_2, d_2, ...])."""
+    from paraspace.kinematics.jacobian import jacobians
+    from paraspace.kinematics.mechanism_jacobian import mechanism_jacobians
+    from paraspace.kinematics.pose import Pose
+
+    design = Design(a=40.0, eta_range="from-zero")
+    mech = preset("paper", {"a": 40.0, "eta_range": "from-zero"})
+    pose = Pose(5.0, -3.0, 135.0, 6.0, -4.0, 3.0)
+    d, eta = np.array([10.0, 20.0, 35.0]), np.array([5.0, 12.0, 25.0])
+    ours = mechanism_jacobians(mech, pose.position, (pose.psi, pose.theta, pose.phi),
+                               [[eta[i], d[i]] for i in range(3)])
+    theirs = jacobians(design, pose, d, eta)
+    np.testing.assert_allclose(ours.J_x, theirs.J_x, atol=1e-12)
+    order = [0, 1, 2, 3, 4, 5, 7, 9, 11, 6, 8, 10]  # ours -> [l, d_1..d_3, eta_1..eta_3]
+    np.testing.assert_allclose(ours.J_q[:, order], theirs.J_q, atol=1e-10)
