@@ -114,3 +114,22 @@ def test_size_limits(http) -> None:
     assert r.status_code == 413 and "max_voxels = 200000" in r.json()["detail"]
     assert "voxel >= " in r.json()["detail"]
     assert np.isfinite(float(r.json()["detail"].split("voxel >= ")[1].split()[0]))
+
+
+def test_ik_of_a_mechanism(http) -> None:
+    from paraspace.kinematics.rotation import euler_zyx_deg
+
+    r = http.post(f"{V1}/ik", json={"mechanism": {"preset": "6-pups"},
+                                    "pose": {"x": 5, "y": 10, "z": 160, "psi": 0, "theta": 8, "phi": 0}})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["feasible"] is True and len(body["chains"]) == 6 and body["condition_number"] >= 1.0
+    lengths = six_pups().leg_lengths([c["q"] for c in body["chains"]], (5.0, 10.0, 160.0),
+                                     euler_zyx_deg(0.0, 8.0, 0.0))
+    np.testing.assert_allclose(lengths, [c["lengths"][0] for c in body["chains"]], atol=1e-9)
+    assert np.all((lengths >= 114.5) & (lengths <= 164.5))
+    # the paper preset answers as the paper's /ik
+    paper_ik = http.post(f"{V1}/ik", json={"mechanism": {"preset": "paper"}, "pose": {"z": 130}}).json()
+    assert paper_ik == http.post(f"{V1}/ik", json={"pose": {"z": 130}}).json()
+    r = http.post(f"{V1}/ik", json={"mechanism": {"preset": "6-pups"}, "d": [0, 0, 0], "eta": [0, 0, 0]})
+    assert r.status_code == 422 and r.json()["detail"][0]["field"] == "d"

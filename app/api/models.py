@@ -45,6 +45,7 @@ class IkRequest(BaseModel):
     eta: list[Num] | None = Field(None, min_length=3, max_length=3,
                                        description="arc positions eta_1..eta_3 in degrees, within the arc stroke")
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
+    mechanism: MechanismIn | None = Field(None, description="a preset or a description instead of design")
 
 
 class MechanismIn(BaseModel):
@@ -89,6 +90,9 @@ class MechanismIn(BaseModel):
             return call_core("mechanism.description", lambda: parse_mechanism(desc))
         name, params = self.preset, dict(self.params)
         return call_core("mechanism", lambda: preset(name, params))
+
+
+IkRequest.model_rebuild()
 
 
 class WorkspaceRequest(BaseModel):
