@@ -640,14 +640,17 @@ def cmd_ik(ns: argparse.Namespace) -> int:
 def _ik_general(ns: argparse.Namespace, mech: Any) -> int:
     """``paraspace ik --mechanism`` for a general mechanism: per chain the carriage values of largest
     smallest length margin (kinematics/mechanism_workspace.py, ``mechanism_ik``)."""
+    from paraspace.kinematics.mechanism_jacobian import mechanism_jacobians
     from paraspace.kinematics.mechanism_workspace import mechanism_ik
     from paraspace.kinematics.pose import Pose
 
     pose = Pose.from_array(_floats("pose", ns.pose, 6))
-    chains = mechanism_ik(mech, pose.position, (pose.psi, pose.theta, pose.phi), length_step=_length_step(ns))
+    angles = (pose.psi, pose.theta, pose.phi)
+    chains = mechanism_ik(mech, pose.position, angles, length_step=_length_step(ns))
     feasible = all(c.feasible for c in chains)
+    cond = mechanism_jacobians(mech, pose.position, angles, [c.q for c in chains]).condition_number
     out = {"mechanism": mech.to_dict(), "pose": pose.to_dict(), "feasible": feasible,
-           "chains": [c.to_dict() for c in chains]}
+           "chains": [c.to_dict() for c in chains], "condition_number": cond}
     if ns.json:
         _emit(out)
     else:
@@ -659,6 +662,7 @@ def _ik_general(ns: argparse.Namespace, mech: Any) -> int:
             q = "  ".join(f"{k}={fixed(v, 3, 8)}" for k, v in zip(kinds, c.q)) or "(fixed base)"
             print(f"chain {c.chain + 1}: {q}  lengths = {' '.join(fixed(x, 3, 8) for x in c.lengths)}  "
                   f"margin {fixed(c.margin, 3, 8)}")
+        print(f"condition number of J: {significant(cond, 4)}")
     return 0 if feasible or not ns.strict else 1
 
 
