@@ -687,7 +687,7 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float],
         n = s_samples if s_hi > s_lo else 1
         s = np.linspace(s_lo, s_hi, n)
         marg = _margins(tab, lo, hi, plat, p, s)
-        k, i = np.unravel_index(int(np.argmax(marg)), marg.shape)
+        k, i = (int(x) for x in np.unravel_index(int(np.argmax(marg)), marg.shape))
         best_s, best_m = float(s[i]), float(marg[k, i])
         width = (s_hi - s_lo) / max(n - 1, 1)
         one = ChainTables(tab.q[k:k + 1], tab.base[k:k + 1], tab.w[k:k + 1], tab.rot[k:k + 1], tab.exact, tab.s_range)

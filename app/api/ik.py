@@ -62,8 +62,8 @@ def _ik_general(req: IkRequest, mech: Any, pose: Any) -> dict[str, Any]:
                                    f"cones; its carriage values are resolved)")
     assert req.mechanism is not None
     angles = (pose.psi, pose.theta, pose.phi)
-    chains = call_core("mechanism", lambda: mechanism_ik(mech, pose.position, angles,
-                                                         length_step=req.mechanism.length_step))
+    step = req.mechanism.length_step
+    chains = call_core("mechanism", lambda: mechanism_ik(mech, pose.position, angles, length_step=step))
     jac = mechanism_jacobians(mech, pose.position, angles, [c.q for c in chains])
     return jsonable({"mechanism": mech.to_dict(), "pose": pose.to_dict(),
                      "feasible": all(c.feasible for c in chains), "chains": [c.to_dict() for c in chains],
