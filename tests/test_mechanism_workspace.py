@@ -246,7 +246,7 @@ def test_refusals_name_the_field() -> None:
     assert compute_mechanism_workspace(paper(), WorkspaceSettings(voxel=H, bracket=True)).volume_inner is not None
 
 
-def _table_mechanism():
+def _table_mechanism(kind: str = "x-y table"):
     """Three chains on a turntable with an x-y table (revolute + two prismatic joints), two legs each:
     the y joint (the longer stroke) is solved exactly, the x joint and the turntable sampled."""
     chains = []
@@ -258,26 +258,33 @@ def _table_mechanism():
             px, py = 40.0, sign * 20.0
             legs.append({"base": [c * bx - s * by, s * bx + c * by, 0.0],
                          "platform": [c * px - s * py, s * px + c * py, 0.0], "length": [110.0, 160.0]})
-        chains.append({"carriage": [
-            {"type": "revolute", "axis": [0, 0, 1], "range": [-10.0, 10.0]},
-            {"type": "prismatic", "axis": [c, s, 0], "range": [-10.0, 10.0]},
-            {"type": "prismatic", "axis": [-s, c, 0.2], "range": [-15.0, 15.0]},
-        ], "legs": legs})
+        carriage = {
+            "x-y table": [{"type": "revolute", "axis": [0, 0, 1], "range": [-10.0, 10.0]},
+                          {"type": "prismatic", "axis": [c, s, 0], "range": [-10.0, 10.0]},
+                          {"type": "prismatic", "axis": [-s, c, 0.2], "range": [-15.0, 15.0]}],
+            # a slide, then a turntable about the slid frame's tilted axis (a revolute after the exact joint)
+            "slide-turn": [{"type": "prismatic", "axis": [-c, -s, 0.3], "range": [0.0, 30.0]},
+                           {"type": "revolute", "axis": [0.1, 0.0, 1.0], "range": [-10.0, 10.0]}],
+            # a turntable only: sampled, tested at s = 0
+            "turntable": [{"type": "revolute", "axis": [0, 0, 1], "range": [-10.0, 10.0]}],
+        }[kind]
+        chains.append({"carriage": carriage, "legs": legs})
     return parse_mechanism({"name": "x-y tables", "chains": chains})
 
 
-def test_two_prismatic_joints_equal_the_brute_force() -> None:
-    mech = _table_mechanism()
+@pytest.mark.parametrize("kind, samples", [("x-y table", 21 * 21), ("slide-turn", 21), ("turntable", 21)])
+def test_other_carriages_equal_the_brute_force(kind, samples) -> None:
+    mech = _table_mechanism(kind)
     orientation = (5.0, 0.0, 3.0)
     res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, orientation=orientation, eta_step=1.0),
                                     length_step=1.0)
-    assert res.samples == (21 * 21,) * 3
+    assert res.samples == (samples,) * 3
     pts, idx = _sample_voxels(res, 60, 20)
     engine = res.occupancy[idx[:, 0], idx[:, 1], idx[:, 2]]
     # the brute force's turntable and x values are the engine's samples; its y values lie in the
     # exactly-solved stroke
     brute = reachable_brute_force(mech, pts, platform_rotation(mech, orientation),
-                                  samples={"revolute": 21, "prismatic": 21})
+                                  samples={"revolute": 21, "prismatic": 21 if kind == "x-y table" else 301})
     assert 10 < engine.sum() < len(pts) - 10
     assert not np.any(brute & ~engine)
     for i in np.flatnonzero(engine & ~brute):
@@ -293,13 +300,15 @@ def _reference_mechanism():
     return parse_mechanism(data)
 
 
-@pytest.mark.parametrize("name", ["paper", "gough-stewart", "6-pups", "6-pss", "x-y tables", "reference"])
+@pytest.mark.parametrize("name", ["paper", "gough-stewart", "6-pups", "6-pss", "x-y tables", "slide-turn",
+                                  "reference"])
 def test_jacobians_match_finite_differences(name) -> None:
     """dl/dx = J_x (x = [P, phi, theta, psi], radians) and dl/dq = -C (J_q = [I | C]) by central
     differences of the description's own forward model (Mechanism.leg_lengths)."""
     from paraspace.kinematics.mechanism_jacobian import mechanism_jacobians
 
-    mech = {"x-y tables": _table_mechanism, "reference": _reference_mechanism}.get(name, lambda: preset(name))()
+    mech = {"x-y tables": _table_mechanism, "slide-turn": lambda: _table_mechanism("slide-turn"),
+            "reference": _reference_mechanism}.get(name, lambda: preset(name))()
     rng = np.random.default_rng(7)
     position = np.array([4.0, -6.0, 140.0])
     angles = np.array([7.0, -4.0, 5.0])  # psi, theta, phi (degrees)
