@@ -82,6 +82,8 @@ MAX_CHAIN_SAMPLES = 200_000
 _BOUND_EPS = 1e-9
 #: Consecutive carriage samples sharing one bound (a block the search skips when its balls reject).
 BLOCK = 8
+#: Edge, in voxels, of the cubes the blocks engine decides whole.
+CUBE = 4
 
 
 def check_length_step(value: float) -> float:
@@ -306,8 +308,10 @@ def _free(x, gap_lo, gap_hi, ng):
 
 @njit(cache=True)
 def _sample_feasible(px, py, pz, k, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
-                     lmin2, lmax2, gap_lo, gap_hi):
-    """The exact test in ``s`` of one chain at its carriage sample ``k`` (module docstring)."""
+                     lmin2, lmax2, gap_lo, gap_hi, shift):
+    """The exact test in ``s`` of one chain at its carriage sample ``k`` (module docstring); ``shift > 0``
+    tightens each cone by ``(1 + k) shift`` (the blocks engine's test for a whole cube, with the leg
+    limits tightened by the caller)."""
     wx, wy, wz = w[k, 0], w[k, 1], w[k, 2]
     lo, hi = s_lo, s_hi
     ng = 0
@@ -334,14 +338,16 @@ def _sample_feasible(px, py, pz, k, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, pl
             ng += 1
         if k_u[j] > -1.0:
             ax, ay, az = u_axis[k, j, 0], u_axis[k, j, 1], u_axis[k, j, 2]
-            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz, -(ax * wx + ay * wy + az * wz), k_u[j], p, q)
+            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz - (1.0 + k_u[j]) * shift,
+                                   -(ax * wx + ay * wy + az * wz), k_u[j], p, q)
             lo = max(lo, a0)
             hi = min(hi, a1)
             if lo > hi:
                 return False
         if k_s[j] > -1.0:
             ax, ay, az = s_axis[j, 0], s_axis[j, 1], s_axis[j, 2]
-            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz, -(ax * wx + ay * wy + az * wz), k_s[j], p, q)
+            a0, a1 = cone_interval(ax * vx + ay * vy + az * vz - (1.0 + k_s[j]) * shift,
+                                   -(ax * wx + ay * wy + az * wz), k_s[j], p, q)
             lo = max(lo, a0)
             hi = min(hi, a1)
             if lo > hi:
@@ -371,7 +377,7 @@ def _balls_reject(px, py, pz, g, l0, nl, plat, centre, out2, in2):
 
 @njit(cache=True)
 def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
-              lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+              lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, shift):
     """Whether chain ``c`` serves ``P``: the whole-chain bound, the sample ``start[c]`` that served
     last, then the blocks of samples outward from its block, each skipped when its bound rejects
     (``start[c]`` is updated to the sample that served)."""
@@ -386,7 +392,7 @@ def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
     n = nk[c]
     s0 = start[c]
     if _sample_feasible(px, py, pz, k0[c] + s0, l0[c], nl[c], s_lo[c], s_hi[c], w, base, u_axis, k_u, plat,
-                        s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
+                        s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi, shift):
         return True
     nb = (n + BLOCK - 1) // BLOCK
     b0 = s0 // BLOCK
@@ -401,7 +407,7 @@ def _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
             continue
         for kk in range(b * BLOCK, min(b * BLOCK + BLOCK, n)):
             if kk != s0 and _sample_feasible(px, py, pz, k0[c] + kk, l0[c], nl[c], s_lo[c], s_hi[c], w, base,
-                                             u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi):
+                                             u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, gap_lo, gap_hi, shift):
                 start[c] = kk
                 return True
     return False
@@ -428,7 +434,7 @@ def _columns_kernel(col_ix, col_iy, xs, ys, zs, k0, nk, l0, nl, s_lo, s_hi, w, b
                 c = (first + cc) % n_chains
                 if not _chain_ok(xs[ix], ys[iy], zs[iz], c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
                                  k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
-                                 blk_out2, blk_in2, gap_lo, gap_hi):
+                                 blk_out2, blk_in2, gap_lo, gap_hi, 0.0):
                     ok = False
                     first = c
                     break
@@ -449,10 +455,112 @@ def _points_kernel(points, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, pla
         for c in range(n_chains):
             if not _chain_ok(points[p, 0], points[p, 1], points[p, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
                              base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0,
-                             blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+                             blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, 0.0):
                 ok = False
                 break
         out[p] = ok
+
+
+@njit(cache=True)
+def _chain_out(px, py, pz, r, rt, c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis, k_s,
+               lmin2r, lmax2r, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+    """True when chain ``c`` fails at every point within ``r`` of ``P``: its balls grown by ``r``
+    reject ``P``, or every sample (of the blocks those balls do not reject) fails the test with its leg
+    limits and cones relaxed by ``rt`` (``lmin2r``, ``lmax2r``): a sample that served a point within
+    ``r`` would pass it (lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``)."""
+    for jj in range(nl[c]):
+        j = l0[c] + jj
+        dx = px + plat[j, 0] - centre[j, 0]
+        dy = py + plat[j, 1] - centre[j, 1]
+        dz = pz + plat[j, 2] - centre[j, 2]
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if d > math.sqrt(out2[j]) + r or d < math.sqrt(in2[j]) - r:
+            return True
+    n = nk[c]
+    nb = (n + BLOCK - 1) // BLOCK
+    for b in range(nb):
+        g = kb0[c] + b
+        rejected = False
+        for jj in range(nl[c]):
+            j = l0[c] + jj
+            dx = px + plat[j, 0] - blk_centre[g, j, 0]
+            dy = py + plat[j, 1] - blk_centre[g, j, 1]
+            dz = pz + plat[j, 2] - blk_centre[g, j, 2]
+            d = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if d > math.sqrt(blk_out2[g, j]) + r or d < math.sqrt(blk_in2[g, j]) - r:
+                rejected = True
+                break
+        if rejected:
+            continue
+        for kk in range(b * BLOCK, min(b * BLOCK + BLOCK, n)):
+            if _sample_feasible(px, py, pz, k0[c] + kk, l0[c], nl[c], s_lo[c], s_hi[c], w, base, u_axis, k_u, plat,
+                                s_axis, k_s, lmin2r, lmax2r, gap_lo, gap_hi, -rt):
+                return False
+    return True
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k0, nk, l0, nl, s_lo, s_hi, w,
+                   base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2,
+                   blk_in2, out):
+    """Cubes of ``m^3`` voxels, by columns of cubes ``cols`` (cube indices ``(cx, cy)``), with ``r`` the
+    half-diagonal of a cube's voxel centres and ``rt = r +`` a rounding margin: a cube is unreachable
+    when some chain is out for every point within ``r`` of its centre (:func:`_chain_out`, limits
+    relaxed by ``rt``), reachable when every chain passes the test at its centre with its leg limits
+    (``lmin2t``, ``lmax2t``) and cones tightened by ``rt`` (the same sample and ``s`` then serve every
+    voxel: lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``), else decided voxel by voxel
+    as the dense kernel does: the same voxels as the dense kernel."""
+    n_chains = k0.shape[0]
+    nx, ny, nz = xs.shape[0], ys.shape[0], zs.shape[0]
+    ncz = (nz + m - 1) // m
+    for col in prange(cols.shape[0]):
+        x0 = cols[col, 0] * m
+        y0 = cols[col, 1] * m
+        x1 = min(x0 + m, nx)
+        y1 = min(y0 + m, ny)
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        vstart = np.empty((m * m, n_chains), np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+            for v in range(m * m):
+                vstart[v, c] = nk[c] // 2
+        px = 0.5 * (xs[x0] + xs[x1 - 1])
+        py = 0.5 * (ys[y0] + ys[y1 - 1])
+        for cz in range(ncz):
+            z0 = cz * m
+            z1 = min(z0 + m, nz)
+            pz = 0.5 * (zs[z0] + zs[z1 - 1])
+            state = 1
+            for c in range(n_chains):
+                if _chain_out(px, py, pz, r, rt, c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis,
+                              k_s, lmin2r, lmax2r, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo,
+                              gap_hi):
+                    state = 0
+                    break
+                if state == 1 and not _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
+                                                k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2, kb0,
+                                                blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, rt):
+                    state = 2
+            if state < 2:
+                for ix in range(x0, x1):
+                    for iy in range(y0, y1):
+                        for iz in range(z0, z1):
+                            out[ix, iy, iz] = state == 1
+                continue
+            for ix in range(x0, x1):
+                for iy in range(y0, y1):
+                    v = (ix - x0) * m + (iy - y0)
+                    for iz in range(z0, z1):
+                        ok = True
+                        for c in range(n_chains):
+                            if not _chain_ok(xs[ix], ys[iy], zs[iz], c, vstart[v], k0, nk, l0, nl, s_lo, s_hi, w,
+                                             base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2,
+                                             kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, 0.0):
+                                ok = False
+                                break
+                        out[ix, iy, iz] = ok
 
 
 # --------------------------------------------------------------------------------------------
@@ -553,7 +661,9 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
                               cancel: CancelToken = None) -> MechanismWorkspaceResult:
     """The general engine on any description (never routed; see :func:`compute_mechanism_workspace`).
 
-    Both ``settings.method`` values give the same voxels: the general engine evaluates every voxel.
+    ``settings.method``: ``"dense"`` tests every voxel; ``"blocks"`` (default) decides cubes of
+    :data:`CUBE`^3 voxels whole where a certificate at the cube's centre holds for all of them
+    (:func:`_blocks_kernel`) and tests the others voxel by voxel: the same voxels.
     """
     _check_general(mech, settings)
     length_step = check_length_step(length_step)
@@ -565,16 +675,38 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     out = np.zeros(grid.shape, np.bool_)
-    gx, gy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-    ix, iy = gx.ravel().astype(np.int64), gy.ravel().astype(np.int64)
-    step = max(64, int(65536 // max(nz, 1)))
     sub = rep.sub(0.0, 1.0)
-    for s in range(0, ix.size, step):
-        check(cancel)
-        with KERNEL_LOCK:
-            _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *tables.args(), out)
-        frac = min(1.0, (s + step) / ix.size)
-        sub(frac, f"computing the workspace, {100 * frac:.0f} %")
+    if settings.method == "blocks":
+        m = CUBE
+        r = math.sqrt(3.0) * 0.5 * (m - 1) * grid.h
+        lmin = np.sqrt(tables.lmin2)
+        lmax = np.sqrt(tables.lmax2)
+        eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tables.base).max(initial=0.0)))
+        rt = r + eps
+        lmin2t = (lmin + rt) ** 2
+        lmax2t = np.where(lmax - rt > 0.0, (lmax - rt) ** 2, -1.0)
+        lmin2r = np.where(lmin - rt > 0.0, lmin - rt, 0.0) ** 2
+        lmax2r = (lmax + rt) ** 2
+        gx, gy = np.meshgrid(np.arange(-(-nx // m)), np.arange(-(-ny // m)), indexing="ij")
+        cols = np.ascontiguousarray(np.stack([gx.ravel(), gy.ravel()], axis=1).astype(np.int64))
+        step = max(16, int(65536 // max(nz * m * m, 1)))
+        for s in range(0, len(cols), step):
+            check(cancel)
+            with KERNEL_LOCK:
+                _blocks_kernel(cols[s:s + step], m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, *tables.args(),
+                               out)
+            frac = min(1.0, (s + step) / len(cols))
+            sub(frac, f"computing the workspace, {100 * frac:.0f} %")
+    else:
+        gx, gy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        ix, iy = gx.ravel().astype(np.int64), gy.ravel().astype(np.int64)
+        step = max(64, int(65536 // max(nz, 1)))
+        for s in range(0, ix.size, step):
+            check(cancel)
+            with KERNEL_LOCK:
+                _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *tables.args(), out)
+            frac = min(1.0, (s + step) / ix.size)
+            sub(frac, f"computing the workspace, {100 * frac:.0f} %")
     seconds = time.perf_counter() - t0
     rep(1.0, "voxels computed")
     return MechanismWorkspaceResult(

@@ -362,3 +362,18 @@ def test_paper_preset_jacobians_are_the_papers() -> None:
     np.testing.assert_allclose(ours.J_x, theirs.J_x, atol=1e-12)
     order = [0, 1, 2, 3, 4, 5, 7, 9, 11, 6, 8, 10]  # ours -> [l, d_1..d_3, eta_1..eta_3]
     np.testing.assert_allclose(ours.J_q[:, order], theirs.J_q, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", ["paper", "gough-stewart", "6-pups", "6-pss", "gs-cones", "x-y table", "slide-turn"])
+def test_blocks_and_dense_give_the_same_voxels(name) -> None:
+    """The general engine's cube certificates (kinematics/mechanism_workspace._blocks_kernel) never
+    change a voxel: blocks == dense at two voxel sizes and two orientations."""
+    mech = {"gs-cones": lambda: _with_cones(preset("gough-stewart"), [0.2, 0.0, 1.0], 50.0, [0.0, 0.3, 1.0], 60.0),
+            "x-y table": _table_mechanism, "slide-turn": lambda: _table_mechanism("slide-turn")}.get(
+        name, lambda: preset(name))()
+    for h, orientation in [(H, (0.0, 0.0, 0.0)), (6.0, (10.0, -5.0, 3.0))]:
+        dense = compute_general_workspace(mech, WorkspaceSettings(voxel=h, orientation=orientation, method="dense"))
+        blocks = compute_general_workspace(mech, WorkspaceSettings(voxel=h, orientation=orientation,
+                                                                   method="blocks"))
+        assert dense.voxels > 50
+        np.testing.assert_array_equal(blocks.occupancy, dense.occupancy)
