@@ -82,7 +82,7 @@ MAX_CHAIN_SAMPLES = 200_000
 _BOUND_EPS = 1e-9
 #: Consecutive carriage samples sharing one bound (a block the search skips when its balls reject).
 BLOCK = 8
-#: Edge, in voxels, of the cubes the blocks engine decides whole.
+#: Edge, in voxels, of the cubes the blocks engine decides whole (then their halves).
 CUBE = 4
 
 
@@ -499,20 +499,41 @@ def _chain_out(px, py, pz, r, rt, c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis
     return True
 
 
+@njit(cache=True)
+def _cube_state(px, py, pz, lv, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, start, k0, nk, l0, nl, s_lo, s_hi, w, base,
+                u_axis, k_u, plat, s_axis, k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+    """0: every voxel of the cube (level ``lv``, centre ``P``) is unreachable; 1: every voxel is
+    reachable; 2: undecided (see :func:`_blocks_kernel`)."""
+    state = 1
+    for c in range(k0.shape[0]):
+        if _chain_out(px, py, pz, r[lv], rt[lv], c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis,
+                      k_s, lmin2r[lv], lmax2r[lv], centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo,
+                      gap_hi):
+            return 0
+        if state == 1 and not _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u,
+                                        plat, s_axis, k_s, lmin2t[lv], lmax2t[lv], centre, out2, in2, kb0,
+                                        blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, rt[lv]):
+            state = 2
+    return state
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k0, nk, l0, nl, s_lo, s_hi, w,
                    base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2,
                    blk_in2, out):
-    """Cubes of ``m^3`` voxels, by columns of cubes ``cols`` (cube indices ``(cx, cy)``), with ``r`` the
-    half-diagonal of a cube's voxel centres and ``rt = r +`` a rounding margin: a cube is unreachable
-    when some chain is out for every point within ``r`` of its centre (:func:`_chain_out`, limits
-    relaxed by ``rt``), reachable when every chain passes the test at its centre with its leg limits
+    """Cubes of ``m^3`` voxels (``m`` even), by columns of cubes ``cols`` (cube indices ``(cx, cy)``),
+    then their halves: at level ``lv`` (0: edge ``m``, 1: edge ``m/2``) ``r[lv]`` is the half-diagonal
+    of a cube's voxel centres and ``rt[lv] = r[lv] +`` a rounding margin. A cube is unreachable when
+    some chain is out for every point within ``r`` of its centre (:func:`_chain_out`, limits relaxed by
+    ``rt``), reachable when every chain passes the test at its centre with its leg limits
     (``lmin2t``, ``lmax2t``) and cones tightened by ``rt`` (the same sample and ``s`` then serve every
-    voxel: lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``), else decided voxel by voxel
-    as the dense kernel does: the same voxels as the dense kernel."""
+    voxel: lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``); an undecided cube is split
+    in eight, and an undecided half decided voxel by voxel as the dense kernel does: the same voxels
+    as the dense kernel."""
     n_chains = k0.shape[0]
     nx, ny, nz = xs.shape[0], ys.shape[0], zs.shape[0]
     ncz = (nz + m - 1) // m
+    half = m // 2
     for col in prange(cols.shape[0]):
         x0 = cols[col, 0] * m
         y0 = cols[col, 1] * m
@@ -526,41 +547,45 @@ def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k
             start[c] = nk[c] // 2
             for v in range(m * m):
                 vstart[v, c] = nk[c] // 2
-        px = 0.5 * (xs[x0] + xs[x1 - 1])
-        py = 0.5 * (ys[y0] + ys[y1 - 1])
         for cz in range(ncz):
             z0 = cz * m
             z1 = min(z0 + m, nz)
-            pz = 0.5 * (zs[z0] + zs[z1 - 1])
-            state = 1
-            for c in range(n_chains):
-                if _chain_out(px, py, pz, r, rt, c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis,
-                              k_s, lmin2r, lmax2r, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo,
-                              gap_hi):
-                    state = 0
-                    break
-                if state == 1 and not _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis,
-                                                k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2, kb0,
-                                                blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, rt):
-                    state = 2
-            if state < 2:
+            st = _cube_state(0.5 * (xs[x0] + xs[x1 - 1]), 0.5 * (ys[y0] + ys[y1 - 1]), 0.5 * (zs[z0] + zs[z1 - 1]),
+                             0, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, start, k0, nk, l0, nl, s_lo, s_hi, w, base,
+                             u_axis, k_u, plat, s_axis, k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2,
+                             gap_lo, gap_hi)
+            if st < 2:
                 for ix in range(x0, x1):
                     for iy in range(y0, y1):
                         for iz in range(z0, z1):
-                            out[ix, iy, iz] = state == 1
+                            out[ix, iy, iz] = st == 1
                 continue
-            for ix in range(x0, x1):
-                for iy in range(y0, y1):
-                    v = (ix - x0) * m + (iy - y0)
-                    for iz in range(z0, z1):
-                        ok = True
-                        for c in range(n_chains):
-                            if not _chain_ok(xs[ix], ys[iy], zs[iz], c, vstart[v], k0, nk, l0, nl, s_lo, s_hi, w,
-                                             base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2,
-                                             kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, 0.0):
-                                ok = False
-                                break
-                        out[ix, iy, iz] = ok
+            for sx in range(x0, x1, half):
+                ex = min(sx + half, x1)
+                for sy in range(y0, y1, half):
+                    ey = min(sy + half, y1)
+                    for sz in range(z0, z1, half):
+                        ez = min(sz + half, z1)
+                        st2 = _cube_state(0.5 * (xs[sx] + xs[ex - 1]), 0.5 * (ys[sy] + ys[ey - 1]),
+                                          0.5 * (zs[sz] + zs[ez - 1]), 1, r, rt, lmin2t, lmax2t, lmin2r, lmax2r,
+                                          start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis,
+                                          k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi)
+                        for ix in range(sx, ex):
+                            for iy in range(sy, ey):
+                                v = (ix - x0) * m + (iy - y0)
+                                for iz in range(sz, ez):
+                                    if st2 < 2:
+                                        out[ix, iy, iz] = st2 == 1
+                                        continue
+                                    ok = True
+                                    for c in range(n_chains):
+                                        if not _chain_ok(xs[ix], ys[iy], zs[iz], c, vstart[v], k0, nk, l0, nl, s_lo,
+                                                         s_hi, w, base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2,
+                                                         centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2,
+                                                         gap_lo, gap_hi, 0.0):
+                                            ok = False
+                                            break
+                                    out[ix, iy, iz] = ok
 
 
 # --------------------------------------------------------------------------------------------
@@ -678,15 +703,15 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
     sub = rep.sub(0.0, 1.0)
     if settings.method == "blocks":
         m = CUBE
-        r = math.sqrt(3.0) * 0.5 * (m - 1) * grid.h
-        lmin = np.sqrt(tables.lmin2)
-        lmax = np.sqrt(tables.lmax2)
+        r = math.sqrt(3.0) * 0.5 * np.array([m - 1, m // 2 - 1], float) * grid.h  # levels: edge m, m/2
+        lmin = np.sqrt(tables.lmin2)[None, :]
+        lmax = np.sqrt(tables.lmax2)[None, :]
         eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tables.base).max(initial=0.0)))
         rt = r + eps
-        lmin2t = (lmin + rt) ** 2
-        lmax2t = np.where(lmax - rt > 0.0, (lmax - rt) ** 2, -1.0)
-        lmin2r = np.where(lmin - rt > 0.0, lmin - rt, 0.0) ** 2
-        lmax2r = (lmax + rt) ** 2
+        lmin2t = np.ascontiguousarray((lmin + rt[:, None]) ** 2)
+        lmax2t = np.ascontiguousarray(np.where(lmax - rt[:, None] > 0.0, (lmax - rt[:, None]) ** 2, -1.0))
+        lmin2r = np.ascontiguousarray(np.where(lmin - rt[:, None] > 0.0, lmin - rt[:, None], 0.0) ** 2)
+        lmax2r = np.ascontiguousarray((lmax + rt[:, None]) ** 2)
         gx, gy = np.meshgrid(np.arange(-(-nx // m)), np.arange(-(-ny // m)), indexing="ij")
         cols = np.ascontiguousarray(np.stack([gx.ravel(), gy.ravel()], axis=1).astype(np.int64))
         step = max(16, int(65536 // max(nz * m * m, 1)))
