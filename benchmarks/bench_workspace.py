@@ -27,7 +27,7 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      columns by the mirror y -> -y): the
      paper preset (routed to the paper engine: its ratio must stay 1.00), the general engine
      (kinematics/mechanism_workspace.py) on the paper preset's grid (with whether its voxels are the
-     paper engine's), and the gough-stewart, 6-pups and 6-pss presets.
+     paper engine's; its blocks and dense methods), and the gough-stewart, 6-pups and 6-pss presets.
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
                                             [--options] [--threads] [--presets]
@@ -152,6 +152,8 @@ def preset_rows(h: float = 2.0, runs: int = 5) -> None:
     rows["paper engine, dense"] = lambda: compute_workspace(design, WorkspaceSettings(voxel=h, method="dense"))
     rows["paper preset (routed)"] = lambda: compute_mechanism_workspace(preset("paper"), plain)
     rows["paper preset, general engine"] = lambda: compute_general_workspace(preset("paper"), on_grid)
+    dense_grid = WorkspaceSettings(voxel=h, bounds=(ref.grid.lo, ref.grid.hi), method="dense")
+    rows["paper preset, general dense"] = lambda: compute_general_workspace(preset("paper"), dense_grid)
     for name in PRESETS:
         if name != "paper":
             rows[name] = lambda name=name: compute_mechanism_workspace(preset(name), plain)
