@@ -42,6 +42,15 @@ sampling (both relaxed by a rounding margin so the bound never contradicts the s
 same bound over each block of :data:`BLOCK` consecutive samples skips whole blocks of the search.
 The chain's balls give the default box: ``P`` in ``c_j - R u_j +- (lmax_j + rho_j)`` for every leg.
 
+**Blocks.** ``method="blocks"`` (the default) decides cubes of :data:`CUBE`^3 voxels, then their
+halves, whole: with ``r`` the half-diagonal of a cube's voxel centres, every leg length is
+1-Lipschitz and every cone function ``a . v - k |v|`` is ``(1 + k)``-Lipschitz in ``P``, so a sample
+and ``s`` that pass at the cube's centre with the limits and cones TIGHTENED by ``r`` pass at every
+voxel of it, and a sample that passes at some voxel passes at the centre with them RELAXED by ``r``
+(both with a rounding margin): "some chain has no sample passing relaxed" makes the cube unreachable,
+"every chain has a sample passing tightened" reachable; the other cubes are tested voxel by voxel.
+The voxels are those of ``method="dense"`` (every voxel tested; tested equal).
+
 **The paper's mechanism** (a description equal to :func:`kinematics.presets.paper` of some
 :class:`~kinematics.design.Design`, reference zero) is routed to :func:`kinematics.workspace.
 compute_workspace` with that design: voxel-identical to today's model at today's speed. The general
