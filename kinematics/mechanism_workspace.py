@@ -682,12 +682,14 @@ def _grid_for(tables: KernelTables, settings: WorkspaceSettings) -> GridSpec:
     return GridSpec.from_bounds((glo[0], glo[1], zlo), (ghi[0], ghi[1], max(zhi, zlo + h)), h)
 
 
-def general_grid(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),
-                 length_step: float = 1.0) -> GridSpec:
-    """The grid the general engine lays for ``mech`` (computed before running, for size limits)."""
+def general_plan(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),
+                 length_step: float = 1.0) -> tuple[GridSpec, tuple[int, ...]]:
+    """The grid the general engine lays for ``mech`` and each chain's number of carriage samples
+    (computed before running, for size limits)."""
     _check_general(mech, settings)
     rot = platform_rotation(mech, settings.orientation)
-    return _grid_for(kernel_tables(mech, rot, settings.eta_step, check_length_step(length_step)), settings)
+    tables = kernel_tables(mech, rot, settings.eta_step, check_length_step(length_step))
+    return _grid_for(tables, settings), tuple(len(t.q) for t in tables.chains)
 
 
 def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),

@@ -133,3 +133,14 @@ def test_ik_of_a_mechanism(http) -> None:
     assert paper_ik == http.post(f"{V1}/ik", json={"pose": {"z": 130}}).json()
     r = http.post(f"{V1}/ik", json={"mechanism": {"preset": "6-pups"}, "d": [0, 0, 0], "eta": [0, 0, 0]})
     assert r.status_code == 422 and r.json()["detail"][0]["field"] == "d"
+
+
+def test_carriage_samples_are_bounded(http) -> None:
+    """A chain of 36,001 turntable samples (0.01 deg over 360 deg) is refused before any work."""
+    data = six_pups().to_dict()
+    for chain in data["chains"]:
+        chain["carriage"].insert(0, {"type": "revolute", "axis": [0, 0, 1], "range": [-180.0, 180.0]})
+    r = http.post(f"{V1}/workspace", json={"mechanism": {"description": data},
+                                           "settings": {"voxel": 20, "eta_step": 0.01}})
+    assert r.status_code == 413 and "36,001 carriage samples" in r.json()["detail"]
+    assert "settings.eta_step" in r.json()["detail"]

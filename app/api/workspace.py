@@ -21,6 +21,9 @@ from .models import WorkspaceRequest
 
 router = api_router()
 RANGES[("query", "max_faces")] = "[100, 2000000]"
+#: Most carriage samples of one chain in a general mechanism's request (the work per voxel); the paper's
+#: arc at its finest eta_step (0.01 deg over 180 deg) has 18,001.
+MAX_API_CARRIAGE_SAMPLES = 20_000
 
 
 @router.post("/workspace", status_code=202, summary="Start a position-workspace job",
@@ -67,7 +70,7 @@ def _start_general(ctx: ApiContext, req: WorkspaceRequest, request: Request, mec
     import json
 
     from paraspace.kinematics.design import ParameterError
-    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, general_grid
+    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, general_plan
 
     assert req.mechanism is not None
     length_step = req.mechanism.length_step
@@ -77,9 +80,13 @@ def _start_general(ctx: ApiContext, req: WorkspaceRequest, request: Request, mec
         ctx.quota_check(request)
         with ctx.prechecks():
             try:
-                grid = general_grid(mech, settings, length_step)
+                grid, samples = general_plan(mech, settings, length_step)
             except ParameterError as exc:
                 raise FieldError(f"settings.{exc.field}", str(exc)) from None
+            if max(samples) > MAX_API_CARRIAGE_SAMPLES:
+                raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most "
+                                    f"{MAX_API_CARRIAGE_SAMPLES:,} per request (a larger settings.eta_step or "
+                                    f"mechanism.length_step)")
             if grid.size > ctx.limits.max_voxels:
                 h = settings.voxel
                 need = math.ceil(h * (grid.size / ctx.limits.max_voxels) ** (1.0 / 3.0) * 10.0 + 1e-9) / 10.0
