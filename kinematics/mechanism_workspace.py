@@ -873,3 +873,39 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float],
         lengths = np.linalg.norm(p + plat - base, axis=1)
         out.append(ChainIK(c, q, [float(x) for x in lengths], best_m, best_m >= -1e-9))
     return out
+
+
+# --------------------------------------------------------------------------------------------
+# parameter studies over a preset's parameters
+
+
+def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | None = None,
+                 settings: WorkspaceSettings = WorkspaceSettings(), length_step: float = 1.0,
+                 progress: ProgressFn | None = None, cancel: CancelToken = None) -> list[dict]:
+    """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
+    else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
+    volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
+    The paper preset runs the paper's engine (the same numbers as :func:`kinematics.sweep.sweep_1d`)."""
+    from .measures import measure_workspace
+    from .presets import PRESETS, preset
+
+    if name not in PRESETS:
+        raise ParameterError("mechanism", name, f"one of the presets {', '.join(PRESETS)}")
+    known = [p.name for p in PRESETS[name].params]
+    if param not in known:
+        raise ParameterError("param", param, f"a parameter of preset {name!r}: {', '.join(known)}")
+    values = list(values)
+    if not 1 <= len(values) <= 1000:
+        raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
+    rep = Reporter(progress)
+    rows = []
+    for i, value in enumerate(values):
+        check(cancel)
+        mech = preset(name, {**(params or {}), param: value})
+        res = compute_mechanism_workspace(mech, settings, length_step, rep.sub(i / len(values), (i + 1) / len(values)),
+                                          cancel)
+        measures = measure_workspace(res, cancel=cancel).to_dict()
+        rows.append({**measures, param: value, "engine": res.engine, "voxels": res.voxels, "volume": res.volume,
+                     "compute_seconds": res.compute_seconds})
+    rep(1.0, "sweep done")
+    return rows

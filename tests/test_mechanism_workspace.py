@@ -377,3 +377,26 @@ def test_blocks_and_dense_give_the_same_voxels(name) -> None:
                                                                    method="blocks"))
         assert dense.voxels > 50
         np.testing.assert_array_equal(blocks.occupancy, dense.occupancy)
+
+
+def test_sweep_over_a_preset_parameter() -> None:
+    """A longer lift only adds carriage values: the workspaces nest voxel by voxel (fixed box), a
+    zero lift is the Gough-Stewart platform's, and the sweep's rows are those workspaces; the paper
+    preset's rows are the paper engine's."""
+    from paraspace.kinematics.mechanism_workspace import sweep_preset
+
+    box = ((-120.0, -120.0, 0.0), (120.0, 120.0, 240.0))
+    settings = WorkspaceSettings(voxel=H, bounds=box)
+    occ = [compute_mechanism_workspace(preset("6-pups", {"lift": v}), settings).occupancy for v in (0.0, 20.0, 40.0)]
+    assert 100 < occ[0].sum() < occ[1].sum() < occ[2].sum()
+    assert not np.any(occ[0] & ~occ[1]) and not np.any(occ[1] & ~occ[2])
+    np.testing.assert_array_equal(occ[0], compute_mechanism_workspace(gough_stewart(), settings).occupancy)
+    rows = sweep_preset("6-pups", "lift", [0.0, 20.0, 40.0], settings=settings)
+    assert [r["voxels"] for r in rows] == [int(o.sum()) for o in occ]
+    assert [r["lift"] for r in rows] == [0.0, 20.0, 40.0] and rows[0]["engine"] == "general"
+    assert all(r["volume"] == r["voxels"] * H ** 3 for r in rows)
+    paper_rows = sweep_preset("paper", "a", [40.0, 60.0], settings=WorkspaceSettings(voxel=H))
+    assert [r["voxels"] for r in paper_rows] == [compute_workspace(Design(a=a), WorkspaceSettings(voxel=H)).voxels
+                                                  for a in (40.0, 60.0)]
+    with pytest.raises(ParameterError, match="a parameter of preset '6-pups'"):
+        sweep_preset("6-pups", "a", [1.0])
