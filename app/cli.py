@@ -472,10 +472,53 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     return 0
 
 
+#: ``sweep`` flags that only the paper's design study has
+_SWEEP_PAPER_ONLY = {"--param2": "param2", "--values2": "values2", "--scheduler": "scheduler", "--workers": "workers",
+                     "--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+
+
+def _sweep_mechanism(ns: argparse.Namespace) -> int:
+    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``: workspace
+    measures against one of the preset's parameters (kinematics/mechanism_workspace.sweep_preset)."""
+    from paraspace.kinematics.mechanism_workspace import sweep_preset, warm_up_general
+    from paraspace.kinematics.presets import PRESETS
+    from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
+
+    from .mechanism_cli import _param_values
+
+    if ns.mechanism not in PRESETS:
+        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): a sweep varies a "
+                                                          "preset's parameter")
+    for flag, dest in {**_DESIGN_FLAGS, **_JOINT_FLAGS, **_SWEEP_PAPER_ONLY}.items():
+        if _given(ns, flag, dest):
+            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism (a preset's sweep: --param NAME "
+                                 "--values V1,V2,... [--set NAME=VALUE]... [--voxel H] [--json] [--csv FILE])")
+    values = _floats("values", ns.values)
+    settings = WorkspaceSettings(voxel=_voxel(ns))
+    warm_up()
+    warm_up_general()
+    progress, done = progress_line("sweep")
+    try:
+        rows = sweep_preset(ns.mechanism, ns.param, values, _param_values(ns.set), settings, progress=progress)
+    finally:
+        done()
+    if ns.csv:
+        write_atomic(ns.csv, rows_to_csv(rows))
+    if ns.json:
+        _emit(rows)
+    else:
+        sys.stdout.write(rows_to_csv(rows))
+    return 0
+
+
 def cmd_sweep(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.sweep import sweep_1d, sweep_2d
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
+    if getattr(ns, "mechanism", None) is not None:
+        return _sweep_mechanism(ns)
+    if getattr(ns, "set", None):
+        raise ParameterError("--set", ns.set[0], "only with --mechanism PRESET")
     design = _design(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), joints=_joints(ns))
     for field in ("param", "param2"):
@@ -863,7 +906,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
     _add_design_flags(s)
-    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS))
+    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS) + " (with --mechanism: one of the "
+                                                   "preset's parameters)")
     s.add_argument("--values", required=True, help="comma-separated values")
     s.add_argument("--param2", help="second parameter for a 2-D grid")
     s.add_argument("--values2", help="values of the second parameter")
@@ -878,6 +922,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    s.add_argument("--mechanism", metavar="PRESET", help="sweep a parameter of a mechanism preset instead of the "
+                                                         "paper's design (see 'paraspace mechanism presets')")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="with --mechanism: a fixed parameter of the preset (repeatable)")
     _add_scan_flags(s)
     _add_joint_flags(s)
     s.set_defaults(func=cmd_sweep)

@@ -905,7 +905,7 @@ def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | 
         res = compute_mechanism_workspace(mech, settings, length_step, rep.sub(i / len(values), (i + 1) / len(values)),
                                           cancel)
         measures = measure_workspace(res, cancel=cancel).to_dict()
-        rows.append({**measures, param: value, "engine": res.engine, "voxels": res.voxels, "volume": res.volume,
+        rows.append({param: value, "engine": res.engine, **measures, "voxels": res.voxels, "volume": res.volume,
                      "compute_seconds": res.compute_seconds})
     rep(1.0, "sweep done")
     return rows

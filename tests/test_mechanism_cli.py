@@ -91,3 +91,18 @@ def test_paper_preset_keeps_the_paper_options(capsys) -> None:
                  "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["volume_inner"] <= data["volume"] <= data["volume_outer"]
+
+
+def test_sweep_over_a_preset_parameter(capsys) -> None:
+    assert main(["sweep", "--mechanism", "6-pups", "--param", "lift", "--values", "0,40", "--set",
+                 "platform_half_angle=20", "--voxel", "8", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    for row, lift in zip(rows, (0.0, 40.0)):
+        ref = compute_mechanism_workspace(six_pups(lift=lift, platform_half_angle=20.0), WorkspaceSettings(voxel=8.0))
+        assert row["lift"] == lift and row["voxels"] == ref.voxels and row["engine"] == "general"
+    assert rows[0]["voxels"] < rows[1]["voxels"]
+    assert main(["sweep", "--mechanism", "6-pups", "--param", "lift", "--values", "0", "--param2", "l_max",
+                 "--values2", "150"]) == 2
+    assert "--param2" in capsys.readouterr().err
+    assert main(["sweep", "--mechanism", "my.toml", "--param", "lift", "--values", "0"]) == 2
+    assert "a sweep varies a preset's parameter" in capsys.readouterr().err
