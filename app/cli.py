@@ -17,7 +17,8 @@
     paraspace mechanism   show|export|presets [FILE|PRESET] [--param NAME=VALUE]... [--json] [-o FILE]
 
 Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]... [--length-step L]``
-instead of the design flags. The paper preset (or a file equal to it) runs the paper's engine with every
+instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
+sweeps a preset's parameter. The paper preset (or a file equal to it) runs the paper's engine with every
 option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
 workspace, its measures and shell, IK), and the flags only the paper's engine has (design and joint
 flags, --bracket, --diagnostics, --tilt/--torsion, --dexterity, ik --carriage) are refused by name.
