@@ -144,3 +144,19 @@ def test_carriage_samples_are_bounded(http) -> None:
                                            "settings": {"voxel": 20, "eta_step": 0.01}})
     assert r.status_code == 413 and "36,001 carriage samples" in r.json()["detail"]
     assert "settings.eta_step" in r.json()["detail"]
+
+
+def test_presets_endpoint_lists_what_the_requests_take(http) -> None:
+    from paraspace.kinematics.presets import PRESETS, preset
+
+    body = http.get(f"{V1}/mechanism/presets").json()
+    assert [p["name"] for p in body["presets"]] == list(PRESETS)
+    for p in body["presets"]:
+        assert p["mechanism"] == preset(p["name"]).to_dict()
+        assert {q["name"] for q in p["params"]} == {q.name for q in PRESETS[p["name"]].params}
+    pups = next(p for p in body["presets"] if p["name"] == "6-pups")
+    lift = next(q for q in pups["params"] if q["name"] == "lift")
+    assert (lift["default"], lift["min"], lift["max"]) == (50.0, 0.0, 1000.0)
+    # a listed description is accepted back as a request's mechanism
+    res = _result(http, {"mechanism": {"description": pups["mechanism"]}, "settings": {"voxel": 10}})["result"]
+    assert res["voxels"] == compute_mechanism_workspace(six_pups(), WorkspaceSettings(voxel=10.0)).voxels
