@@ -20,8 +20,9 @@ Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME
 instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
 sweeps a preset's parameter. The paper preset (or a file equal to it) runs the paper's engine with every
 option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
-workspace, its measures and shell, IK), and the flags only the paper's engine has (design and joint
-flags, --bracket, --diagnostics, --tilt/--torsion, --dexterity, ik --carriage) are refused by name.
+workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
+has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
+ik --carriage) are refused by name.
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``ik``): ``--u-cone DEG --s-cone DEG
@@ -231,7 +232,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
-    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method)
+    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket)
     length_step = _length_step(ns)
     fmt = _export_format(ns)
     warm_up_general()
@@ -245,6 +246,9 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
            "voxel_size": result.grid.h, "voxels": result.voxels, "volume": result.volume,
            "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "carriage_samples": list(result.samples), "eta_step": settings.eta_step, "length_step": length_step}
+    if ns.bracket:
+        out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
+        out["bracket_seconds"] = result.bracket_seconds
     if fmt:
         from paraspace.kinematics.shell import export_shell, workspace_shell
 
@@ -257,6 +261,9 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
         print(f"mechanism       {mech.name}  (general engine; carriage samples per chain "
               f"{', '.join(str(n) for n in result.samples)})")
         print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
+        if ns.bracket:
+            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
+                  "  (continuous workspace, kinematics/mechanism_bracket.py)")
         for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
             if key in out:
                 print(f"{key:<15} {out[key]}")
@@ -277,7 +284,7 @@ def _export_format(ns: argparse.Namespace) -> str | None:
 
 
 #: ``workspace`` flags that only the paper's engine computes
-_WORKSPACE_PAPER_ONLY = {"--bracket": "bracket", "--bracket-refine": "bracket_refine",
+_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine",
                          "--diagnostics": "diagnostics", "--tilt": "tilt", "--torsion": "torsion",
                          "--angle-step": "angle_step", "--dexterity": "dexterity", "--kappa-min": "kappa_min",
                          "--dexterity-mode": "dexterity_mode"}

@@ -57,7 +57,8 @@ compute_workspace` with that design: voxel-identical to today's model at today's
 engine decides the same arc samples and the same exact test in ``d`` on it (``d = s``), so it agrees
 with that engine up to floating-point rounding at voxel centres lying on a leg limit (tested).
 
-What the general engine does not compute (refused by name): the certified volume bracket, leg
+``settings.bracket`` adds the certified bracket of :mod:`kinematics.mechanism_bracket` (one level,
+no refinement; not with cones). What the general engine does not compute (refused by name): leg
 interference (a leg ``diameter``), per-chain diagnostics, and :class:`~kinematics.joints.Joints`
 options (a description carries its own cones).
 """
@@ -638,8 +639,6 @@ class MechanismWorkspaceResult(WorkspaceResult):
 
 
 def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
-    if settings.bracket:
-        raise ParameterError("bracket", True, "not available for a general mechanism (only the paper preset)")
     if settings.diagnostics:
         raise ParameterError("diagnostics", True, "not available for a general mechanism (only the paper preset)")
     if settings.joints != Joints():
@@ -744,11 +743,21 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
             frac = min(1.0, (s + step) / ix.size)
             sub(frac, f"computing the workspace, {100 * frac:.0f} %")
     seconds = time.perf_counter() - t0
-    rep(1.0, "voxels computed")
-    return MechanismWorkspaceResult(
+    res = MechanismWorkspaceResult(
         design=None, settings=settings, grid=grid, occupancy=out, chain_mask=None,  # type: ignore[arg-type]
         compute_seconds=seconds, n_eta=int(max(len(t.q) for t in tables.chains)), mechanism=mech,
         engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step)
+    if settings.bracket:
+        from .mechanism_bracket import general_bracket
+
+        t1 = time.perf_counter()
+        check(cancel)
+        with KERNEL_LOCK:
+            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor)
+        res.volume_inner, res.volume_outer = br.volume_inner, br.volume_outer
+        res.bracket_seconds = time.perf_counter() - t1
+    rep(1.0, "voxels computed")
+    return res
 
 
 def compute_mechanism_workspace(mech: Mechanism, settings: WorkspaceSettings = WorkspaceSettings(),
@@ -795,7 +804,9 @@ def warm_up_general() -> float:
         from .presets import six_pups
 
         mech = six_pups()
-        compute_general_workspace(mech, WorkspaceSettings(voxel=40.0, bounds=((-80, -80, 80), (80, 80, 200))))
+        box = ((-80, -80, 80), (80, 80, 200))
+        compute_general_workspace(mech, WorkspaceSettings(voxel=40.0, bounds=box))
+        compute_general_workspace(mech, WorkspaceSettings(voxel=40.0, bounds=box, method="dense", bracket=True))
         reachable_general(mech, np.array([[0.0, 0.0, 150.0]]))
         _WARM = True
     return time.perf_counter() - t0

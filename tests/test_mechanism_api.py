@@ -93,8 +93,8 @@ def test_bad_mechanisms_name_the_field(http) -> None:
     assert d["field"] == "mechanism.description.mechanism" and "valid TOML" in d["message"]
     assert detail({"mechanism": {"preset": "paper", "description": bad}})[0]["field"] == "mechanism"
     assert detail({"mechanism": {"preset": "6-pups"}, "design": {"a": 40}})[0]["field"] == "design"
-    d = detail({"mechanism": {"preset": "6-pups"}, "settings": {"voxel": 8, "bracket": True}})[0]
-    assert d["field"] == "settings.bracket" and "general mechanism" in d["message"]
+    d = detail({"mechanism": {"preset": "6-pups"}, "settings": {"voxel": 8, "diagnostics": True}})[0]
+    assert d["field"] == "settings.diagnostics" and "general mechanism" in d["message"]
     d = detail({"mechanism": {"preset": "6-pups", "length_step": 0}})[0]
     assert d["field"] == "mechanism.length_step" and "0.01" in d["message"]
 

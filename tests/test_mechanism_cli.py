@@ -69,8 +69,8 @@ def test_ik_of_a_general_mechanism(capsys) -> None:
 
 @pytest.mark.parametrize("args, message", [
     (["workspace", "--mechanism", "6-pups", "--a", "40"], "--a = '40' is invalid: expected not with --mechanism"),
-    (["workspace", "--mechanism", "gough-stewart", "--bracket"], "--bracket = True is invalid: expected only for "
-                                                                    "the paper's mechanism"),
+    (["workspace", "--mechanism", "gough-stewart", "--bracket-refine", "1"], "--bracket-refine = '1' is invalid: "
+                                                                             "expected only for the paper's mechanism"),
     (["workspace", "--mechanism", "6-pss", "--dexterity"], "--dexterity"),
     (["workspace", "--mechanism", "6-pss", "--u-cone", "30"], "a description carries its own cones"),
     (["workspace", "--param", "lift=3"], "--param = 'lift=3' is invalid: expected only with --mechanism"),
@@ -106,3 +106,9 @@ def test_sweep_over_a_preset_parameter(capsys) -> None:
     assert "--param2" in capsys.readouterr().err
     assert main(["sweep", "--mechanism", "my.toml", "--param", "lift", "--values", "0"]) == 2
     assert "a sweep varies a preset's parameter" in capsys.readouterr().err
+
+
+def test_bracket_of_a_general_mechanism(capsys) -> None:
+    assert main(["workspace", "--mechanism", "6-pups", "--voxel", "8", "--bracket", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert 0 < data["volume_inner"] <= data["volume"] <= data["volume_outer"]

@@ -232,8 +232,11 @@ def test_general_results_work_with_measures_and_shell() -> None:
 
 def test_refusals_name_the_field() -> None:
     gs = gough_stewart()
-    with pytest.raises(ParameterError, match="bracket"):
-        compute_mechanism_workspace(gs, WorkspaceSettings(voxel=H, bracket=True))
+    with pytest.raises(ParameterError, match="bracket = True is invalid: expected not available with joint cones"):
+        compute_mechanism_workspace(_with_cones(gs, [0, 0, 1], 60.0, [0, 0, 1], 60.0),
+                                    WorkspaceSettings(voxel=H, bracket=True))
+    with pytest.raises(ParameterError, match="diagnostics"):
+        compute_mechanism_workspace(gs, WorkspaceSettings(voxel=H, diagnostics=True))
     with pytest.raises(ParameterError, match="joints"):
         compute_mechanism_workspace(gs, WorkspaceSettings(voxel=H, joints=Joints(theta_u=30.0)))
     with pytest.raises(ParameterError, match=r"length_step = 0 is invalid: valid range \[0.01, 100\]"):
@@ -400,3 +403,63 @@ def test_sweep_over_a_preset_parameter() -> None:
                                                   for a in (40.0, 60.0)]
     with pytest.raises(ParameterError, match="a parameter of preset '6-pups'"):
         sweep_preset("6-pups", "a", [1.0])
+
+
+@pytest.mark.parametrize("name", ["paper", "gough-stewart", "6-pups", "slide-turn"])
+def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
+    """volume_inner <= V <= volume_outer around the voxel estimate and a finer one (h/2, finer
+    samples); points near the centre of an inside cube are reachable and points of outside cubes
+    unreachable by the plain brute force (twice the engine's revolute samples, fine prismatic), at
+    the cubes next to the boundary cubes."""
+    from paraspace.kinematics.mechanism_bracket import general_bracket
+    from paraspace.kinematics.mechanism_workspace import kernel_tables
+
+    mech = _table_mechanism("slide-turn") if name == "slide-turn" else preset(name)
+    res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, bracket=True))
+    fine = compute_general_workspace(mech, WorkspaceSettings(voxel=H / 2, eta_step=0.25), length_step=0.5)
+    assert 0 < res.volume_inner <= min(res.volume, fine.volume)
+    assert max(res.volume, fine.volume) <= res.volume_outer < math.inf
+    rot = platform_rotation(mech, (0.0, 0.0, 0.0))
+    br = general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0)
+    assert (br.volume_inner, br.volume_outer) == (res.volume_inner, res.volume_outer)
+    # the cubes' states on the bracket's grid: an inside cube's centre is a reachable voxel, an
+    # outside cube's is not
+    rng = np.random.default_rng(11)
+    big = br.grid
+    tabs = kernel_tables(mech, rot)
+    inside_pts, outside_pts = [], []
+    xs, ys, zs = big.axes()
+    occ = compute_general_workspace(mech, WorkspaceSettings(voxel=H, bounds=(big.lo, big.hi))).occupancy
+    state = _states(mech, tabs, big)
+    assert not np.any((state == 1) & ~occ) and not np.any((state == 0) & occ)
+    for want, bucket, spread in ((1, inside_pts, 0.25), (0, outside_pts, 0.5)):
+        idx = np.argwhere(state == want)
+        # the cubes nearest the workspace's boundary are the ones a wrong certificate would hit
+        near = idx[ndi.binary_dilation(state == 2, iterations=1)[idx[:, 0], idx[:, 1], idx[:, 2]]]
+        pick = near[rng.choice(len(near), min(25, len(near)), replace=False)]
+        centres = np.stack([xs[pick[:, 0]], ys[pick[:, 1]], zs[pick[:, 2]]], axis=1)
+        bucket.extend(centres + rng.uniform(-spread, spread, centres.shape) * H)
+    # the engine's 61 revolute samples are among these 121; an inside cube's points near its centre
+    # keep a length margin of more than 3 (half-diagonal 6.9, offset at most 3.5): 1001 prismatic
+    # samples (spacing 0.05) find them
+    samples = {"revolute": 121, "prismatic": 1001}
+    assert np.all(reachable_brute_force(mech, np.array(inside_pts), rot, samples=samples))
+    assert not np.any(reachable_brute_force(mech, np.array(outside_pts), rot, samples=samples))
+
+
+def _states(mech, tabs, grid):
+    from paraspace.kinematics.mechanism_bracket import _bracket_kernel, chain_slack
+    from paraspace.kinematics.mechanism_workspace import _BOUND_EPS
+
+    lmin, lmax = np.sqrt(tabs.lmin2), np.sqrt(tabs.lmax2)
+    eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tabs.base).max(initial=0.0)))
+    delta = math.sqrt(3.0) * 0.5 * grid.h
+    e_out = delta + np.array([chain_slack(c, 0.5, 1.0) for c in mech.chains]) + eps
+    e_leg = e_out[[c for c, _, _ in mech.legs]]
+    rows = (len(mech.chains), len(lmin))
+    state = np.zeros(grid.shape, np.uint8)
+    _bracket_kernel(*grid.axes(), delta + eps, e_out, (lmin + delta + eps) ** 2,
+                    np.where(lmax - delta - eps > 0, (lmax - delta - eps) ** 2, -1.0),
+                    np.ascontiguousarray(np.broadcast_to(np.where(lmin - e_leg > 0, lmin - e_leg, 0.0) ** 2, rows)),
+                    np.ascontiguousarray(np.broadcast_to((lmax + e_leg) ** 2, rows)), *tabs.args(), state)
+    return state
