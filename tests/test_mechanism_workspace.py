@@ -411,8 +411,7 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
     samples); points near the centre of an inside cube are reachable and points of outside cubes
     unreachable by the plain brute force (twice the engine's revolute samples, fine prismatic), at
     the cubes next to the boundary cubes."""
-    from paraspace.kinematics.mechanism_bracket import general_bracket
-    from paraspace.kinematics.mechanism_workspace import kernel_tables
+    from paraspace.kinematics.mechanism_workspace import general_bracket, kernel_tables
 
     mech = _table_mechanism("slide-turn") if name == "slide-turn" else preset(name)
     res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, bracket=True))
@@ -448,8 +447,7 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
 
 
 def _states(mech, tabs, grid):
-    from paraspace.kinematics.mechanism_bracket import _bracket_kernel, chain_slack
-    from paraspace.kinematics.mechanism_workspace import _BOUND_EPS
+    from paraspace.kinematics.mechanism_workspace import _BOUND_EPS, _bracket_kernel, chain_slack
 
     lmin, lmax = np.sqrt(tabs.lmin2), np.sqrt(tabs.lmax2)
     eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tabs.base).max(initial=0.0)))
