@@ -263,7 +263,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
         print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
         if ns.bracket:
             print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
-                  "  (continuous workspace, kinematics/mechanism_workspace.py, general_bracket)")
+                  "  (continuous workspace, general_bracket)")
         for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
             if key in out:
                 print(f"{key:<15} {out[key]}")
