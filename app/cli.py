@@ -19,6 +19,15 @@
     paraspace report      [design flags] [joint flags] [--compare NAME=V,..]... [--voxel H] --out FILE.html
     paraspace ik          [design flags] --pose x,y,z,psi,theta,phi [--carriage d1,d2,d3,eta1,eta2,eta3] [--json]
     paraspace serve       [--host H] [--port P] [--api-port Q]
+    paraspace mechanism   show|export|presets [FILE|PRESET] [--param NAME=VALUE]... [--json] [-o FILE]
+
+Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]... [--length-step L]``
+instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
+sweeps a preset's parameter. The paper preset (or a file equal to it) runs the paper's engine with every
+option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
+workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
+has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
+ik --carriage) are refused by name.
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
@@ -45,6 +54,7 @@ import paraspace
 from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
 
 from .fileout import write_atomic
+from .mechanism_cli import add_mechanism_flags
 from .numfmt import fixed, significant
 from .progressline import progress_line
 
@@ -160,11 +170,140 @@ def _emit(obj: Any) -> None:
     sys.stdout.write("\n")
 
 
+#: flags that set the paper's design or the global joint options: a mechanism description replaces them
+_DESIGN_FLAGS: dict[str, str] = {**{f"--{n.replace('_', '-')}": n for n in PARAMS}, "--eta-range": "eta_range"}
+_JOINT_FLAGS: dict[str, str] = {"--u-cone": "theta_u", "--s-cone": "theta_s", "--cone-axis": "cone_axis",
+                                "--leg-diameter": "leg_diameter", "--clearance": "clearance"}
+
+
+def _given(ns: argparse.Namespace, flag: str, dest: str) -> bool:
+    """Whether ``flag`` was written on the command line (or its value differs from the default)."""
+    tokens = {t.split("=", 1)[0] for t in getattr(ns, "argv", []) if t.startswith("--")}
+    if flag in tokens:
+        return True
+    default = _DEFAULTS.get(dest)
+    value = getattr(ns, dest, None)
+    return value not in (None, False) and value != default and str(value) != str(default)
+
+
+_DEFAULTS: dict[str, Any] = {**{n: spec.default for n, spec in PARAMS.items()}, "eta_range": "centered",
+                             "cone_axis": "normal", "leg_diameter": 0.0, "clearance": 0.0, "angle_step": 5.0,
+                             "dexterity_mode": "resolved", "bracket_refine": 2, "method": "blocks"}
+
+
+def _mechanism(ns: argparse.Namespace, paper_only: dict[str, str]) -> tuple[Any, Design | None]:
+    """``--mechanism FILE|PRESET [--param NAME=VALUE]...``: ``(mechanism, design)`` where ``design`` is the
+    equivalent paper :class:`Design` (the paper's engine and every option apply) or ``None`` (a general
+    mechanism: the flags of ``paper_only``, the design flags and the joint flags are refused by name).
+    Without ``--mechanism``: ``(None, the design flags' Design)``."""
+    if getattr(ns, "mechanism", None) is None:
+        for flag, dest in (("--param", "param"), ("--length-step", "length_step")):
+            if getattr(ns, dest, None):
+                raise ParameterError(flag, getattr(ns, dest) if dest != "param" else ns.param[0],
+                                     "only with --mechanism FILE|PRESET")
+        return None, _design(ns)
+    from paraspace.kinematics.mechanism_workspace import paper_design
+
+    from .mechanism_cli import resolve_mechanism
+
+    for flag, dest in _DESIGN_FLAGS.items():
+        if _given(ns, flag, dest):
+            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism: set a preset's parameters with "
+                                 "--param NAME=VALUE (paraspace mechanism presets lists them)")
+    mech = resolve_mechanism(ns.mechanism, ns.param)
+    design = paper_design(mech)
+    if design is None:
+        for flag, dest in _JOINT_FLAGS.items():
+            if _given(ns, flag, dest):
+                raise ParameterError(flag, getattr(ns, dest), "only for the paper's mechanism: a description "
+                                     "carries its own cones (u_cone, s_cone per leg)")
+        for flag, dest in paper_only.items():
+            if _given(ns, flag, dest):
+                raise ParameterError(flag, getattr(ns, dest), f"only for the paper's mechanism, not {mech.name!r}")
+    return mech, design
+
+
+def _length_step(ns: argparse.Namespace) -> float:
+    from paraspace.kinematics.mechanism_workspace import check_length_step
+
+    raw = getattr(ns, "length_step", None)
+    return check_length_step(_float_arg("length_step", raw, "[0.01, 100]")) if raw is not None else 1.0
+
+
+def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
+    """``paraspace workspace --mechanism`` for a general mechanism: the position workspace, its measures
+    and the shell (kinematics/mechanism_workspace.py)."""
+    from paraspace.kinematics.measures import measure_workspace
+    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
+    from paraspace.kinematics.workspace import WorkspaceSettings
+
+    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket)
+    length_step = _length_step(ns)
+    fmt = _export_format(ns)
+    warm_up_general()
+    progress, done = progress_line("workspace")
+    try:
+        result = compute_mechanism_workspace(mech, settings, length_step, progress)
+    finally:
+        done()
+    measures = measure_workspace(result)
+    out = {"mechanism": mech.to_dict(), "engine": result.engine, **measures.to_dict(),
+           "voxel_size": result.grid.h, "voxels": result.voxels, "volume": result.volume,
+           "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
+           "carriage_samples": list(result.samples), "eta_step": settings.eta_step, "length_step": length_step}
+    if ns.bracket:
+        out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
+        out["bracket_seconds"] = result.bracket_seconds
+    if fmt:
+        from paraspace.kinematics.shell import export_shell, workspace_shell
+
+        mesh = workspace_shell(result)
+        write_atomic(ns.export, export_shell(mesh, fmt))
+        out["export"] = {"file": ns.export, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
+    if ns.json:
+        _emit(out)
+    else:
+        print(f"mechanism       {mech.name}  (general engine; carriage samples per chain "
+              f"{', '.join(str(n) for n in result.samples)})")
+        print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
+        if ns.bracket:
+            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
+                  "  (continuous workspace, general_bracket)")
+        for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
+            if key in out:
+                print(f"{key:<15} {out[key]}")
+        print(f"bounds          {out.get('bounds')}")
+        print(f"compute_seconds {out['compute_seconds']:.3f}")
+        if fmt:
+            print(f"exported        {ns.export} ({out['export']['faces']} faces)")
+    return 0
+
+
+def _export_format(ns: argparse.Namespace) -> str | None:
+    if not ns.export:
+        return None
+    fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
+    if fmt not in ("stl", "ply", "obj", "glb"):
+        raise ParameterError("export", ns.export, "a file name ending in .stl, .ply, .obj or .glb")
+    return fmt
+
+
+#: ``workspace`` flags that only the paper's engine computes
+_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine",
+                         "--diagnostics": "diagnostics", "--tilt": "tilt", "--torsion": "torsion",
+                         "--angle-step": "angle_step", "--dexterity": "dexterity", "--kappa-min": "kappa_min",
+                         "--dexterity-mode": "dexterity_mode"}
+
+
 def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.measures import measure_workspace
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
-    design = _design(ns)
+    mech, design = _mechanism(ns, _WORKSPACE_PAPER_ONLY)
+    if design is None:
+        return _workspace_general(ns, mech)
+    if mech is not None:
+        _length_step(ns)  # validated; the paper's engine solves d exactly and samples no other prismatic joint
     try:
         refine = int(ns.bracket_refine)
     except (TypeError, ValueError):
@@ -188,11 +327,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         kappa_min = check_kappa_min(0.005 if ns.kappa_min is None else ns.kappa_min)
         if ns.dexterity_mode not in MODES:
             raise ParameterError("dexterity_mode", ns.dexterity_mode, " or ".join(MODES))
-    fmt = None
-    if ns.export:
-        fmt = ns.export.rsplit(".", 1)[-1].lower() if "." in ns.export else ""
-        if fmt not in ("stl", "ply", "obj", "glb"):
-            raise ParameterError("export", ns.export, "a file name ending in .stl, .ply, .obj or .glb")
+    fmt = _export_format(ns)
     warm_up()
     progress, done = progress_line("workspace")
     try:
@@ -204,6 +339,8 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
            "voxel_size": result.grid.h, "voxels": result.voxels,
            "volume": result.volume, "compute_seconds": result.compute_seconds, "grid": result.grid.to_dict(),
            "eta_samples": result.n_eta}
+    if mech is not None:
+        out["mechanism"], out["engine"] = mech.to_dict(), "paper"
     if ns.bracket:
         out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
         out["bracket_seconds"] = result.bracket_seconds
@@ -560,10 +697,53 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     return 0
 
 
+#: ``sweep`` flags that only the paper's design study has
+_SWEEP_PAPER_ONLY = {"--param2": "param2", "--values2": "values2", "--scheduler": "scheduler", "--workers": "workers",
+                     "--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+
+
+def _sweep_mechanism(ns: argparse.Namespace) -> int:
+    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``: workspace
+    measures against one of the preset's parameters (kinematics/mechanism_workspace.sweep_preset)."""
+    from paraspace.kinematics.mechanism_workspace import sweep_preset, warm_up_general
+    from paraspace.kinematics.presets import PRESETS
+    from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
+
+    from .mechanism_cli import _param_values
+
+    if ns.mechanism not in PRESETS:
+        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): a sweep varies a "
+                                                          "preset's parameter")
+    for flag, dest in {**_DESIGN_FLAGS, **_JOINT_FLAGS, **_SWEEP_PAPER_ONLY}.items():
+        if _given(ns, flag, dest):
+            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism (a preset's sweep: --param NAME "
+                                 "--values V1,V2,... [--set NAME=VALUE]... [--voxel H] [--json] [--csv FILE])")
+    values = _floats("values", ns.values)
+    settings = WorkspaceSettings(voxel=_voxel(ns))
+    warm_up()
+    warm_up_general()
+    progress, done = progress_line("sweep")
+    try:
+        rows = sweep_preset(ns.mechanism, ns.param, values, _param_values(ns.set), settings, progress=progress)
+    finally:
+        done()
+    if ns.csv:
+        write_atomic(ns.csv, rows_to_csv(rows))
+    if ns.json:
+        _emit(rows)
+    else:
+        sys.stdout.write(rows_to_csv(rows))
+    return 0
+
+
 def cmd_sweep(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.sweep import sweep_1d, sweep_2d
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
+    if getattr(ns, "mechanism", None) is not None:
+        return _sweep_mechanism(ns)
+    if getattr(ns, "set", None):
+        raise ParameterError("--set", ns.set[0], "only with --mechanism PRESET")
     design = _design(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), joints=_joints(ns))
     for field in ("param", "param2"):
@@ -703,7 +883,9 @@ def cmd_ik(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.pose import Pose
     from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
-    design = _design(ns)
+    mech, design = _mechanism(ns, {"--carriage": "carriage"})
+    if design is None:
+        return _ik_general(ns, mech)
     joints = _joints(ns)
     pose = Pose.from_array(_floats("pose", ns.pose, 6))
     if ns.carriage:
@@ -726,6 +908,35 @@ def cmd_ik(ns: argparse.Namespace) -> int:
         if res.min_leg_distance is not None:
             print(f"closest two legs: {res.min_leg_distance:.2f} apart (axes)")
     return 0 if res.feasible or not ns.strict else 1
+
+
+def _ik_general(ns: argparse.Namespace, mech: Any) -> int:
+    """``paraspace ik --mechanism`` for a general mechanism: per chain the carriage values of largest
+    smallest length margin (kinematics/mechanism_workspace.py, ``mechanism_ik``)."""
+    from paraspace.kinematics.mechanism_jacobian import mechanism_jacobians
+    from paraspace.kinematics.mechanism_workspace import mechanism_ik
+    from paraspace.kinematics.pose import Pose
+
+    pose = Pose.from_array(_floats("pose", ns.pose, 6))
+    angles = (pose.psi, pose.theta, pose.phi)
+    chains = mechanism_ik(mech, pose.position, angles, length_step=_length_step(ns))
+    feasible = all(c.feasible for c in chains)
+    cond = mechanism_jacobians(mech, pose.position, angles, [c.q for c in chains]).condition_number
+    out = {"mechanism": mech.to_dict(), "pose": pose.to_dict(), "feasible": feasible,
+           "chains": [c.to_dict() for c in chains], "condition_number": cond}
+    if ns.json:
+        _emit(out)
+    else:
+        print("reachable: every chain puts its legs in range" if feasible else
+              "unreachable: chain(s) " + ", ".join(str(c.chain + 1) for c in chains if not c.feasible)
+              + " cannot put every leg in range")
+        for c in chains:
+            kinds = [j.type[0] for j in mech.chains[c.chain].carriage]
+            q = "  ".join(f"{k}={fixed(v, 3, 8)}" for k, v in zip(kinds, c.q)) or "(fixed base)"
+            print(f"chain {c.chain + 1}: {q}  lengths = {' '.join(fixed(x, 3, 8) for x in c.lengths)}  "
+                  f"margin {fixed(c.margin, 3, 8)}")
+        print(f"condition number of J: {significant(cond, 4)}")
+    return 0 if feasible or not ns.strict else 1
 
 
 def cmd_serve(ns: argparse.Namespace) -> int:
@@ -924,6 +1135,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--dexterity-mode", dest="dexterity_mode", default="resolved", metavar="resolved|best",
                    help="carriage pose of 1/kappa: the redundancy resolution's (default) or the best sampled")
     _add_joint_flags(w)
+    add_mechanism_flags(w)
     w.set_defaults(func=cmd_workspace)
 
     o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")
@@ -944,7 +1156,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
     _add_design_flags(s)
-    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS))
+    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS) + " (with --mechanism: one of the "
+                                                   "preset's parameters)")
     s.add_argument("--values", required=True, help="comma-separated values")
     s.add_argument("--param2", help="second parameter for a 2-D grid")
     s.add_argument("--values2", help="values of the second parameter")
@@ -959,6 +1172,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
     s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    s.add_argument("--mechanism", metavar="PRESET", help="sweep a parameter of a mechanism preset instead of the "
+                                                         "paper's design (see 'paraspace mechanism presets')")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="with --mechanism: a fixed parameter of the preset (repeatable)")
     _add_scan_flags(s)
     _add_joint_flags(s)
     _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")
@@ -985,6 +1202,7 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--json", action="store_true")
     k.add_argument("--strict", action="store_true", help="exit 1 when the pose is unreachable")
     _add_joint_flags(k)
+    add_mechanism_flags(k)
     k.set_defaults(func=cmd_ik)
 
     v = sub.add_parser("serve", help="run the browser explorer and the REST API")
@@ -1013,6 +1231,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     ns = parser.parse_args(argv)
+    ns.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return int(ns.func(ns))
     except ParameterError as err:

@@ -25,7 +25,7 @@ from paraspace.kinematics.presets import PRESETS, preset
 
 from .fileout import write_atomic
 
-__all__ = ["add_mechanism_parser", "resolve_mechanism"]
+__all__ = ["add_mechanism_flags", "add_mechanism_parser", "resolve_mechanism"]
 
 
 def _param_values(pairs: list[str] | None) -> dict[str, Any]:
@@ -54,6 +54,18 @@ def resolve_mechanism(source: str, params: list[str] | None = None) -> Mechanism
         raise ParameterError("mechanism", f"{path.stat().st_size:,} bytes",
                              f"a description of at most {MAX_TEXT_BYTES:,} bytes")
     return loads_mechanism(path.read_bytes())
+
+
+def add_mechanism_flags(p: argparse.ArgumentParser) -> None:
+    """``--mechanism FILE|PRESET``, ``--param NAME=VALUE`` (repeatable) and ``--length-step L`` on a command."""
+    g = p.add_argument_group("mechanism (instead of the design flags; see 'paraspace mechanism presets')")
+    g.add_argument("--mechanism", metavar="FILE|PRESET",
+                   help=f"a preset ({', '.join(PRESETS)}) or a TOML/JSON description file; 'paper' (and a file "
+                        "equal to it) runs the paper's engine with every option, any other mechanism the general "
+                        "engine (position workspace, measures, shell, IK)")
+    g.add_argument("--param", action="append", metavar="NAME=VALUE", help="a preset's parameter (repeatable)")
+    g.add_argument("--length-step", dest="length_step", metavar="L",
+                   help="spacing of a sampled (second) prismatic joint's values, [0.01, 100] (default 1)")
 
 
 def cmd_mechanism(ns: argparse.Namespace) -> int:

@@ -30,10 +30,16 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
      row that issue 24's work touched, the new path beside the old one it replaced.
-
+  9. a row per mechanism preset (kinematics/presets.py) at h = 2 with derived bounds, against the
+     paper engine on the paper's default design in the same run (medians of alternating runs; its
+     dense method too, which like the general engine evaluates every voxel, though it computes half the
+     columns by the mirror y -> -y): the
+     paper preset (routed to the paper engine: its ratio must stay 1.00), the general engine
+     (kinematics/mechanism_workspace.py) on the paper preset's grid (with whether its voxels are the
+     paper engine's; its blocks and dense methods), and the gough-stewart, 6-pups and 6-pss presets.
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
-                                            [--options] [--threads] [--task] [--throughput]
+                                            [--options] [--threads] [--task] [--throughput] [--presets]
 """
 
 from __future__ import annotations
@@ -328,6 +334,45 @@ def throughput_rows(design: Design) -> None:
     tail_rows(design)
 
 
+def preset_rows(h: float = 2.0, runs: int = 5) -> None:
+    """Item 7 of the module docstring."""
+    import numpy as np
+
+    from paraspace.kinematics.mechanism_workspace import compute_general_workspace, compute_mechanism_workspace
+    from paraspace.kinematics.presets import PRESETS, preset
+
+    design = Design()
+    plain = WorkspaceSettings(voxel=h)
+    ref = compute_workspace(design, plain)
+    on_grid = WorkspaceSettings(voxel=h, bounds=(ref.grid.lo, ref.grid.hi))
+    rows = {"paper engine, default design": lambda: compute_workspace(design, plain)}
+    rows["paper engine, dense"] = lambda: compute_workspace(design, WorkspaceSettings(voxel=h, method="dense"))
+    rows["paper preset (routed)"] = lambda: compute_mechanism_workspace(preset("paper"), plain)
+    rows["paper preset, general engine"] = lambda: compute_general_workspace(preset("paper"), on_grid)
+    dense_grid = WorkspaceSettings(voxel=h, bounds=(ref.grid.lo, ref.grid.hi), method="dense")
+    rows["paper preset, general dense"] = lambda: compute_general_workspace(preset("paper"), dense_grid)
+    for name in PRESETS:
+        if name != "paper":
+            rows[name] = lambda name=name: compute_mechanism_workspace(preset(name), plain)
+    for fn in rows.values():
+        fn()  # compile
+    times: dict[str, list[float]] = {k: [] for k in rows}
+    out = {}
+    for _ in range(runs):  # alternate so drift hits every row
+        for k, fn in rows.items():
+            out[k] = fn()
+            times[k].append(out[k].compute_seconds)
+    base = statistics.median(times["paper engine, default design"])
+    for k in rows:
+        t, res = statistics.median(times[k]), out[k]
+        extra = ""
+        if k.startswith("paper preset") or k == "paper engine, dense":
+            extra = f"  identical voxels: {bool(np.array_equal(res.occupancy, ref.occupancy))}"
+        samples = getattr(res, "samples", ())
+        print(f"  {k:<30} {t * 1e3:8.1f} ms  x{t / base:5.2f}  {res.grid.size:>10,} voxels in the box  "
+              f"volume {res.volume:.5g}  carriage samples/chain {max(samples) if samples else res.n_eta}{extra}")
+
+
 POLICIES = ("equal split", "chunks", "chunks+load")
 
 
@@ -407,6 +452,7 @@ def main() -> None:
     ap.add_argument("--threads", action="store_true", help="only the thread rows (item 6)")
     ap.add_argument("--task", action="store_true", help="only the task rows (item 7)")
     ap.add_argument("--throughput", action="store_true", help="only the issue-24 throughput rows (item 8)")
+    ap.add_argument("--presets", action="store_true", help="only the mechanism-preset rows (item 9)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
@@ -415,7 +461,10 @@ def main() -> None:
         task_rows(design)
     if ns.throughput:
         throughput_rows(design)
-    if ns.task or ns.throughput:
+    if ns.presets:
+        print(f"\nmechanism presets at h = 2, derived bounds (load average {os.getloadavg()[0]:.2f}):")
+        preset_rows()
+    if ns.task or ns.throughput or ns.presets:
         return
     if ns.options or ns.threads:
         if ns.options:

@@ -376,27 +376,43 @@ def dumps_mechanism(mech: Mechanism) -> str:
     return "\n".join(lines) + "\n"
 
 
-def carriage_samples(chain: Chain, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _count(samples: int | Mapping[str, int], kind: str) -> int:
+    return int(samples[kind]) if isinstance(samples, Mapping) else int(samples)
+
+
+def carriage_samples(chain: Chain, samples: int | Mapping[str, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A chain's carriage on a grid of ``samples`` values per joint (one where the range is one
-    value): the joint values ``(K, k)``, the legs' base joints ``(K, legs, 3)`` and the carriage
-    rotations ``(K, 3, 3)`` by (M1)-(M2)."""
-    grids = [np.linspace(j.range[0], j.range[1], samples if j.range[1] > j.range[0] else 1) for j in chain.carriage]
+    value; ``samples`` may map a joint type, ``"revolute"`` or ``"prismatic"``, to its count): the
+    joint values ``(K, k)``, the legs' base joints ``(K, legs, 3)`` and the carriage rotations
+    ``(K, 3, 3)`` by (M1)-(M2)."""
+    grids = [np.linspace(j.range[0], j.range[1], _count(samples, j.type) if j.range[1] > j.range[0] else 1)
+             for j in chain.carriage]
     if grids:
         mesh = np.meshgrid(*grids, indexing="ij")
         combos = np.stack([m.ravel() for m in mesh], axis=1)
     else:
         combos = np.zeros((1, 0))
-    rots = np.empty((len(combos), 3, 3))
-    bases = np.empty((len(combos), len(chain.legs), 3))
-    for k, q in enumerate(combos):
-        rots[k], trans = chain.transform(q)
-        bases[k] = np.array([leg.base for leg in chain.legs], float) @ rots[k].T + trans
+    # (M1) for every combination at once: T <- T T_m
+    rots = np.broadcast_to(np.eye(3), (len(combos), 3, 3)).copy()
+    trans = np.zeros((len(combos), 3))
+    for m, joint in enumerate(chain.carriage):
+        axis = np.asarray(joint.axis, float)
+        if joint.type == "revolute":
+            ang = np.radians(combos[:, m])
+            k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+            r_m = (np.eye(3)[None] + np.sin(ang)[:, None, None] * k[None]
+                   + (1.0 - np.cos(ang))[:, None, None] * (k @ k)[None])
+            rots = rots @ r_m
+        else:
+            trans = trans + combos[:, m, None] * (rots @ axis)
+    bases = np.einsum("lc,kdc->kld", np.array([leg.base for leg in chain.legs], float), rots) + trans[:, None, :]
     return combos, bases, rots
 
 
 def reachable_brute_force(mech: Mechanism, points: Sequence[float] | np.ndarray, rotation: np.ndarray,
-                          samples: int = 41) -> np.ndarray | bool:
-    """The plain oracle: some carriage value on a grid of ``samples`` per joint puts every leg of
+                          samples: int | Mapping[str, int] = 41) -> np.ndarray | bool:
+    """The plain oracle: some carriage value on a grid of ``samples`` per joint (or per joint type,
+    see :func:`carriage_samples`) puts every leg of
     each chain in its length range (and inside its cones, when given), at each of ``points``
     (``(N, 3)``, or one point) with the platform rotation ``rotation``. Returns a bool array
     ``(N,)`` (a bool for one point). For tests and checks, not speed: a sample that passes

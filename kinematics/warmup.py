@@ -11,7 +11,8 @@ workspace engines (blocks and dense, with diagnostics, the certified bracket and
 per-point test with and without joint cones about both axes and with leg interference, the
 redundancy resolution with joints (the explorer's pose panel and ``/ik``), the orientation line
 scan, the task answers (region and pose list: the certification and pose kernels), the dexterity
-field and the measures and shell of a result.
+field, the measures and shell of a result, and the general engine of a mechanism description
+(:mod:`kinematics.mechanism_workspace`).
 """
 
 from __future__ import annotations
@@ -74,5 +75,8 @@ def warm_up() -> float:
         dexterity_field(res)
         measure_workspace(res)
         workspace_shell(res)
+        from .mechanism_workspace import warm_up_general
+
+        warm_up_general()
         _warm = True
     return time.perf_counter() - t0

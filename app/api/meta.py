@@ -1,4 +1,5 @@
-"""Routes about the service itself: ``/health``, ``/design/defaults`` and the landing page ``/``."""
+"""Routes about the service itself: ``/health``, ``/design/defaults``, ``/mechanism/presets`` and the
+landing page ``/``."""
 
 from __future__ import annotations
 
@@ -37,6 +38,21 @@ async def design_defaults() -> dict[str, Any]:
     return {"fields": fields, "defaults": Design().to_dict(),
             "eta_range": {"default": "centered", "options": list(ETA_RANGES)},
             "constraints": ["d_s <= r"]}
+
+
+@router.get("/mechanism/presets", summary="Mechanism presets, their parameters and descriptions")
+async def mechanism_presets() -> dict[str, Any]:
+    """Every preset of ``kinematics.presets`` with its parameters (default, valid range, unit, words)
+    and its description at the defaults (the structure ``mechanism.description`` takes)."""
+    from paraspace.kinematics.presets import PRESETS
+
+    return {"presets": [
+        {"name": p.name, "description": p.description,
+         "params": [{"name": q.name, "default": q.default, "description": q.description,
+                     **({} if isinstance(q.default, str) else {"min": q.lo, "max": q.hi, "unit": q.unit or None})}
+                    for q in p.params],
+         "mechanism": p.mechanism().to_dict()}
+        for p in PRESETS.values()]}
 
 
 @site.get("/", include_in_schema=False)

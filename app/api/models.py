@@ -47,14 +47,63 @@ class IkRequest(BaseModel):
     eta: list[Num] | None = Field(None, min_length=3, max_length=3,
                                        description="arc positions eta_1..eta_3 in degrees, within the arc stroke")
     joints: JointsIn = Field(default_factory=JointsIn, description="joint cones and leg interference")
+    mechanism: MechanismIn | None = Field(None, description="a preset or a description instead of design")
+
+
+class MechanismIn(BaseModel):
+    """A mechanism instead of the paper's design: a ``preset`` with its ``params``, or a ``description``
+    (the TOML file's structure as a JSON object, or the TOML/JSON text; at most 65,536 bytes).
+    The paper preset (or a description equal to it) runs the paper's engine with every setting; any
+    other mechanism the general engine (kinematics/mechanism_workspace.py)."""
+
+    model_config = _MODEL
+    preset: str | None = Field(None, max_length=40, description="a preset: paper, gough-stewart, 6-pups, 6-pss")
+    params: dict[str, float | str] = Field(default_factory=dict, max_length=32,
+                                           description="the preset's parameters by name (GET /mechanism/presets)")
+    description: dict[str, Any] | str | None = Field(
+        None, description="a mechanism description: the file's structure as an object, or its TOML/JSON text")
+    length_step: float = Field(1.0, ge=0.01, le=100.0, allow_inf_nan=False,
+                               description="spacing of a sampled (second) prismatic joint's values; "
+                                           "valid range [0.01, 100]")
+
+    def build(self) -> Any:
+        """The core :class:`~kinematics.mechanism.Mechanism` (its ParameterError becomes a 422 naming
+        ``mechanism.<field>``; an oversized description a 413)."""
+        import json
+
+        from paraspace.kinematics.mechanism import MAX_TEXT_BYTES, loads_mechanism, parse_mechanism
+        from paraspace.kinematics.presets import preset
+
+        from .errors import ApiError
+
+        if (self.preset is None) == (self.description is None):
+            raise FieldError("mechanism", "mechanism: give exactly one of preset (with params) or description")
+        if self.description is not None:
+            if self.params:
+                raise FieldError("mechanism.params", "mechanism.params: only with a preset, not a description")
+            text = self.description if isinstance(self.description, str) else json.dumps(self.description)
+            size = len(text.encode("utf-8"))
+            if size > MAX_TEXT_BYTES:
+                raise ApiError(413, f"mechanism.description: {size:,} bytes is too large: a description of at "
+                                    f"most {MAX_TEXT_BYTES:,} bytes")
+            if isinstance(self.description, str):
+                return call_core("mechanism.description", lambda: loads_mechanism(text))
+            desc = self.description
+            return call_core("mechanism.description", lambda: parse_mechanism(desc))
+        name, params = self.preset, dict(self.params)
+        return call_core("mechanism", lambda: preset(name, params))
+
+
+IkRequest.model_rebuild()
 
 
 class WorkspaceRequest(BaseModel):
-    """A constant-orientation position workspace."""
+    """A constant-orientation position workspace: of the paper's ``design``, or of a ``mechanism``."""
 
     model_config = _MODEL
     design: DesignIn = Field(default_factory=DesignIn)
     settings: WorkspaceSettingsIn = Field(default_factory=WorkspaceSettingsIn)
+    mechanism: MechanismIn | None = Field(None, description="a preset or a description instead of design")
 
 
 class OrientationRequest(BaseModel):

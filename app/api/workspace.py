@@ -4,6 +4,7 @@ measures) and ``GET /workspace/{id}/shell.{fmt}`` (its boundary surface as a mes
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any, Literal
 
 from fastapi import Path, Query, Request
@@ -20,6 +21,9 @@ from .models import WorkspaceRequest
 
 router = api_router()
 RANGES[("query", "max_faces")] = "[100, 2000000]"
+#: Most carriage samples of one chain in a general mechanism's request (the work per voxel); the paper's
+#: arc at its finest eta_step (0.01 deg over 180 deg) has 18,001.
+MAX_API_CARRIAGE_SAMPLES = 20_000
 
 
 @router.post("/workspace", status_code=202, summary="Start a position-workspace job",
@@ -34,7 +38,18 @@ async def workspace(req: WorkspaceRequest, request: Request, ctx: Ctx, wait: flo
 def _start_workspace(ctx: ApiContext, req: WorkspaceRequest, request: Request) -> tuple[Job, bool]:
     from paraspace.kinematics.workspace import compute_workspace
 
-    design, settings = req.design.build(), req.settings.build()
+    settings = req.settings.build()
+    if req.mechanism is not None:
+        from paraspace.kinematics.mechanism_workspace import paper_design
+
+        if "design" in req.model_fields_set:
+            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+        mech = req.mechanism.build()
+        design = paper_design(mech)
+        if design is None:
+            return _start_general(ctx, req, request, mech, settings)
+    else:
+        design = req.design.build()
     key = (design.key(), settings.key())
     cached = ctx.caches["workspace"].get(key) is not None
     if not cached:
@@ -44,6 +59,43 @@ def _start_workspace(ctx: ApiContext, req: WorkspaceRequest, request: Request) -
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = compute_workspace(design, settings, progress, cancel)
+        return ApiResult(raw=res, payload=workspace_payload(res, cancel))
+
+    return ctx.submit(request, "workspace", key, compute), cached
+
+
+def _start_general(ctx: ApiContext, req: WorkspaceRequest, request: Request, mech: Any,
+                   settings: Any) -> tuple[Job, bool]:
+    """A general mechanism's workspace job (kinematics/mechanism_workspace.py), its grid checked first."""
+    import json
+
+    from paraspace.kinematics.design import ParameterError
+    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, general_plan
+
+    assert req.mechanism is not None
+    length_step = req.mechanism.length_step
+    key = ("mechanism", json.dumps(mech.to_dict(), sort_keys=True), settings.key(), length_step)
+    cached = ctx.caches["workspace"].get(key) is not None
+    if not cached:
+        ctx.quota_check(request)
+        with ctx.prechecks():
+            try:
+                grid, samples = general_plan(mech, settings, length_step)
+            except ParameterError as exc:
+                raise FieldError(f"settings.{exc.field}", str(exc)) from None
+            if max(samples) > MAX_API_CARRIAGE_SAMPLES:
+                raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most "
+                                    f"{MAX_API_CARRIAGE_SAMPLES:,} per request (a larger settings.eta_step or "
+                                    f"mechanism.length_step)")
+            if grid.size > ctx.limits.max_voxels:
+                h = settings.voxel
+                need = math.ceil(h * (grid.size / ctx.limits.max_voxels) ** (1.0 / 3.0) * 10.0 + 1e-9) / 10.0
+                raise ApiError(413, f"voxel = {h:g} is invalid: valid range voxel >= {need:g} for this mechanism "
+                                    f"(a grid of at most {ctx.limits.max_voxels:,} voxels; voxel {h:g} makes "
+                                    f"{grid.size:,}) (limit max_voxels = {ctx.limits.max_voxels})")
+
+    def compute(progress: Any, cancel: Any) -> ApiResult:
+        res = compute_mechanism_workspace(mech, settings, length_step, progress, cancel)
         return ApiResult(raw=res, payload=workspace_payload(res, cancel))
 
     return ctx.submit(request, "workspace", key, compute), cached
@@ -102,7 +154,7 @@ def workspace_payload(res: Any, cancel: Any = None) -> dict[str, Any]:
     """JSON summary of a WorkspaceResult with its measures."""
     g = res.grid
     payload: dict[str, Any] = {
-        "design": res.design.to_dict(),
+        "design": res.design.to_dict() if res.design is not None else None,
         "settings": jsonable(dataclasses.asdict(res.settings)),
         "voxels": res.voxels,
         "volume": res.volume,
@@ -113,6 +165,11 @@ def workspace_payload(res: Any, cancel: Any = None) -> dict[str, Any]:
         "grid": {"origin": list(g.origin), "h": g.h, "shape": list(g.shape), "lo": list(g.lo), "hi": list(g.hi),
                  "size": g.size},
     }
+    mech = getattr(res, "mechanism", None)
+    if mech is not None:
+        payload["mechanism"] = mech.to_dict()
+        payload["engine"] = res.engine
+        payload["carriage_samples"] = list(res.samples)
     try:
         from paraspace.kinematics.measures import measure_workspace
     except ImportError as e:  # pragma: no cover - measures is part of the core
