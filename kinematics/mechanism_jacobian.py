@@ -71,7 +71,7 @@ def carriage_derivatives(mech: Mechanism, q: Sequence[Sequence[float]]) -> tuple
     return d_pts, deriv
 
 
-def mechanism_jacobians(mech: Mechanism, position: Sequence[float], orientation: Sequence[float],
+def mechanism_jacobians(mech: Mechanism, position: Sequence[float] | np.ndarray, orientation: Sequence[float],
                         q: Sequence[Sequence[float]]) -> MechanismJacobians:
     """The Jacobians of the module docstring at platform pose ``(position, orientation)``
     (``orientation`` = ``(psi, theta, phi)`` degrees) and carriage values ``q`` (per chain, degrees for

@@ -840,7 +840,7 @@ def _margins(tab: ChainTables, lo: np.ndarray, hi: np.ndarray, plat: np.ndarray,
     return np.minimum(length - lo[None, :, None], hi[None, :, None] - length).min(axis=1)
 
 
-def mechanism_ik(mech: Mechanism, position: Sequence[float],
+def mechanism_ik(mech: Mechanism, position: Sequence[float] | np.ndarray,
                  orientation: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
                  eta_step: float = 0.5, length_step: float = 1.0, s_samples: int = 401) -> list[ChainIK]:
     """Redundancy resolution of a description: per chain the carriage values that keep its legs

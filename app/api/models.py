@@ -90,7 +90,7 @@ class MechanismIn(BaseModel):
                 return call_core("mechanism.description", lambda: loads_mechanism(text))
             desc = self.description
             return call_core("mechanism.description", lambda: parse_mechanism(desc))
-        name, params = self.preset, dict(self.params)
+        name, params = str(self.preset), dict(self.params)
         return call_core("mechanism", lambda: preset(name, params))
 
 
