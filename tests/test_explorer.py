@@ -790,6 +790,28 @@ def test_shell_coloured_by_the_actuator_usage_maps(explorer, browsers):
     wait_for(lambda: s.panels.legend.colorbar.label == "shell colour = height z", 10.0, "back to height")
 
 
+def test_usage_histograms_in_the_plots_tab(explorer, browsers):
+    """Issue 22: the actuator-usage histograms (share of the workspace's voxels per bin) are the
+    usage maps' own counts, computed independently here."""
+    from paraspace.app.explorer.dexterity_colour import DEXTERITY_VOXEL
+    from paraspace.kinematics.usage import actuator_usage
+
+    b = browsers("voxel=6&a=60")
+    s = b.session
+    wait_idle(explorer, s)
+    b.click(s.usage.run)
+    wait_for(lambda: s.usage.summary is not None and s.usage.plot.figure is not None, 60.0, "the histograms")
+    maps = actuator_usage(compute_workspace(Design(a=60.0), WorkspaceSettings(voxel=DEXTERITY_VOXEL)))
+    fig = s.usage.plot.figure
+    for trace, key in zip(fig.data, ("leg_use", "stroke_use", "joint_angle")):
+        v = getattr(maps, key)
+        v = v[np.isfinite(v)]
+        hi = 1.0 if key != "joint_angle" else max(90.0, float(v.max()))
+        counts, _ = np.histogram(v, bins=20, range=(0.0, hi))
+        assert np.allclose(trace.y, 100.0 * counts / counts.sum()), key
+    assert "leg stroke use up to" in s.usage.text.content
+
+
 def test_shell_coloured_by_dexterity(explorer, browsers):
     """Issue 9: the shell coloured by 1/kappa; the colours are the field's at the vertices."""
     from paraspace.app.explorer.dexterity_colour import DEXTERITY_VOXEL

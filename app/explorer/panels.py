@@ -76,6 +76,7 @@ class Panels:
     joints: JointsControls
     # pose
     pose_tab: Any
+    plots_tab: Any
     pose: dict[str, Any]
     gizmo: Any
     carriages: Any
@@ -253,7 +254,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
                                  initial_value=state.opacity)
         payload = gui.add_markdown("")
 
-    with tabs.add_tab("Plots", viser.Icon.CHART_LINE):
+    plots_tab = tabs.add_tab("Plots", viser.Icon.CHART_LINE)
+    with plots_tab:
         with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True) as orientation_folder:
             rng = SETTING_SLIDERS["z0"]
             z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
@@ -311,7 +313,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         tabs=tabs,
         legend=legend,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
-        pose_tab=pose_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta, pose_table=pose_table,
+        pose_tab=pose_tab, plots_tab=plots_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta,
+        pose_table=pose_table,
         view_buttons=view_buttons, fit_view=fit_view, shell_colour=shell_colour, cut=cut, cut_z=cut_z,
         cut_keep=cut_keep, opacity=opacity,
         payload=payload,

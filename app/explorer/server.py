@@ -68,6 +68,7 @@ from .share_controller import ShareController
 from .studies_controller import StudiesController
 from .task_panel import TaskHooks, TaskPanel
 from .tilt_panel import TiltPanel
+from .usage_panel import UsagePanel
 from .view_controller import ViewController
 from .workspace_controller import WorkspaceController
 from .workspace_job import cached_bundle, compute_bundle
@@ -152,6 +153,9 @@ class ClientSession:
                                                      load_design=self.design_controller.load_design, notify=notify,
                                                      current_indices=self._current_indices))
         self.orientation_controller.on_shown = self.compare.refresh
+        with ctx.panels.plots_tab:
+            self.usage = UsagePanel(client.gui, ctx.jobs, ctx.job_client,
+                                    get_input=lambda: (ctx.state.design, ctx.state.joints))
         with ctx.panels.tabs.add_tab("Task", viser.Icon.TARGET):
             self.task = TaskPanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
                                   TaskHooks(get_input=lambda: (ctx.state.design, ctx.state.joints, ctx.state.voxel),
