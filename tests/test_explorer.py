@@ -710,6 +710,9 @@ def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
     assert t.result.certified == ref.certified
     assert len(t.result.cells) == ref.details["sample_points"]
     assert "Reachable:" in t.answer.content and "Binding limit:" in t.answer.content
+    # the answer in one line in the Numbers too
+    wait_for(lambda: f"{100 * ref.fraction:.1f} % of the region reachable"
+             in s.panels.numbers.content.replace("\\", ""), 5.0, "the task in the Numbers")  # markdown-escaped
     assert any(getattr(h, "name", "") == "/task/worst" for h in t.nodes)
     wait_for(lambda: "task=box,0,0,130,40,40,30,10,0" in urllib.parse.unquote(b.search), 5.0, "the task in the link")
     # a bad size is named, nothing runs
@@ -727,7 +730,8 @@ def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
     b.set(t.path_slider, 3)
     wait_for(lambda: s.state.pose.x == 20.0 and s.state.pose.z == 130.0, 10.0, "the platform at pose 3")
     b.click(t.clear_button)
-    wait_for(lambda: s.state.task is None and not t.nodes, 5.0, "cleared")
+    wait_for(lambda: s.state.task is None and not t.nodes and "**Task**" not in s.panels.numbers.content, 5.0,
+             "cleared")
 
 
 def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):

@@ -54,7 +54,7 @@ def joints_text(j: Joints) -> str:
 
 def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
                      ori: OrientationResult | None,
-                     design_error: str | None) -> str:
+                     design_error: str | None, task_line: str | None = None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
     :class:`~app.session.SessionContext`, ``None`` before one), ``res`` the pose's IK, ``inside`` whether
     the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of
@@ -114,6 +114,8 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
             lines.append(f"**{hover('Pose', 'pose')}** reachable{where}")
         else:
             lines.append(f"**{hover('Pose', 'pose')}** {md_text(res.message)}{where}")
+    if task_line:
+        lines.append(f"**Task** {md_text(task_line)}")
     if design_error:
         lines.append(f"**Design not applied:** {md_text(design_error)}")
     return "\n\n".join(lines)
@@ -166,5 +168,5 @@ class NumbersPanel:
             inside = ctx.in_workspace
             ori = ctx.orientation
             s = ctx.state
-        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error)
+        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line)
         ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori)

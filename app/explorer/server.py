@@ -160,7 +160,8 @@ class ClientSession:
             self.task = TaskPanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
                                   TaskHooks(get_input=lambda: (ctx.state.design, ctx.state.joints, ctx.state.voxel),
                                             get_task=lambda: ctx.state.task, set_task=self._set_task,
-                                            move_to=self.pose_controller.set_pose, notify=notify))
+                                            move_to=self.pose_controller.set_pose, notify=notify,
+                                            show_in_numbers=self._show_task_line))
         with ctx.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
             self.paper = PaperPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                     cache=self.explorer.paper_results, notify=notify)
@@ -206,6 +207,11 @@ class ClientSession:
         """The Compare tab's pinned designs changed: they go into the state and the link."""
         self.ctx.update_state(pins=tuple(designs))
         self.share_controller.schedule_url()
+
+    def _show_task_line(self, line: str | None) -> None:
+        """The Task tab's answer in the Numbers panel."""
+        self.ctx.task_line = line
+        self.numbers.render()
 
     def _set_task(self, task: TaskLink | None) -> None:
         """The Task tab's region task (or none): it goes into the state and the link."""

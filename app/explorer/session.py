@@ -147,6 +147,7 @@ class SessionContext:
         self.in_workspace: bool | None = None
         self.orientation: OrientationResult | None = None  # the orientation maps on screen
         self.design_error: str | None = None
+        self.task_line: str | None = None  # the Task tab's answer in one line, for the Numbers
         self.payloads: dict[str, int] = {}  # GLB bytes of the last preview/full shell sent
         self.events: list[tuple[float, str]] = []  # (time, what) for tests/benchmarks
 

@@ -159,6 +159,8 @@ class TaskHooks:
     set_task: Callable[[TaskLink | None], None]  # the state and the link
     move_to: Callable[[Pose], None]  # the platform to a pose (the path slider)
     notify: Callable[[str, str], None]
+    #: the answer in one line for the Numbers panel (``None``: no task on screen)
+    show_in_numbers: Callable[[str | None], None] = lambda _line: None
 
 
 class TaskPanel:
@@ -356,6 +358,7 @@ class TaskPanel:
         self.path_folder.visible = False
         self.clear_button.disabled = True
         self.hooks.set_task(None)
+        self.hooks.show_in_numbers(None)
 
     def show(self, res: TaskResult, task: Any) -> None:
         """Draw the answer of a finished check (``result`` is set last: when it is there, so is the rest)."""
@@ -407,6 +410,9 @@ class TaskPanel:
             self.nodes.append(sc.add_icosphere(f"{self.NODE}/worst_marker", radius=2.5, color=(20, 20, 20),
                                                position=where))
         self.result = res
+        what = "of the region" if res.kind == "region" else f"of the {len(res.poses or [])} poses"
+        self.hooks.show_in_numbers(f"{100 * res.fraction:.1f} % {what} reachable, margin {significant(res.margin, 3)}, "
+                                   f"certified: {res.certified}")
 
     def _on_path_slider(self) -> None:
         res = self.result
