@@ -335,7 +335,8 @@ def test_viser_panel_does_not_flash_before_the_explorer_gui(browser: Browser, ex
             time.sleep(0.02)
         before_ours = [s for s in samples if not s["ours"]]
         assert before_ours, "the page was not sampled before the explorer's GUI arrived"
-        assert not any(s["viser"] or s["panel"] for s in before_ours), "viser's panel was visible first"
+        bad = [(k, s) for k, s in enumerate(samples) if not s["ours"] and (s["viser"] or s["panel"])]
+        assert not bad, f"viser's panel was visible first: {bad[:3]} of {len(samples)} samples"
         assert samples[-1]["ours"] and samples[-1]["panel"], "the explorer's panel was never shown"
     finally:
         ctx.close()

@@ -97,8 +97,14 @@ def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.
 PANEL_WAIT_CLASS = "paraspace-wait"
 
 
-def show_panel(client: viser.ClientHandle) -> None:
+def show_panel(client: viser.ClientHandle, marker: str = "Numbers") -> None:
     """Show the page's control panel (hidden until the explorer's GUI has arrived, so that viser's
     own panel -- connection, "Save Canvas", scene tree -- never flashes before it). The script
-    arrives after the GUI messages queued before it."""
-    run_js(client, f"document.documentElement.classList.remove({json.dumps(PANEL_WAIT_CLASS)});")
+    arrives after the GUI messages queued before it, but the browser may run it before it has
+    drawn them: it waits, 16 ms at a time (at most 5 s), until the panel shows ``marker`` (a
+    label of the explorer's GUI)."""
+    run_js(client, "(function(){var t0=Date.now();function go(){"
+                   "var p=document.querySelector('[data-testid=\"floating-panel\"]');"
+                   f"if((p&&p.textContent.indexOf({json.dumps(marker)})>=0)||Date.now()-t0>5000)"
+                   f"{{document.documentElement.classList.remove({json.dumps(PANEL_WAIT_CLASS)});return;}}"
+                   "setTimeout(go,16);}go();})();")
