@@ -76,6 +76,15 @@ def _floats(field: str, text: str, count: int | None = None) -> list[float]:
     return vals
 
 
+def _export_shell(result: Any, path: str, fmt: str) -> dict[str, Any]:
+    """Write the marching-cubes shell of ``result`` to ``path`` whole (``--export``); its JSON entry."""
+    from paraspace.kinematics.shell import export_shell, workspace_shell
+
+    mesh = workspace_shell(result)
+    write_atomic(path, export_shell(mesh, fmt))
+    return {"file": path, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
+
+
 def _add_design_flags(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design (paper Table I; defaults are the paper's design)")
     for name, spec in PARAMS.items():
@@ -255,11 +264,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
         out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
         out["bracket_seconds"] = result.bracket_seconds
     if fmt:
-        from paraspace.kinematics.shell import export_shell, workspace_shell
-
-        mesh = workspace_shell(result)
-        write_atomic(ns.export, export_shell(mesh, fmt))
-        out["export"] = {"file": ns.export, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
+        out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
         _emit(out)
     else:
@@ -362,11 +367,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         dx = total_orientation_workspace(design, tilt, torsion, step, settings, position=result)
         out["total_orientation"] = {**dx.summary(), "measures": measure_workspace(dx.result).to_dict()}
     if fmt:
-        from paraspace.kinematics.shell import export_shell, workspace_shell
-
-        mesh = workspace_shell(result)
-        write_atomic(ns.export, export_shell(mesh, fmt))
-        out["export"] = {"file": ns.export, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
+        out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
         _emit(out)
     else:
