@@ -737,6 +737,20 @@ def _sweep_mechanism(ns: argparse.Namespace) -> int:
     return 0
 
 
+def _backend_workers(ns: argparse.Namespace, auto: bool = True) -> int | None:
+    """Local Dask workers of a sweep or optimisation: ``--workers`` as given (0: serially in this
+    process); with neither ``--workers`` nor ``--scheduler`` (and ``auto``), the machine's default
+    (:func:`kinematics.distributed.default_workers`: a local cluster of half the cores from 8 usable
+    cores, else serial)."""
+    if ns.workers is not None:
+        return None if ns.workers == 0 else ns.workers
+    if ns.scheduler is not None or not auto:
+        return None
+    from paraspace.kinematics.distributed import default_workers
+
+    return default_workers()
+
+
 def cmd_sweep(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.sweep import sweep_1d, sweep_2d
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
@@ -763,9 +777,10 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
             export_format(ns.plot)
         except ValueError as err:
             raise ParameterError("plot", ns.plot, str(err)) from None
-    distributed = ns.scheduler is not None or ns.workers is not None
+    workers = _backend_workers(ns, auto=task is None)
+    distributed = ns.scheduler is not None or workers is not None
     cores = os.cpu_count() or 1
-    if ns.scheduler is None and ns.workers is not None and ns.workers > cores:
+    if ns.scheduler is None and workers is not None and workers > cores:
         # a local cluster of more single-threaded workers than cores is slower than the serial path
         # (which already uses every core): say so, and run serially
         sys.stderr.write(f"paraspace: --workers {ns.workers} exceeds this machine's {cores} cores; running the "
@@ -783,7 +798,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
                 from paraspace.kinematics.distributed import sweep_grid
 
                 rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings, orientation=orientation,
-                                  scheduler=ns.scheduler, n_workers=ns.workers, progress=progress)
+                                  scheduler=ns.scheduler, n_workers=workers, progress=progress)
             else:
                 rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, orientation=orientation,
                                 progress=progress, task=task)["points"]
@@ -791,7 +806,7 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
             from paraspace.kinematics.distributed import sweep_grid
 
             rows = sweep_grid(design, {ns.param: values}, settings, orientation=orientation, scheduler=ns.scheduler,
-                              n_workers=ns.workers, progress=progress)
+                              n_workers=workers, progress=progress)
         else:
             rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress,
                             task=task)
@@ -1023,7 +1038,7 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
 
     progress, done = progress_line("optimize", force=ns.progress)
     try:
-        result = optimize(settings, scheduler=ns.scheduler, workers=ns.workers, progress=progress).to_dict()
+        result = optimize(settings, scheduler=ns.scheduler, workers=_backend_workers(ns), progress=progress).to_dict()
     finally:
         done()
     from paraspace.app.optimize_plots import front_csv, front_png
@@ -1082,7 +1097,9 @@ def _add_optimize_parser(sub: Any) -> None:
     z.add_argument("--progress", action="store_true",
                    help="show the progress bar on stderr even when it is not a terminal")
     z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
-    z.add_argument("--workers", type=int, metavar="N", help="evaluate on a local Dask cluster with N workers")
+    z.add_argument("--workers", type=int, metavar="N",
+                   help="evaluate on a local Dask cluster with N workers, kept warm for the run (0: in this process; "
+                        "default: half the cores from 8 usable cores, else in this process)")
     _add_scan_flags(z)
     _add_joint_flags(z)
     _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
@@ -1172,7 +1189,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--z0", default=None, metavar="Z",
                    help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
     s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
-    s.add_argument("--workers", type=int, metavar="N", help="run on a local Dask cluster with N workers")
+    s.add_argument("--workers", type=int, metavar="N",
+                   help="run on a local Dask cluster with N workers (0: in this process; default: half the cores "
+                        "from 8 usable cores, else in this process)")
     s.add_argument("--mechanism", metavar="PRESET", help="sweep a parameter of a mechanism preset instead of the "
                                                          "paper's design (see 'paraspace mechanism presets')")
     s.add_argument("--set", action="append", metavar="NAME=VALUE",

@@ -4,8 +4,13 @@
 point of ``product(params[p1], params[p2], ...)``, e.g. a 4-D study over ``a, d_s, eta_s, l_s``:
 
 * by default on a ``distributed.LocalCluster`` of processes (one single-threaded worker per core,
-  numba limited to one thread per worker so the cores are not oversubscribed), started and closed
-  by the call; or on an existing cluster with ``scheduler="tcp://host:8786"``;
+  numba limited to one thread per worker so the cores are not oversubscribed); or on an existing
+  cluster with ``scheduler="tcp://host:8786"``;
+* one warm client per process: :func:`shared_client` keeps the client (and the local cluster it
+  started, its workers warmed once by :func:`kinematics.warmup.warm_up`) keyed by the scheduler
+  address or the number of local workers, so that later sweeps, optimiser generations and
+  optimiser runs in the same process reuse it; a client whose scheduler stopped answering is
+  replaced, and every kept client is closed at exit (:func:`close_clients`);
 * progress is reported as points complete (``as_completed``); ``cancel`` stops waiting, cancels
   the points not yet finished and raises :class:`~kinematics.progress.Cancelled`;
 * robust: every point has ``retries=1``; a point that still fails, or whose worker keeps dying
@@ -18,15 +23,24 @@ point of ``product(params[p1], params[p2], ...)``, e.g. a 4-D study over ``a, d_
   ``params``, ``index``, ``ok`` and the wall-clock ``compute_seconds``, identical to calling
   ``evaluate_design`` serially.
 
+The default backend of the command line's sweeps and optimiser (:func:`default_workers`): a
+machine with at least ``LOCAL_CLUSTER_MIN_CORES`` (8) usable cores runs them on a local cluster of
+``cores // 2`` single-threaded workers (a generation's designs then run side by side, each on one
+core, while this process and the scheduler keep the other half); a smaller machine runs them
+serially in this process, whose kernels already use every core. An explicit ``--scheduler`` or
+``--workers`` wins (``--workers 0``: serially in this process).
+
 This module is part of the numerical core: it imports no web packages (Dask is imported lazily).
 """
 
 from __future__ import annotations
 
+import atexit
 import itertools
 import logging
 import math
 import os
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -35,13 +49,33 @@ from .design import PARAMS, Design, ParameterError
 from .progress import Cancelled, CancelToken, ProgressFn, is_cancelled
 from .workspace import WorkspaceSettings
 
-__all__ = ["sweep_grid", "grid_designs", "WORKER_ENV"]
+__all__ = ["sweep_grid", "grid_designs", "WORKER_ENV", "LOCAL_CLUSTER_MIN_CORES", "usable_cores", "default_workers",
+           "shared_client", "close_clients"]
 
 log = logging.getLogger(__name__)
 
 #: Environment of the worker processes of the local cluster: one numba/BLAS thread each.
 WORKER_ENV: dict[str, str] = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
                               "MKL_NUM_THREADS": "1"}
+
+
+#: Usable cores from which the command line's sweeps and optimiser run on a local cluster by default.
+LOCAL_CLUSTER_MIN_CORES = 8
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the system says, else all)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def default_workers(cores: int | None = None) -> int | None:
+    """Workers of the default local cluster for ``cores`` usable cores (default: this machine's):
+    ``cores // 2`` where ``cores >= LOCAL_CLUSTER_MIN_CORES``, else ``None`` (serial in this process)."""
+    n = usable_cores() if cores is None else int(cores)
+    return n // 2 if n >= LOCAL_CLUSTER_MIN_CORES else None
 
 
 def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
@@ -156,6 +190,76 @@ def _close_quietly(client: Any, cluster: Any) -> None:
             lg.setLevel(lv)
 
 
+_clients: dict[tuple[str, Any], tuple[Any, Any]] = {}
+_clients_lock = threading.Lock()
+_atexit_registered = False
+
+
+def _client_key(scheduler: str | None, n_workers: int | None) -> tuple[str, Any]:
+    if scheduler is not None:
+        return ("scheduler", scheduler.strip())
+    return ("local", n_workers or usable_cores())
+
+
+def shared_client(scheduler: str | None = None, n_workers: int | None = None, *,
+                  connect_timeout: float = 10.0) -> Any:
+    """The process's warm ``distributed.Client`` for ``scheduler`` (an address) or for a local
+    cluster of ``n_workers`` single-threaded process workers (default: one per usable core).
+
+    The first call opens it (a local cluster's workers run :func:`kinematics.warmup.warm_up`
+    as they join); later calls with the same key return the same client while its scheduler
+    answers and has a worker, else close it and open a new one. Kept clients are closed at exit.
+
+    Raises:
+        ParameterError: an unreachable ``scheduler``.
+    """
+    global _atexit_registered
+    key = _client_key(scheduler, n_workers)
+    with _clients_lock:
+        entry = _clients.pop(key, None)
+        if entry is not None:
+            client, cluster = entry
+            if getattr(client, "status", None) == "running" and _cluster_trouble(client) is None:
+                _clients[key] = entry
+                return client
+            log.info("shared_client: %s no longer answers; opening a new client", key)
+            _close_quietly(client, cluster)
+        client, cluster = _open_client(scheduler, key[1] if scheduler is None else None, connect_timeout)
+        if cluster is not None:
+            from .dask_warmup import WarmUp
+
+            try:
+                client.register_plugin(WarmUp())
+            except BaseException:
+                _close_quietly(client, cluster)
+                raise
+        _clients[key] = (client, cluster)
+        if not _atexit_registered:
+            atexit.register(close_clients)
+            _atexit_registered = True
+        return client
+
+
+def discard_client(client: Any) -> None:
+    """Close ``client`` (and its local cluster) and forget it, e.g. after its cluster was lost."""
+    with _clients_lock:
+        for key, (c, cluster) in list(_clients.items()):
+            if c is client:
+                del _clients[key]
+                _close_quietly(c, cluster)
+                return
+
+
+def close_clients() -> int:
+    """Close every kept client and the local clusters they started; returns how many."""
+    with _clients_lock:
+        entries = list(_clients.values())
+        _clients.clear()
+    for client, cluster in entries:
+        _close_quietly(client, cluster)
+    return len(entries)
+
+
 def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
                orientation: Any = None, scheduler: str | None = None, n_workers: int | None = None,
                progress: ProgressFn | None = None, cancel: CancelToken = None, retries: int = 1,
@@ -169,8 +273,9 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
             "l_s": [40, 60]}``; the first name varies slowest.
         settings: workspace sampling of every point.
         orientation: optional ``OrientationSettings``: also TI_1, TI_2 per point.
-        scheduler: address of a running scheduler (``"tcp://host:8786"``); ``None`` starts a
-            local cluster of processes for this call.
+        scheduler: address of a running scheduler (``"tcp://host:8786"``); ``None``: a local
+            cluster of processes, started by the first call and kept warm for later ones
+            (:func:`shared_client`).
         n_workers: workers of the local cluster (default: the number of cores); only without
             ``scheduler``.
         progress: ``progress(fraction, message)`` as points complete.
@@ -216,7 +321,7 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
     from distributed import as_completed
 
     t0 = time.perf_counter()
-    client, cluster = _open_client(scheduler, n_workers, connect_timeout)
+    client = shared_client(scheduler, n_workers, connect_timeout=connect_timeout)
     try:
         futures = client.map(evaluate, designs, settings=settings, orientation=orientation,
                              retries=retries, pure=False)
@@ -281,7 +386,10 @@ def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: 
                                "design": designs[i].to_dict()}
                     failed += 1
             log.warning("sweep_grid: %s; %d of %d points not finished", lost, len(pending), n)
+            discard_client(client)
         log.info("sweep_grid: %d points (%d failed) in %.2f s", n, failed, time.perf_counter() - t0)
-    finally:
-        _close_quietly(client, cluster)
+    except BaseException:
+        if client.status != "running":
+            discard_client(client)
+        raise
     return [r for r in rows if r is not None]

@@ -820,9 +820,11 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
         settings: what to optimise.
         scheduler: address of a running Dask scheduler (``tcp://host:8786``); each generation's
             population runs there, one task per design.
-        workers: start a local Dask cluster of this many single-threaded process workers for
-            the run (``None`` and no scheduler: evaluate in this process, whose compiled kernels
-            already use every core).
+        workers: run on a local Dask cluster of this many single-threaded process workers,
+            started by the first run that asks for it and kept warm for later runs in this
+            process (``None`` and no scheduler: evaluate in this process, whose compiled kernels
+            already use every core; :func:`kinematics.distributed.default_workers` is the
+            command line's default).
         client: an existing ``distributed.Client`` to use (instead of ``scheduler``/``workers``).
         cache: a :class:`~kinematics.sweep.ResultCache` shared with sweeps (default: a fresh
             in-memory one for this run).
@@ -871,13 +873,13 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
     algorithm.setup(problem, termination=get_termination("n_gen", settings.generations), seed=settings.seed,
                     verbose=False)
 
-    own_client = cluster = None
+    own_client = None
     backend = "serial"
     if client is None and (scheduler is not None or workers is not None):
-        from .distributed import _open_client
+        from .distributed import shared_client
 
-        own_client, cluster = _open_client(scheduler, workers, connect_timeout)
-        client = own_client
+        # the process's warm client: kept (with its warmed workers) for later runs, closed at exit
+        own_client = client = shared_client(scheduler, workers, connect_timeout=connect_timeout)
     if client is not None:
         backend = "dask " + (scheduler if scheduler is not None else f"local cluster ({workers or 'default'} workers)"
                              if own_client is not None else "client")
@@ -974,13 +976,12 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
                 if row.get("ok"):
                     archive_rows[i] = row
             computed += n_full
-    finally:
-        if own_client is not None:
-            try:
-                own_client.close()
-            finally:
-                if cluster is not None:
-                    cluster.close()
+    except BaseException:
+        if own_client is not None and own_client.status != "running":
+            from .distributed import discard_client
+
+            discard_client(own_client)
+        raise
     AF = np.array(archive_F) if archive_F else np.zeros((0, len(objs)))
     hv, norm = normalised_hypervolume(fronts)
     norm = {**norm, "objectives": [o.label for o in objs],

@@ -10,10 +10,12 @@ import time
 
 import pytest
 
+from paraspace.kinematics import distributed
 from paraspace.kinematics.design import Design, ParameterError
-from paraspace.kinematics.distributed import grid_designs, sweep_grid
+from paraspace.kinematics.distributed import close_clients, default_workers, grid_designs, shared_client, sweep_grid
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.sweep import evaluate_design
+from paraspace.kinematics.warmup import is_warm
 from paraspace.kinematics.workspace import WorkspaceSettings
 
 BOOKKEEPING = ("params", "index", "ok", "compute_seconds")
@@ -58,6 +60,7 @@ def cluster():
         c = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                          dashboard_address=None, silence_logs=50)
         yield c
+        close_clients()  # the warm clients kept by the sweeps, before their scheduler goes
         c.close()
 
 
@@ -79,12 +82,23 @@ def test_validation_before_anything_starts():
 
 @pytest.mark.slow
 def test_local_cluster_identical_to_serial():
-    """Default path: a LocalCluster of 2 process workers started and closed by the call."""
+    """Default path: a LocalCluster of 2 process workers started by the first call, kept warm
+    (same client, same worker processes) for the second, closed by close_clients."""
     params = {"a": [40.0, 60.0], "l_s": [40.0, 60.0]}
     seen = []
+    close_clients()
     t0 = time.perf_counter()
     rows = sweep_grid(Design(), params, COARSE, n_workers=2, progress=lambda f, m: seen.append((f, m)))
     t_dist = time.perf_counter() - t0
+    client = shared_client(None, 2)
+    pids = sorted(client.run(os.getpid).values())
+    assert len(pids) == 2 and os.getpid() not in pids
+    # the workers were warmed when they joined: every kernel compiled or loaded in each of them
+    assert all(client.run(is_warm).values())
+    again = sweep_grid(Design(), {"a": [60.0], "l_s": [40.0]}, COARSE, n_workers=2)
+    assert shared_client(None, 2) is client and sorted(client.run(os.getpid).values()) == pids  # no new cluster
+    assert _strip(again[0]) == _strip(rows[2])
+    assert close_clients() == 1 and client.status != "running"
     t0 = time.perf_counter()
     serial = [evaluate_design(Design(a=a, l_s=l), COARSE) for a in params["a"] for l in params["l_s"]]
     t_ser = time.perf_counter() - t0
@@ -139,3 +153,27 @@ def test_cancel(cluster):
 def test_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ParameterError, match="scheduler = 'tcp://127.0.0.1:9' is invalid.*reachable Dask scheduler"):
         sweep_grid(Design(), {"a": [50.0]}, COARSE, scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
+
+
+def test_default_backend_rule_by_core_count(monkeypatch):
+    """>= 8 usable cores: a local cluster of cores // 2 workers; fewer: serial (None); the
+    command line's default follows it, an explicit --workers or --scheduler wins, 0 is serial."""
+    import argparse
+
+    from paraspace.app.cli import _backend_workers
+
+    assert [default_workers(c) for c in (1, 2, 4, 7)] == [None] * 4
+    assert [default_workers(c) for c in (8, 9, 16, 64)] == [4, 4, 8, 32]
+    for cores, expected in ((2, None), (16, 8)):
+        monkeypatch.setattr(distributed, "usable_cores", lambda cores=cores: cores)
+        assert default_workers() == expected
+        assert _backend_workers(argparse.Namespace(workers=None, scheduler=None)) == expected
+        assert _backend_workers(argparse.Namespace(workers=None, scheduler=None), auto=False) is None
+        assert _backend_workers(argparse.Namespace(workers=3, scheduler=None)) == 3
+        assert _backend_workers(argparse.Namespace(workers=0, scheduler=None)) is None
+        assert _backend_workers(argparse.Namespace(workers=None, scheduler="tcp://h:8786")) is None
+
+
+def test_usable_cores_is_the_affinity():
+    assert distributed.usable_cores() == (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                                          else os.cpu_count())

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.distributed import close_clients, shared_client
 from paraspace.kinematics.optimize import (
     MEASURES,
     Constraint,
@@ -284,6 +285,7 @@ def cluster():
         c = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                          dashboard_address=None, silence_logs=50)
         yield c
+        close_clients()  # the warm clients kept by the runs, before their scheduler goes
         c.close()
 
 
@@ -296,6 +298,28 @@ def test_dask_same_front_as_serial(cluster):
     assert dask_run.backend.startswith("dask")
     assert _strip_front(dask_run.front) == _strip_front(serial.front)
     assert dask_run.hypervolume == serial.hypervolume
+
+
+@pytest.mark.slow
+def test_two_runs_reuse_one_warm_local_cluster_and_match_serial():
+    """optimize(workers=2) twice in one process: one client, the same two worker processes, the
+    fronts identical to the serial run's."""
+    s = OptimizeSettings(params=("a", "l_s"), objectives="volume,-footprint", workspace=COARSE,
+                         population=6, generations=2, seed=23)
+    close_clients()
+    serial = optimize(s)
+    try:
+        first = optimize(s, workers=2)
+        client = shared_client(None, 2)
+        pids = sorted(client.run(os.getpid).values())
+        second = optimize(dataclasses.replace(s, seed=24), workers=2)
+        assert shared_client(None, 2) is client and sorted(client.run(os.getpid).values()) == pids
+        assert first.backend.startswith("dask") and second.backend == first.backend
+        assert _strip_front(first.front) == _strip_front(serial.front)
+        assert first.hypervolume == serial.hypervolume
+        assert _strip_front(second.front) == _strip_front(optimize(dataclasses.replace(s, seed=24)).front)
+    finally:
+        close_clients()
 
 
 @pytest.mark.slow
