@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from paraspace.kinematics.display_mesh import DISPLAY_FACES
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
@@ -37,7 +38,7 @@ PREVIEW_VOXEL = 6.0
 #: of engine and 0.08 s of meshing on 2 idle cores), faster than a preview would help: the preview is
 #: shown first only below it, or with leg interference (about 3x slower) (:func:`wants_preview`).
 PREVIEW_BELOW = 2.0
-#: Face budgets of the shells sent to the browser (decimated; keeps the transfer small).
+#: Face budgets of the block re-mesh of the preview and full shells (then decimated to DISPLAY_FACES).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
 #: Boundary refinements of the explorer's certified bracket (one: about 2 s of CPU at h = 2, after the
@@ -59,11 +60,13 @@ class ShellBundle:
     bracket: VolumeBracket | None = None  # certified volume_inner <= V <= volume_outer
 
 
-def make_shell(result: WorkspaceResult, max_faces: int) -> trimesh.Trimesh:
+def make_shell(result: WorkspaceResult, max_faces: int, display_faces: int | None = DISPLAY_FACES) -> trimesh.Trimesh:
     """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
     (block re-mesh), smoothed for display (no voxel terracing) and scaled to the voxel volume
     (:func:`kinematics.shell.smooth_for_display`): the final scaling sets the volume, so the re-mesh
-    needs no volume-matching passes (1 % is enough; the exported meshes keep 1e-4)."""
+    needs no volume-matching passes (1 % is enough; the exported meshes keep 1e-4); then decimated to
+    ``display_faces`` for the screen (:func:`kinematics.display_mesh.display_mesh`; ``None``: not)."""
+    from paraspace.kinematics.display_mesh import display_mesh
     from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
     zr = voxel_z_range(result)
@@ -72,7 +75,7 @@ def make_shell(result: WorkspaceResult, max_faces: int) -> trimesh.Trimesh:
     mesh = smooth_for_display(mesh, volume=result.volume)
     if zr is not None:
         mesh.metadata.setdefault("paraspace", {})["color_range"] = zr
-    return mesh
+    return mesh if display_faces is None else display_mesh(mesh, display_faces)
 
 
 def voxel_z_range(result: WorkspaceResult) -> tuple[float, float] | None:
