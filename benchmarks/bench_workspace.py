@@ -30,6 +30,10 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
      row that issue 24's work touched, the new path beside the old one it replaced.
+     Target 10: the explorer's display shell at h = 2 (re-mesh and decimation to the display budget,
+     against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
+     design, serially, on a local cluster of 2 workers started by the run, and on the warm client
+     reused by the next run (first and later generations).
   9. a row per mechanism preset (kinematics/presets.py) at h = 2 with derived bounds, against the
      paper engine on the paper's default design in the same run (medians of alternating runs; its
      dense method too, which like the general engine evaluates every voxel, though it computes half the
@@ -191,8 +195,9 @@ def _row(name: str, t: float, base: float, note: str = "") -> None:
 
 
 def shell_rows(design: Design, runs: int = 5) -> None:
-    """Target 9: the explorer's display shell (block re-mesh) at h = 1 with the block means from one
-    summed-volume table, and with the former per-size means (``_block_mean`` for each k tried)."""
+    """Target 9: the explorer's display shell (block re-mesh; without the display decimation, a row of
+    its own) at h = 1 with the block means from one summed-volume table, and with the former per-size
+    means (``_block_mean`` for each k tried)."""
     from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
     from paraspace.kinematics import shell
 
@@ -202,12 +207,12 @@ def shell_rows(design: Design, runs: int = 5) -> None:
     def old():
         shell._BlockMeans.__call__ = lambda self, k: shell._block_mean(self.field, k)  # type: ignore[method-assign]
         try:
-            return make_shell(res, FULL_FACES)
+            return make_shell(res, FULL_FACES, display_faces=None)
         finally:
             shell._BlockMeans.__call__ = fast_call  # type: ignore[method-assign]
 
     med = _alternating({"engine": lambda: compute_workspace(design, WorkspaceSettings(voxel=1.0)),
-                        "new": lambda: make_shell(res, FULL_FACES), "old": old}, runs)
+                        "new": lambda: make_shell(res, FULL_FACES, display_faces=None), "old": old}, runs)
     print(f"  target 9, make_shell h=1 (load average {os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms):")
     _row("make_shell, block means from one table", med["new"], med["engine"], "(target <= 2x)")
     _row("make_shell, block means per size (before)", med["old"], med["engine"])
@@ -324,6 +329,62 @@ def tail_rows(design: Design, runs: int = 3) -> None:
         _row("mirror fill + == 7, numpy (before)", med["old"] - med["copy"], med["engine"])
 
 
+def display_rows(design: Design, runs: int = 5) -> None:
+    """Target 10: the explorer's full shell at h = 2, meshed for display and decimated to the display
+    budget (kinematics.display_mesh), against the re-mesh sent before, with the GLB bytes of each."""
+    from paraspace.app.explorer.scene import glb_with_material
+    from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
+
+    ws = WorkspaceSettings(voxel=2.0)
+    res = compute_workspace(design, ws)
+    med = _alternating({"engine": lambda: compute_workspace(design, ws),
+                        "light": lambda: make_shell(res, FULL_FACES),
+                        "before": lambda: make_shell(res, FULL_FACES, display_faces=None)}, runs)
+    light, before = make_shell(res, FULL_FACES), make_shell(res, FULL_FACES, display_faces=None)
+    size = [len(glb_with_material(m.export(file_type="glb", include_normals=True), 0.55)) for m in (light, before)]
+    print(f"  target 10, the explorer's display shell h=2 (load average {os.getloadavg()[0]:.2f}; "
+          f"engine {med['engine'] * 1e3:.0f} ms):")
+    _row(f"re-mesh + decimation, {len(light.faces):,} faces", med["light"], med["engine"],
+         f"(target: no slower than the engine) GLB {size[0] / 1e6:.2f} MB")
+    _row(f"re-mesh alone (before), {len(before.faces):,} faces", med["before"], med["engine"],
+         f"GLB {size[1] / 1e6:.2f} MB")
+
+
+def optimizer_cluster_rows(h: float = 6.0, population: int = 8, generations: int = 3, workers: int = 2) -> None:
+    """Target 8: an optimiser generation's wall time per design, as a ratio to the plain engine on
+    the default design: serially, on a local cluster started by the run (generation 1 then pays the
+    cluster and the workers' warm-up: every run before the warm client), and on the next run, which
+    reuses the warm client (kinematics.distributed.shared_client)."""
+    from paraspace.kinematics.distributed import close_clients, shared_client
+    from paraspace.kinematics.optimize import OptimizeSettings, optimize
+
+    ws = WorkspaceSettings(voxel=h)
+    engine = _alternating({"engine": lambda: compute_workspace(Design(), ws)}, 5)["engine"]
+    s = OptimizeSettings(objectives="volume,-footprint", workspace=ws, population=population,
+                         generations=generations, seed=1)
+
+    def gens(**kw) -> list[float]:
+        marks = [time.perf_counter()]
+        optimize(s, on_generation=lambda info: marks.append(time.perf_counter()), **kw)
+        return [b - a for a, b in zip(marks, marks[1:])]
+
+    close_clients()
+    try:
+        serial = gens()
+        cold = gens(workers=workers)
+        client = shared_client(None, workers)
+        warm = gens(workers=workers)
+        same = shared_client(None, workers) is client
+    finally:
+        close_clients()
+    print(f"  target 8, optimiser generations of {population} designs at h={h:g}, {workers} local workers "
+          f"(load average {os.getloadavg()[0]:.2f}; engine {engine * 1e3:.0f} ms; per design):")
+    for name, g in (("serial", serial), ("cluster started by the run (before)", cold),
+                    (f"warm client, next run (same client: {same})", warm)):
+        _row(f"{name}: generation 1", g[0] / population, engine)
+        _row(f"{name}: later generations (median)", statistics.median(g[1:]) / population, engine)
+
+
 def throughput_rows(design: Design) -> None:
     """Item 7 of the module docstring."""
     print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
@@ -332,6 +393,8 @@ def throughput_rows(design: Design) -> None:
     evaluation_rows(design)
     measure_rows(design)
     tail_rows(design)
+    display_rows(design)
+    optimizer_cluster_rows()
 
 
 def preset_rows(h: float = 2.0, runs: int = 5) -> None:

@@ -16,6 +16,11 @@ with timestamps taken *in the page* (``performance.now()``, sampled once per ani
 * connect: page load -> first full shell on screen, with its legs (page load event, plotly.js
   evaluated in the page, the server's first job and first full shell) and the websocket bytes.
 
+``--display full`` is the "before" of issue 24 target 10: the full shell sent as the 50 000-face
+re-mesh, without the decimation to the display budget (``kinematics.display_mesh``; the default,
+``light``, is what the explorer sends). The load average is printed before and after: the machine
+is shared, so compare runs taken side by side.
+
 ``--trace DIR`` also records a Chrome trace and a JS CPU profile of the connect and of one more
 press, and prints where the renderer's main thread and the GPU process spend that time.
 ``--no-plots`` is a what-if: the explorer's plotly plots are replaced by stand-ins (plotly.js is
@@ -24,6 +29,7 @@ then never sent), to measure what lazily created plots would save. Numbers only,
 Usage::
 
     python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots]
+                                          [--display light|full]
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import os
 import statistics
 import sys
 import time
@@ -147,6 +154,15 @@ def _no_plots() -> None:
 
 #: (what, start, end) on the server's perf_counter clock, from :func:`_time_server_steps`.
 STEPS: list[tuple[str, float, float]] = []
+
+
+def _undecimated_display() -> None:
+    """The explorer's shells as before issue 24 target 10: the re-mesh, not decimated for display."""
+    import functools
+
+    from paraspace.app.explorer import workspace_job
+
+    workspace_job.make_shell = functools.partial(workspace_job.make_shell, display_faces=None)  # type: ignore[assignment]
 
 
 def _time_server_steps() -> None:
@@ -292,9 +308,14 @@ def main() -> None:
     ap.add_argument("--trace", type=Path, default=None, help="write Chrome traces and CPU profiles here")
     ap.add_argument("--connects", type=int, default=3, help="page loads timed (each a new design)")
     ap.add_argument("--no-plots", action="store_true", help="what-if: no plotly plots (stand-ins)")
+    ap.add_argument("--display", choices=("light", "full"), default="light",
+                    help="full: the shell on screen not decimated to the display budget (before issue 24 target 10)")
     args = ap.parse_args()
     if args.no_plots:
         _no_plots()
+    if args.display == "full":
+        _undecimated_display()
+    load_before = os.getloadavg()
     _time_server_steps()
     if args.trace is not None:
         args.trace.mkdir(parents=True, exist_ok=True)
@@ -483,8 +504,9 @@ def main() -> None:
         exp.stop()
 
     print(f"\nexplorer latency, headless Chromium (SwiftShader), viewport {args.width}x{args.height}, "
-          f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}"
-          )
+          f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}, "
+          f"display shell {args.display}; load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after "
+          f"({os.cpu_count()} CPUs)")
     print(f"{'':44s} {'median':>8s} {'min':>8s} {'max':>8s}")
     for name, vals in rows.items():
         print(f"{name:44s} {_stats(vals)}")
