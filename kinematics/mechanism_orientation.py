@@ -295,6 +295,18 @@ def mechanism_orientation_workspace(mech: Mechanism, settings: OrientationSettin
                                       azimuth=line_azimuth(order), length_step=length_step)
 
 
+def scan_plan(mech: Mechanism, settings: OrientationSettings = DEFAULT_SCAN,
+              length_step: float = 1.0) -> tuple[int, tuple[int, ...]]:
+    """The general scan's size before running (for limits): the (position, angle) samples of the
+    nine maps and each chain's number of carriage samples."""
+    _check_mechanism(mech, settings.joints)
+    tables, plat0, _ = _unrotated(mech, settings.eta_step, check_length_step(length_step))
+    azimuth = line_azimuth(symmetry_order(mech))
+    n_pos = sum(_lattice(*scan_range(tables, plat0, ln, settings, azimuth), settings.position_step).size
+                for ln in LINES)
+    return n_pos * angle_samples(settings).size * len(ROTATIONS), tuple(len(t.q) for t in tables.chains)
+
+
 def general_orientation_workspace(mech: Mechanism, settings: OrientationSettings = DEFAULT_SCAN,
                                   length_step: float = 1.0, progress: ProgressFn | None = None,
                                   cancel: CancelToken = None) -> MechanismOrientationResult:
