@@ -61,6 +61,7 @@ import math
 import time
 
 import numpy as np
+from numba import njit, prange
 
 from .design import ParameterError
 from .dexterous import BATCH, DexterousResult, orientation_samples
@@ -70,8 +71,8 @@ from .mechanism import Chain, Leg, Mechanism
 from .mechanism_workspace import (
     KernelTables,
     MechanismWorkspaceResult,
+    _chain_ok,
     _check_general,
-    _points_kernel,
     check_length_step,
     compute_mechanism_workspace,
     kernel_tables,
@@ -249,17 +250,52 @@ class MechanismOrientationResult(OrientationResult):
         return out
 
 
-def _with_rotation(tables: KernelTables, plat0: np.ndarray, s_axis0: np.ndarray, rot: np.ndarray) -> KernelTables:
-    """The tables at another platform rotation (only ``R u_j`` and the S-cone axes depend on it)."""
-    return dataclasses.replace(tables, plat=np.ascontiguousarray(plat0 @ rot.T),
-                               s_axis=np.ascontiguousarray(s_axis0 @ rot.T))
+@njit(parallel=True, cache=True, nogil=True)
+def _scan_kernel(points, plats, s_axes, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, k_s, lmin2, lmax2,
+                 centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, out):
+    """``out[p, m]``: the general engine's test (:func:`kinematics.mechanism_workspace._chain_ok` for
+    every chain) at position ``points[p]`` and rotation ``m`` (``plats[m]`` = ``R u_j``, ``s_axes[m]``
+    the S-cone axes). One rotation per thread, its line walked with a warm start per chain (the
+    answer does not depend on the start: every block of samples is searched unless its bound rejects)."""
+    n_chains = k0.shape[0]
+    for m in prange(plats.shape[0]):
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+        plat = plats[m]
+        s_axis = s_axes[m]
+        first = 0
+        for p in range(points.shape[0]):
+            ok = True
+            for cc in range(n_chains):
+                c = (first + cc) % n_chains
+                if not _chain_ok(points[p, 0], points[p, 1], points[p, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
+                                 base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0,
+                                 blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, 0.0):
+                    ok = False
+                    first = c
+                    break
+            out[p, m] = ok
 
 
-def _reachable_at(tables: KernelTables, pts: np.ndarray) -> np.ndarray:
-    out = np.zeros(len(pts), np.bool_)
-    if len(pts):
+def reachable_rotations(tables: KernelTables, plat0: np.ndarray, s_axis0: np.ndarray, rots: np.ndarray,
+                        pts: np.ndarray) -> np.ndarray:
+    """``(N, M)``: the general engine's test at every position ``pts[p]`` and rotation ``rots[m]`` in
+    one launch (the answers of :func:`~kinematics.mechanism_workspace.reachable_general` per rotation;
+    tested)."""
+    rots = np.asarray(rots, float).reshape(-1, 3, 3)
+    pts = np.ascontiguousarray(np.asarray(pts, float).reshape(-1, 3))
+    out = np.zeros((len(pts), len(rots)), np.bool_)
+    if len(pts) and len(rots):
+        plats = np.ascontiguousarray(np.einsum("jc,mdc->mjd", plat0, rots))
+        s_axes = np.ascontiguousarray(np.einsum("jc,mdc->mjd", s_axis0, rots))
+        t = tables
         with KERNEL_LOCK:
-            _points_kernel(np.ascontiguousarray(pts), *tables.args(), out)
+            _scan_kernel(pts, plats, s_axes, t.k0, t.nk, t.l0, t.nl, t.s_lo, t.s_hi, t.w, t.base, t.u_axis, t.k_u,
+                         t.k_s, t.lmin2, t.lmax2, t.centre, t.out2, t.in2, t.kb0, t.blk_centre, t.blk_out2,
+                         t.blk_in2, out)
     return out
 
 
@@ -332,14 +368,14 @@ def general_orientation_workspace(mech: Mechanism, settings: OrientationSettings
     for n, (ln, rt) in enumerate(keys):
         pts = scan_points(ln, positions[ln], settings.z0, azimuth)
         axis = rotation_axis(rt, azimuth)
+        rots = np.stack([ref @ axis_angle(axis, math.radians(float(a))) for a in ang]) if ang.size else \
+            np.zeros((0, 3, 3))
         feas = np.zeros((pts.shape[0], ang.size), bool)
-        for m, alpha in enumerate(ang):
-            if m % 16 == 0:
-                check(cancel)
-                rep((n + m / max(ang.size, 1)) / len(keys),
-                    f"orientation {LINE_SYMBOL[ln]} line, {ROTATION_SYMBOL[rt]}")
-            rot = ref @ axis_angle(axis, math.radians(float(alpha)))
-            feas[:, m] = _reachable_at(_with_rotation(tables, plat0, s_axis0, rot), pts)
+        step = max(1, min(ang.size, 2_000_000 // max(pts.shape[0], 1)))
+        for m in range(0, ang.size, step):
+            check(cancel)
+            rep((n + m / max(ang.size, 1)) / len(keys), f"orientation {LINE_SYMBOL[ln]} line, {ROTATION_SYMBOL[rt]}")
+            feas[:, m:m + step] = reachable_rotations(tables, plat0, s_axis0, rots[m:m + step], pts)
         regions[(ln, rt)] = make_region(ln, rt, positions[ln], ang, feas, position_step=settings.position_step,
                                         angle_step=settings.angle_step, position_range=ranges[ln],
                                         angle_range=(-settings.angle_range, settings.angle_range),
@@ -386,16 +422,16 @@ def mechanism_total_orientation(mech: Mechanism, tilt: float, torsion: float, st
     idx = np.flatnonzero(occ.ravel())
     pts = position.grid.points().reshape(-1, 3)[idx]
     rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
+    rots = np.einsum("ab,mbc->mac", ref, rots)
     alive = np.ones(idx.size, bool)
     n = samples.shape[0]
-    for m in range(n):
-        if m % BATCH == 0:
-            check(cancel)
-            rep(0.3 + 0.7 * m / n, f"total-orientation workspace: {int(alive.sum())} voxels left")
+    for m in range(0, n, BATCH):
+        check(cancel)
+        rep(0.3 + 0.7 * m / n, f"total-orientation workspace: {int(alive.sum())} voxels left")
         live = np.flatnonzero(alive)
         if not live.size:
             break
-        ok = _reachable_at(_with_rotation(tables, plat0, s_axis0, ref @ rots[m]), pts[live])
+        ok = reachable_rotations(tables, plat0, s_axis0, rots[m:m + BATCH], pts[live]).all(axis=1)
         alive[live[~ok]] = False
     flat = np.zeros(occ.size, bool)
     flat[idx[alive]] = True

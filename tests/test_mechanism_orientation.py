@@ -290,3 +290,21 @@ def test_lines_and_rotations_are_all_scanned() -> None:
     d = res.to_dict()
     assert d["symmetry_order"] == 1 and d["second_line_azimuth"] == 90.0
     np.testing.assert_allclose(d["lines"]["y_prime"]["direction"], [0.0, 1.0, 0.0], atol=1e-15)
+
+
+def test_one_launch_over_rotations_equals_the_per_rotation_test() -> None:
+    """The scan kernel (every rotation in one launch, a warm start along the line) answers as the
+    general engine's point test run once per rotation (reachable_general)."""
+    from paraspace.kinematics.mechanism_orientation import _unrotated, reachable_rotations
+    from paraspace.kinematics.mechanism_workspace import reachable_general
+
+    mech = _with_cones(preset("6-pups"), [-0.2, 0.1, 1.0], 45.0, [0.1, 0.0, 1.0], 55.0)
+    rng = np.random.default_rng(5)
+    pts = np.column_stack([np.linspace(-90, 90, 40), rng.uniform(-30, 30, 40), rng.uniform(120, 200, 40)])
+    angles = rng.uniform(-25, 25, (12, 3))
+    rots = np.stack([platform_rotation(mech, a) for a in angles])
+    tables, plat0, s_axis0 = _unrotated(mech, 0.5, 1.0)
+    many = reachable_rotations(tables, plat0, s_axis0, rots, pts)
+    for m, a in enumerate(angles):
+        np.testing.assert_array_equal(many[:, m], reachable_general(mech, pts, a))
+    assert many.any() and not many.all()
