@@ -308,3 +308,30 @@ def test_one_launch_over_rotations_equals_the_per_rotation_test() -> None:
     for m, a in enumerate(angles):
         np.testing.assert_array_equal(many[:, m], reachable_general(mech, pts, a))
     assert many.any() and not many.all()
+
+
+@pytest.mark.parametrize("name", ["paper", "6-pups", "reference"])
+def test_batched_resolver_and_jacobians_equal_the_per_point_ones(name) -> None:
+    """The field's batches (resolved_carriages, inverse_condition_batch) give mechanism_ik's carriage
+    values and mechanism_jacobians' 1/kappa at each point (a revolute carriage, a lift, a reference)."""
+    from paraspace.kinematics.mechanism_dexterity import (
+        inverse_condition_at,
+        inverse_condition_batch,
+        resolved_carriages,
+    )
+
+    if name == "reference":
+        data = preset("6-pups").to_dict()
+        data["reference"] = [10.0, -5.0, 3.0]
+        mech = parse_mechanism(data)
+    else:
+        mech = preset(name)
+    rng = np.random.default_rng(11)
+    pts = np.column_stack([rng.uniform(-40, 40, 6), rng.uniform(-40, 40, 6), rng.uniform(120, 180, 6)])
+    orientation = (5.0, -3.0, 2.0)
+    q = resolved_carriages(mech, pts, orientation)
+    vals = inverse_condition_batch(mech, pts, orientation, q)
+    for i, p in enumerate(pts):
+        for c, sol in enumerate(mechanism_ik(mech, p, orientation)):
+            np.testing.assert_allclose(q[c][i], sol.q, rtol=0, atol=1e-12)
+        assert vals[i] == pytest.approx(inverse_condition_at(mech, p, orientation), rel=1e-9, abs=1e-15)
