@@ -132,9 +132,10 @@ def main() -> None:
         "general path on the paper preset": lambda: mechanism_dexterity_field(dgen, 0.005),
         **{name: (lambda r=dpos[name]: mechanism_dexterity_field(r, 0.005)) for name in mechs},
     }
-    gci = mechanism_dexterity_field(dgen, 0.005).gci
-    notes = {"general path on the paper preset": f"GCI {gci:.4g} (L = the platform radius a; the paper path's "
-                                                 f"{dexterity_field(dpaper, 0.005).gci:.4g} with L = a/2)"}
+    gci, gci_paper = mechanism_dexterity_field(dgen, 0.005).gci, dexterity_field(dpaper, 0.005).gci
+    notes = {"general path on the paper preset": f"GCI {gci:.4g} (L = the mean platform radius, mechanism_ik's "
+                                                 f"carriage; the paper path's {gci_paper:.4g}: L = a/2, its own "
+                                                 "resolver)"}
     notes.update({name: f"{dpos[name].voxels} voxels" for name in mechs})
     notes["paper path"] = f"{dpaper.voxels} voxels"
     _print(f"3. dexterity field at h = {ns.dex_voxel:g}", _medians(rows, ns.repeat), "paper path", notes)
