@@ -335,3 +335,46 @@ def test_batched_resolver_and_jacobians_equal_the_per_point_ones(name) -> None:
         for c, sol in enumerate(mechanism_ik(mech, p, orientation)):
             np.testing.assert_allclose(q[c][i], sol.q, rtol=0, atol=1e-12)
         assert vals[i] == pytest.approx(inverse_condition_at(mech, p, orientation), rel=1e-9, abs=1e-15)
+
+
+def _slide_turn():
+    """Three chains: a tilted slide (the exact joint), then a turntable about a tilted axis that is the
+    same in every chain (so no rotation about z maps the description onto itself: order 1)."""
+    chains = []
+    for gamma in (0.0, 120.0, 240.0):
+        c, s = math.cos(math.radians(gamma)), math.sin(math.radians(gamma))
+        legs = [{"base": [c * 90.0 - s * sg * 10.0, s * 90.0 + c * sg * 10.0, 0.0],
+                 "platform": [c * 40.0 - s * sg * 20.0, s * 40.0 + c * sg * 20.0, 0.0], "length": [110.0, 160.0]}
+                for sg in (1.0, -1.0)]
+        chains.append({"carriage": [{"type": "prismatic", "axis": [-c, -s, 0.3], "range": [0.0, 30.0]},
+                                    {"type": "revolute", "axis": [0.1, 0.0, 1.0], "range": [-10.0, 10.0]}],
+                       "legs": legs})
+    return parse_mechanism({"name": "slide-turn", "chains": chains})
+
+
+def test_scan_of_a_revolute_carriage_equals_the_brute_force() -> None:
+    """A sampled revolute joint after the exact one: the brute force takes the engine's turntable
+    samples (21 over 20 deg at eta_step 1) and 301 slide values; the lines are the base axes."""
+    mech = _slide_turn()
+    assert symmetry_order(mech) == 1
+    scan = OrientationSettings(angle_range=40.0, angle_step=10.0, position_step=10.0, z0=140.0, eta_step=1.0)
+    res = general_orientation_workspace(mech, scan)
+    assert res.azimuth == 90.0
+    n_feasible = 0
+    for (ln, rt), reg in res.regions.items():
+        pts = scan_points(ln, reg.positions, scan.z0, 90.0)
+        for m, alpha in enumerate(reg.angles):
+            rot = axis_angle(rotation_axis(rt, 90.0), math.radians(alpha))
+            brute = reachable_brute_force(mech, pts, rot, samples={"revolute": 21, "prismatic": 301})
+            engine = reg.feasible[:, m]
+            assert not np.any(brute & ~engine), (ln, rt, alpha)
+            for i in np.flatnonzero(engine & ~brute):
+                assert _witness_steps(mech, pts[i], rot), (ln, rt, alpha, pts[i])
+            n_feasible += int(engine.sum())
+    assert n_feasible > 30
+
+
+def _witness_steps(mech, point, rot) -> bool:
+    sol = mechanism_ik(mech, point, rot, eta_step=1.0)
+    lengths = mech.leg_lengths([c.q for c in sol], point, platform_rotation(mech, rot))
+    return bool(np.all((lengths >= 110.0 - 1e-6) & (lengths <= 160.0 + 1e-6)))
