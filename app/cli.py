@@ -21,13 +21,15 @@
     paraspace serve       [--host H] [--port P] [--api-port Q]
     paraspace mechanism   show|export|presets [FILE|PRESET] [--param NAME=VALUE]... [--json] [-o FILE]
 
-Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]... [--length-step L]``
-instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
-sweeps a preset's parameter. The paper preset (or a file equal to it) runs the paper's engine with every
-option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
-workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
-has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
-ik --carriage) are refused by name.
+Mechanism flags (``workspace``, ``orientation``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]...
+[--length-step L]`` instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ...
+[--set NAME=VALUE]...`` sweeps a preset's parameter. The paper preset (or a file equal to it) runs the
+paper's engine with every option; any other mechanism runs the general engine (kinematics/
+mechanism_workspace.py: the position workspace, its measures and shell, its certified bracket, IK;
+``workspace --tilt/--torsion`` and ``--dexterity``: kinematics/mechanism_orientation.py and
+mechanism_dexterity.py; ``orientation``: the scans and TI along the mechanism's symmetry lines), and
+the flags only the paper's engine has (design and joint flags, --bracket-refine, --diagnostics,
+--dexterity-mode best, orientation --at, ik --carriage) are refused by name.
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
@@ -239,6 +241,51 @@ def _length_step(ns: argparse.Namespace) -> float:
     return check_length_step(_float_arg("length_step", raw, "[0.01, 100]")) if raw is not None else 1.0
 
 
+def _total_and_dexterity(ns: argparse.Namespace) -> tuple[tuple[float, float, float] | None,
+                                                          tuple[float, str] | None]:
+    """``--tilt/--torsion/--angle-step`` and ``--dexterity/--kappa-min/--dexterity-mode`` of ``workspace``,
+    checked by their table entries: ``((tilt, torsion, step) or None, (kappa_min, mode) or None)``."""
+    from paraspace.kinematics.dexterous import check_step, orientation_samples
+    from paraspace.kinematics.settings import TOTAL_ORIENTATION
+
+    step = check_step(ns.angle_step)
+    total = None
+    if ns.tilt is not None or ns.torsion is not None:
+        tilt = TOTAL_ORIENTATION["tilt"].parse(0.0 if ns.tilt is None else ns.tilt)
+        torsion = TOTAL_ORIENTATION["torsion"].parse(0.0 if ns.torsion is None else ns.torsion)
+        orientation_samples(tilt, torsion, step)  # validates tilt and torsion
+        total = (float(tilt), float(torsion), step)
+    dexterity = None
+    if ns.dexterity or ns.kappa_min is not None:
+        from paraspace.kinematics.dexterity import MODES, check_kappa_min
+
+        kappa_min = check_kappa_min(0.005 if ns.kappa_min is None else ns.kappa_min)
+        if ns.dexterity_mode not in MODES:
+            raise ParameterError("dexterity_mode", ns.dexterity_mode, " or ".join(MODES))
+        dexterity = (kappa_min, ns.dexterity_mode)
+    return total, dexterity
+
+
+def _add_dexterity(out: dict[str, Any], dex: dict[str, Any]) -> None:
+    out["gci"], out["well_conditioned_volume"], out["kappa_min"] = (
+        dex["gci"], dex["well_conditioned_volume"], dex["kappa_min"])
+    out["dexterity"] = dex
+
+
+def _print_total_and_dexterity(out: dict[str, Any]) -> None:
+    if "dexterity" in out:
+        d = out["dexterity"]
+        print(f"gci             {significant(d['gci'], 4)}  (mean 1/kappa of eq. (26), "
+              f"{d['dexterity_mode']} carriages; "
+              f"range {d['inverse_condition_min']:.3g} .. {d['inverse_condition_max']:.3g})")
+        print(f"well_cond_volume {significant(d['well_conditioned_volume'], 4)}  (1/kappa >= {d['kappa_min']:g})")
+    if "total_orientation" in out:
+        t = out["total_orientation"]
+        print(f"total_orient_vol {significant(t['volume'], 4)}  (tilt <= {t['tilt']:g}, "
+              f"|torsion| <= {t['torsion']:g} deg; "
+              f"{t['orientations']} orientations, step {t['angle_step']:g} deg; {t['seconds']:.1f} s)")
+
+
 def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     """``paraspace workspace --mechanism`` for a general mechanism: the position workspace, its measures
     and the shell (kinematics/mechanism_workspace.py)."""
@@ -248,6 +295,11 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
 
     settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket)
     length_step = _length_step(ns)
+    total, dexterity = _total_and_dexterity(ns)
+    if dexterity is not None:
+        from paraspace.kinematics.mechanism_dexterity import check_general_mode
+
+        check_general_mode(dexterity[1])
     fmt = _export_format(ns)
     warm_up_general()
     progress, done = progress_line("workspace")
@@ -263,6 +315,15 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     if ns.bracket:
         out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
         out["bracket_seconds"] = result.bracket_seconds
+    if dexterity:
+        from paraspace.kinematics.mechanism_dexterity import mechanism_dexterity_field
+
+        _add_dexterity(out, mechanism_dexterity_field(result, *dexterity).summary())
+    if total:
+        from paraspace.kinematics.mechanism_orientation import mechanism_total_orientation
+
+        dx = mechanism_total_orientation(mech, *total, settings, length_step, position=result)
+        out["total_orientation"] = {**dx.summary(), "measures": measure_workspace(dx.result).to_dict()}
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
@@ -279,6 +340,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
                 print(f"{key:<15} {out[key]}")
         print(f"bounds          {out.get('bounds')}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
+        _print_total_and_dexterity(out)
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
     return 0
@@ -294,10 +356,7 @@ def _export_format(ns: argparse.Namespace) -> str | None:
 
 
 #: ``workspace`` flags that only the paper's engine computes
-_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine",
-                         "--diagnostics": "diagnostics", "--tilt": "tilt", "--torsion": "torsion",
-                         "--angle-step": "angle_step", "--dexterity": "dexterity", "--kappa-min": "kappa_min",
-                         "--dexterity-mode": "dexterity_mode"}
+_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine", "--diagnostics": "diagnostics"}
 
 
 def cmd_workspace(ns: argparse.Namespace) -> int:
@@ -316,22 +375,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
                                  bracket_refine=refine,
                                  joints=_joints(ns))
-    from paraspace.kinematics.dexterous import check_step, orientation_samples
-    from paraspace.kinematics.settings import TOTAL_ORIENTATION
-
-    step = check_step(ns.angle_step)
-    total = ns.tilt is not None or ns.torsion is not None
-    if total:
-        tilt = TOTAL_ORIENTATION["tilt"].parse(0.0 if ns.tilt is None else ns.tilt)
-        torsion = TOTAL_ORIENTATION["torsion"].parse(0.0 if ns.torsion is None else ns.torsion)
-        orientation_samples(tilt, torsion, step)  # validates tilt and torsion
-    dexterity = ns.dexterity or ns.kappa_min is not None
-    if dexterity:
-        from paraspace.kinematics.dexterity import MODES, check_kappa_min
-
-        kappa_min = check_kappa_min(0.005 if ns.kappa_min is None else ns.kappa_min)
-        if ns.dexterity_mode not in MODES:
-            raise ParameterError("dexterity_mode", ns.dexterity_mode, " or ".join(MODES))
+    total, dexterity = _total_and_dexterity(ns)
     fmt = _export_format(ns)
     warm_up()
     progress, done = progress_line("workspace")
@@ -357,14 +401,11 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if dexterity:
         from paraspace.kinematics.dexterity import dexterity_field
 
-        dex = dexterity_field(result, kappa_min, ns.dexterity_mode).summary()
-        out["gci"], out["well_conditioned_volume"], out["kappa_min"] = (
-            dex["gci"], dex["well_conditioned_volume"], dex["kappa_min"])
-        out["dexterity"] = dex
+        _add_dexterity(out, dexterity_field(result, *dexterity).summary())
     if total:
         from paraspace.kinematics.dexterous import total_orientation_workspace
 
-        dx = total_orientation_workspace(design, tilt, torsion, step, settings, position=result)
+        dx = total_orientation_workspace(design, *total, settings, position=result)
         out["total_orientation"] = {**dx.summary(), "measures": measure_workspace(dx.result).to_dict()}
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
@@ -400,19 +441,40 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
             print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
-        if dexterity:
-            d = out["dexterity"]
-            print(f"gci             {significant(d['gci'], 4)}  (mean 1/kappa of eq. (26), "
-                  f"{d['dexterity_mode']} carriages; "
-                  f"range {d['inverse_condition_min']:.3g} .. {d['inverse_condition_max']:.3g})")
-            print(f"well_cond_volume {significant(d['well_conditioned_volume'], 4)}  (1/kappa >= {d['kappa_min']:g})")
-        if total:
-            t = out["total_orientation"]
-            print(f"total_orient_vol {significant(t['volume'], 4)}  (tilt <= {t['tilt']:g}, "
-                  f"|torsion| <= {t['torsion']:g} deg; "
-                  f"{t['orientations']} orientations, step {t['angle_step']:g} deg; {t['seconds']:.1f} s)")
+        _print_total_and_dexterity(out)
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
+    return 0
+
+
+def _orientation_general(ns: argparse.Namespace, mech: Any) -> int:
+    """``paraspace orientation --mechanism`` for a general mechanism: the scans along the lines of its
+    symmetry order and TI_1, TI_2 (kinematics/mechanism_orientation.py), the paper path's output shape."""
+    from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace
+    from paraspace.kinematics.mechanism_workspace import warm_up_general
+    from paraspace.kinematics.orientation import OrientationSettings
+    from paraspace.kinematics.settings import ORIENTATION
+
+    z0 = float(ORIENTATION["z0"].parse(ns.z0))
+    settings = OrientationSettings(z0=z0, position_delta=ns.position_delta, **_scan(ns))
+    length_step = _length_step(ns)
+    warm_up_general()
+    progress, done = progress_line("orientation")
+    try:
+        result = mechanism_orientation_workspace(mech, settings, length_step, progress)
+    finally:
+        done()
+    out = result.to_dict()
+    if ns.json:
+        _emit(out)
+    else:
+        print(f"mechanism {mech.name}: symmetry order {result.order} about z; lines z, x and y' = the "
+              f"horizontal line at {result.azimuth:g} deg from x (kinematics/mechanism_orientation.py (S2))")
+        print(f"TI_1 = {out['TI_1']:.6g}   TI_2 = {out['TI_2']:.6g}   (z0 = {z0:g})")
+        if out["saturation_note"]:
+            print(f"note: {out['saturation_note']}")
+        for name, val in out.get("deltas", {}).items():
+            print(f"  {name:<8} {val:.6g}")
     return 0
 
 
@@ -420,7 +482,11 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
     from paraspace.kinematics.workspace import warm_up
 
-    design = _design(ns)
+    mech, design = _mechanism(ns, {"--at": "at"})
+    if design is None:
+        return _orientation_general(ns, mech)
+    if mech is not None:
+        _length_step(ns)  # validated; the paper path samples no second prismatic joint
     if ns.at is not None:
         given = [flag for flag, name in SCAN_FLAGS.items() if getattr(ns, f"scan_{name}") is not None]
         if given:
@@ -438,6 +504,8 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     finally:
         done()
     out = {"design": design.to_dict(), **result.to_dict()}
+    if mech is not None:
+        out["mechanism"], out["engine"] = mech.to_dict(), "paper"
     if ns.json:
         _emit(out)
     else:
@@ -1170,6 +1238,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "or the literal reading: one Δ per line taken from the φ region")
     _add_scan_flags(o)
     _add_joint_flags(o)
+    add_mechanism_flags(o)
     o.set_defaults(func=cmd_orientation)
 
     s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")

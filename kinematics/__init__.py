@@ -34,6 +34,8 @@ _LAZY = {
     "total_orientation_workspace": "dexterous",
     "compute_mechanism_workspace": "mechanism_workspace", "mechanism_ik": "mechanism_workspace",
     "sweep_preset": "mechanism_workspace", "mechanism_jacobians": "mechanism_jacobian",
+    "mechanism_orientation_workspace": "mechanism_orientation", "mechanism_total_orientation": "mechanism_orientation",
+    "mechanism_dexterity_field": "mechanism_dexterity",
 }
 
 

@@ -160,3 +160,40 @@ def test_presets_endpoint_lists_what_the_requests_take(http) -> None:
     # a listed description is accepted back as a request's mechanism
     res = _result(http, {"mechanism": {"description": pups["mechanism"]}, "settings": {"voxel": 10}})["result"]
     assert res["voxels"] == compute_mechanism_workspace(six_pups(), WorkspaceSettings(voxel=10.0)).voxels
+
+
+ORIENT = {"angle_range": 60, "angle_step": 10, "position_step": 12, "z0": 150}
+
+
+def test_orientation_of_a_mechanism(http) -> None:
+    """``POST /orientation`` with a mechanism: the core's scans (tested per sample against the brute
+    force in test_mechanism_orientation.py); the paper preset the paper path's indices."""
+    from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace
+    from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+    scan = OrientationSettings(angle_range=60.0, angle_step=10.0, position_step=12.0, z0=150.0)
+    r = http.post(f"{V1}/orientation", params={"wait": 60},
+                  json={"mechanism": {"preset": "6-pups", "params": {"lift": 40}}, "settings": ORIENT})
+    assert r.status_code == 200, r.text
+    res = r.json()["result"]
+    ref = mechanism_orientation_workspace(six_pups(lift=40.0), scan)
+    assert res["engine"] == "general" and res["symmetry_order"] == 3
+    assert (res["TI_1"], res["TI_2"]) == (ref.ti1, ref.ti2) and res["TI_1"] > 0
+    r = http.post(f"{V1}/orientation", params={"wait": 60}, json={"mechanism": {"preset": "paper"}, "settings": ORIENT})
+    assert r.status_code == 200, r.text
+    paper = orientation_workspace(Design(), scan)
+    assert (r.json()["result"]["TI_1"], r.json()["result"]["TI_2"]) == (paper.ti1, paper.ti2)
+
+
+def test_orientation_refusals_name_the_field(http) -> None:
+    def detail(body, status=422):
+        r = http.post(f"{V1}/orientation", json=body)
+        assert r.status_code == status, r.text
+        return r.json()["detail"]
+
+    d = detail({"mechanism": {"preset": "6-pups"}, "settings": {**ORIENT, "joints": {"theta_u": 30}}})[0]
+    assert d["field"] == "settings.joints" and "u_cone/s_cone" in d["message"]
+    assert detail({"mechanism": {"preset": "6-pups"}, "design": {"a": 40}})[0]["field"] == "design"
+    assert detail({"mechanism": {"preset": "6-pups", "params": {"lift": -1}}})[0]["field"] == "mechanism.lift"
+    d = detail({"mechanism": {"preset": "6-pups"}, "settings": {"angle_step": 0.01, "position_step": 0.01}}, 413)
+    assert "max_orientation_samples" in d

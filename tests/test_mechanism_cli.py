@@ -1,4 +1,5 @@
-"""``--mechanism FILE|PRESET`` and ``--param NAME=VALUE`` on ``paraspace workspace`` and ``ik``.
+"""``--mechanism FILE|PRESET`` and ``--param NAME=VALUE`` on ``paraspace workspace`` (with ``--tilt/--torsion``
+and ``--dexterity``), ``orientation`` and ``ik``.
 
 The numbers are checked against independent computations: the paper's engine for the paper preset,
 the description's brute force (kinematics/mechanism.reachable_brute_force) for a general mechanism's
@@ -71,7 +72,14 @@ def test_ik_of_a_general_mechanism(capsys) -> None:
     (["workspace", "--mechanism", "6-pups", "--a", "40"], "--a = '40' is invalid: expected not with --mechanism"),
     (["workspace", "--mechanism", "gough-stewart", "--bracket-refine", "1"], "--bracket-refine = '1' is invalid: "
                                                                              "expected only for the paper's mechanism"),
-    (["workspace", "--mechanism", "6-pss", "--dexterity"], "--dexterity"),
+    (["workspace", "--mechanism", "6-pss", "--dexterity", "--dexterity-mode", "best"],
+     "dexterity_mode = 'best' is invalid: expected 'resolved' for a general mechanism"),
+    (["workspace", "--mechanism", "6-pups", "--tilt", "100"], "tilt"),
+    (["orientation", "--mechanism", "6-pups", "--at", "0,0,150"], "--at = '0,0,150' is invalid: expected only for "
+                                                                   "the paper's mechanism"),
+    (["orientation", "--mechanism", "6-pups", "--u-cone", "30"], "a description carries its own cones"),
+    (["orientation", "--mechanism", "6-pups", "--angle-step", "0"], "angle_step"),
+    (["orientation", "--param", "lift=3"], "--param = 'lift=3' is invalid: expected only with --mechanism"),
     (["workspace", "--mechanism", "6-pss", "--u-cone", "30"], "a description carries its own cones"),
     (["workspace", "--param", "lift=3"], "--param = 'lift=3' is invalid: expected only with --mechanism"),
     (["workspace", "--mechanism", "6-pups", "--param", "a=3"], "a parameter of preset '6-pups'"),
@@ -112,3 +120,43 @@ def test_bracket_of_a_general_mechanism(capsys) -> None:
     assert main(["workspace", "--mechanism", "6-pups", "--voxel", "8", "--bracket", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert 0 < data["volume_inner"] <= data["volume"] <= data["volume_outer"]
+
+
+SCAN_ARGS = ["--angle-range", "60", "--angle-step", "10", "--position-step", "12", "--z0", "150"]
+
+
+def test_orientation_of_a_general_mechanism_is_the_cores(capsys) -> None:
+    """The command's numbers are the core's (tested per sample against the brute force in
+    test_mechanism_orientation.py), in the paper path's output shape plus the lines it scanned."""
+    from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace
+    from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+
+    assert main(["orientation", "--mechanism", "6-pups", "--param", "lift=40", *SCAN_ARGS, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    scan = OrientationSettings(angle_range=60.0, angle_step=10.0, position_step=12.0, z0=150.0)
+    ref = mechanism_orientation_workspace(six_pups(lift=40.0), scan)
+    assert data["engine"] == "general" and data["symmetry_order"] == 3 and data["second_line_azimuth"] == 60.0
+    assert (data["TI_1"], data["TI_2"]) == (ref.ti1, ref.ti2) and data["TI_1"] > 0
+    assert set(data["regions"]) == {f"{ln}/{rt}" for ln, rt in ref.regions}
+    paper = orientation_workspace(Design(), scan)
+    assert main(["orientation", "--mechanism", "paper", *SCAN_ARGS, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["engine"] == "paper" and (data["TI_1"], data["TI_2"]) == (paper.ti1, paper.ti2)
+    assert main(["orientation", "--mechanism", "gough-stewart", *SCAN_ARGS]) == 0
+    assert "symmetry order 3" in capsys.readouterr().out
+
+
+def test_total_orientation_and_dexterity_of_a_general_mechanism(capsys) -> None:
+    from paraspace.kinematics.mechanism_dexterity import mechanism_dexterity_field
+    from paraspace.kinematics.mechanism_orientation import mechanism_total_orientation
+
+    assert main(["workspace", "--mechanism", "6-pups", "--voxel", "16", "--tilt", "10", "--angle-step", "10",
+                 "--dexterity", "--kappa-min", "0.3", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    settings = WorkspaceSettings(voxel=16.0)
+    dx = mechanism_total_orientation(six_pups(), 10.0, 0.0, 10.0, settings)
+    field = mechanism_dexterity_field(dx.position, 0.3)
+    t = data["total_orientation"]
+    assert t["voxels"] == dx.voxels and 0 < t["voxels"] < data["voxels"]
+    assert data["gci"] == pytest.approx(field.gci) and data["kappa_min"] == 0.3
+    assert data["well_conditioned_volume"] == field.well_conditioned_volume

@@ -107,11 +107,13 @@ class WorkspaceRequest(BaseModel):
 
 
 class OrientationRequest(BaseModel):
-    """An orientation workspace (tilt indices TI_1, TI_2 of eq. (28))."""
+    """An orientation workspace (tilt indices TI_1, TI_2 of eq. (28)): of the paper's ``design``, or of
+    a ``mechanism`` (its lines follow its symmetry axis, kinematics/mechanism_orientation.py)."""
 
     model_config = _MODEL
     design: DesignIn = Field(default_factory=DesignIn)
     settings: OrientationSettingsIn = Field(default_factory=OrientationSettingsIn)
+    mechanism: MechanismIn | None = Field(None, description="a preset or a description instead of design")
 
 
 def study_settings(settings: WorkspaceSettingsIn, orientation: OrientationSettingsIn | None) -> tuple[Any, Any]:

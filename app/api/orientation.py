@@ -13,7 +13,7 @@ from paraspace.kinematics.serialize import jsonable
 from ..jobs import Job
 from ..limits import orientation_samples
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
-from .errors import ApiError, call_core
+from .errors import ApiError, FieldError, call_core
 from .models import OrientationRequest
 
 router = api_router()
@@ -32,7 +32,19 @@ def _start_orientation(ctx: ApiContext, req: OrientationRequest, request: Reques
     from paraspace.kinematics.orientation import orientation_workspace
 
     limits = ctx.limits
-    design, settings = req.design.build(), req.settings.build()
+    settings = req.settings.build()
+    if req.mechanism is not None:
+        from paraspace.kinematics.mechanism_workspace import paper_design
+
+        if "design" in req.model_fields_set:
+            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+        mech = req.mechanism.build()
+        paper = paper_design(mech)
+        if paper is None:
+            return _start_general(ctx, req, request, mech, settings)
+        design = paper
+    else:
+        design = req.design.build()
     key = (design.key(), settings.key())
     cached = ctx.caches["orientation"].get(key) is not None
     if not cached:
@@ -45,6 +57,38 @@ def _start_orientation(ctx: ApiContext, req: OrientationRequest, request: Reques
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = orientation_workspace(design, settings, progress, cancel)
+        return ApiResult(raw=None, payload=jsonable(res.to_dict(include_grids=False)))
+
+    return ctx.submit(request, "orientation", key, compute), cached
+
+
+def _start_general(ctx: ApiContext, req: OrientationRequest, request: Request, mech: Any,
+                   settings: Any) -> tuple[Job, bool]:
+    """A general mechanism's scans (kinematics/mechanism_orientation.py), their size checked first."""
+    import json
+
+    from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace, scan_plan
+
+    from .workspace import MAX_API_CARRIAGE_SAMPLES
+
+    assert req.mechanism is not None
+    length_step = req.mechanism.length_step
+    key = ("mechanism", json.dumps(mech.to_dict(), sort_keys=True), settings.key(), length_step)
+    cached = ctx.caches["orientation"].get(key) is not None
+    if not cached:
+        ctx.quota_check(request)
+        n, samples = call_core("settings", lambda: scan_plan(mech, settings, length_step))
+        if max(samples) > MAX_API_CARRIAGE_SAMPLES:
+            raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most "
+                                f"{MAX_API_CARRIAGE_SAMPLES:,} per request (a larger settings.eta_step or "
+                                f"mechanism.length_step)")
+        if n > ctx.limits.max_orientation_samples:
+            raise ApiError(413, f"orientation request of {n} samples exceeds the limit "
+                                f"max_orientation_samples = {ctx.limits.max_orientation_samples}: use larger "
+                                f"angle_step / position_step")
+
+    def compute(progress: Any, cancel: Any) -> ApiResult:
+        res = mechanism_orientation_workspace(mech, settings, length_step, progress, cancel)
         return ApiResult(raw=None, payload=jsonable(res.to_dict(include_grids=False)))
 
     return ctx.submit(request, "orientation", key, compute), cached
