@@ -48,6 +48,8 @@ import time
 import numpy as np
 
 from .design import Design, ParameterError
+from .feasibility import default_n_eta
+from .orientation_tree import reachable_at_all
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .settings import TOTAL_ORIENTATION
 from .tilt_torsion import tt_rotations
@@ -55,6 +57,11 @@ from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, re
 
 #: Orientations per launch of the pair kernel.
 BATCH = 16
+#: Hardest samples tested by the per-pair test before the tree (``method="tree"``): most voxels
+#: that fail, fail one of them.
+FIRST = 32
+#: How the orientations are tested (:func:`total_orientation_workspace`).
+METHODS: tuple[str, ...] = ("tree", "pairs")
 
 
 def _angle(field: str, value, hi: float | None = None) -> float:
@@ -138,14 +145,20 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
                                 settings: WorkspaceSettings = WorkspaceSettings(),
                                 position: WorkspaceResult | None = None,
                                 progress: ProgressFn | None = None,
-                                cancel: CancelToken = None) -> DexterousResult:
+                                cancel: CancelToken = None, *, method: str = "tree") -> DexterousResult:
     """The total-orientation workspace for ``tilt`` (degrees, ``[0, 90]``) and ``torsion``
     (``[0, 180]``) with the sample set of :func:`orientation_samples` (module docstring).
 
     Args:
         settings: of the position workspace (its grid is reused); the orientation must be zero.
         position: an already computed position workspace with those settings (else computed).
+        method: ``"tree"`` (default) decides the orientations by groups
+            (:mod:`kinematics.orientation_tree`) for the plain model, and falls back to ``"pairs"``
+            with joint cones or leg interference; ``"pairs"`` tests every orientation of every
+            candidate in batches (the module docstring's cost). Both give the same voxels.
     """
+    if method not in METHODS:
+        raise ParameterError("method", method, " or ".join(METHODS))
     samples = orientation_samples(tilt, torsion, step)
     if any(abs(a) > 0 for a in settings.orientation):
         raise ParameterError("orientation", settings.orientation,
@@ -162,15 +175,22 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
     alive = np.ones(idx.size, bool)
     eta_step = position.settings.eta_step
+    joints = position.settings.joints
     n = samples.shape[0]
-    for s in range(0, n, BATCH):
+    tree = method == "tree" and not joints.has_cones and joints.min_distance == 0.0
+    first = min(n, FIRST) if tree else n  # the tree takes over after the hardest FIRST samples
+    for s in range(0, first, BATCH):
         check(cancel)
         live = np.flatnonzero(alive)
         if not live.size:
             break
-        ok = reachable_pairs(design, pts[live], rots[s:s + BATCH], eta_step, position.settings.joints).all(axis=1)
+        ok = reachable_pairs(design, pts[live], rots[s:min(first, s + BATCH)], eta_step, joints).all(axis=1)
         alive[live[~ok]] = False
         rep(0.3 + 0.7 * min(1.0, (s + BATCH) / n), f"total-orientation workspace: {int(alive.sum())} voxels left")
+    live = np.flatnonzero(alive)
+    if tree and first < n and live.size:
+        alive[live] = reachable_at_all(design, pts[live], samples[first:], rots[first:],
+                                       default_n_eta(design, eta_step), rep.sub(0.3 + 0.7 * first / n, 1.0), cancel)
     flat = np.zeros(occ.size, bool)
     flat[idx[alive]] = True
     out = flat.reshape(occ.shape)
