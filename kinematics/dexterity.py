@@ -60,12 +60,11 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design, ParameterError
-from .geometry import LEG_SIGN, platform_points_local
+from .dexterity_sweep import _constants, _lin, _margin_cs, continuation_field
 from .parallel import KERNEL_LOCK
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .redundancy import resolve_redundancy
-from .rotation import euler_rate_matrix, euler_zyx_deg
 from .workspace import WorkspaceResult
 
 MODES: tuple[str, ...] = ("resolved", "best")
@@ -80,33 +79,9 @@ CHUNK = 32768
 
 
 @njit(cache=True, inline="always")
-def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
-    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
-    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
-    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
-    dx = bx0 - (c * rho - s * hb)
-    dy = by0 - (s * rho + c * hb)
-    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
-    dx = bx1 - (c * rho + s * hb)
-    dy = by1 - (s * rho - c * hb)
-    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
-    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
-
-
-@njit(cache=True, inline="always")
 def _margin(bx0, by0, bz0, bx1, by1, bz1, varpi, rho, hb, lmin, lmax):
     """:func:`_margin_cs` at the carriage angle ``varpi`` (radians)."""
     return _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi), rho, hb, lmin, lmax)
-
-
-@njit(cache=True, inline="always")
-def _lin(lo, hi, n, k):
-    """``np.linspace(lo, hi, n)[k]``."""
-    if n == 1:
-        return lo
-    if k == n - 1:
-        return hi
-    return lo + k * ((hi - lo) / (n - 1))
 
 
 @njit(cache=True)
@@ -217,14 +192,6 @@ def _inv_kappa_batch(J_h: np.ndarray, J_q: np.ndarray) -> np.ndarray:
             r = sv[:, -1] / sv[:, 0]
         out[ok] = np.where(np.isfinite(r), r, 0.0)
     return out
-
-
-def _constants(design: Design, orientation_deg: Sequence[float]):
-    psi, theta, phi = (float(v) for v in orientation_deg)
-    rot = euler_zyx_deg(psi, theta, phi)
-    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
-    R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
-    return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
 
 
 def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0)
@@ -443,8 +410,6 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     pts = result.grid.points()[occ]
     orientation = result.settings.orientation
     if mode == "resolved" and search == "sweep":
-        from .dexterity_sweep import continuation_field
-
         vals = continuation_field(design, occ, result.grid.axes(), orientation, rep, cancel)[0]
     else:
         vals = np.zeros(pts.shape[0])

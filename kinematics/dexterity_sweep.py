@@ -35,7 +35,9 @@ and ``|1/kappa - 1/kappa_full| <= TOL_REL x 1/kappa_full + TOL_ABS`` (:data:`TOL
 :data:`TOL_ABS` = 1e-12: the eigenvalues of ``J J^T`` against numpy's SVD of ``J``, both accurate to
 about ``kappa x 1e-16`` absolute) at every voxel.
 
-Cost: see ``benchmarks/bench_workspace.py --throughput`` (target 3).
+Cost: see ``benchmarks/bench_workspace.py --throughput`` (target 3). The chain margin and the
+Jacobian's constants are defined here and shared with :mod:`kinematics.dexterity` (which imports
+this module, not the other way round).
 """
 
 from __future__ import annotations
@@ -47,9 +49,10 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design
-from .dexterity import _constants, _lin, _margin_cs
+from .geometry import LEG_SIGN, platform_points_local
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
+from .rotation import euler_rate_matrix, euler_zyx_deg
 
 #: Stated tolerance on 1/kappa against the full search's: relative and absolute (module docstring).
 TOL_REL, TOL_ABS = 1e-9, 1e-12
@@ -59,6 +62,38 @@ _SLACK = 1e-7
 PLANES = 8
 #: The resolver's grids: coarse 73 x 61, zooms 21 x 21 (kinematics.dexterity._best_carriage_one).
 _NE, _NR, _NZ = 73, 61, 21
+
+
+@njit(cache=True, inline="always")
+def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
+    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
+    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
+    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
+    dx = bx0 - (c * rho - s * hb)
+    dy = by0 - (s * rho + c * hb)
+    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
+    dx = bx1 - (c * rho + s * hb)
+    dy = by1 - (s * rho - c * hb)
+    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
+    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
+
+
+@njit(cache=True, inline="always")
+def _lin(lo, hi, n, k):
+    """``np.linspace(lo, hi, n)[k]``."""
+    if n == 1:
+        return lo
+    if k == n - 1:
+        return hi
+    return lo + k * ((hi - lo) / (n - 1))
+
+
+def _constants(design: Design, orientation_deg: Sequence[float]):
+    psi, theta, phi = (float(v) for v in orientation_deg)
+    rot = euler_zyx_deg(psi, theta, phi)
+    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
+    R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
+    return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
 
 
 @njit(cache=True, inline="always")
