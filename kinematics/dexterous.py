@@ -33,10 +33,13 @@ samples the sampling is not certified: a voxel can pass every sample and still m
 orientation between them (the error is one-sided towards a larger set, and shrinks with
 ``step``).
 
-Cost: the candidates are the plain workspace's voxels; orientations are tested in batches of
-:data:`BATCH`, hardest first (largest tilt, then largest torsion), and a voxel is dropped at its
-first unreachable orientation, so the cost is about ``N_plain x (orientations until the first
-failure)`` plus ``N_result x |S|`` single-point tests.
+Cost: the candidates are the plain workspace's voxels. ``method="pairs"`` tests the orientations
+in batches of :data:`BATCH`, hardest first (largest tilt, then largest torsion), and drops a voxel
+at its first unreachable orientation: about ``N_plain x (orientations until the first failure)``
+plus ``N_result x |S|`` single-point tests. ``method="tree"`` (the default for the plain model)
+tests each voxel's :data:`FIRST` hardest orientations one by one, then certifies the others by
+groups (:mod:`kinematics.orientation_tree`), so a voxel of the result costs far fewer than ``|S|``
+tests; the voxels are the same.
 """
 
 from __future__ import annotations
@@ -57,8 +60,8 @@ from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, re
 
 #: Orientations per launch of the pair kernel.
 BATCH = 16
-#: Hardest samples tested by the per-pair test before the tree (``method="tree"``): most voxels
-#: that fail, fail one of them.
+#: Hardest samples tested one by one before the tree (``method="tree"``): most voxels that fail,
+#: fail one of them.
 FIRST = 32
 #: How the orientations are tested (:func:`total_orientation_workspace`).
 METHODS: tuple[str, ...] = ("tree", "pairs")
@@ -177,20 +180,18 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     eta_step = position.settings.eta_step
     joints = position.settings.joints
     n = samples.shape[0]
-    tree = method == "tree" and not joints.has_cones and joints.min_distance == 0.0
-    first = min(n, FIRST) if tree else n  # the tree takes over after the hardest FIRST samples
-    for s in range(0, first, BATCH):
+    if method == "tree" and not joints.has_cones and joints.min_distance == 0.0:
+        alive = reachable_at_all(design, pts, samples, rots, default_n_eta(design, eta_step), FIRST,
+                                 rep.sub(0.3, 1.0), cancel)
+        n = 0
+    for s in range(0, n, BATCH):
         check(cancel)
         live = np.flatnonzero(alive)
         if not live.size:
             break
-        ok = reachable_pairs(design, pts[live], rots[s:min(first, s + BATCH)], eta_step, joints).all(axis=1)
+        ok = reachable_pairs(design, pts[live], rots[s:s + BATCH], eta_step, joints).all(axis=1)
         alive[live[~ok]] = False
         rep(0.3 + 0.7 * min(1.0, (s + BATCH) / n), f"total-orientation workspace: {int(alive.sum())} voxels left")
-    live = np.flatnonzero(alive)
-    if tree and first < n and live.size:
-        alive[live] = reachable_at_all(design, pts[live], samples[first:], rots[first:],
-                                       default_n_eta(design, eta_step), rep.sub(0.3 + 0.7 * first / n, 1.0), cancel)
     flat = np.zeros(occ.size, bool)
     flat[idx[alive]] = True
     out = flat.reshape(occ.shape)

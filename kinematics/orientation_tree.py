@@ -120,31 +120,49 @@ def _certified(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lo2, hi2
 
 
 @njit(cache=True)
-def _exact(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc):
-    """The per-pair test of :func:`kinematics.workspace._pairs_kernel` for chain ``i`` at one orientation."""
+def _exact(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, hint):
+    """The per-pair test of :func:`kinematics.workspace._pairs_kernel` for chain ``i`` at one
+    orientation ("some arc sample passes"), trying the chain's last passing sample ``hint[i]`` first
+    (the same answer: the whole-stroke bound never rejects a feasible pose)."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    k = hint[i]
+    if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lmin2, lmax2, jc[i],
+                    0.0):
+        return True
     if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lmin2, lmax2):
         return False
-    return chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi, lmin2, lmax2, jc[i],
-                        cos_t.shape[1] // 2) >= 0
+    k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi, lmin2, lmax2, jc[i],
+                     cos_t.shape[1] // 2)
+    if k < 0:
+        return False
+    hint[i] = k
+    return True
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _tree_kernel(points, us, jcs, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                 lmin2, lmax2, out):
+def _tree_kernel(points, us, jcs, first, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
+                 rho_hi, lmin2, lmax2, out):
     """``out[p]``: ``points[p]`` passes the exact test at every sample (the tree walk of the module
-    docstring, chain by chain: a chain certified at a node is not tested below it); ``lo2``/``hi2``
-    (nodes, 3): each chain's tightened limits squared (``hi2 < 0``: no certificate)."""
+    docstring, chain by chain: a chain certified at a node is not tested below it), after the
+    samples ``0 .. first - 1`` tested one by one; ``lo2``/``hi2`` (nodes, 3): each chain's tightened
+    limits squared (``hi2 < 0``: no certificate)."""
     n_eta = cos_t.shape[1]
     for p in prange(points.shape[0]):
         px, py, pz = points[p, 0], points[p, 1], points[p, 2]
         stack = np.empty(128, np.int64)
         done = np.empty(128, np.int64)
         hint = np.full(3, n_eta // 2, np.int64)
-        top = 0
+        ok = True
+        for m in range(first):
+            for i in range(3):
+                if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m], hint):
+                    ok = False
+                    break
+            if not ok:
+                break
+        top = 0 if left.shape[0] else -1
         stack[0] = 0
         done[0] = 0
-        ok = True
         while top >= 0 and ok:
             nd = stack[top]
             bits = done[top]
@@ -154,7 +172,8 @@ def _tree_kernel(points, us, jcs, left, right, leaf, centre, lo2, hi2, cos_t, si
                 if (bits >> i) & 1:
                     continue
                 if m >= 0:
-                    if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m]):
+                    if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m],
+                                  hint):
                         ok = False
                         break
                 elif hi2[nd, i] >= 0.0 and _certified(px, py, pz, us[centre[nd]], i, cos_t, sin_t, arc, hb, rho_lo,
@@ -171,10 +190,11 @@ def _tree_kernel(points, us, jcs, left, right, leaf, centre, lo2, hi2, cos_t, si
 
 
 def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, rotations: np.ndarray, n_eta: int,
-                     progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
+                     first: int = 0, progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
     """Whether each of ``points`` (N, 3) passes the exact per-pair test at every rotation of
     ``rotations`` (M, 3, 3; ``samples`` their (azimuth, tilt, torsion) rows), plain model only
-    (module docstring): bool (N,)."""
+    (module docstring): bool (N,). The first ``first`` samples (the hardest: most positions that
+    fail, fail one of them) are tested one by one before the tree of the others."""
     from .joints import Joints
 
     pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
@@ -187,11 +207,19 @@ def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, ro
         return out
     _u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
     us, jcs = rotation_tables(design, rots, Joints())
-    left, right, leaf, centre, members = build_tree(samples, rots)
+    first = min(int(first), rots.shape[0])
+    if first < rots.shape[0]:
+        left, right, leaf, centre, members = build_tree(samples[first:], rots[first:])
+        leaf = np.where(leaf >= 0, leaf + first, -1)
+        centre = centre + first
+        members = [m + first for m in members]
+    else:
+        left = right = leaf = centre = np.zeros(0, np.int64)
+        members = []
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (pts[:, 0], pts[:, 1], pts[:, 2]))
     e = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
-                  for m, c in zip(members, centre)]) + eps
+                  for m, c in zip(members, centre)]).reshape(-1, 3) + eps
     lo2 = (lmin + e) ** 2
     hi2 = np.where(lmin + e <= lmax - e, (lmax - e) ** 2, -1.0)
     hi2[leaf >= 0] = -1.0
@@ -199,8 +227,8 @@ def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, ro
         check(cancel)
         sl = slice(s, min(pts.shape[0], s + CHUNK))
         with kernel_launch(sl.stop - sl.start):
-            _tree_kernel(pts[sl], us, jcs, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                         lmin2, lmax2, out[sl])
+            _tree_kernel(pts[sl], us, jcs, first, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
+                         rho_hi, lmin2, lmax2, out[sl])
         if progress is not None:
             progress(sl.stop / pts.shape[0], "total-orientation workspace")
     return out
