@@ -29,7 +29,8 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
-     row that issue 24's work touched, the new path beside the old one it replaced.
+     row that issue 24's work touched, the new path beside the old one it replaced (the dexterity
+     field at h = 2 is one run of each: the full search takes over a minute).
      Target 10: the explorer's display shell at h = 2 (re-mesh and decimation to the display budget,
      against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
      design, serially, on a local cluster of 2 workers started by the run, and on the warm client
@@ -385,6 +386,42 @@ def optimizer_cluster_rows(h: float = 6.0, population: int = 8, generations: int
         _row(f"{name}: later generations (median)", statistics.median(g[1:]) / population, engine)
 
 
+def dexterity_rows(design: Design, runs: int = 1) -> None:
+    """Target 3: the dexterity field (resolved 1/kappa) at h = 2: the pruned sweep (the default) and
+    the full search at every voxel (before), alternating (``runs``: each takes a minute or more)."""
+    from paraspace.kinematics.dexterity import dexterity_field
+
+    ws = WorkspaceSettings(voxel=2.0)
+    res = compute_workspace(design, ws)
+    med = _alternating({"engine": lambda: compute_workspace(design, ws),
+                        "sweep": lambda: dexterity_field(res, 0.005),
+                        "full": lambda: dexterity_field(res, 0.005, search="full")}, runs)
+    print(f"  target 3, dexterity field h=2, {res.voxels:,} voxels (load average {os.getloadavg()[0]:.2f}; "
+          f"engine {med['engine'] * 1e3:.0f} ms; {runs} run(s) each):")
+    _row("sweep: the same carriage poses, pruned", med["sweep"], med["engine"], "(target <= 20x)")
+    _row("full search at every voxel + numpy SVD (before)", med["full"], med["engine"])
+
+
+def total_orientation_rows(design: Design, runs: int = 3) -> None:
+    """Target 5: the total-orientation workspace 15/15 deg (step 5, 657 orientations) at h = 4 with
+    the orientation tree (the default) and with every orientation tested per pair (before)."""
+    from paraspace.kinematics.dexterous import total_orientation_workspace
+
+    ws = WorkspaceSettings(voxel=4.0)
+    pos = compute_workspace(design, ws)
+    total_orientation_workspace(design, 15.0, 15.0, 5.0, ws, pos)  # compile
+
+    def run(method: str):
+        return total_orientation_workspace(design, 15.0, 15.0, 5.0, ws, pos, method=method)
+
+    med = _alternating({"engine": lambda: compute_workspace(design, ws), "tree": lambda: run("tree"),
+                        "pairs": lambda: run("pairs")}, runs)
+    print(f"  target 5, total orientation 15/15 deg h=4, {run('tree').samples.shape[0]} orientations "
+          f"(load average {os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms):")
+    _row("orientation tree after the 32 hardest", med["tree"], med["engine"], "(target <= 20x)")
+    _row("every orientation per pair (before)", med["pairs"], med["engine"])
+
+
 def throughput_rows(design: Design) -> None:
     """Item 7 of the module docstring."""
     print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
@@ -395,6 +432,8 @@ def throughput_rows(design: Design) -> None:
     tail_rows(design)
     display_rows(design)
     optimizer_cluster_rows()
+    total_orientation_rows(design)
+    dexterity_rows(design)
 
 
 def preset_rows(h: float = 2.0, runs: int = 5) -> None:

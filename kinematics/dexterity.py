@@ -36,13 +36,16 @@ a threshold like 0.1 selects nothing; the CLI's default ``kappa_min`` is 0.005 (
 quarter of the workspace). Dividing the arc columns by ``L`` as well would give ``1/kappa`` 0.14
 at the home pose ``(0, 0, 130)``; that is not the paper's definition and is not done here.
 
-Cost: the resolved carriage pose is found per voxel by a compiled copy of the resolver's search
+Cost (``search="full"``): the resolved carriage pose is found per voxel by a compiled copy of the resolver's search
 (a 73 x 61 grid and two 21 x 21 zooms per chain, about 5,300 margin evaluations per chain), the
 Jacobians are assembled by a compiled kernel and ``J`` and its singular values are computed with
 numpy's batched ``solve``/``svd`` in chunks of :data:`CHUNK` voxels. ``mode="best"`` adds
 ``sweeps x 3 x n_eta x n_d`` Jacobians per voxel (252 with the defaults). Measured on 2 shared
 cores for the paper's design (resolved): 17 s for the 189,656 voxels at ``h = 3``, 51 s for the
-640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search).
+640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search). The
+field's default ``search="sweep"`` (:mod:`kinematics.dexterity_sweep`) finds the same carriage
+poses with fewer margins (each grid pruned with the previous voxel's margins) and computes
+``1/kappa`` in the same compiled pass (to 1e-9 relative of the SVD's).
 """
 
 from __future__ import annotations
@@ -57,15 +60,16 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design, ParameterError
-from .geometry import LEG_SIGN, platform_points_local
+from .dexterity_sweep import _constants, _lin, _margin_cs, continuation_field
 from .parallel import KERNEL_LOCK
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .redundancy import resolve_redundancy
-from .rotation import euler_rate_matrix, euler_zyx_deg
 from .workspace import WorkspaceResult
 
 MODES: tuple[str, ...] = ("resolved", "best")
+#: How the field finds the resolved carriage poses (:func:`dexterity_field`).
+SEARCHES: tuple[str, ...] = ("sweep", "full")
 #: Voxels per batched ``solve``/``svd`` call.
 CHUNK = 32768
 
@@ -75,33 +79,9 @@ CHUNK = 32768
 
 
 @njit(cache=True, inline="always")
-def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
-    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
-    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
-    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
-    dx = bx0 - (c * rho - s * hb)
-    dy = by0 - (s * rho + c * hb)
-    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
-    dx = bx1 - (c * rho + s * hb)
-    dy = by1 - (s * rho - c * hb)
-    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
-    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
-
-
-@njit(cache=True, inline="always")
 def _margin(bx0, by0, bz0, bx1, by1, bz1, varpi, rho, hb, lmin, lmax):
     """:func:`_margin_cs` at the carriage angle ``varpi`` (radians)."""
     return _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi), rho, hb, lmin, lmax)
-
-
-@njit(cache=True, inline="always")
-def _lin(lo, hi, n, k):
-    """``np.linspace(lo, hi, n)[k]``."""
-    if n == 1:
-        return lo
-    if k == n - 1:
-        return hi
-    return lo + k * ((hi - lo) / (n - 1))
 
 
 @njit(cache=True)
@@ -212,14 +192,6 @@ def _inv_kappa_batch(J_h: np.ndarray, J_q: np.ndarray) -> np.ndarray:
             r = sv[:, -1] / sv[:, 0]
         out[ok] = np.where(np.isfinite(r), r, 0.0)
     return out
-
-
-def _constants(design: Design, orientation_deg: Sequence[float]):
-    psi, theta, phi = (float(v) for v in orientation_deg)
-    rot = euler_zyx_deg(psi, theta, phi)
-    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
-    R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
-    return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
 
 
 def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0)
@@ -421,10 +393,15 @@ def check_kappa_min(kappa_min: float) -> float:
 
 def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved", *,
                     n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: ProgressFn | None = None,
-                    cancel: CancelToken = None) -> DexterityField:
+                    cancel: CancelToken = None, search: str = "sweep") -> DexterityField:
     """``1/kappa`` at every reachable voxel centre of ``result`` (at its orientation), the GCI and
-    the well-conditioned workspace ``1/kappa >= kappa_min`` (module docstring)."""
+    the well-conditioned workspace ``1/kappa >= kappa_min`` (module docstring). ``search`` (resolved
+    mode): ``"sweep"`` finds the resolver's carriage poses voxel after voxel, pruned with the
+    previous voxel's margins (:mod:`kinematics.dexterity_sweep`: the same poses), ``"full"`` runs
+    the resolver's full search at every voxel and numpy's SVD."""
     _check_mode(mode)
+    if search not in SEARCHES:
+        raise ParameterError("search", search, " or ".join(SEARCHES))
     kappa_min = check_kappa_min(kappa_min)
     rep = Reporter(progress)
     t0 = time.perf_counter()
@@ -432,17 +409,21 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     occ = np.asarray(result.occupancy, bool)
     pts = result.grid.points()[occ]
     orientation = result.settings.orientation
-    vals = np.zeros(pts.shape[0])
-    step = 8 * CHUNK
-    for s in range(0, pts.shape[0], step):
-        check(cancel)
-        p = pts[s:s + step]
-        if mode == "resolved":
-            d, eta = resolved_carriages(design, p, orientation)
-            vals[s:s + step] = inverse_condition_batch(design, p, d, eta, orientation)
-        else:
-            vals[s:s + step] = best_inverse_condition_batch(design, p, orientation, n_eta, n_d, sweeps, cancel)[0]
-        rep(min(1.0, (s + step) / max(pts.shape[0], 1)), "dexterity")
+    if mode == "resolved" and search == "sweep":
+        vals = continuation_field(design, occ, result.grid.axes(), orientation, rep, cancel)[0]
+    else:
+        vals = np.zeros(pts.shape[0])
+        step = 8 * CHUNK
+        for s in range(0, pts.shape[0], step):
+            check(cancel)
+            p = pts[s:s + step]
+            if mode == "resolved":
+                d, eta = resolved_carriages(design, p, orientation)
+                vals[s:s + step] = inverse_condition_batch(design, p, d, eta, orientation)
+            else:
+                vals[s:s + step] = best_inverse_condition_batch(design, p, orientation, n_eta, n_d, sweeps,
+                                                                cancel)[0]
+            rep(min(1.0, (s + step) / max(pts.shape[0], 1)), "dexterity")
     field = np.full(occ.shape, np.nan)
     field[occ] = vals
     well = np.zeros(occ.shape, bool)

@@ -33,10 +33,13 @@ samples the sampling is not certified: a voxel can pass every sample and still m
 orientation between them (the error is one-sided towards a larger set, and shrinks with
 ``step``).
 
-Cost: the candidates are the plain workspace's voxels; orientations are tested in batches of
-:data:`BATCH`, hardest first (largest tilt, then largest torsion), and a voxel is dropped at its
-first unreachable orientation, so the cost is about ``N_plain x (orientations until the first
-failure)`` plus ``N_result x |S|`` single-point tests.
+Cost: the candidates are the plain workspace's voxels. ``method="pairs"`` tests the orientations
+in batches of :data:`BATCH`, hardest first (largest tilt, then largest torsion), and drops a voxel
+at its first unreachable orientation: about ``N_plain x (orientations until the first failure)``
+plus ``N_result x |S|`` single-point tests. ``method="tree"`` (the default for the plain model)
+tests each voxel's :data:`FIRST` hardest orientations one by one, then certifies the others by
+groups (:mod:`kinematics.orientation_tree`), so a voxel of the result costs far fewer than ``|S|``
+tests; the voxels are the same.
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ import time
 import numpy as np
 
 from .design import Design, ParameterError
+from .feasibility import default_n_eta
+from .orientation_tree import reachable_at_all
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .settings import TOTAL_ORIENTATION
 from .tilt_torsion import tt_rotations
@@ -55,6 +60,11 @@ from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, re
 
 #: Orientations per launch of the pair kernel.
 BATCH = 16
+#: Hardest samples tested one by one before the tree (``method="tree"``): most voxels that fail,
+#: fail one of them.
+FIRST = 32
+#: How the orientations are tested (:func:`total_orientation_workspace`).
+METHODS: tuple[str, ...] = ("tree", "pairs")
 
 
 def _angle(field: str, value, hi: float | None = None) -> float:
@@ -138,14 +148,20 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
                                 settings: WorkspaceSettings = WorkspaceSettings(),
                                 position: WorkspaceResult | None = None,
                                 progress: ProgressFn | None = None,
-                                cancel: CancelToken = None) -> DexterousResult:
+                                cancel: CancelToken = None, *, method: str = "tree") -> DexterousResult:
     """The total-orientation workspace for ``tilt`` (degrees, ``[0, 90]``) and ``torsion``
     (``[0, 180]``) with the sample set of :func:`orientation_samples` (module docstring).
 
     Args:
         settings: of the position workspace (its grid is reused); the orientation must be zero.
         position: an already computed position workspace with those settings (else computed).
+        method: ``"tree"`` (default) decides the orientations by groups
+            (:mod:`kinematics.orientation_tree`) for the plain model, and falls back to ``"pairs"``
+            with joint cones or leg interference; ``"pairs"`` tests every orientation of every
+            candidate in batches (the module docstring's cost). Both give the same voxels.
     """
+    if method not in METHODS:
+        raise ParameterError("method", method, " or ".join(METHODS))
     samples = orientation_samples(tilt, torsion, step)
     if any(abs(a) > 0 for a in settings.orientation):
         raise ParameterError("orientation", settings.orientation,
@@ -162,13 +178,18 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
     alive = np.ones(idx.size, bool)
     eta_step = position.settings.eta_step
+    joints = position.settings.joints
     n = samples.shape[0]
+    if method == "tree" and not joints.has_cones and joints.min_distance == 0.0:
+        alive = reachable_at_all(design, pts, samples, rots, default_n_eta(design, eta_step), FIRST,
+                                 rep.sub(0.3, 1.0), cancel)
+        n = 0
     for s in range(0, n, BATCH):
         check(cancel)
         live = np.flatnonzero(alive)
         if not live.size:
             break
-        ok = reachable_pairs(design, pts[live], rots[s:s + BATCH], eta_step, position.settings.joints).all(axis=1)
+        ok = reachable_pairs(design, pts[live], rots[s:s + BATCH], eta_step, joints).all(axis=1)
         alive[live[~ok]] = False
         rep(0.3 + 0.7 * min(1.0, (s + BATCH) / n), f"total-orientation workspace: {int(alive.sum())} voxels left")
     flat = np.zeros(occ.size, bool)

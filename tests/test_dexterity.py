@@ -142,7 +142,9 @@ def test_best_is_at_least_resolved_and_exhaustive_is_the_true_max():
 
 def test_best_field_dominates_resolved_field():
     res = compute_workspace(DESIGN, WorkspaceSettings(voxel=16.0))
-    r = dexterity_field(res, 0.005)
+    # mode="best" starts from the full search's 1/kappa (numpy's SVD); the default sweep's agrees
+    # with it to TOL_REL (test_sweep_field_is_the_full_search), not to the last bit
+    r = dexterity_field(res, 0.005, search="full")
     b = dexterity_field(res, 0.005, mode="best", n_eta=3, n_d=2, sweeps=1)
     occ = res.occupancy
     assert np.all(b.inverse_condition[occ] >= r.inverse_condition[occ] - 1e-15)
@@ -184,3 +186,29 @@ def test_cli_dexterity_bad_input(args, field, valid):
     assert proc.returncode == 2 and proc.stdout == ""
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and valid in lines[0]
+
+
+@pytest.mark.parametrize("design,voxel,orientation", [(DESIGN, 8.0, (0.0, 0.0, 0.0)),
+                                                      (Design(a=30, b=20, eta_s=60), 10.0, (8.0, -5.0, 3.0))])
+def test_sweep_field_is_the_full_search(design, voxel, orientation):
+    """Issue 24 target 3: the pruned sweep (kinematics/dexterity_sweep.py, the default) finds the
+    resolver's full-search carriage poses bit for bit and 1/kappa within the stated tolerance of
+    numpy's SVD at every voxel, also where 1/kappa is about 1e-5 (the slow path: resolved_carriages
+    and inverse_condition_batch)."""
+    from paraspace.kinematics.dexterity import inverse_condition_batch
+    from paraspace.kinematics.dexterity_sweep import TOL_ABS, TOL_REL, continuation_field
+
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    occ = res.occupancy
+    pts = res.grid.points()[occ]
+    vals, d, eta = continuation_field(design, occ, res.grid.axes(), orientation)
+    d_full, eta_full = resolved_carriages(design, pts, orientation)
+    assert np.array_equal(d, d_full) and np.array_equal(eta, eta_full)
+    full = inverse_condition_batch(design, pts, d_full, eta_full, orientation)
+    assert np.all(np.abs(vals - full) <= TOL_REL * full + TOL_ABS)
+    f = dexterity_field(res, 0.005)
+    g = dexterity_field(res, 0.005, search="full")
+    np.testing.assert_array_equal(f.inverse_condition[occ], vals)
+    np.testing.assert_allclose(f.inverse_condition[occ], g.inverse_condition[occ], rtol=TOL_REL, atol=TOL_ABS)
+    with pytest.raises(ParameterError, match="search"):
+        dexterity_field(res, 0.005, search="local")

@@ -147,3 +147,29 @@ def test_cli_total_orientation_bad_input(args, field, rng):
     assert proc.returncode == 2 and proc.stdout == ""
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and rng in lines[0]
+
+
+@pytest.mark.parametrize("design,tilt,torsion,step,first", [
+    (DESIGN, 15.0, 15.0, 5.0, None),  # the issue's 657 orientations, the hardest 32 by the per-pair test
+    (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0),  # the tree decides every sample
+])
+def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, torsion, step, first, monkeypatch):
+    """Issue 24 target 5: orientations certified by groups (kinematics/orientation_tree.py) give the
+    voxels of the exact per-pair test at every sample (method="pairs", the former path)."""
+    from paraspace.kinematics import dexterous
+
+    if first is not None:
+        monkeypatch.setattr(dexterous, "FIRST", first)
+    ws = WorkspaceSettings(voxel=10.0)
+    pos = compute_workspace(design, ws)
+    tree = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos)
+    pairs = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos, method="pairs")
+    assert tree.samples.shape[0] > 100
+    assert np.array_equal(tree.occupancy, pairs.occupancy)
+    assert 0 < tree.voxels < pos.voxels
+
+
+def test_unknown_method_is_refused(plain):
+    with pytest.raises(ParameterError, match="method"):
+        total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
+                                    method="fast")

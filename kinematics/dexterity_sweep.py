@@ -1,0 +1,332 @@
+"""Dexterity field by continuation: the resolver's search at every reachable voxel, pruned with the
+margins found at the voxel before it, and ``1/kappa`` computed in the same compiled pass.
+
+Definition
+----------
+:mod:`kinematics.dexterity` defines the resolved carriage pose of chain ``i`` at a position ``P``
+as the result of the resolver's **full search** over ``(eta, rho)`` for the largest chain margin
+``m(P; eta, rho) = min_j min(l_j - l_min, l_max - l_j)``: the first maximiser (in scan order) over a
+73 x 61 grid on the strokes, then over two 21 x 21 grids ("zooms") each centred on the previous
+maximiser; about 5,300 margins per chain and voxel.
+
+The continuation sweep finds the **same** maximisers (bit for bit) with fewer margins. The voxels
+of one ``x`` plane are visited in a serpentine ``(y, z)`` order, and each grid point keeps an upper
+bound of its margin at the current voxel:
+
+* **Lipschitz lemma**: a leg's length is 1-Lipschitz in the platform position at fixed
+  ``(eta, rho)`` (the U joint does not move, the S joint moves with ``P``), hence so is the margin:
+  ``m(Q; g) <= m(P; g) + |Q - P|`` for every grid point ``g``. A bound set when ``m(P; g)`` was
+  computed therefore stays valid at the later voxel ``Q`` after adding the length ``D`` of the
+  path walked since (kept as one running sum, so nothing is updated per grid point).
+* At each voxel and grid (coarse or zoom, when the zoom's window is the one of the voxel before),
+  the margin ``v`` at the previous voxel's maximiser is computed; a grid point whose bound is below
+  ``v - 1e-7`` cannot reach the maximum (nor tie with it) and is skipped; every other point is
+  computed, in the full search's scan order with its strict ``>``, so the first maximiser is the
+  full search's. A row is skipped at once when the largest bound of its points is below. The
+  first voxel of a plane, and a zoom whose window moved, scan the whole grid.
+
+``1/kappa = sigma_min(J) / sigma_max(J)`` of ``J = J_h^{-1} J_q`` (eq. (26)) is computed in the same
+kernel, as ``sqrt(lambda_min / lambda_max)`` of ``J J^T`` (Gauss-Jordan elimination with partial
+pivoting, then cyclic Jacobi rotations; 0 where a pivot of ``J_h`` is exactly zero).
+
+**Tolerance** (checked by the tests against the full search, the slow path
+``dexterity_field(..., search="full")``): the carriage poses are identical to the full search's,
+and ``|1/kappa - 1/kappa_full| <= TOL_REL x 1/kappa_full + TOL_ABS`` (:data:`TOL_REL` = 1e-9,
+:data:`TOL_ABS` = 1e-12: the eigenvalues of ``J J^T`` against numpy's SVD of ``J``, both accurate to
+about ``kappa x 1e-16`` absolute) at every voxel.
+
+Cost: see ``benchmarks/bench_workspace.py --throughput`` (target 3). The chain margin and the
+Jacobian's constants are defined here and shared with :mod:`kinematics.dexterity` (which imports
+this module, not the other way round).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit, prange
+
+from .design import Design
+from .geometry import LEG_SIGN, platform_points_local
+from .parallel import kernel_launch
+from .progress import CancelToken, Reporter, check
+from .rotation import euler_rate_matrix, euler_zyx_deg
+
+#: Stated tolerance on 1/kappa against the full search's: relative and absolute (module docstring).
+TOL_REL, TOL_ABS = 1e-9, 1e-12
+#: Slack of the pruning test (margins are lengths; it only adds grid points to compute).
+_SLACK = 1e-7
+#: x planes per kernel launch (cancellation and progress are checked between launches).
+PLANES = 8
+#: The resolver's grids: coarse 73 x 61, zooms 21 x 21 (kinematics.dexterity._best_carriage_one).
+_NE, _NR, _NZ = 73, 61, 21
+
+
+@njit(cache=True, inline="always")
+def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
+    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
+    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
+    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
+    dx = bx0 - (c * rho - s * hb)
+    dy = by0 - (s * rho + c * hb)
+    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
+    dx = bx1 - (c * rho + s * hb)
+    dy = by1 - (s * rho - c * hb)
+    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
+    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
+
+
+@njit(cache=True, inline="always")
+def _lin(lo, hi, n, k):
+    """``np.linspace(lo, hi, n)[k]``."""
+    if n == 1:
+        return lo
+    if k == n - 1:
+        return hi
+    return lo + k * ((hi - lo) / (n - 1))
+
+
+def _constants(design: Design, orientation_deg: Sequence[float]):
+    psi, theta, phi = (float(v) for v in orientation_deg)
+    rot = euler_zyx_deg(psi, theta, phi)
+    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
+    R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
+    return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
+
+
+@njit(cache=True, inline="always")
+def _grid_argmax(bx0, by0, bz0, bx1, by1, bz1, gamma, lo_e, hi_e, n_e, lo_r, hi_r, n_r, W, RM, ST, D,
+                 hb, lmin, lmax):
+    """First maximiser ``(ke, kr)`` of the margin over the ``n_e x n_r`` grid on ``[lo_e, hi_e] x
+    [lo_r, hi_r]`` (the full search's scan), pruned by the bounds ``W + D`` when the grid is the one
+    of the previous call (``ST``: its window, maximiser and a valid flag; ``RM``: per-row largest
+    ``W``)."""
+    same = (ST[8] == 1.0 and ST[0] == lo_e and ST[1] == hi_e and ST[2] == lo_r and ST[3] == hi_r
+            and ST[4] == n_e and ST[5] == n_r)
+    thr = -np.inf
+    if same:
+        varpi = gamma + _lin(lo_e, hi_e, n_e, int(ST[6]))
+        v = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi),
+                       _lin(lo_r, hi_r, n_r, int(ST[7])), hb, lmin, lmax)
+        thr = v - _SLACK - D
+    best = -np.inf
+    ke, kr = 0, 0
+    for a in range(n_e):
+        if same and RM[a] < thr:
+            continue
+        varpi = gamma + _lin(lo_e, hi_e, n_e, a)
+        c, s = math.cos(varpi), math.sin(varpi)
+        rm = -np.inf
+        for b in range(n_r):
+            k = a * n_r + b
+            if same and W[k] < thr:
+                rm = max(rm, W[k])
+                continue
+            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, _lin(lo_r, hi_r, n_r, b), hb, lmin, lmax)
+            W[k] = m - D
+            rm = max(rm, W[k])
+            if m > best:
+                best, ke, kr = m, a, b
+        RM[a] = rm
+    ST[0], ST[1], ST[2], ST[3], ST[4], ST[5] = lo_e, hi_e, lo_r, hi_r, n_e, n_r
+    ST[6], ST[7], ST[8] = ke, kr, 1.0
+    return ke, kr
+
+
+@njit(cache=True)
+def _pruned_carriage(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, RM, ST, D):
+    """:func:`kinematics.dexterity._best_carriage_one` (same grids, same result) with each grid's
+    argmax pruned by :func:`_grid_argmax` (``W``, ``RM``, ``ST``: per level). Returns (rho, eta_rad)."""
+    lo_e, hi_e, lo_r, hi_r = e_lo, e_hi, r_lo, r_hi
+    n_e = 1 if hi_e <= lo_e else _NE
+    n_r = 1 if hi_r <= lo_r else _NR
+    be, br = 0.5 * (e_lo + e_hi), 0.5 * (r_lo + r_hi)
+    for it in range(3):
+        ke, kr = _grid_argmax(bx0, by0, bz0, bx1, by1, bz1, gamma, lo_e, hi_e, n_e, lo_r, hi_r, n_r,
+                              W[it], RM[it], ST[it], D, hb, lmin, lmax)
+        be = _lin(lo_e, hi_e, n_e, ke)
+        br = _lin(lo_r, hi_r, n_r, kr)
+        de = (hi_e - lo_e) / max(n_e - 1, 1)
+        dr = (hi_r - lo_r) / max(n_r - 1, 1)
+        lo_e, hi_e = max(e_lo, be - 2 * de), min(e_hi, be + 2 * de)
+        lo_r, hi_r = max(r_lo, br - 2 * dr), min(r_hi, br + 2 * dr)
+        n_e = 1 if hi_e <= lo_e else _NZ
+        n_r = 1 if hi_r <= lo_r else _NZ
+    return br, be
+
+
+@njit(cache=True)
+def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
+    """``1/kappa`` of ``J_h^{-1} J_q`` at one position and carriage pose (module docstring; the
+    matrices of :func:`kinematics.dexterity._assemble_kernel`). Work arrays: ``A`` (6, 18) for
+    ``[J_h | J_q]``, ``G`` (6, 6)."""
+    for r in range(6):
+        for k in range(18):
+            A[r, k] = 0.0
+    for i in range(3):
+        varpi = 2.0 * math.pi * i / 3.0 + eta[i]
+        c, s = math.cos(varpi), math.sin(varpi)
+        for j in range(2):
+            row = 2 * i + j
+            lat = hb if j == 0 else -hb
+            ux, uy, uz = u[i, j, 0], u[i, j, 1], u[i, j, 2]
+            vx = px + ux - (c * rho[i] - s * lat)
+            vy = py + uy - (s * rho[i] + c * lat)
+            vz = pz + uz
+            n = math.sqrt(vx * vx + vy * vy + vz * vz)
+            sx, sy, sz = vx / n, vy / n, vz / n
+            cx = uy * sz - uz * sy
+            cy = uz * sx - ux * sz
+            cz = ux * sy - uy * sx
+            A[row, 0] = sx
+            A[row, 1] = sy
+            A[row, 2] = sz
+            for k in range(3):
+                A[row, 3 + k] = (cx * R2[0, k] + cy * R2[1, k] + cz * R2[2, k]) * inv_L
+            A[row, 6 + row] = 1.0
+            A[row, 12 + i] = -(sx * c + sy * s)
+            A[row, 15 + i] = sx * (-rho[i] * s - lat * c) + sy * (rho[i] * c - lat * s)
+    # Gauss-Jordan elimination with partial pivoting: [J_h | J_q] becomes [I | J]
+    for col in range(6):
+        p = col
+        for r in range(col + 1, 6):
+            if abs(A[r, col]) > abs(A[p, col]):
+                p = r
+        if A[p, col] == 0.0:
+            return 0.0
+        if p != col:
+            for k in range(18):
+                A[p, k], A[col, k] = A[col, k], A[p, k]
+        inv = 1.0 / A[col, col]
+        for k in range(col, 18):
+            A[col, k] *= inv
+        for r in range(6):
+            if r != col and A[r, col] != 0.0:
+                f = A[r, col]
+                for k in range(col, 18):
+                    A[r, k] -= f * A[col, k]
+    # G = J J^T and its eigenvalues by cyclic Jacobi rotations
+    for a in range(6):
+        for b in range(a, 6):
+            acc = 0.0
+            for k in range(6, 18):
+                acc += A[a, k] * A[b, k]
+            G[a, b] = acc
+            G[b, a] = acc
+    for _sweep in range(50):
+        off = 0.0
+        diag = 0.0
+        for a in range(6):
+            diag += G[a, a] * G[a, a]
+            for b in range(a + 1, 6):
+                off += G[a, b] * G[a, b]
+        if off <= 1e-36 * diag:
+            break
+        for a in range(5):
+            for b in range(a + 1, 6):
+                gab = G[a, b]
+                if gab == 0.0:
+                    continue
+                theta = 0.5 * (G[b, b] - G[a, a]) / gab
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                cs = 1.0 / math.sqrt(t * t + 1.0)
+                sn = t * cs
+                for k in range(6):
+                    gka, gkb = G[k, a], G[k, b]
+                    G[k, a] = cs * gka - sn * gkb
+                    G[k, b] = sn * gka + cs * gkb
+                for k in range(6):
+                    gak, gbk = G[a, k], G[b, k]
+                    G[a, k] = cs * gak - sn * gbk
+                    G[b, k] = sn * gak + cs * gbk
+    lo = G[0, 0]
+    hi = G[0, 0]
+    for a in range(1, 6):
+        lo = min(lo, G[a, a])
+        hi = max(hi, G[a, a])
+    if not (hi > 0.0) or lo <= 0.0:
+        return 0.0
+    return math.sqrt(lo / hi)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
+                  out, rho_out, eta_out):
+    """The continuation sweep (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
+    ``1/kappa`` and ``rho_out``/``eta_out`` (N, 3; ``rho = r - d``, ``eta`` in radians) the resolved
+    carriage of the reachable voxels in C order (``offset[i]``: the index of plane ``i``'s first)."""
+    ny, nz = occ.shape[1], occ.shape[2]
+    for i in prange(i0, i1):
+        W = np.empty((3, 3, _NE * _NR))
+        RM = np.empty((3, 3, _NE))
+        ST = np.zeros((3, 3, 9))
+        rho = np.zeros(3)
+        eta = np.zeros(3)
+        A = np.empty((6, 18))
+        G = np.empty((6, 6))
+        # C-order index of each reachable voxel of the plane
+        index = np.empty((ny, nz), np.int64)
+        n = offset[i]
+        for j in range(ny):
+            for k in range(nz):
+                if occ[i, j, k]:
+                    index[j, k] = n
+                    n += 1
+        px = xs[i]
+        D = 0.0
+        qy, qz = 0.0, 0.0
+        first = True
+        for j in range(ny):
+            py = ys[j]
+            for kk in range(nz):
+                k = kk if j % 2 == 0 else nz - 1 - kk  # serpentine: short steps between voxels
+                if not occ[i, j, k]:
+                    continue
+                pz = zs[k]
+                if not first:
+                    D += math.sqrt((py - qy) ** 2 + (pz - qz) ** 2)
+                first = False
+                qy, qz = py, pz
+                for c in range(3):
+                    r, e = _pruned_carriage(px + u[c, 0, 0], py + u[c, 0, 1], pz + u[c, 0, 2],
+                                            px + u[c, 1, 0], py + u[c, 1, 1], pz + u[c, 1, 2],
+                                            2.0 * math.pi * c / 3.0, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
+                                            W[c], RM[c], ST[c], D)
+                    rho[c] = r
+                    eta[c] = e
+                m = index[j, k]
+                for c in range(3):
+                    rho_out[m, c] = rho[c]
+                    eta_out[m, c] = eta[c]
+                out[m] = _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G)
+
+
+def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                       orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
+                       cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``1/kappa`` at the resolved carriage pose (module docstring) of every reachable voxel of
+    ``occupancy`` (a grid of ``axes = (xs, ys, zs)``) in C order, with the carriage pose: returns
+    ``(inverse_condition, d, eta_deg)`` as :func:`kinematics.dexterity.resolved_carriages` does."""
+    occ = np.ascontiguousarray(np.asarray(occupancy, bool))
+    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
+    u, R2, hb, inv_L = _constants(design, orientation)
+    e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
+    r_lo, r_hi = design.rho_limits
+    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
+    offset = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    n = int(counts.sum())
+    out = np.zeros(n)
+    rho = np.zeros((n, 3))
+    eta = np.zeros((n, 3))
+    nx = occ.shape[0]
+    for i0 in range(0, nx, PLANES):
+        check(cancel)
+        i1 = min(nx, i0 + PLANES)
+        with kernel_launch(i1 - i0):
+            _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, float(r_lo), float(r_hi), hb, inv_L,
+                          float(design.l_min), float(design.l_max), out, rho, eta)
+        if progress is not None:
+            progress(i1 / nx, "dexterity")
+    return out, design.r - rho, np.degrees(eta) + 0.0

@@ -1,0 +1,234 @@
+"""Reachability of a position at EVERY orientation of a sample set, decided by groups of orientations.
+
+Lemma (orientation slack). Let ``R0`` be a rotation and ``G`` a finite set of rotations. For the
+platform points ``u`` of chain ``i`` let ``e_i = max_{R in G, u} |R u - R0 u|`` (at most ``alpha
+max|u|`` when every ``R R0^T`` turns by at most ``alpha``, since ``|(R R0^T - I) v| <= 2 sin(alpha/2)
+|v|``). At a fixed carriage pose (arc sample ``k``, rail coordinate ``rho``) the U joints do not
+move with the platform, so every leg length of chain ``i`` at ``(P, R)``, ``R in G``, is within
+``e_i`` of the one at ``(P, R0)``.
+
+Hence, **certificate** (per chain): if some arc sample admits a ``rho`` with both legs of chain
+``i`` in the tightened range ``[l_min + e_i + eps, l_max - e_i - eps]`` at ``(P, R0)``, the same
+``(k, rho)`` serves chain ``i`` at every orientation of ``G`` with the exact limits, so the exact
+per-pair test's chain test (:func:`kinematics.workspace.reachable_pairs`: the whole-stroke bound,
+which never rejects a feasible pose, then a search over every sample) passes at every ``(P, R)``,
+``R in G``. This is the argument of :mod:`kinematics.blocks` with the orientation in place of the
+position. (``eps``, 1e-9 of the design's scale, absorbs rounding.)
+
+The samples are arranged in a binary tree (each node split in two halves along the widest of its
+tilt-vector ``(theta cos phi, theta sin phi)`` and torsion coordinates, down to single samples);
+each node stores as ``R0`` its member whose largest angle to the others is smallest, and ``e_i``
+over its members. A position is decided by a depth-first walk from the root, chain by chain: a
+chain certified at a node is not tested below it, a node with a chain left is opened, a single
+sample tests its chains left exactly; the walk stops at the first failing test. The answer is
+therefore, position by position, the one of testing every sample exactly (the tests compare the
+two). A certificate looks only at the samples near the chain's last passing one (a certificate not
+found merely opens the node). Only for the plain model (no joint cones, no leg interference): the
+caller uses the per-pair test otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .blocks import rounding_margin
+from .design import Design
+from .feasibility import _chain_excluded, _feasible_at, chain_points, chain_search
+from .kernel_args import kernel_args
+from .parallel import kernel_launch
+from .progress import CancelToken, Reporter, check
+from .workspace import rotation_tables
+
+#: Arc samples either side of the last passing one that a certificate looks at.
+WINDOW = 4
+#: Positions per kernel launch (cancellation and progress are checked between launches).
+CHUNK = 16384
+
+
+def _angles(rots: np.ndarray, r0: np.ndarray) -> np.ndarray:
+    """Rotation angle of ``R r0^T`` for each ``R`` of ``rots`` (radians)."""
+    tr = np.einsum("mij,ij->m", rots, r0)
+    return np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
+
+
+def build_tree(samples: np.ndarray, rots: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The tree of the module docstring over ``samples`` (M, 3: azimuth, tilt, torsion in degrees)
+    with rotations ``rots`` (M, 3, 3). Returns per node ``(left, right, sample, centre, members)``:
+    children (-1 for a single sample), the sample of a leaf (-1 otherwise), the centre sample and
+    the member samples; node 0 is the root. Children are ordered as the samples (hardest first)."""
+    az, th = np.radians(samples[:, 0]), samples[:, 1]
+    coords = np.stack([th * np.cos(az), th * np.sin(az), samples[:, 2]], axis=1)
+    left: list[int] = []
+    right: list[int] = []
+    leaf: list[int] = []
+    centre: list[int] = []
+    group: list[np.ndarray] = []
+
+    def node(members: np.ndarray) -> int:
+        k = len(left)
+        left.append(-1)
+        right.append(-1)
+        leaf.append(-1)
+        centre.append(int(members[0]))
+        group.append(members)
+        if members.size == 1:
+            leaf[k] = int(members[0])
+            return k
+        worst = np.array([_angles(rots[members], rots[m]).max() for m in members])
+        c = int(np.argmin(worst))
+        centre[k] = int(members[c])
+        span = coords[members].max(axis=0) - coords[members].min(axis=0)
+        axis = int(np.argmax(span))
+        order = members[np.argsort(coords[members, axis], kind="stable")]
+        half = order.size // 2
+        a, b = np.sort(order[:half]), np.sort(order[half:])
+        if b[0] < a[0]:
+            a, b = b, a
+        left[k] = node(a)
+        right[k] = node(b)
+        return k
+
+    node(np.arange(samples.shape[0]))
+    return (np.array(left, np.int64), np.array(right, np.int64), np.array(leaf, np.int64),
+            np.array(centre, np.int64), group)
+
+
+@njit(cache=True)
+def _certified(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lo2, hi2, jc, hint):
+    """The certificate of the module docstring for chain ``i`` at ``P`` with the rotated platform
+    points ``u`` of ``R0`` and the tightened limits ``lo2 = (l_min + e)^2``, ``hi2 = (l_max - e)^2``,
+    looking for a sample within :data:`WINDOW` of ``hint[i]`` (the chain's last passing sample,
+    updated): a certificate not found only opens the node."""
+    n = cos_t.shape[1]
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo2, hi2):
+        return False
+    for step in range(2 * WINDOW + 1):
+        off = (step + 1) // 2
+        k = hint[i] + off if step % 2 == 1 else hint[i] - off
+        if k < 0 or k >= n:
+            continue
+        if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo2, hi2,
+                        jc[i], 0.0):
+            hint[i] = k
+            return True
+    return False
+
+
+@njit(cache=True)
+def _exact(px, py, pz, u, i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, hint):
+    """The per-pair test of :func:`kinematics.workspace._pairs_kernel` for chain ``i`` at one
+    orientation ("some arc sample passes"), trying the chain's last passing sample ``hint[i]`` first
+    (the same answer: the whole-stroke bound never rejects a feasible pose)."""
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    k = hint[i]
+    if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lmin2, lmax2, jc[i],
+                    0.0):
+        return True
+    if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lmin2, lmax2):
+        return False
+    k = chain_search(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi, lmin2, lmax2, jc[i],
+                     cos_t.shape[1] // 2)
+    if k < 0:
+        return False
+    hint[i] = k
+    return True
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _tree_kernel(points, us, jcs, first, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
+                 rho_hi, lmin2, lmax2, out):
+    """``out[p]``: ``points[p]`` passes the exact test at every sample (the tree walk of the module
+    docstring, chain by chain: a chain certified at a node is not tested below it), after the
+    samples ``0 .. first - 1`` tested one by one; ``lo2``/``hi2`` (nodes, 3): each chain's tightened
+    limits squared (``hi2 < 0``: no certificate)."""
+    n_eta = cos_t.shape[1]
+    for p in prange(points.shape[0]):
+        px, py, pz = points[p, 0], points[p, 1], points[p, 2]
+        stack = np.empty(128, np.int64)
+        done = np.empty(128, np.int64)
+        hint = np.full(3, n_eta // 2, np.int64)
+        ok = True
+        for m in range(first):
+            for i in range(3):
+                if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m], hint):
+                    ok = False
+                    break
+            if not ok:
+                break
+        top = 0 if left.shape[0] else -1
+        stack[0] = 0
+        done[0] = 0
+        while top >= 0 and ok:
+            nd = stack[top]
+            bits = done[top]
+            top -= 1
+            m = leaf[nd]
+            for i in range(3):
+                if (bits >> i) & 1:
+                    continue
+                if m >= 0:
+                    if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m],
+                                  hint):
+                        ok = False
+                        break
+                elif hi2[nd, i] >= 0.0 and _certified(px, py, pz, us[centre[nd]], i, cos_t, sin_t, arc, hb, rho_lo,
+                                                      rho_hi, lo2[nd, i], hi2[nd, i], jcs[centre[nd]], hint):
+                    bits |= 1 << i
+            if m < 0 and bits != 7:
+                top += 1
+                stack[top] = right[nd]
+                done[top] = bits
+                top += 1
+                stack[top] = left[nd]
+                done[top] = bits
+        out[p] = ok
+
+
+def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, rotations: np.ndarray, n_eta: int,
+                     first: int = 0, progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
+    """Whether each of ``points`` (N, 3) passes the exact per-pair test at every rotation of
+    ``rotations`` (M, 3, 3; ``samples`` their (azimuth, tilt, torsion) rows), plain model only
+    (module docstring): bool (N,). The first ``first`` samples (the hardest: most positions that
+    fail, fail one of them) are tested one by one before the tree of the others."""
+    from .joints import Joints
+
+    pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+    rots = np.ascontiguousarray(np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3))
+    out = np.zeros(pts.shape[0], np.bool_)
+    if not pts.shape[0]:
+        return out
+    if not rots.shape[0]:
+        out[:] = True
+        return out
+    _u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
+    us, jcs = rotation_tables(design, rots, Joints())
+    first = min(int(first), rots.shape[0])
+    if first < rots.shape[0]:
+        left, right, leaf, centre, members = build_tree(samples[first:], rots[first:])
+        leaf = np.where(leaf >= 0, leaf + first, -1)
+        centre = centre + first
+        members = [m + first for m in members]
+    else:
+        left = right = leaf = centre = np.zeros(0, np.int64)
+        members = []
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    eps = rounding_margin(lmax, (pts[:, 0], pts[:, 1], pts[:, 2]))
+    e = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
+                  for m, c in zip(members, centre)]).reshape(-1, 3) + eps
+    lo2 = (lmin + e) ** 2
+    hi2 = np.where(lmin + e <= lmax - e, (lmax - e) ** 2, -1.0)
+    hi2[leaf >= 0] = -1.0
+    for s in range(0, pts.shape[0], CHUNK):
+        check(cancel)
+        sl = slice(s, min(pts.shape[0], s + CHUNK))
+        with kernel_launch(sl.stop - sl.start):
+            _tree_kernel(pts[sl], us, jcs, first, left, right, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
+                         rho_hi, lmin2, lmax2, out[sl])
+        if progress is not None:
+            progress(sl.stop / pts.shape[0], "total-orientation workspace")
+    return out
