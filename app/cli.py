@@ -23,7 +23,8 @@
 
 Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]... [--length-step L]``
 instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
-sweeps a preset's parameter. The paper preset (or a file equal to it) runs the paper's engine with every
+sweeps a preset's parameter; ``optimize --mechanism PRESET [--param NAME=VALUE]... --params NAME,...``
+optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a file equal to it) runs the paper's engine with every
 option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
 workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
 has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
@@ -962,8 +963,8 @@ def cmd_serve(ns: argparse.Namespace) -> int:
 # ----- optimize (issue 11) -------------------------------------------------------------------
 
 
-def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
-    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}``."""
+def _bounds_arg(text: str | None, known: Sequence[str] = tuple(PARAMS)) -> dict[str, tuple[float, float]]:
+    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}`` (names among ``known``)."""
     out: dict[str, tuple[float, float]] = {}
     if not text:
         return out
@@ -976,8 +977,8 @@ def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
         if not sep or not sep2:
             raise ParameterError("bounds", part, "NAME=LO:HI, comma-separated, e.g. l_s=20:100,a=10:90")
         name = name.strip()
-        if name not in PARAMS:
-            raise ParameterError("bounds", name, "design parameters " + ", ".join(PARAMS))
+        if name not in known:
+            raise ParameterError("bounds", name, "parameters " + ", ".join(known))
         try:
             out[name] = (float(lo), float(hi))
         except ValueError:
@@ -993,20 +994,45 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
+    preset, values, length_step, known = _optimize_preset(ns)
+    general = preset not in (None, "paper")
     joints = _joints(ns)
     spec = _study_task(ns, joints)
     total = None
     if ns.tilt is not None or ns.torsion is not None:
         total = (0.0 if ns.tilt is None else ns.tilt, 0.0 if ns.torsion is None else ns.torsion, ns.task_angle_step)
+    from paraspace.kinematics.optimize import DEFAULT_PARAMS
+
+    params = ns.params if ns.params is not None else ",".join(known if general else DEFAULT_PARAMS)
+    objectives = ns.objectives if ns.objectives is not None else ("volume,-l_max" if general else "volume,-footprint")
     return OptimizeSettings(
-        task=spec, total_orientation=total,
-        params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
-        objectives=ns.objectives, constraints=constraints, design=_design(ns),
+        task=spec, total_orientation=total, preset=preset, preset_values=values, length_step=length_step,
+        params=tuple(p.strip() for p in params.split(",")), bounds=_bounds_arg(ns.bounds, known),
+        objectives=objectives, constraints=constraints, design=Design() if preset is not None else _design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
         orientation=OrientationSettings(joints=joints, **_scan(ns)),
         population=int(OPTIMIZE["population"].parse(ns.population)),
         generations=int(OPTIMIZE["generations"].parse(ns.generations)),
         seed=int(OPTIMIZE["seed"].parse(ns.seed)), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
+
+
+def _optimize_preset(ns: argparse.Namespace) -> tuple[str | None, dict[str, Any], float, list[str]]:
+    """``optimize --mechanism PRESET [--param NAME=VALUE]... [--length-step L]``: ``(preset, its fixed
+    values, length_step, the names --params and --bounds may use)``; ``(None, {}, 1, PARAMS)`` without
+    ``--mechanism``. A file is refused (the optimiser varies a preset's parameters); so are the design
+    flags, and the joint flags with a general preset (by :func:`_mechanism`)."""
+    from paraspace.kinematics.presets import PRESETS
+
+    from .mechanism_cli import _param_values
+
+    if getattr(ns, "mechanism", None) is not None and ns.mechanism not in PRESETS:
+        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): the optimiser varies "
+                                                          "a preset's parameters, not a description file's")
+    _mechanism(ns, {})  # refuses the flags a preset replaces (and validates --param)
+    if ns.mechanism is None:
+        return None, {}, 1.0, list(PARAMS)
+    known = [q.name for q in PRESETS[ns.mechanism].params if q.numeric]
+    return ns.mechanism, _param_values(ns.param), _length_step(ns), known
 
 
 def cmd_optimize(ns: argparse.Namespace) -> int:
@@ -1019,7 +1045,12 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
         raise ParameterError("plot", ns.plot, "a file name ending in .png")
     if ns.scheduler is not None and ns.workers is not None:
         raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
-    warm_up()
+    if settings.general:
+        from paraspace.kinematics.mechanism_workspace import warm_up_general
+
+        warm_up_general()
+    else:
+        warm_up()
 
     progress, done = progress_line("optimize", force=ns.progress)
     try:
@@ -1056,16 +1087,21 @@ def _add_optimize_parser(sub: Any) -> None:
 
     z = sub.add_parser("optimize", help="multi-objective optimal design: the Pareto front over design parameters")
     _add_design_flags(z)
-    z.add_argument("--params", default=",".join(DEFAULT_PARAMS),
+    z.add_argument("--params",
                    help=f"free parameters, comma-separated (default {','.join(DEFAULT_PARAMS)}; any of "
-                        f"{', '.join(PARAMS)}); the others keep the design flags' values")
-    z.add_argument("--objectives", default="volume,-footprint",
-                   help="measures, comma-separated; a leading - minimises (default volume,-footprint). "
-                        "Measures: " + ", ".join(k for k, m in MEASURES.items() if not m.flag))
+                        f"{', '.join(PARAMS)}); the others keep the design flags' values. With --mechanism "
+                        "PRESET: the preset's numeric parameters (default all of them), the others --param's "
+                        "values or the preset's defaults")
+    z.add_argument("--objectives",
+                   help="measures, comma-separated; a leading - minimises (default volume,-footprint; with a "
+                        "general --mechanism volume,-l_max, and only the position workspace's measures and the "
+                        "preset's parameters exist). Measures: " + ", ".join(k for k, m in MEASURES.items()
+                                                                            if not m.flag))
     z.add_argument("--constraint", action="append", metavar="C",
                    help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
                         + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
-    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges)")
+    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges; with --mechanism PRESET each "
+                                    "parameter's study range, 'paraspace mechanism presets')")
     from paraspace.kinematics.settings import OPTIMIZE
 
     for name, note in (("population", ""), ("generations", "; 16 x 12 at h = 4 takes about 50 s here"), ("seed", ""),
@@ -1086,6 +1122,7 @@ def _add_optimize_parser(sub: Any) -> None:
     _add_scan_flags(z)
     _add_joint_flags(z)
     _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
+    add_mechanism_flags(z)
     z.set_defaults(func=cmd_optimize)
 
 

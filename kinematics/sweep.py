@@ -33,6 +33,7 @@ import numpy as np
 from .bytecache import ByteLRU
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
+from .presets import PresetDesign
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .serialize import jsonable
 from .workspace import WorkspaceSettings, compute_workspace
@@ -45,17 +46,21 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 # the unit of work
 
 
-def evaluate_design(design: Design, settings: WorkspaceSettings, *,
+def evaluate_design(design: Design | PresetDesign, settings: WorkspaceSettings, *,
                     orientation: OrientationSettings | None = None, cancel: CancelToken = None,
                     task: Any = None, dexterity: bool = False,
                     total_orientation: tuple[float, float, float] | None = None,
-                    measures: Sequence[str] | None = None) -> dict:
+                    measures: Sequence[str] | None = None, length_step: float | None = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
     ----------
-    design : Design
-        The mechanism's dimensions.
+    design : Design or PresetDesign
+        The mechanism's dimensions: the paper's :class:`Design`, or a preset's parameters
+        (:class:`~kinematics.presets.PresetDesign`: its workspace is
+        :func:`kinematics.mechanism_workspace.compute_mechanism_workspace`'s, the paper's engine for
+        the paper preset, the general engine otherwise; the orientation indices, the task, the
+        dexterity and the total orientation are then refused, naming the argument).
     settings : WorkspaceSettings
         The workspace computation (:func:`compute_workspace` then :func:`measure_workspace`).
     orientation : OrientationSettings, optional
@@ -74,6 +79,8 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         Only these fields of ``WorkspaceMeasures`` (and the size and box fields that are always
         there, :func:`kinematics.measures.measure_fields`), each computed with only the steps it
         needs and equal to the full evaluation's; ``None`` (default): every field.
+    length_step : float, optional
+        A :class:`PresetDesign`'s sampled prismatic spacing (default 1; only with one).
 
     Returns
     -------
@@ -102,6 +109,11 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     names = _measure_names(measures)
     t0 = time.perf_counter()
     check(cancel)
+    if isinstance(design, PresetDesign):
+        return _evaluate_preset(design, settings, names, t0, cancel, length_step, orientation=orientation,
+                                task=task, dexterity=dexterity, total_orientation=total_orientation)
+    if length_step is not None:
+        raise ParameterError("length_step", length_step, "only with a preset's design (PresetDesign)")
     result = compute_workspace(design, settings, cancel=cancel)
     check(cancel)
     out: dict[str, Any] = (dict(measure_workspace(result, cancel=cancel).to_dict()) if names is None
@@ -125,6 +137,28 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         tilt, torsion, step = total_orientation
         out["total_orientation_volume"] = total_orientation_workspace(design, tilt, torsion, step, settings,
                                                                       position=result, cancel=cancel).volume
+    out["design"] = design.to_dict()
+    out["compute_seconds"] = time.perf_counter() - t0
+    return jsonable(out)
+
+
+def _evaluate_preset(design: PresetDesign, settings: WorkspaceSettings, names: tuple[str, ...] | None, t0: float,
+                     cancel: CancelToken, length_step: float | None, **refused: Any) -> dict:
+    """:func:`evaluate_design` of a preset's design: the measures of its position workspace."""
+    from .measures import measure_fields, measure_workspace
+    from .mechanism_workspace import compute_mechanism_workspace
+
+    for name, value in refused.items():
+        if value not in (None, False):
+            raise ParameterError(name, value if not hasattr(value, "to_dict") else type(value).__name__,
+                                 f"none for a preset's design ({design.preset}): only the position workspace's "
+                                 "measures")
+    result = compute_mechanism_workspace(design.mechanism(), settings, 1.0 if length_step is None else length_step,
+                                         cancel=cancel)
+    check(cancel)
+    out: dict[str, Any] = (dict(measure_workspace(result, cancel=cancel).to_dict()) if names is None
+                           else dict(measure_fields(result, names, cancel=cancel)))
+    out["engine"] = result.engine
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
