@@ -24,8 +24,8 @@
 Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]... [--length-step L]``
 instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
 sweeps a preset's parameter; ``optimize --mechanism PRESET [--param NAME=VALUE]... --params NAME,...``
-optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a file equal to it) runs the paper's engine with every
-option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
+optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a file equal to it)
+runs the paper's engine with every option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
 workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
 has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
 ik --carriage) are refused by name.
