@@ -25,10 +25,10 @@ Mechanism flags (``workspace``, ``ik``): ``--mechanism FILE|PRESET [--param NAME
 instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``
 sweeps a preset's parameter; ``optimize --mechanism PRESET [--param NAME=VALUE]... --params NAME,...``
 optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a file equal to it)
-runs the paper's engine with every option; any other mechanism runs the general engine (kinematics/mechanism_workspace.py: the position
-workspace, its measures and shell, its certified bracket, IK), and the flags only the paper's engine
-has (design and joint flags, --bracket-refine, --diagnostics, --tilt/--torsion, --dexterity,
-ik --carriage) are refused by name.
+runs the paper's engine with every option; any other mechanism runs the general engine
+(kinematics/mechanism_workspace.py: the position workspace, its measures and shell, its certified
+bracket, IK), and the flags only the paper's engine has (design and joint flags, --bracket-refine,
+--diagnostics, --tilt/--torsion, --dexterity, ik --carriage) are refused by name.
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
