@@ -700,15 +700,26 @@ def cmd_paper(ns: argparse.Namespace) -> int:
 
 
 #: ``sweep`` flags that only the paper's design study has
-_SWEEP_PAPER_ONLY = {"--param2": "param2", "--values2": "values2", "--scheduler": "scheduler", "--workers": "workers",
-                     "--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+_SWEEP_PAPER_ONLY = {"--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+
+
+def _preset_row(row: dict, names: Sequence[str]) -> dict:
+    """A preset sweep's row: the swept parameters' values first, then the measures (the bookkeeping of
+    sweep_1d, sweep_2d and sweep_grid and the full design dict left out; ``ok``/``error`` kept)."""
+    design = row.get("design") or {}
+    skip = {"param", "value", "param_x", "param_y", "x", "y", "ix", "iy", "params", "index", "design"}
+    return {**{n: design.get(n) for n in names}, **{k: v for k, v in row.items() if k not in skip}}
 
 
 def _sweep_mechanism(ns: argparse.Namespace) -> int:
-    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``: workspace
-    measures against one of the preset's parameters (kinematics/mechanism_workspace.sweep_preset)."""
-    from paraspace.kinematics.mechanism_workspace import sweep_preset, warm_up_general
-    from paraspace.kinematics.presets import PRESETS
+    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--param2 NAME --values2 ...]
+    [--set NAME=VALUE]... [--workers N | --scheduler ADDR]``: workspace measures over one or two of the
+    preset's parameters (kinematics/sweep.py on a PresetDesign; Dask: kinematics/distributed.py)."""
+    import functools
+
+    from paraspace.kinematics.mechanism_workspace import warm_up_general
+    from paraspace.kinematics.presets import PRESETS, PresetDesign
+    from paraspace.kinematics.sweep import evaluate_design, sweep_1d, sweep_2d
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
     from .mechanism_cli import _param_values
@@ -719,22 +730,50 @@ def _sweep_mechanism(ns: argparse.Namespace) -> int:
     for flag, dest in {**_DESIGN_FLAGS, **_JOINT_FLAGS, **_SWEEP_PAPER_ONLY}.items():
         if _given(ns, flag, dest):
             raise ParameterError(flag, getattr(ns, dest), "not with --mechanism (a preset's sweep: --param NAME "
-                                 "--values V1,V2,... [--set NAME=VALUE]... [--voxel H] [--json] [--csv FILE])")
+                                 "--values V1,V2,... [--param2 NAME --values2 ...] [--set NAME=VALUE]... [--voxel H] "
+                                 "[--workers N | --scheduler ADDR] [--json] [--csv FILE])")
+    for flag, dest in (("--box", "box"), ("--cylinder", "cylinder"), ("--sphere", "sphere"), ("--points", "points")):
+        if getattr(ns, dest, None) is not None:
+            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism: task measures exist for the "
+                                                          "paper's model only")
+    if (ns.param2 is None) != (ns.values2 is None):
+        raise ParameterError("param2", ns.param2, "given together with --values2")
+    design = PresetDesign.of(ns.mechanism, _param_values(ns.set))
+    length_step = _length_step(ns)
     values = _floats("values", ns.values)
+    values2 = None if ns.values2 is None else _floats("values2", ns.values2)
     settings = WorkspaceSettings(voxel=_voxel(ns))
+    names = [ns.param] + ([] if ns.param2 is None else [ns.param2])
+    distributed = ns.scheduler is not None or ns.workers is not None
     warm_up()
     warm_up_general()
     progress, done = progress_line("sweep")
     try:
-        rows = sweep_preset(ns.mechanism, ns.param, values, _param_values(ns.set), settings, progress=progress)
+        if distributed:
+            from paraspace.kinematics.distributed import sweep_grid
+
+            grid = {ns.param: values, **({} if values2 is None else {ns.param2: values2})}
+            raw = sweep_grid(design, grid, settings, scheduler=ns.scheduler, n_workers=ns.workers, progress=progress,
+                             evaluate=functools.partial(evaluate_design, length_step=length_step))
+        elif values2 is not None:
+            raw = sweep_2d(design, ns.param, values, ns.param2, values2, settings, progress=progress,
+                           length_step=length_step)["points"]
+        else:
+            raw = sweep_1d(design, ns.param, values, settings, progress=progress, length_step=length_step)
     finally:
         done()
+    rows = [_preset_row(r, names) for r in raw]
+    failed = [r for r in rows if r.get("ok") is False]
     if ns.csv:
         write_atomic(ns.csv, rows_to_csv(rows))
     if ns.json:
         _emit(rows)
     else:
         sys.stdout.write(rows_to_csv(rows))
+    if failed:
+        sys.stderr.write(f"paraspace: error: {len(failed)} of {len(rows)} points failed "
+                         f"(first: {failed[0].get('error', '?')})\n")
+        return 1
     return 0
 
 
@@ -1214,6 +1253,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                          "paper's design (see 'paraspace mechanism presets')")
     s.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="with --mechanism: a fixed parameter of the preset (repeatable)")
+    s.add_argument("--length-step", dest="length_step", metavar="L",
+                   help="with --mechanism: spacing of a sampled (second) prismatic joint's values, [0.01, 100] "
+                        "(default 1)")
     _add_scan_flags(s)
     _add_joint_flags(s)
     _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")

@@ -894,30 +894,19 @@ def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | 
     """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
     else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
     volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
-    The paper preset runs the paper's engine (the same numbers as :func:`kinematics.sweep.sweep_1d`)."""
-    from .measures import measure_workspace
-    from .presets import PRESETS, preset
+    A thin layer over :func:`kinematics.sweep.sweep_1d` of a :class:`~kinematics.presets.PresetDesign`
+    (2-D: :func:`kinematics.sweep.sweep_2d`, Dask: :func:`kinematics.distributed.sweep_grid`, the
+    same designs). The paper preset runs the paper's engine (the same numbers as ``sweep_1d``)."""
+    from .presets import PresetDesign
+    from .sweep import sweep_1d
 
-    if name not in PRESETS:
-        raise ParameterError("mechanism", name, f"one of the presets {', '.join(PRESETS)}")
-    known = [p.name for p in PRESETS[name].params]
-    if param not in known:
-        raise ParameterError("param", param, f"a parameter of preset {name!r}: {', '.join(known)}")
+    design = PresetDesign.of(name, params)
     values = list(values)
     if not 1 <= len(values) <= 1000:
         raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
-    rep = Reporter(progress)
-    rows = []
-    for i, value in enumerate(values):
-        check(cancel)
-        mech = preset(name, {**(params or {}), param: value})
-        res = compute_mechanism_workspace(mech, settings, length_step, rep.sub(i / len(values), (i + 1) / len(values)),
-                                          cancel)
-        measures = measure_workspace(res, cancel=cancel).to_dict()
-        rows.append({param: value, "engine": res.engine, **measures, "voxels": res.voxels, "volume": res.volume,
-                     "compute_seconds": res.compute_seconds})
-    rep(1.0, "sweep done")
-    return rows
+    rows = sweep_1d(design, param, values, settings, progress=progress, cancel=cancel, length_step=length_step)
+    return [{param: row["value"], **{k: v for k, v in row.items() if k not in ("param", "value", "design")}}
+            for row in rows]
 
 # --------------------------------------------------------------------------------------------
 # the certified bracket

@@ -127,14 +127,14 @@ def study_settings(settings: WorkspaceSettingsIn, orientation: OrientationSettin
             orientation.model_copy(update={"joints": joints}).build())
 
 
-ParamName = Literal["a", "b", "d_s", "r", "l_min", "l_s", "eta_s"]
 
 
 class SweepAxis(BaseModel):
     """One swept parameter: explicit ``values`` or ``n`` values spread over its slider range."""
 
     model_config = _MODEL
-    param: ParamName = Field(description="design parameter to vary")
+    param: str = Field(max_length=40, description="design parameter to vary (a, b, d_s, r, l_min, l_s, eta_s; with "
+                                                  "a mechanism preset one of its numeric parameters)")
     values: list[Num] | None = Field(None, min_length=1, max_length=10_000,
                                           description="values (each within the parameter's model range)")
     n: int | None = Field(None, ge=1, le=10_000, description="number of values over the slider range")
@@ -154,6 +154,10 @@ class SweepRequest(BaseModel):
     y: SweepAxis | None = None
     orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2; its joints are settings.joints when not given here")
+    mechanism: MechanismIn | None = Field(
+        None, description="a preset (with its fixed params) whose parameters are swept instead of design's; the "
+                          "paper preset is the paper's design, any other runs the general engine (position "
+                          "workspace measures only)")
 
 
 class OptimizeRequest(BaseModel):
