@@ -562,17 +562,24 @@ def cmd_task(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.task import evaluate_task
     from paraspace.kinematics.workspace import warm_up
 
-    design = _design(ns)
+    mech, design = _mechanism(ns, {})
     task = _task_of(ns)
     oset = _task_orientations(ns)
     settings = _task_settings(ns)
     if ns.points is not None and (ns.tilt is not None or ns.torsion is not None or ns.orientation):
         raise ParameterError("tilt", ns.tilt if ns.tilt is not None else ns.torsion,
                              "not with --points (each pose carries its orientation)")
-    warm_up()
     progress, done = progress_line("task")
     try:
-        res = evaluate_task(design, task, oset, settings, progress)
+        if design is None:  # a general mechanism (kinematics/mechanism_task.py)
+            from paraspace.kinematics.mechanism_task import evaluate_mechanism_task
+            from paraspace.kinematics.mechanism_workspace import warm_up_general
+
+            warm_up_general()
+            res = evaluate_mechanism_task(mech, task, oset, settings, _length_step(ns), progress)
+        else:
+            warm_up()
+            res = evaluate_task(design, task, oset, settings, progress)
     finally:
         done()
     from paraspace.kinematics.serialize import jsonable
@@ -592,7 +599,11 @@ def cmd_task(ns: argparse.Namespace) -> int:
     sat = " (at least: no unreachable point within margin_range)" if out.get("margin_saturated") else ""
     print(f"margin          {out['margin']:.4g}{sat}")
     print(f"binding         {out['binding']['message']}")
-    if out["kind"] == "poses":
+    if out["kind"] == "poses" and design is None:
+        if out["unreachable"]:
+            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
+                  + (" ..." if len(out["unreachable"]) > 20 else ""))
+    elif out["kind"] == "poses":
         car = out["carriage"]
         print(f"carriage travel d {car['travel_d']:.4g}, eta {car['travel_eta']:.4g} deg"
               + (f"; max speed d {car['max_speed_d']:.4g}/s, eta {car['max_speed_eta']:.4g} deg/s"
@@ -630,6 +641,7 @@ def _add_task_parser(sub: Any) -> None:
                                                       "worst, binding (and poses, discontinuities for a pose list)")
     t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
     _add_joint_flags(t)
+    add_mechanism_flags(t)
     t.set_defaults(func=cmd_task)
 
 

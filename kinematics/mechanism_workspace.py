@@ -885,30 +885,6 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float] | np.ndarray,
 
 
 # --------------------------------------------------------------------------------------------
-# parameter studies over a preset's parameters
-
-
-def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | None = None,
-                 settings: WorkspaceSettings = WorkspaceSettings(), length_step: float = 1.0,
-                 progress: ProgressFn | None = None, cancel: CancelToken = None) -> list[dict]:
-    """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
-    else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
-    volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
-    A thin layer over :func:`kinematics.sweep.sweep_1d` of a :class:`~kinematics.presets.PresetDesign`
-    (2-D: :func:`kinematics.sweep.sweep_2d`, Dask: :func:`kinematics.distributed.sweep_grid`, the
-    same designs). The paper preset runs the paper's engine (the same numbers as ``sweep_1d``)."""
-    from .presets import PresetDesign
-    from .sweep import sweep_1d
-
-    design = PresetDesign.of(name, params)
-    values = list(values)
-    if not 1 <= len(values) <= 1000:
-        raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
-    rows = sweep_1d(design, param, values, settings, progress=progress, cancel=cancel, length_step=length_step)
-    return [{param: row["value"], **{k: v for k, v in row.items() if k not in ("param", "value", "design")}}
-            for row in rows]
-
-# --------------------------------------------------------------------------------------------
 # the certified bracket
 #
 # A certified bracket of a general mechanism's continuous workspace volume:

@@ -543,6 +543,24 @@ def sweep_2d(design: Design | PresetDesign, param_x: str, values_x: Sequence[flo
             "volume": grids.get("volume", [[None] * len(xs) for _ in ys]), "grids": grids, "points": points}
 
 
+def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | None = None,
+                 settings: WorkspaceSettings = WorkspaceSettings(), length_step: float = 1.0,
+                 progress: ProgressFn | None = None, cancel: CancelToken = None) -> list[dict]:
+    """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
+    else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
+    volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
+    A thin layer over :func:`kinematics.sweep.sweep_1d` of a :class:`~kinematics.presets.PresetDesign`
+    (2-D: :func:`kinematics.sweep.sweep_2d`, Dask: :func:`kinematics.distributed.sweep_grid`, the
+    same designs). The paper preset runs the paper's engine (the same numbers as ``sweep_1d``)."""
+    design = PresetDesign.of(name, params)
+    values = list(values)
+    if not 1 <= len(values) <= 1000:
+        raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
+    rows = sweep_1d(design, param, values, settings, progress=progress, cancel=cancel, length_step=length_step)
+    return [{param: row["value"], **{k: v for k, v in row.items() if k not in ("param", "value", "design")}}
+            for row in rows]
+
+
 def study_values(param: str, n: int = 10, design: Design | PresetDesign | None = None) -> list[float]:
     """``n`` values evenly over the paper's Table I range of ``param`` (``PARAMS[param].slider_*``),
     or over a preset parameter's study range (``PresetParam.study_range``) when ``design`` is a

@@ -386,7 +386,7 @@ def test_sweep_over_a_preset_parameter() -> None:
     """A longer lift only adds carriage values: the workspaces nest voxel by voxel (fixed box), a
     zero lift is the Gough-Stewart platform's, and the sweep's rows are those workspaces; the paper
     preset's rows are the paper engine's."""
-    from paraspace.kinematics.mechanism_workspace import sweep_preset
+    from paraspace.kinematics.sweep import sweep_preset
 
     box = ((-120.0, -120.0, 0.0), (120.0, 120.0, 240.0))
     settings = WorkspaceSettings(voxel=H, bounds=box)

@@ -11,9 +11,9 @@ import pytest
 
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.measures import measure_workspace
-from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, sweep_preset
+from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
 from paraspace.kinematics.presets import PresetDesign, preset
-from paraspace.kinematics.sweep import ResultCache, evaluate_design, study_values, sweep_1d, sweep_2d
+from paraspace.kinematics.sweep import ResultCache, evaluate_design, study_values, sweep_1d, sweep_2d, sweep_preset
 from paraspace.kinematics.workspace import WorkspaceSettings
 
 WS = WorkspaceSettings(voxel=16.0)

@@ -230,6 +230,9 @@ class OptimizeRequest(BaseModel):
 
             from paraspace.kinematics.task import TaskSpec
 
+            if self.task.mechanism is not None:
+                raise FieldError("task.mechanism", "task.mechanism: not in an optimisation's task (the designs are "
+                                                   "the optimisation's: design, or mechanism)")
             _, task, oset, tsettings = self.task.build()
             spec = TaskSpec(task, oset, dataclasses.replace(tsettings, joints=workspace.joints))
         return OptimizeSettings(
@@ -293,6 +296,9 @@ class TaskRequest(BaseModel):
     t: list[Num] | None = Field(None, max_length=MAX_POSES, description="times of the poses (s), increasing")
     csv: str | None = Field(None, max_length=MAX_CSV_BYTES, description="a pose list as CSV text")
     settings: TaskSettingsIn = Field(default_factory=TaskSettingsIn)
+    mechanism: MechanismIn | None = Field(
+        None, description="POST /task: a preset or a description instead of design (any mechanism other than the "
+                          "paper's: kinematics/mechanism_task.py)")
 
     def build(self) -> tuple[Any, Any, Any, Any]:
         """``(design, task, orientation set, task settings)`` of the core (ParameterError: 422)."""
