@@ -58,9 +58,10 @@ engine decides the same arc samples and the same exact test in ``d`` on it (``d 
 with that engine up to floating-point rounding at voxel centres lying on a leg limit (tested).
 
 ``settings.bracket`` adds the certified bracket of :func:`general_bracket` (its proof is in the
-comment above it; one level, no refinement; not with cones). What the general engine does not
-compute (refused by name): leg interference (a leg ``diameter``), per-chain diagnostics, and
-:class:`~kinematics.joints.Joints` options (a description carries its own cones).
+comment above it; one level, no refinement; not with cones). A leg ``diameter`` adds leg
+interference (:mod:`kinematics.mechanism_interference`: the reachable voxels are filtered by its
+test; not with the bracket). What the general engine does not compute (refused by name): per-chain
+diagnostics and :class:`~kinematics.joints.Joints` options (a description carries its own cones).
 """
 
 from __future__ import annotations
@@ -77,15 +78,12 @@ from .design import Design, ParameterError
 from .feasibility import cone_interval
 from .grid import GridSpec
 from .joints import Joints
-from .mechanism import Chain, Mechanism
+from .mechanism import LENGTH_STEP_RANGE, Chain, Mechanism, check_length_step, platform_rotation  # noqa: F401 - re-exported
 from .parallel import KERNEL_LOCK
 from .presets import paper
 from .progress import CancelToken, ProgressFn, Reporter, check
-from .rotation import euler_zyx_deg
 from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
-#: Valid range of ``length_step``, the spacing of a sampled (second) prismatic joint's values.
-LENGTH_STEP_RANGE = (0.01, 100.0)
 #: Most carriage samples of one chain (the product of its sampled joints' counts).
 MAX_CHAIN_SAMPLES = 200_000
 #: Relative rounding margin of the whole-chain bound.
@@ -94,25 +92,6 @@ _BOUND_EPS = 1e-9
 BLOCK = 8
 #: Edge, in voxels, of the cubes the blocks engine decides whole (then their halves).
 CUBE = 4
-
-
-def check_length_step(value: float) -> float:
-    """Validate ``length_step`` (the message names the field and its range)."""
-    lo, hi = LENGTH_STEP_RANGE
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or not lo <= value <= hi:
-        raise ParameterError("length_step", value, f"[{lo:g}, {hi:g}] (length units)")
-    return float(value)
-
-
-def platform_rotation(mech: Mechanism, orientation: Sequence[float] | np.ndarray) -> np.ndarray:
-    """``R = Rot(reference) Rz(psi) Ry(theta) Rx(phi)``: ``orientation`` is ``(psi, theta, phi)`` in
-    degrees or a 3x3 matrix (used as the rotation from the reference frame)."""
-    o = np.asarray(orientation, float)
-    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
-    if any(mech.reference):
-        rot = euler_zyx_deg(*mech.reference) @ rot
-    return rot
 
 
 def exact_joint(chain: Chain) -> int | None:
@@ -636,6 +615,7 @@ class MechanismWorkspaceResult(WorkspaceResult):
     engine: str = "general"
     samples: tuple[int, ...] = ()
     length_step: float = 1.0
+    interference_undecided: int = 0
 
 
 def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
@@ -644,10 +624,6 @@ def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
     if settings.joints != Joints():
         raise ParameterError("joints", settings.joints.to_dict(),
                              "none for a mechanism description: its legs carry their own u_cone/s_cone")
-    for c, j, leg in mech.legs:
-        if leg.diameter > 0.0:
-            raise ParameterError(f"chains[{c}].legs[{j}].diameter", leg.diameter,
-                                 "0: leg interference is not computed for a general mechanism yet")
 
 
 def reach_box_general(tables: KernelTables, z_floor: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -742,11 +718,24 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
                 _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *tables.args(), out)
             frac = min(1.0, (s + step) / ix.size)
             sub(frac, f"computing the workspace, {100 * frac:.0f} %")
+    undecided = 0
+    if any(leg.diameter > 0.0 for _, _, leg in mech.legs):  # leg interference: kinematics/mechanism_interference
+        from .mechanism_interference import interference_filter
+
+        if settings.bracket:
+            raise ParameterError("bracket", True, "not with leg diameters (the bracket does not model interference)")
+        idx = np.argwhere(out)
+        pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+        sub(1.0, f"leg interference at {len(pts):,} reachable voxels")
+        free, undecided = interference_filter(mech, pts, settings.orientation, settings.eta_step, length_step,
+                                              cancel)
+        out[tuple(idx[~free].T)] = False
     seconds = time.perf_counter() - t0
     res = MechanismWorkspaceResult(
         design=None, settings=settings, grid=grid, occupancy=out, chain_mask=None,  # type: ignore[arg-type]
         compute_seconds=seconds, n_eta=int(max(len(t.q) for t in tables.chains)), mechanism=mech,
-        engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step)
+        engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step,
+        interference_undecided=undecided)
     if settings.bracket:
         t1 = time.perf_counter()
         check(cancel)
@@ -787,6 +776,11 @@ def reachable_general(mech: Mechanism, points: np.ndarray,
     if len(pts):
         with KERNEL_LOCK:
             _points_kernel(pts, *tables.args(), out)
+    if len(pts) and any(leg.diameter > 0.0 for _, _, leg in mech.legs):
+        from .mechanism_interference import interference_filter
+
+        live = np.flatnonzero(out)
+        out[live] = interference_filter(mech, pts[live], orientation, eta_step, length_step)[0]
     return out
 
 
