@@ -28,7 +28,8 @@ optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a
 runs the paper's engine with every option; any other mechanism runs the general engine
 (kinematics/mechanism_workspace.py: the position workspace, its measures and shell, its certified
 bracket, IK), and the flags only the paper's engine has (design and joint flags, --bracket-refine,
---diagnostics, --tilt/--torsion, --dexterity, ik --carriage) are refused by name.
+--tilt/--torsion, --dexterity, ik --carriage) are refused by name; ``--diagnostics`` names the
+binding limit per chain (kinematics/mechanism_diagnostics.py).
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
 Joint flags (``workspace``, ``orientation``, ``sweep``, ``optimize``, ``task``, ``ik``): ``--u-cone DEG --s-cone DEG
@@ -264,6 +265,10 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     if ns.bracket:
         out["volume_inner"], out["volume_outer"] = result.volume_inner, result.volume_outer
         out["bracket_seconds"] = result.bracket_seconds
+    if ns.diagnostics and result.engine == "general":  # which limit binds at the surface, per chain
+        from paraspace.kinematics.mechanism_diagnostics import mechanism_limit_binding
+
+        out["limit_binding"] = mechanism_limit_binding(result).to_dict()
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
@@ -279,6 +284,8 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
             if key in out:
                 print(f"{key:<15} {out[key]}")
         print(f"bounds          {out.get('bounds')}")
+        if "limit_binding" in out:
+            print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
         if fmt:
             print(f"exported        {ns.export} ({out['export']['faces']} faces)")
@@ -296,7 +303,7 @@ def _export_format(ns: argparse.Namespace) -> str | None:
 
 #: ``workspace`` flags that only the paper's engine computes
 _WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine",
-                         "--diagnostics": "diagnostics", "--tilt": "tilt", "--torsion": "torsion",
+                         "--tilt": "tilt", "--torsion": "torsion",
                          "--angle-step": "angle_step", "--dexterity": "dexterity", "--kappa-min": "kappa_min",
                          "--dexterity-mode": "dexterity_mode"}
 
