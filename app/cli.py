@@ -27,8 +27,8 @@ sweeps a preset's parameter; ``optimize --mechanism PRESET [--param NAME=VALUE].
 optimises a preset's parameters (kinematics/optimize.py). The paper preset (or a file equal to it)
 runs the paper's engine with every option; any other mechanism runs the general engine
 (kinematics/mechanism_workspace.py: the position workspace, its measures and shell, its certified
-bracket, IK), and the flags only the paper's engine has (design and joint flags, --bracket-refine,
---tilt/--torsion, --dexterity, ik --carriage) are refused by name; ``--diagnostics`` names the
+bracket with --bracket-refine, IK), and the flags only the paper's engine has (design and joint
+flags, --tilt/--torsion, --dexterity, ik --carriage) are refused by name; ``--diagnostics`` names the
 binding limit per chain (kinematics/mechanism_diagnostics.py).
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
@@ -248,7 +248,11 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
-    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket)
+    try:
+        refine = int(ns.bracket_refine)
+    except (TypeError, ValueError):
+        raise ParameterError("bracket_refine", ns.bracket_refine, "[0, 3] (an integer)") from None
+    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
     length_step = _length_step(ns)
     fmt = _export_format(ns)
     warm_up_general()
@@ -302,8 +306,7 @@ def _export_format(ns: argparse.Namespace) -> str | None:
 
 
 #: ``workspace`` flags that only the paper's engine computes
-_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine",
-                         "--tilt": "tilt", "--torsion": "torsion",
+_WORKSPACE_PAPER_ONLY = {"--tilt": "tilt", "--torsion": "torsion",
                          "--angle-step": "angle_step", "--dexterity": "dexterity", "--kappa-min": "kappa_min",
                          "--dexterity-mode": "dexterity_mode"}
 

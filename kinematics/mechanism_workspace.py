@@ -58,8 +58,8 @@ engine decides the same arc samples and the same exact test in ``d`` on it (``d 
 with that engine up to floating-point rounding at voxel centres lying on a leg limit (tested).
 
 ``settings.bracket`` adds the certified bracket of :func:`general_bracket` (its proof is in the
-comment above it; one level, no refinement; not with cones). A leg ``diameter`` adds leg
-interference (:mod:`kinematics.mechanism_interference`: the reachable voxels are filtered by its
+comment above it; ``settings.bracket_refine`` halvings of the boundary cubes; not with cones). A leg
+``diameter`` adds leg interference (:mod:`kinematics.mechanism_interference`: the reachable voxels are filtered by its
 test; not with the bracket). What the general engine does not compute (refused by name): per-chain
 diagnostics and :class:`~kinematics.joints.Joints` options (a description carries its own cones).
 """
@@ -740,7 +740,8 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
         t1 = time.perf_counter()
         check(cancel)
         with KERNEL_LOCK:
-            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor)
+            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor,
+                                 settings.bracket_refine)
         res.volume_inner, res.volume_outer = br.volume_inner, br.volume_outer
         res.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
@@ -909,7 +910,10 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float] | np.ndarray,
 # A cube is inside ``W`` when every chain is inside, outside when some chain is outside, else a
 # boundary cube; ``N_in h^3 <= V <= (N_in + N_boundary) h^3`` provided ``W`` lies in the grid, which
 # is checked: the grid is grown by ``ceil(max e_c / h) + 1`` voxels (never below the floor) and every
-# cube of its outer layer (but the floor) must be outside, else ``volume_outer`` is ``inf``. Joint
+# cube of its outer layer (but the floor) must be outside, else ``volume_outer`` is ``inf``.
+# Refinement: a boundary cube is cut into its 8 half cubes, each classified by the same two tests
+# with its own half-diagonal (the proof above holds for any cube), ``refine`` times; inside half cubes
+# add to ``N_in h^3``, outside ones leave, the last boundary ones make the outer bound. Joint
 # cones are refused (their axes turn with the revolute joints: not part of this proof yet).
 
 
@@ -974,9 +978,55 @@ def _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, 
             state[ix, iy, iz] = st
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _bracket_points_kernel(pts, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, k0, nk, l0, nl, s_lo, s_hi, w,
+                           base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
+                           blk_out2, blk_in2, state):
+    """:func:`_bracket_kernel` at cube centres ``pts`` (N, 3) (the refinement's half cubes)."""
+    n_chains = k0.shape[0]
+    for i in prange(pts.shape[0]):
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+        st = 1
+        for c in range(n_chains):
+            if _chain_out(pts[i, 0], pts[i, 1], pts[i, 2], e_out[c], e_out[c], c, k0, nk, l0, nl, s_lo, s_hi, w,
+                          base, u_axis, k_u, plat, s_axis, k_s, lmin2r[c], lmax2r[c], centre, out2, in2, kb0,
+                          blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+                st = 0
+                break
+            if st == 1 and not _chain_ok(pts[i, 0], pts[i, 1], pts[i, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
+                                        base, u_axis, k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2,
+                                        kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t):
+                st = 2
+        state[i] = st
+
+
+def _bracket_thresholds(delta: float, slack: np.ndarray, tables: KernelTables, legs_chain: np.ndarray,
+                        eps: float) -> tuple:
+    """The tightened and relaxed squared limits of cubes of half-diagonal ``delta`` (the comment above)."""
+    lmin = np.sqrt(tables.lmin2)
+    lmax = np.sqrt(tables.lmax2)
+    delta_t = delta + eps
+    lmin2t = (lmin + delta_t) ** 2
+    lmax2t = np.where(lmax - delta_t > 0.0, (lmax - delta_t) ** 2, -1.0)
+    e_out = delta + slack + eps                                   # per chain
+    e_leg = e_out[legs_chain]
+    lmin2r = np.where(lmin - e_leg > 0.0, lmin - e_leg, 0.0) ** 2
+    lmax2r = (lmax + e_leg) ** 2
+    # per chain rows: the kernel reads row c (the legs of other chains are never read)
+    n = len(slack)
+    return (delta_t, e_out, lmin2t, lmax2t, np.ascontiguousarray(np.broadcast_to(lmin2r, (n, len(lmin)))),
+            np.ascontiguousarray(np.broadcast_to(lmax2r, (n, len(lmin)))))
+
+
 def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_step: float, length_step: float,
-                    z_floor: float) -> GeneralBracket:
-    """The bracket of the module docstring around the workspace computed on ``grid``."""
+                    z_floor: float, refine: int = 0) -> GeneralBracket:
+    """The bracket of the module docstring around the workspace computed on ``grid``; ``refine``
+    halvings of the boundary cubes (each child cube classified by the same tests with its own
+    half-diagonal, the same proof: ``volume_inner`` grows and ``volume_outer`` shrinks)."""
     if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
         raise ParameterError("bracket", True, "not available with joint cones (u_cone, s_cone) on a general "
                                               "mechanism")
@@ -987,23 +1037,12 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     hi = (grid.hi[0] + pad * h, grid.hi[1] + pad * h, grid.hi[2] + pad * h)
     big = GridSpec.from_bounds(lo, hi, h)
     xs, ys, zs = big.axes()
-    lmin = np.sqrt(tables.lmin2)
     lmax = np.sqrt(tables.lmax2)
     eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tables.base).max(initial=0.0)))
-    delta = math.sqrt(3.0) * 0.5 * h
-    delta_t = delta + eps
-    lmin2t = (lmin + delta_t) ** 2
-    lmax2t = np.where(lmax - delta_t > 0.0, (lmax - delta_t) ** 2, -1.0)
-    e_out = delta + slack + eps                                   # per chain
     legs_chain = np.array([c for c, _, _ in mech.legs])
-    e_leg = e_out[legs_chain]
-    lmin2r = np.where(lmin - e_leg > 0.0, lmin - e_leg, 0.0) ** 2
-    lmax2r = (lmax + e_leg) ** 2
-    # per chain rows: the kernel reads row c (the legs of other chains are never read)
-    lmin2r_c = np.ascontiguousarray(np.broadcast_to(lmin2r, (len(mech.chains), len(lmin))))
-    lmax2r_c = np.ascontiguousarray(np.broadcast_to(lmax2r, (len(mech.chains), len(lmin))))
     state = np.zeros(big.shape, np.uint8)
-    _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r_c, lmax2r_c, *tables.args(), state)
+    _bracket_kernel(xs, ys, zs, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * h, slack, tables, legs_chain, eps),
+                    *tables.args(), state)
     inside = int((state == 1).sum())
     boundary = int((state == 2).sum())
     vv = h ** 3
@@ -1014,4 +1053,20 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     if big.lo[2] > z_floor + 1e-9:  # the bottom is not the floor: W must not cross it either
         rim[:, :, 0] = True
     contained = not np.any(state[rim] != 0)
-    return GeneralBracket(inside * vv, (inside + boundary) * vv if contained else math.inf, inside, boundary, big)
+    v_in = inside * vv
+    idx = np.argwhere(state == 2)
+    centres = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1) if len(idx) else np.zeros((0, 3))
+    edge = h
+    offsets = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+    for _ in range(refine):
+        if not len(centres):
+            break
+        edge *= 0.5
+        kids = np.ascontiguousarray((centres[:, None, :] + 0.5 * edge * offsets[None]).reshape(-1, 3))
+        st = np.zeros(len(kids), np.uint8)
+        _bracket_points_kernel(kids, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * edge, slack, tables, legs_chain,
+                                                          eps), *tables.args(), st)
+        v_in += int((st == 1).sum()) * edge ** 3
+        centres = kids[st == 2]
+    v_out = v_in + len(centres) * edge ** 3
+    return GeneralBracket(v_in, v_out if contained else math.inf, inside, boundary, big)

@@ -69,8 +69,8 @@ def test_ik_of_a_general_mechanism(capsys) -> None:
 
 @pytest.mark.parametrize("args, message", [
     (["workspace", "--mechanism", "6-pups", "--a", "40"], "--a = '40' is invalid: expected not with --mechanism"),
-    (["workspace", "--mechanism", "gough-stewart", "--bracket-refine", "1"], "--bracket-refine = '1' is invalid: "
-                                                                             "expected only for the paper's mechanism"),
+    (["workspace", "--mechanism", "gough-stewart", "--bracket", "--bracket-refine", "7"], "bracket_refine = 7 is "
+                                                                                          "invalid"),
     (["workspace", "--mechanism", "6-pss", "--dexterity"], "--dexterity"),
     (["workspace", "--mechanism", "6-pss", "--u-cone", "30"], "a description carries its own cones"),
     (["workspace", "--param", "lift=3"], "--param = 'lift=3' is invalid: expected only with --mechanism"),

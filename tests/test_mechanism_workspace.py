@@ -419,8 +419,14 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
     assert 0 < res.volume_inner <= min(res.volume, fine.volume)
     assert max(res.volume, fine.volume) <= res.volume_outer < math.inf
     rot = platform_rotation(mech, (0.0, 0.0, 0.0))
-    br = general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0)
+    br = general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0, WorkspaceSettings().bracket_refine)
     assert (br.volume_inner, br.volume_outer) == (res.volume_inner, res.volume_outer)
+    # each halving of the boundary cubes tightens the bracket and keeps it around the volumes
+    levels = [general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0, k) for k in range(3)]
+    for a, b in zip(levels, levels[1:]):
+        assert a.volume_inner <= b.volume_inner <= min(res.volume, fine.volume)
+        assert max(res.volume, fine.volume) <= b.volume_outer <= a.volume_outer
+    assert levels[2].volume_outer - levels[2].volume_inner < levels[0].volume_outer - levels[0].volume_inner
     # the cubes' states on the bracket's grid: an inside cube's centre is a reachable voxel, an
     # outside cube's is not
     rng = np.random.default_rng(11)
