@@ -60,8 +60,9 @@ with that engine up to floating-point rounding at voxel centres lying on a leg l
 ``settings.bracket`` adds the certified bracket of :func:`general_bracket` (its proof is in the
 comment above it; ``settings.bracket_refine`` halvings of the boundary cubes; not with cones). A leg
 ``diameter`` adds leg interference (:mod:`kinematics.mechanism_interference`: the reachable voxels are filtered by its
-test; not with the bracket). What the general engine does not compute (refused by name): per-chain
-diagnostics and :class:`~kinematics.joints.Joints` options (a description carries its own cones).
+test; not with the bracket). What the general engine does not compute (refused by name): the per-voxel
+chain masks of ``settings.diagnostics`` (:mod:`kinematics.mechanism_diagnostics` names the binding
+limits instead) and :class:`~kinematics.joints.Joints` options (a description carries its own cones).
 """
 
 from __future__ import annotations
