@@ -21,14 +21,16 @@
     paraspace serve       [--host H] [--port P] [--api-port Q]
     paraspace mechanism   show|export|presets [FILE|PRESET] [--param NAME=VALUE]... [--json] [-o FILE]
 
-Mechanism flags (``workspace``, ``orientation``, ``ik``): ``--mechanism FILE|PRESET [--param NAME=VALUE]...
-[--length-step L]`` instead of the design flags; ``sweep --mechanism PRESET --param NAME --values ...
-[--set NAME=VALUE]...`` sweeps a preset's parameter. The paper preset (or a file equal to it) runs the
-paper's engine with every option; any other mechanism runs the general engine (kinematics/
-mechanism_workspace.py: the position workspace, its measures and shell, its certified bracket, IK;
-``workspace --tilt/--torsion`` and ``--dexterity``: kinematics/mechanism_orientation.py and
-mechanism_dexterity.py; ``orientation``: the scans and TI along the mechanism's symmetry lines), and
-the flags only the paper's engine has (design and joint flags, --bracket-refine, --diagnostics,
+Mechanism flags (``workspace``, ``orientation``, ``ik``, ``task``): ``--mechanism FILE|PRESET
+[--param NAME=VALUE]... [--length-step L]`` instead of the design flags; ``sweep --mechanism PRESET --param
+NAME --values ... [--set NAME=VALUE]...`` sweeps a preset's parameter; ``optimize --mechanism PRESET
+[--param NAME=VALUE]... --params NAME,...`` optimises a preset's parameters (kinematics/optimize.py). The
+paper preset (or a file equal to it) runs the paper's engine with every option; any other mechanism runs
+the general engine (kinematics/mechanism_workspace.py: the position workspace, its measures and shell, its
+certified bracket with --bracket-refine, IK; ``--diagnostics`` names the binding limit per chain:
+kinematics/mechanism_diagnostics.py; ``workspace --tilt/--torsion`` and ``--dexterity``:
+kinematics/mechanism_orientation.py and mechanism_dexterity.py; ``orientation``: the scans and TI along the
+mechanism's symmetry lines), and the flags only the paper's engine has (design and joint flags,
 --dexterity-mode best, orientation --at, ik --carriage) are refused by name.
 
 Design flags: ``--a --b --d-s --r --l-min --l-s --eta-s --eta-range centered|from-zero``.
@@ -293,7 +295,11 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
-    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket)
+    try:
+        refine = int(ns.bracket_refine)
+    except (TypeError, ValueError):
+        raise ParameterError("bracket_refine", ns.bracket_refine, "[0, 3] (an integer)") from None
+    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
     length_step = _length_step(ns)
     total, dexterity = _total_and_dexterity(ns)
     if dexterity is not None:
@@ -324,6 +330,10 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
 
         dx = mechanism_total_orientation(mech, *total, settings, length_step, position=result)
         out["total_orientation"] = {**dx.summary(), "measures": measure_workspace(dx.result).to_dict()}
+    if ns.diagnostics and result.engine == "general":  # which limit binds at the surface, per chain
+        from paraspace.kinematics.mechanism_diagnostics import mechanism_limit_binding
+
+        out["limit_binding"] = mechanism_limit_binding(result).to_dict()
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
@@ -339,6 +349,8 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
             if key in out:
                 print(f"{key:<15} {out[key]}")
         print(f"bounds          {out.get('bounds')}")
+        if "limit_binding" in out:
+            print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
         _print_total_and_dexterity(out)
         if fmt:
@@ -356,7 +368,9 @@ def _export_format(ns: argparse.Namespace) -> str | None:
 
 
 #: ``workspace`` flags that only the paper's engine computes
-_WORKSPACE_PAPER_ONLY = {"--bracket-refine": "bracket_refine", "--diagnostics": "diagnostics"}
+#: ``workspace`` flags that only the paper's engine computes (none left: a general mechanism's bracket
+#: refinement, diagnostics, tilt/torsion and dexterity are computed by the general modules)
+_WORKSPACE_PAPER_ONLY: dict[str, str] = {}
 
 
 def cmd_workspace(ns: argparse.Namespace) -> int:
@@ -629,17 +643,24 @@ def cmd_task(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.task import evaluate_task
     from paraspace.kinematics.workspace import warm_up
 
-    design = _design(ns)
+    mech, design = _mechanism(ns, {})
     task = _task_of(ns)
     oset = _task_orientations(ns)
     settings = _task_settings(ns)
     if ns.points is not None and (ns.tilt is not None or ns.torsion is not None or ns.orientation):
         raise ParameterError("tilt", ns.tilt if ns.tilt is not None else ns.torsion,
                              "not with --points (each pose carries its orientation)")
-    warm_up()
     progress, done = progress_line("task")
     try:
-        res = evaluate_task(design, task, oset, settings, progress)
+        if design is None:  # a general mechanism (kinematics/mechanism_task.py)
+            from paraspace.kinematics.mechanism_task import evaluate_mechanism_task
+            from paraspace.kinematics.mechanism_workspace import warm_up_general
+
+            warm_up_general()
+            res = evaluate_mechanism_task(mech, task, oset, settings, _length_step(ns), progress)
+        else:
+            warm_up()
+            res = evaluate_task(design, task, oset, settings, progress)
     finally:
         done()
     from paraspace.kinematics.serialize import jsonable
@@ -659,7 +680,11 @@ def cmd_task(ns: argparse.Namespace) -> int:
     sat = " (at least: no unreachable point within margin_range)" if out.get("margin_saturated") else ""
     print(f"margin          {out['margin']:.4g}{sat}")
     print(f"binding         {out['binding']['message']}")
-    if out["kind"] == "poses":
+    if out["kind"] == "poses" and design is None:
+        if out["unreachable"]:
+            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
+                  + (" ..." if len(out["unreachable"]) > 20 else ""))
+    elif out["kind"] == "poses":
         car = out["carriage"]
         print(f"carriage travel d {car['travel_d']:.4g}, eta {car['travel_eta']:.4g} deg"
               + (f"; max speed d {car['max_speed_d']:.4g}/s, eta {car['max_speed_eta']:.4g} deg/s"
@@ -697,6 +722,7 @@ def _add_task_parser(sub: Any) -> None:
                                                       "worst, binding (and poses, discontinuities for a pose list)")
     t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
     _add_joint_flags(t)
+    add_mechanism_flags(t)
     t.set_defaults(func=cmd_task)
 
 
@@ -767,15 +793,26 @@ def cmd_paper(ns: argparse.Namespace) -> int:
 
 
 #: ``sweep`` flags that only the paper's design study has
-_SWEEP_PAPER_ONLY = {"--param2": "param2", "--values2": "values2", "--scheduler": "scheduler", "--workers": "workers",
-                     "--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+_SWEEP_PAPER_ONLY = {"--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
+
+
+def _preset_row(row: dict, names: Sequence[str]) -> dict:
+    """A preset sweep's row: the swept parameters' values first, then the measures (the bookkeeping of
+    sweep_1d, sweep_2d and sweep_grid and the full design dict left out; ``ok``/``error`` kept)."""
+    design = row.get("design") or {}
+    skip = {"param", "value", "param_x", "param_y", "x", "y", "ix", "iy", "params", "index", "design"}
+    return {**{n: design.get(n) for n in names}, **{k: v for k, v in row.items() if k not in skip}}
 
 
 def _sweep_mechanism(ns: argparse.Namespace) -> int:
-    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--set NAME=VALUE]...``: workspace
-    measures against one of the preset's parameters (kinematics/mechanism_workspace.sweep_preset)."""
-    from paraspace.kinematics.mechanism_workspace import sweep_preset, warm_up_general
-    from paraspace.kinematics.presets import PRESETS
+    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--param2 NAME --values2 ...]
+    [--set NAME=VALUE]... [--workers N | --scheduler ADDR]``: workspace measures over one or two of the
+    preset's parameters (kinematics/sweep.py on a PresetDesign; Dask: kinematics/distributed.py)."""
+    import functools
+
+    from paraspace.kinematics.mechanism_workspace import warm_up_general
+    from paraspace.kinematics.presets import PRESETS, PresetDesign
+    from paraspace.kinematics.sweep import evaluate_design, sweep_1d, sweep_2d
     from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
 
     from .mechanism_cli import _param_values
@@ -786,22 +823,50 @@ def _sweep_mechanism(ns: argparse.Namespace) -> int:
     for flag, dest in {**_DESIGN_FLAGS, **_JOINT_FLAGS, **_SWEEP_PAPER_ONLY}.items():
         if _given(ns, flag, dest):
             raise ParameterError(flag, getattr(ns, dest), "not with --mechanism (a preset's sweep: --param NAME "
-                                 "--values V1,V2,... [--set NAME=VALUE]... [--voxel H] [--json] [--csv FILE])")
+                                 "--values V1,V2,... [--param2 NAME --values2 ...] [--set NAME=VALUE]... [--voxel H] "
+                                 "[--workers N | --scheduler ADDR] [--json] [--csv FILE])")
+    for flag, dest in (("--box", "box"), ("--cylinder", "cylinder"), ("--sphere", "sphere"), ("--points", "points")):
+        if getattr(ns, dest, None) is not None:
+            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism: task measures exist for the "
+                                                          "paper's model only")
+    if (ns.param2 is None) != (ns.values2 is None):
+        raise ParameterError("param2", ns.param2, "given together with --values2")
+    design = PresetDesign.of(ns.mechanism, _param_values(ns.set))
+    length_step = _length_step(ns)
     values = _floats("values", ns.values)
+    values2 = None if ns.values2 is None else _floats("values2", ns.values2)
     settings = WorkspaceSettings(voxel=_voxel(ns))
+    names = [ns.param] + ([] if ns.param2 is None else [ns.param2])
+    distributed = ns.scheduler is not None or ns.workers is not None
     warm_up()
     warm_up_general()
     progress, done = progress_line("sweep")
     try:
-        rows = sweep_preset(ns.mechanism, ns.param, values, _param_values(ns.set), settings, progress=progress)
+        if distributed:
+            from paraspace.kinematics.distributed import sweep_grid
+
+            grid = {ns.param: values, **({} if values2 is None else {ns.param2: values2})}
+            raw = sweep_grid(design, grid, settings, scheduler=ns.scheduler, n_workers=ns.workers, progress=progress,
+                             evaluate=functools.partial(evaluate_design, length_step=length_step))
+        elif values2 is not None:
+            raw = sweep_2d(design, ns.param, values, ns.param2, values2, settings, progress=progress,
+                           length_step=length_step)["points"]
+        else:
+            raw = sweep_1d(design, ns.param, values, settings, progress=progress, length_step=length_step)
     finally:
         done()
+    rows = [_preset_row(r, names) for r in raw]
+    failed = [r for r in rows if r.get("ok") is False]
     if ns.csv:
         write_atomic(ns.csv, rows_to_csv(rows))
     if ns.json:
         _emit(rows)
     else:
         sys.stdout.write(rows_to_csv(rows))
+    if failed:
+        sys.stderr.write(f"paraspace: error: {len(failed)} of {len(rows)} points failed "
+                         f"(first: {failed[0].get('error', '?')})\n")
+        return 1
     return 0
 
 
@@ -1045,8 +1110,8 @@ def cmd_serve(ns: argparse.Namespace) -> int:
 # ----- optimize (issue 11) -------------------------------------------------------------------
 
 
-def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
-    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}``."""
+def _bounds_arg(text: str | None, known: Sequence[str] = tuple(PARAMS)) -> dict[str, tuple[float, float]]:
+    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}`` (names among ``known``)."""
     out: dict[str, tuple[float, float]] = {}
     if not text:
         return out
@@ -1059,8 +1124,8 @@ def _bounds_arg(text: str | None) -> dict[str, tuple[float, float]]:
         if not sep or not sep2:
             raise ParameterError("bounds", part, "NAME=LO:HI, comma-separated, e.g. l_s=20:100,a=10:90")
         name = name.strip()
-        if name not in PARAMS:
-            raise ParameterError("bounds", name, "design parameters " + ", ".join(PARAMS))
+        if name not in known:
+            raise ParameterError("bounds", name, "parameters " + ", ".join(known))
         try:
             out[name] = (float(lo), float(hi))
         except ValueError:
@@ -1076,20 +1141,45 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
+    preset, values, length_step, known = _optimize_preset(ns)
+    general = preset not in (None, "paper")
     joints = _joints(ns)
     spec = _study_task(ns, joints)
     total = None
     if ns.tilt is not None or ns.torsion is not None:
         total = (0.0 if ns.tilt is None else ns.tilt, 0.0 if ns.torsion is None else ns.torsion, ns.task_angle_step)
+    from paraspace.kinematics.optimize import DEFAULT_PARAMS
+
+    params = ns.params if ns.params is not None else ",".join(known if general else DEFAULT_PARAMS)
+    objectives = ns.objectives if ns.objectives is not None else ("volume,-l_max" if general else "volume,-footprint")
     return OptimizeSettings(
-        task=spec, total_orientation=total,
-        params=tuple(p.strip() for p in ns.params.split(",")), bounds=_bounds_arg(ns.bounds),
-        objectives=ns.objectives, constraints=constraints, design=_design(ns),
+        task=spec, total_orientation=total, preset=preset, preset_values=values, length_step=length_step,
+        params=tuple(p.strip() for p in params.split(",")), bounds=_bounds_arg(ns.bounds, known),
+        objectives=objectives, constraints=constraints, design=Design() if preset is not None else _design(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
         orientation=OrientationSettings(joints=joints, **_scan(ns)),
         population=int(OPTIMIZE["population"].parse(ns.population)),
         generations=int(OPTIMIZE["generations"].parse(ns.generations)),
         seed=int(OPTIMIZE["seed"].parse(ns.seed)), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
+
+
+def _optimize_preset(ns: argparse.Namespace) -> tuple[str | None, dict[str, Any], float, list[str]]:
+    """``optimize --mechanism PRESET [--param NAME=VALUE]... [--length-step L]``: ``(preset, its fixed
+    values, length_step, the names --params and --bounds may use)``; ``(None, {}, 1, PARAMS)`` without
+    ``--mechanism``. A file is refused (the optimiser varies a preset's parameters); so are the design
+    flags, and the joint flags with a general preset (by :func:`_mechanism`)."""
+    from paraspace.kinematics.presets import PRESETS
+
+    from .mechanism_cli import _param_values
+
+    if getattr(ns, "mechanism", None) is not None and ns.mechanism not in PRESETS:
+        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): the optimiser varies "
+                                                          "a preset's parameters, not a description file's")
+    _mechanism(ns, {})  # refuses the flags a preset replaces (and validates --param)
+    if ns.mechanism is None:
+        return None, {}, 1.0, list(PARAMS)
+    known = [q.name for q in PRESETS[ns.mechanism].params if q.numeric]
+    return ns.mechanism, _param_values(ns.param), _length_step(ns), known
 
 
 def cmd_optimize(ns: argparse.Namespace) -> int:
@@ -1102,7 +1192,12 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
         raise ParameterError("plot", ns.plot, "a file name ending in .png")
     if ns.scheduler is not None and ns.workers is not None:
         raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
-    warm_up()
+    if settings.general:
+        from paraspace.kinematics.mechanism_workspace import warm_up_general
+
+        warm_up_general()
+    else:
+        warm_up()
 
     progress, done = progress_line("optimize", force=ns.progress)
     try:
@@ -1139,16 +1234,21 @@ def _add_optimize_parser(sub: Any) -> None:
 
     z = sub.add_parser("optimize", help="multi-objective optimal design: the Pareto front over design parameters")
     _add_design_flags(z)
-    z.add_argument("--params", default=",".join(DEFAULT_PARAMS),
+    z.add_argument("--params",
                    help=f"free parameters, comma-separated (default {','.join(DEFAULT_PARAMS)}; any of "
-                        f"{', '.join(PARAMS)}); the others keep the design flags' values")
-    z.add_argument("--objectives", default="volume,-footprint",
-                   help="measures, comma-separated; a leading - minimises (default volume,-footprint). "
-                        "Measures: " + ", ".join(k for k, m in MEASURES.items() if not m.flag))
+                        f"{', '.join(PARAMS)}); the others keep the design flags' values. With --mechanism "
+                        "PRESET: the preset's numeric parameters (default all of them), the others --param's "
+                        "values or the preset's defaults")
+    z.add_argument("--objectives",
+                   help="measures, comma-separated; a leading - minimises (default volume,-footprint; with a "
+                        "general --mechanism volume,-l_max, and only the position workspace's measures and the "
+                        "preset's parameters exist). Measures: " + ", ".join(k for k, m in MEASURES.items()
+                                                                            if not m.flag))
     z.add_argument("--constraint", action="append", metavar="C",
                    help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
                         + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
-    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges)")
+    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges; with --mechanism PRESET each "
+                                    "parameter's study range, 'paraspace mechanism presets')")
     from paraspace.kinematics.settings import OPTIMIZE
 
     for name, note in (("population", ""), ("generations", "; 16 x 12 at h = 4 takes about 50 s here"), ("seed", ""),
@@ -1171,6 +1271,7 @@ def _add_optimize_parser(sub: Any) -> None:
     _add_scan_flags(z)
     _add_joint_flags(z)
     _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
+    add_mechanism_flags(z)
     z.set_defaults(func=cmd_optimize)
 
 
@@ -1265,6 +1366,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                          "paper's design (see 'paraspace mechanism presets')")
     s.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="with --mechanism: a fixed parameter of the preset (repeatable)")
+    s.add_argument("--length-step", dest="length_step", metavar="L",
+                   help="with --mechanism: spacing of a sampled (second) prismatic joint's values, [0.01, 100] "
+                        "(default 1)")
     _add_scan_flags(s)
     _add_joint_flags(s)
     _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")

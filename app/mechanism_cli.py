@@ -73,7 +73,9 @@ def cmd_mechanism(ns: argparse.Namespace) -> int:
         for p in PRESETS.values():
             print(f"{p.name}: {p.description}")
             for q in p.params:
-                rng = "" if isinstance(q.default, str) else f" in [{q.lo:g}, {q.hi:g}]{' ' + q.unit if q.unit else ''}"
+                unit = " " + q.unit if q.unit else ""
+                rng = "" if not q.numeric else (f" in [{q.lo:g}, {q.hi:g}]{unit} (studies: {q.study_range[0]:g} "
+                                                f"to {q.study_range[1]:g})")
                 print(f"    {q.name} = {q.default}{rng}: {q.description}")
         return 0
     if ns.source is None:

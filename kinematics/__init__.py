@@ -33,7 +33,7 @@ _LAZY = {
     "tilt_torsion_at": "tilt_torsion", "TiltTorsionSettings": "tilt_torsion",
     "total_orientation_workspace": "dexterous",
     "compute_mechanism_workspace": "mechanism_workspace", "mechanism_ik": "mechanism_workspace",
-    "sweep_preset": "mechanism_workspace", "mechanism_jacobians": "mechanism_jacobian",
+    "sweep_preset": "sweep", "mechanism_jacobians": "mechanism_jacobian",
     "mechanism_orientation_workspace": "mechanism_orientation", "mechanism_total_orientation": "mechanism_orientation",
     "mechanism_dexterity_field": "mechanism_dexterity",
 }

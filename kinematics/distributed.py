@@ -80,7 +80,10 @@ def default_workers(cores: int | None = None) -> int | None:
 
 def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
                  ) -> tuple[list[tuple[int, ...]], list[dict[str, float]], list[Design]]:
-    """The points of the grid, validated before anything runs.
+    """The points of the grid, validated before anything runs (``design`` may also be a preset's
+    :class:`~kinematics.presets.PresetDesign`: its numeric parameters, each in its ``[lo, hi]``;
+    then pass ``evaluate=functools.partial(evaluate_design, length_step=...)`` to :func:`sweep_grid`
+    for another spacing than 1).
 
     Returns:
         ``(indices, values, designs)`` in grid order (first parameter outermost).
@@ -92,21 +95,23 @@ def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
         raise ParameterError("params", params, "a mapping of 1 or more design parameters to value lists")
     names = list(params)
     lists: list[list[float]] = []
+    from .sweep import param_range  # a Design's fields or a preset design's parameters (PresetDesign)
+
     for name in names:
-        if name not in PARAMS:
+        if isinstance(design, Design) and name not in PARAMS:
             raise ParameterError("params", name, "design parameters " + ", ".join(PARAMS))
+        lo, hi = param_range(design, name, "params")
         raw = params[name]
         if isinstance(raw, (str, bytes)) or not hasattr(raw, "__len__") or len(raw) == 0:
             raise ParameterError(name, raw, "a non-empty list of numbers")
-        spec = PARAMS[name]
         vals = []
         for v in raw:
             try:
                 f = float(v)
             except (TypeError, ValueError):
-                raise ParameterError(name, v, f"a number in [{spec.model_min:g}, {spec.model_max:g}]") from None
-            if not (math.isfinite(f) and spec.model_min <= f <= spec.model_max):
-                raise ParameterError(name, v, f"[{spec.model_min:g}, {spec.model_max:g}]")
+                raise ParameterError(name, v, f"a number in [{lo:g}, {hi:g}]") from None
+            if not (math.isfinite(f) and lo <= f <= hi):
+                raise ParameterError(name, v, f"[{lo:g}, {hi:g}]")
             vals.append(f)
         lists.append(vals)
     indices: list[tuple[int, ...]] = []

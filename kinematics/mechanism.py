@@ -46,6 +46,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .design import ParameterError
+from .rotation import euler_zyx_deg
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -449,3 +450,26 @@ def reachable_brute_force(mech: Mechanism, points: Sequence[float] | np.ndarray,
                     ok &= v[:, j] @ s_cone[0] >= length[:, j] * s_cone[1] - 1e-9
             ok_all[p_i] = bool(ok.any())
     return bool(ok_all[0]) if single else ok_all
+
+
+#: Valid range of ``length_step``, the spacing of a sampled (second) prismatic joint's values.
+LENGTH_STEP_RANGE = (0.01, 100.0)
+
+
+def check_length_step(value: float) -> float:
+    """Validate ``length_step`` (the message names the field and its range)."""
+    lo, hi = LENGTH_STEP_RANGE
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or not lo <= value <= hi:
+        raise ParameterError("length_step", value, f"[{lo:g}, {hi:g}] (length units)")
+    return float(value)
+
+
+def platform_rotation(mech: Mechanism, orientation: Sequence[float] | np.ndarray) -> np.ndarray:
+    """``R = Rot(reference) Rz(psi) Ry(theta) Rx(phi)``: ``orientation`` is ``(psi, theta, phi)`` in
+    degrees or a 3x3 matrix (used as the rotation from the reference frame)."""
+    o = np.asarray(orientation, float)
+    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
+    if any(mech.reference):
+        rot = euler_zyx_deg(*mech.reference) @ rot
+    return rot

@@ -58,9 +58,11 @@ engine decides the same arc samples and the same exact test in ``d`` on it (``d 
 with that engine up to floating-point rounding at voxel centres lying on a leg limit (tested).
 
 ``settings.bracket`` adds the certified bracket of :func:`general_bracket` (its proof is in the
-comment above it; one level, no refinement; not with cones). What the general engine does not
-compute (refused by name): leg interference (a leg ``diameter``), per-chain diagnostics, and
-:class:`~kinematics.joints.Joints` options (a description carries its own cones).
+comment above it; ``settings.bracket_refine`` halvings of the boundary cubes; not with cones). A leg
+``diameter`` adds leg interference (:mod:`kinematics.mechanism_interference`: the reachable voxels are filtered by its
+test; not with the bracket). What the general engine does not compute (refused by name): the per-voxel
+chain masks of ``settings.diagnostics`` (:mod:`kinematics.mechanism_diagnostics` names the binding
+limits instead) and :class:`~kinematics.joints.Joints` options (a description carries its own cones).
 """
 
 from __future__ import annotations
@@ -77,15 +79,12 @@ from .design import Design, ParameterError
 from .feasibility import cone_interval
 from .grid import GridSpec
 from .joints import Joints
-from .mechanism import Chain, Mechanism
+from .mechanism import LENGTH_STEP_RANGE, Chain, Mechanism, check_length_step, platform_rotation  # noqa: F401 - re-exported
 from .parallel import KERNEL_LOCK
 from .presets import paper
 from .progress import CancelToken, ProgressFn, Reporter, check
-from .rotation import euler_zyx_deg
 from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
-#: Valid range of ``length_step``, the spacing of a sampled (second) prismatic joint's values.
-LENGTH_STEP_RANGE = (0.01, 100.0)
 #: Most carriage samples of one chain (the product of its sampled joints' counts).
 MAX_CHAIN_SAMPLES = 200_000
 #: Relative rounding margin of the whole-chain bound.
@@ -94,25 +93,6 @@ _BOUND_EPS = 1e-9
 BLOCK = 8
 #: Edge, in voxels, of the cubes the blocks engine decides whole (then their halves).
 CUBE = 4
-
-
-def check_length_step(value: float) -> float:
-    """Validate ``length_step`` (the message names the field and its range)."""
-    lo, hi = LENGTH_STEP_RANGE
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or not lo <= value <= hi:
-        raise ParameterError("length_step", value, f"[{lo:g}, {hi:g}] (length units)")
-    return float(value)
-
-
-def platform_rotation(mech: Mechanism, orientation: Sequence[float] | np.ndarray) -> np.ndarray:
-    """``R = Rot(reference) Rz(psi) Ry(theta) Rx(phi)``: ``orientation`` is ``(psi, theta, phi)`` in
-    degrees or a 3x3 matrix (used as the rotation from the reference frame)."""
-    o = np.asarray(orientation, float)
-    rot = o if o.shape == (3, 3) else euler_zyx_deg(*o)
-    if any(mech.reference):
-        rot = euler_zyx_deg(*mech.reference) @ rot
-    return rot
 
 
 def exact_joint(chain: Chain) -> int | None:
@@ -636,6 +616,7 @@ class MechanismWorkspaceResult(WorkspaceResult):
     engine: str = "general"
     samples: tuple[int, ...] = ()
     length_step: float = 1.0
+    interference_undecided: int = 0
 
 
 def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
@@ -644,10 +625,6 @@ def _check_general(mech: Mechanism, settings: WorkspaceSettings) -> None:
     if settings.joints != Joints():
         raise ParameterError("joints", settings.joints.to_dict(),
                              "none for a mechanism description: its legs carry their own u_cone/s_cone")
-    for c, j, leg in mech.legs:
-        if leg.diameter > 0.0:
-            raise ParameterError(f"chains[{c}].legs[{j}].diameter", leg.diameter,
-                                 "0: leg interference is not computed for a general mechanism yet")
 
 
 def reach_box_general(tables: KernelTables, z_floor: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -742,16 +719,30 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
                 _columns_kernel(ix[s:s + step], iy[s:s + step], xs, ys, zs, *tables.args(), out)
             frac = min(1.0, (s + step) / ix.size)
             sub(frac, f"computing the workspace, {100 * frac:.0f} %")
+    undecided = 0
+    if any(leg.diameter > 0.0 for _, _, leg in mech.legs):  # leg interference: kinematics/mechanism_interference
+        from .mechanism_interference import interference_filter
+
+        if settings.bracket:
+            raise ParameterError("bracket", True, "not with leg diameters (the bracket does not model interference)")
+        idx = np.argwhere(out)
+        pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+        sub(1.0, f"leg interference at {len(pts):,} reachable voxels")
+        free, undecided = interference_filter(mech, pts, settings.orientation, settings.eta_step, length_step,
+                                              cancel)
+        out[tuple(idx[~free].T)] = False
     seconds = time.perf_counter() - t0
     res = MechanismWorkspaceResult(
         design=None, settings=settings, grid=grid, occupancy=out, chain_mask=None,  # type: ignore[arg-type]
         compute_seconds=seconds, n_eta=int(max(len(t.q) for t in tables.chains)), mechanism=mech,
-        engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step)
+        engine="general", samples=tuple(len(t.q) for t in tables.chains), length_step=length_step,
+        interference_undecided=undecided)
     if settings.bracket:
         t1 = time.perf_counter()
         check(cancel)
         with KERNEL_LOCK:
-            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor)
+            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor,
+                                 settings.bracket_refine)
         res.volume_inner, res.volume_outer = br.volume_inner, br.volume_outer
         res.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
@@ -787,6 +778,11 @@ def reachable_general(mech: Mechanism, points: np.ndarray,
     if len(pts):
         with KERNEL_LOCK:
             _points_kernel(pts, *tables.args(), out)
+    if len(pts) and any(leg.diameter > 0.0 for _, _, leg in mech.legs):
+        from .mechanism_interference import interference_filter
+
+        live = np.flatnonzero(out)
+        out[live] = interference_filter(mech, pts[live], orientation, eta_step, length_step)[0]
     return out
 
 
@@ -885,41 +881,6 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float] | np.ndarray,
 
 
 # --------------------------------------------------------------------------------------------
-# parameter studies over a preset's parameters
-
-
-def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | None = None,
-                 settings: WorkspaceSettings = WorkspaceSettings(), length_step: float = 1.0,
-                 progress: ProgressFn | None = None, cancel: CancelToken = None) -> list[dict]:
-    """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
-    else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
-    volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
-    The paper preset runs the paper's engine (the same numbers as :func:`kinematics.sweep.sweep_1d`)."""
-    from .measures import measure_workspace
-    from .presets import PRESETS, preset
-
-    if name not in PRESETS:
-        raise ParameterError("mechanism", name, f"one of the presets {', '.join(PRESETS)}")
-    known = [p.name for p in PRESETS[name].params]
-    if param not in known:
-        raise ParameterError("param", param, f"a parameter of preset {name!r}: {', '.join(known)}")
-    values = list(values)
-    if not 1 <= len(values) <= 1000:
-        raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
-    rep = Reporter(progress)
-    rows = []
-    for i, value in enumerate(values):
-        check(cancel)
-        mech = preset(name, {**(params or {}), param: value})
-        res = compute_mechanism_workspace(mech, settings, length_step, rep.sub(i / len(values), (i + 1) / len(values)),
-                                          cancel)
-        measures = measure_workspace(res, cancel=cancel).to_dict()
-        rows.append({param: value, "engine": res.engine, **measures, "voxels": res.voxels, "volume": res.volume,
-                     "compute_seconds": res.compute_seconds})
-    rep(1.0, "sweep done")
-    return rows
-
-# --------------------------------------------------------------------------------------------
 # the certified bracket
 #
 # A certified bracket of a general mechanism's continuous workspace volume:
@@ -950,7 +911,10 @@ def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | 
 # A cube is inside ``W`` when every chain is inside, outside when some chain is outside, else a
 # boundary cube; ``N_in h^3 <= V <= (N_in + N_boundary) h^3`` provided ``W`` lies in the grid, which
 # is checked: the grid is grown by ``ceil(max e_c / h) + 1`` voxels (never below the floor) and every
-# cube of its outer layer (but the floor) must be outside, else ``volume_outer`` is ``inf``. Joint
+# cube of its outer layer (but the floor) must be outside, else ``volume_outer`` is ``inf``.
+# Refinement: a boundary cube is cut into its 8 half cubes, each classified by the same two tests
+# with its own half-diagonal (the proof above holds for any cube), ``refine`` times; inside half cubes
+# add to ``N_in h^3``, outside ones leave, the last boundary ones make the outer bound. Joint
 # cones are refused (their axes turn with the revolute joints: not part of this proof yet).
 
 
@@ -1015,9 +979,55 @@ def _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, 
             state[ix, iy, iz] = st
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _bracket_points_kernel(pts, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, k0, nk, l0, nl, s_lo, s_hi, w,
+                           base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
+                           blk_out2, blk_in2, state):
+    """:func:`_bracket_kernel` at cube centres ``pts`` (N, 3) (the refinement's half cubes)."""
+    n_chains = k0.shape[0]
+    for i in prange(pts.shape[0]):
+        gap_lo = np.empty(8)
+        gap_hi = np.empty(8)
+        start = np.empty(n_chains, np.int64)
+        for c in range(n_chains):
+            start[c] = nk[c] // 2
+        st = 1
+        for c in range(n_chains):
+            if _chain_out(pts[i, 0], pts[i, 1], pts[i, 2], e_out[c], e_out[c], c, k0, nk, l0, nl, s_lo, s_hi, w,
+                          base, u_axis, k_u, plat, s_axis, k_s, lmin2r[c], lmax2r[c], centre, out2, in2, kb0,
+                          blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+                st = 0
+                break
+            if st == 1 and not _chain_ok(pts[i, 0], pts[i, 1], pts[i, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
+                                        base, u_axis, k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2,
+                                        kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t):
+                st = 2
+        state[i] = st
+
+
+def _bracket_thresholds(delta: float, slack: np.ndarray, tables: KernelTables, legs_chain: np.ndarray,
+                        eps: float) -> tuple:
+    """The tightened and relaxed squared limits of cubes of half-diagonal ``delta`` (the comment above)."""
+    lmin = np.sqrt(tables.lmin2)
+    lmax = np.sqrt(tables.lmax2)
+    delta_t = delta + eps
+    lmin2t = (lmin + delta_t) ** 2
+    lmax2t = np.where(lmax - delta_t > 0.0, (lmax - delta_t) ** 2, -1.0)
+    e_out = delta + slack + eps                                   # per chain
+    e_leg = e_out[legs_chain]
+    lmin2r = np.where(lmin - e_leg > 0.0, lmin - e_leg, 0.0) ** 2
+    lmax2r = (lmax + e_leg) ** 2
+    # per chain rows: the kernel reads row c (the legs of other chains are never read)
+    n = len(slack)
+    return (delta_t, e_out, lmin2t, lmax2t, np.ascontiguousarray(np.broadcast_to(lmin2r, (n, len(lmin)))),
+            np.ascontiguousarray(np.broadcast_to(lmax2r, (n, len(lmin)))))
+
+
 def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_step: float, length_step: float,
-                    z_floor: float) -> GeneralBracket:
-    """The bracket of the module docstring around the workspace computed on ``grid``."""
+                    z_floor: float, refine: int = 0) -> GeneralBracket:
+    """The bracket of the module docstring around the workspace computed on ``grid``; ``refine``
+    halvings of the boundary cubes (each child cube classified by the same tests with its own
+    half-diagonal, the same proof: ``volume_inner`` grows and ``volume_outer`` shrinks)."""
     if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
         raise ParameterError("bracket", True, "not available with joint cones (u_cone, s_cone) on a general "
                                               "mechanism")
@@ -1028,23 +1038,12 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     hi = (grid.hi[0] + pad * h, grid.hi[1] + pad * h, grid.hi[2] + pad * h)
     big = GridSpec.from_bounds(lo, hi, h)
     xs, ys, zs = big.axes()
-    lmin = np.sqrt(tables.lmin2)
     lmax = np.sqrt(tables.lmax2)
     eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tables.base).max(initial=0.0)))
-    delta = math.sqrt(3.0) * 0.5 * h
-    delta_t = delta + eps
-    lmin2t = (lmin + delta_t) ** 2
-    lmax2t = np.where(lmax - delta_t > 0.0, (lmax - delta_t) ** 2, -1.0)
-    e_out = delta + slack + eps                                   # per chain
     legs_chain = np.array([c for c, _, _ in mech.legs])
-    e_leg = e_out[legs_chain]
-    lmin2r = np.where(lmin - e_leg > 0.0, lmin - e_leg, 0.0) ** 2
-    lmax2r = (lmax + e_leg) ** 2
-    # per chain rows: the kernel reads row c (the legs of other chains are never read)
-    lmin2r_c = np.ascontiguousarray(np.broadcast_to(lmin2r, (len(mech.chains), len(lmin))))
-    lmax2r_c = np.ascontiguousarray(np.broadcast_to(lmax2r, (len(mech.chains), len(lmin))))
     state = np.zeros(big.shape, np.uint8)
-    _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r_c, lmax2r_c, *tables.args(), state)
+    _bracket_kernel(xs, ys, zs, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * h, slack, tables, legs_chain, eps),
+                    *tables.args(), state)
     inside = int((state == 1).sum())
     boundary = int((state == 2).sum())
     vv = h ** 3
@@ -1055,4 +1054,20 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     if big.lo[2] > z_floor + 1e-9:  # the bottom is not the floor: W must not cross it either
         rim[:, :, 0] = True
     contained = not np.any(state[rim] != 0)
-    return GeneralBracket(inside * vv, (inside + boundary) * vv if contained else math.inf, inside, boundary, big)
+    v_in = inside * vv
+    idx = np.argwhere(state == 2)
+    centres = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1) if len(idx) else np.zeros((0, 3))
+    edge = h
+    offsets = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+    for _ in range(refine):
+        if not len(centres):
+            break
+        edge *= 0.5
+        kids = np.ascontiguousarray((centres[:, None, :] + 0.5 * edge * offsets[None]).reshape(-1, 3))
+        st = np.zeros(len(kids), np.uint8)
+        _bracket_points_kernel(kids, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * edge, slack, tables, legs_chain,
+                                                          eps), *tables.args(), st)
+        v_in += int((st == 1).sum()) * edge ** 3
+        centres = kids[st == 2]
+    v_out = v_in + len(centres) * edge ** 3
+    return GeneralBracket(v_in, v_out if contained else math.inf, inside, boundary, big)

@@ -62,7 +62,9 @@ from typing import Any
 import numpy as np
 
 from .design import PARAMS, Design, ParameterError
+from .joints import Joints
 from .orientation import OrientationSettings
+from .presets import PRESETS, PresetDesign
 from .progress import Cancelled, CancelToken, ProgressFn, check, is_cancelled
 from .serialize import jsonable
 from .settings import OPTIMIZE
@@ -102,6 +104,11 @@ class Measure:
             only those its objectives and constraints name); ``None``: ``key`` (or ``name``) when
             that is such a field and there is no ``derive``, none for an orientation measure, else
             every field (a derived measure that says nothing may read anything).
+        general: it exists for a general mechanism's design (a preset's
+            :class:`~kinematics.presets.PresetDesign`: the position workspace's measures and the
+            preset's parameters); ``False`` for the paper model's own (TI, task, gci, footprint...).
+        parameter: the value is a design parameter (``row["design"][name]``): it exists for the
+            designs that have that parameter.
     """
 
     name: str
@@ -114,6 +121,8 @@ class Measure:
     needs_dexterity: bool = False
     needs_total_orientation: bool = False
     fields: tuple[str, ...] | None = None
+    general: bool = True
+    parameter: bool = False
 
     def measure_fields(self) -> tuple[str, ...] | None:
         """The ``WorkspaceMeasures`` fields this measure needs (``None``: all of them)."""
@@ -156,6 +165,10 @@ def _footprint(row: dict) -> float:
 
 def _l_max(row: dict) -> float:
     d = row["design"]
+    if "l_max" in d:  # a preset's own parameter (gough-stewart, 6-pups)
+        return float(d["l_max"])
+    if "leg_length" in d:  # fixed-length legs (6-pss)
+        return float(d["leg_length"])
     return float(d["l_min"]) + float(d["l_s"])
 
 
@@ -180,11 +193,14 @@ for _m in (
     Measure("box_contact_fraction", "fraction of the grid box's face voxels that are reachable"),
     Measure("height", "z extent of the workspace's bounding box", derive=_extent(2), fields=("extents",)),
     Measure("width", "x extent of the workspace's bounding box", derive=_extent(0), fields=("extents",)),
-    Measure("TI_1", "tilt index TI_1 of eq. (28) (kinematics.orientation)", needs_orientation=True),
-    Measure("TI_2", "tilt index TI_2 of eq. (28) (kinematics.orientation)", needs_orientation=True),
+    Measure("TI_1", "tilt index TI_1 of eq. (28) (kinematics.orientation)", needs_orientation=True,
+            general=False),
+    Measure("TI_2", "tilt index TI_2 of eq. (28) (kinematics.orientation)", needs_orientation=True,
+            general=False),
     Measure("footprint", "r + l_min + l_s: base radius plus the longest leg (our size proxy)",
-            derive=_footprint, fields=()),
-    Measure("l_max", "longest leg l_min + l_s", derive=_l_max, fields=()),
+            derive=_footprint, fields=(), general=False),
+    Measure("l_max", "longest leg: l_min + l_s (paper), a preset's l_max, or 6-pss's leg_length", derive=_l_max,
+            fields=()),
     Measure("boundary_complete", "the workspace boundary is complete (kinematics.measures)", flag=True),
     Measure("boundary_closed", "the workspace boundary is closed (kinematics.measures)", flag=True),
     Measure("pieces", "components holding >= 1 % of the volume (kinematics.measures, stable in h)"),
@@ -193,14 +209,15 @@ for _m in (
     Measure("boundary_closed_stable", "one piece, not cut by the box (kinematics.measures, stable in h)",
             flag=True),
     Measure("task_fraction", "share of the task reachable (kinematics.task: volume of a region, poses of a list)",
-            needs_task=True),
+            needs_task=True, general=False),
     Measure("task_margin", "how far the task region could grow (< 0: must shrink), or a pose list's smallest leg "
-            "slack (kinematics.task)", needs_task=True),
-    Measure("contains_task", "the task is reachable everywhere (kinematics.task)", flag=True, needs_task=True),
+            "slack (kinematics.task)", needs_task=True, general=False),
+    Measure("contains_task", "the task is reachable everywhere (kinematics.task)", flag=True, needs_task=True,
+            general=False),
     Measure("gci", "global conditioning index: mean 1/kappa over the workspace (kinematics.dexterity)",
-            needs_dexterity=True),
+            needs_dexterity=True, general=False),
     Measure("total_orientation_volume", "volume of the total-orientation workspace (kinematics.dexterous; "
-            "OptimizeSettings.total_orientation)", needs_total_orientation=True),
+            "OptimizeSettings.total_orientation)", needs_total_orientation=True, general=False),
 ):
     register_measure(_m)
 
@@ -214,7 +231,12 @@ def _param(name: str) -> Callable[[dict], float]:
 for _p in PARAMS:  # the design's own sizes, for size objectives (minimise l_s, d_s, eta_s, r...)
     if _p not in MEASURES:
         register_measure(Measure(_p, f"the design parameter {_p} ({PARAMS[_p].description})", derive=_param(_p),
-                                 fields=()))
+                                 fields=(), parameter=True))
+for _spec in PRESETS.values():  # the presets' numeric parameters (minimise lift, base_radius...)
+    for _q in _spec.params:
+        if _q.numeric and _q.name not in MEASURES:
+            register_measure(Measure(_q.name, f"the preset parameter {_q.name} ({_q.description})",
+                                     derive=_param(_q.name), fields=(), parameter=True))
 
 
 def _measure(name: str, field: str) -> Measure:
@@ -356,6 +378,16 @@ class OptimizeSettings:
             ``task_margin`` and the constraint ``contains_task`` (its joints must be the workspace's).
         total_orientation: ``(tilt, torsion, angle_step)`` of ``total_orientation_volume`` (degrees;
             ``None``: the defaults of :data:`kinematics.settings.TOTAL_ORIENTATION`).
+        preset: a preset's name (:data:`kinematics.presets.PRESETS`) instead of the paper's
+            ``design``: ``params`` are then the preset's numeric parameters, their default bounds
+            each parameter's ``PresetParam.study_range`` and their valid range ``[lo, hi]``. The
+            ``paper`` preset is the paper's model (``design`` from ``preset_values``, every measure);
+            any other preset's designs are :class:`~kinematics.presets.PresetDesign` evaluated by
+            the general engine, and the measures that do not exist for it (``Measure.general``,
+            another mechanism's parameters) are refused by name, as are ``workspace.joints``.
+        preset_values: the preset's fixed parameters (the others take their defaults).
+        length_step: a general preset's sampled prismatic spacing
+            (:func:`kinematics.mechanism_workspace.check_length_step`).
     """
 
     params: tuple[str, ...] = DEFAULT_PARAMS
@@ -372,17 +404,24 @@ class OptimizeSettings:
     algorithm: str = "auto"
     task: Any = None
     total_orientation: tuple[float, float, float] | None = None
+    preset: str | None = None
+    preset_values: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    length_step: float = 1.0
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        self._check_preset()
+        free = self._free_params()
         params = self.params.split(",") if isinstance(self.params, str) else list(self.params)
         params = [p.strip() for p in params if isinstance(p, str) and p.strip()] if all(
             isinstance(p, str) for p in params) else params
         if not params:
-            raise ParameterError("params", self.params, "one or more of " + ", ".join(PARAMS))
+            raise ParameterError("params", self.params, "one or more of " + ", ".join(free))
         for p in params:
-            if p not in PARAMS:
-                raise ParameterError("params", p, "design parameters " + ", ".join(PARAMS))
+            if p not in free:
+                raise ParameterError("params", p, ("design parameters " if self.preset is None else
+                                                   f"numeric parameters of preset {self.preset!r}: ")
+                                     + ", ".join(free))
         if len(set(params)) != len(params):
             raise ParameterError("params", self.params, "each parameter at most once")
         set_("params", tuple(params))
@@ -393,14 +432,14 @@ class OptimizeSettings:
             if name not in params:
                 raise ParameterError("bounds", name, "bounds of free parameters only (params: "
                                                      + ", ".join(params) + ")")
-            spec = PARAMS[name]
+            vmin, vmax = free[name]
             try:
                 lo, hi = (float(lohi[0]), float(lohi[1]))
             except (TypeError, ValueError, IndexError, KeyError):
                 raise ParameterError(name, lohi, "a pair lo:hi of numbers") from None
-            rng = f"[{spec.model_min:g}, {spec.model_max:g}]"
+            rng = f"[{vmin:g}, {vmax:g}]"
             for v in (lo, hi):
-                if not (math.isfinite(v) and spec.model_min <= v <= spec.model_max):
+                if not (math.isfinite(v) and vmin <= v <= vmax):
                     raise ParameterError(name, v, f"bounds within {rng}")
             if not lo < hi:
                 raise ParameterError(name, f"{lo:g}:{hi:g}", "lo < hi (to fix a parameter leave it out of params)")
@@ -449,15 +488,77 @@ class OptimizeSettings:
             orientation_samples(tilt, torsion, step)  # validates them
             set_("total_orientation", (tilt, torsion, step))
         needs = [o.measure for o in objectives] + [c.measure for c in cons]
+        self._check_measures(needs, free)
         if self.task is None and any(MEASURES[n].needs_task for n in needs):
             raise ParameterError("task", None, "a task (--box, --cylinder, --sphere or --points) for "
                                  + ", ".join(n for n in needs if MEASURES[n].needs_task))
 
+    # ----- a preset's design space --------------------------------------------------------------
+    def _check_preset(self) -> None:
+        """Validate ``preset``, ``preset_values`` and ``length_step``; the paper preset sets ``design``."""
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        if not isinstance(self.preset_values, Mapping):
+            raise ParameterError("preset_values", self.preset_values, "a mapping parameter -> value")
+        if self.preset is None:
+            if self.preset_values:
+                raise ParameterError("preset_values", dict(self.preset_values), "only with a preset")
+            return
+        if self.design != Design():
+            raise ParameterError("design", self.design.to_dict(), "the default with a preset (set its parameters in "
+                                                                  "preset_values)")
+        from .mechanism_workspace import check_length_step
+
+        base = PresetDesign.of(self.preset, self.preset_values)  # names the preset, a bad name or value
+        set_("preset_values", dict(base.values))
+        set_("length_step", check_length_step(self.length_step))
+        if self.preset == "paper":
+            set_("design", Design(**dict(base.values)))
+        elif isinstance(self.workspace, WorkspaceSettings) and self.workspace.joints != Joints():
+            raise ParameterError("workspace.joints", self.workspace.joints.to_dict(),
+                                 "none for a general mechanism: its legs carry their own u_cone/s_cone")
+
+    @property
+    def general(self) -> bool:
+        """Whether the designs are a general preset's (:class:`PresetDesign`, the general engine)."""
+        return self.preset is not None and self.preset != "paper"
+
+    def _free_params(self) -> dict[str, tuple[float, float]]:
+        """The parameters that may be free, with their valid ranges."""
+        if self.preset is None or self.preset == "paper":
+            return {p: (spec.model_min, spec.model_max) for p, spec in PARAMS.items()}
+        return {q.name: (q.lo, q.hi) for q in PRESETS[self.preset].params if q.numeric}
+
+    def _check_measures(self, names: Sequence[str], free: Mapping[str, Any]) -> None:
+        """Refuse, by name, a measure that does not exist for these designs."""
+        for name in names:
+            m = MEASURES[name]
+            field = "objectives" if any(o.measure == name for o in self.objectives) else "constraints"
+            mech = "the paper's design" if not self.general else f"preset {self.preset!r}"
+            if m.parameter and name not in free:
+                raise ParameterError(field, name, f"a parameter of {mech}: {', '.join(free)}")
+            if self.general and not m.general:
+                raise ParameterError(field, name, f"a measure of a general mechanism (preset {self.preset!r}): "
+                                     + ", ".join(k for k, v in MEASURES.items() if v.general and not v.parameter)
+                                     + f" or its parameters; {name} exists for the paper's model only")
+
+    @property
+    def engine_extra(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`kinematics.sweep.evaluate_design` the designs need
+        (``length_step`` of a general preset; empty otherwise)."""
+        return {"length_step": self.length_step} if self.general else {}
+
+    def design_of(self, values: Mapping[str, Any]) -> Design | PresetDesign:
+        """The design of a row's ``design`` dict (a :class:`Design` or a :class:`PresetDesign`)."""
+        return PresetDesign.from_dict(values) if self.general else Design.from_dict(dict(values))
+
     # ----- derived ---------------------------------------------------------------------------
     def bounds_of(self, param: str) -> tuple[float, float]:
-        """``(lo, hi)`` of a free parameter (given, else Table I's range)."""
+        """``(lo, hi)`` of a free parameter (given, else Table I's range, or the preset parameter's
+        ``study_range``)."""
         if param in self.bounds:
             return self.bounds[param]
+        if self.general:
+            return next(q.study_range for q in PRESETS[str(self.preset)].params if q.name == param)
         spec = PARAMS[param]
         return (spec.slider_min, spec.slider_max)
 
@@ -495,12 +596,14 @@ class OptimizeSettings:
             return self.algorithm
         return "nsga2" if len(self.objectives) <= 2 else "nsga3"
 
-    def design_at(self, x: Sequence[float]) -> Design:
+    def design_at(self, x: Sequence[float]) -> Design | PresetDesign:
         """The design of a decision vector: rounded to ``step``, clipped to the bounds.
 
         Raises:
-            ParameterError: the combination is invalid for the model (e.g. ``d_s > r``).
+            ParameterError: the combination is invalid for the model (e.g. ``d_s > r``, ``l_max <= l_min``).
         """
+        if self.general:
+            return PresetDesign.of(str(self.preset), {**self.preset_values, **self.values_at(x)})
         return self.design.replace(**self.values_at(x))
 
     def values_at(self, x: Sequence[float]) -> dict[str, float]:
@@ -519,13 +622,15 @@ class OptimizeSettings:
             "bounds": {p: list(self.bounds_of(p)) for p in self.params},
             "objectives": [o.label for o in self.objectives],
             "constraints": [c.label for c in self.constraints],
-            "design": self.design.to_dict(),
+            "design": (PresetDesign.of(str(self.preset), self.preset_values).to_dict() if self.general
+                       else self.design.to_dict()),
             "workspace": dataclasses.asdict(self.workspace),
             "orientation": None if self.orientation_used is None else dataclasses.asdict(self.orientation_used),
             "population": self.population, "generations": self.generations, "seed": self.seed,
             "step": self.step, "algorithm": self.algorithm_used,
             "task": None if self.task_used is None else self.task_used.to_dict(),
             **({"extra": self.extra_used} if self.extra_used else {}),
+            **({} if self.preset is None else {"mechanism": self.preset, "preset_values": dict(self.preset_values)}),
         })
 
     @property
@@ -541,7 +646,7 @@ class OptimizeSettings:
         from .settings import TOTAL_ORIENTATION
 
         names = [o.measure for o in self.objectives] + [c.measure for c in self.constraints]
-        out: dict[str, Any] = {}
+        out: dict[str, Any] = dict(self.engine_extra)
         if any(MEASURES[n].needs_dexterity for n in names):
             out["dexterity"] = True
         if any(MEASURES[n].needs_total_orientation for n in names):
@@ -566,7 +671,7 @@ def _one_line(exc: BaseException) -> str:
     return text if len(text) <= 500 else text[:497] + "..."
 
 
-def evaluate_population(designs: Sequence[Design], settings: WorkspaceSettings, *,
+def evaluate_population(designs: Sequence[Design | PresetDesign], settings: WorkspaceSettings, *,
                         orientation: OrientationSettings | None = None, cache: Any = None,
                         client: Any = None, evaluate: Callable[..., dict] | None = None, retries: int = 1,
                         cancel: CancelToken = None,
@@ -909,7 +1014,7 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
             gen += 1
             pop = algorithm.ask()
             X = pop.get("X")
-            designs: list[Design | None] = []
+            designs: list[Design | PresetDesign | None] = []
             rows: list[dict | None] = []
             for x in X:
                 try:
@@ -969,9 +1074,9 @@ def optimize(settings: OptimizeSettings, *, scheduler: str | None = None, worker
         if fields is not None and len(front_idx):
             # the front's designs with every measure (the evaluations computed only the named ones)
             front_rows = [archive_rows[i] for i in front_idx]
-            full, n_full = evaluate_population([Design.from_dict(r["design"]) for r in front_rows],
+            full, n_full = evaluate_population([settings.design_of(r["design"]) for r in front_rows],
                                                settings.workspace, orientation=ori, cache=cache, client=client,
-                                               retries=retries, cancel=cancel)
+                                               retries=retries, cancel=cancel, extra=settings.engine_extra)
             for i, row in zip(front_idx, full):
                 if row.get("ok"):
                     archive_rows[i] = row

@@ -17,7 +17,9 @@
   Linapod / Hexaglide family with vertical rails.
 
 :data:`PRESETS` maps each name to its function and its parameters' defaults, ranges and words,
-for the CLI (``--mechanism NAME --param NAME=VALUE``), REST and the explorer.
+for the CLI (``--mechanism NAME --param NAME=VALUE``), REST and the explorer. A
+:class:`PresetDesign` (a preset's name and all its parameters' values) is one point of a study:
+what the sweeps and the optimiser vary for a general mechanism, as :class:`Design` for the paper's.
 """
 
 from __future__ import annotations
@@ -120,7 +122,9 @@ def six_pss(base_radius: float = 100.0, base_half_angle: float = 5.0, platform_r
 
 @dataclasses.dataclass(frozen=True)
 class PresetParam:
-    """One preset parameter: default, valid range, unit and words."""
+    """One preset parameter: default, valid range, unit and words; ``study`` is the range a study
+    (the optimiser's default bounds, a sweep's ``n`` values) spans, within ``[lo, hi]`` (``None``:
+    ``[lo, hi]``; a text parameter has none and is never free)."""
 
     name: str
     default: float | str
@@ -128,6 +132,17 @@ class PresetParam:
     hi: float
     unit: str
     description: str
+    study: tuple[float, float] | None = None
+
+    @property
+    def numeric(self) -> bool:
+        """Whether the parameter is a number (a study can vary it)."""
+        return not isinstance(self.default, str)
+
+    @property
+    def study_range(self) -> tuple[float, float]:
+        """``study``, else the valid range ``(lo, hi)``."""
+        return self.study if self.study is not None else (self.lo, self.hi)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,28 +166,31 @@ class Preset:
 
 
 _HEX = (
-    PresetParam("base_radius", 100.0, 1e-6, 1000.0, "", "radius of the base joints' circle"),
-    PresetParam("base_half_angle", 5.0, 0.0, 59.0, "deg", "half the angle between a base pair's joints"),
-    PresetParam("platform_radius", 50.0, 1e-6, 1000.0, "", "radius of the platform joints' circle"),
-    PresetParam("platform_half_angle", 10.0, 1.0, 60.0, "deg", "half the angle between a platform pair's joints"),
+    PresetParam("base_radius", 100.0, 1e-6, 1000.0, "", "radius of the base joints' circle", (60.0, 160.0)),
+    PresetParam("base_half_angle", 5.0, 0.0, 59.0, "deg", "half the angle between a base pair's joints",
+                (0.0, 30.0)),
+    PresetParam("platform_radius", 50.0, 1e-6, 1000.0, "", "radius of the platform joints' circle", (25.0, 100.0)),
+    PresetParam("platform_half_angle", 10.0, 1.0, 60.0, "deg", "half the angle between a platform pair's joints",
+                (1.0, 30.0)),
+)
+_LEGS = (
+    PresetParam("l_min", 114.5, 1e-6, 1000.0, "", "shortest leg length", (80.0, 150.0)),
+    PresetParam("l_max", 164.5, 1e-6, 1000.0, "", "longest leg length", (120.0, 220.0)),
 )
 
 PRESETS: dict[str, Preset] = {
     "paper": Preset("paper", "the paper's 3-(arc-P, P, 2-(UPS)) (Table I)", paper, tuple(
-        PresetParam(p.name, p.default, p.model_min, p.model_max, p.unit, p.description) for p in PARAMS.values()
+        PresetParam(p.name, p.default, p.model_min, p.model_max, p.unit, p.description, (p.slider_min, p.slider_max))
+        for p in PARAMS.values()
     ) + (PresetParam("eta_range", "centered", 0.0, 0.0, "", "arc stroke convention: centered or from-zero"),)),
     "gough-stewart": Preset("gough-stewart", "a 6-UPS Gough-Stewart platform (semi-regular hexagons)",
-                            gough_stewart, _HEX + (
-                                PresetParam("l_min", 114.5, 1e-6, 1000.0, "", "shortest leg length"),
-                                PresetParam("l_max", 164.5, 1e-6, 1000.0, "", "longest leg length"))),
+                            gough_stewart, _HEX + _LEGS),
     "6-pups": Preset("6-pups", "a Gough-Stewart platform with a vertical lift under each leg (6-PUPS)",
-                     six_pups, _HEX + (
-                         PresetParam("l_min", 114.5, 1e-6, 1000.0, "", "shortest leg length"),
-                         PresetParam("l_max", 164.5, 1e-6, 1000.0, "", "longest leg length"),
-                         PresetParam("lift", 50.0, 0.0, 1000.0, "", "stroke of each vertical lift"))),
+                     six_pups, _HEX + _LEGS + (
+                         PresetParam("lift", 50.0, 0.0, 1000.0, "", "stroke of each vertical lift", (0.0, 100.0)),)),
     "6-pss": Preset("6-pss", "six fixed-length legs on vertical rails (6-PSS)", six_pss, _HEX + (
-        PresetParam("leg_length", 120.0, 1e-6, 1000.0, "", "length of every leg"),
-        PresetParam("rail_stroke", 150.0, 0.0, 1000.0, "", "stroke of each vertical rail"))),
+        PresetParam("leg_length", 120.0, 1e-6, 1000.0, "", "length of every leg", (80.0, 200.0)),
+        PresetParam("rail_stroke", 150.0, 0.0, 1000.0, "", "stroke of each vertical rail", (50.0, 250.0)))),
 }
 
 
@@ -181,3 +199,47 @@ def preset(name: str, values: Mapping[str, Any] | None = None) -> Mechanism:
     if name not in PRESETS:
         raise ParameterError("mechanism", name, f"one of the presets {', '.join(PRESETS)} or a description file")
     return PRESETS[name].mechanism(values)
+
+
+@dataclasses.dataclass(frozen=True)
+class PresetDesign:
+    """A point of a preset's parameter space: the preset's name and EVERY parameter's value (the
+    defaults filled in, numbers as floats), in the preset's order. What a study (sweep, optimiser)
+    varies for a general mechanism, as :class:`~kinematics.design.Design` is for the paper's model:
+    :meth:`of` validates (builds the mechanism, so a bad value raises ParameterError naming it)."""
+
+    preset: str
+    values: tuple[tuple[str, float | str], ...]
+
+    @classmethod
+    def of(cls, name: str, values: Mapping[str, Any] | None = None) -> PresetDesign:
+        """The preset ``name`` with ``values`` over its defaults (validated)."""
+        if not isinstance(name, str) or name not in PRESETS:
+            raise ParameterError("mechanism", name, f"one of the presets {', '.join(PRESETS)}")
+        spec = PRESETS[name]
+        given = dict(values or {})
+        spec.mechanism(given)  # names and values validated by the builder
+        full = {p.name: given.get(p.name, p.default) for p in spec.params}
+        norm = tuple((k, v if isinstance(v, str) else float(v)) for k, v in full.items())
+        return cls(name, norm)
+
+    def mechanism(self) -> Mechanism:
+        """The described mechanism."""
+        return PRESETS[self.preset].mechanism(dict(self.values))
+
+    def replace(self, **changes: Any) -> PresetDesign:
+        """A copy with some parameters changed (validated)."""
+        return PresetDesign.of(self.preset, {**dict(self.values), **changes})
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"preset": name, parameter: value, ...}`` (what a study's rows carry as ``design``)."""
+        return {"preset": self.preset, **dict(self.values)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> PresetDesign:
+        """The inverse of :meth:`to_dict`."""
+        return cls.of(d.get("preset"), {k: v for k, v in d.items() if k != "preset"})  # type: ignore[arg-type]
+
+    def key(self) -> tuple:
+        """Hashable identity."""
+        return ("preset", self.preset, self.values)

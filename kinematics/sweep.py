@@ -1,6 +1,11 @@
 """Parameter studies: workspace measures against one design parameter (paper Fig. 4) and over a
 2-D grid of two parameters (paper Fig. 5).
 
+A study's design is the paper's :class:`~kinematics.design.Design` or a preset's
+:class:`~kinematics.presets.PresetDesign` (any mechanism preset: its numeric parameters are the
+parameters, :func:`param_range` their valid ranges, its study ranges :func:`study_values`'s, and
+each point runs :func:`kinematics.mechanism_workspace.compute_mechanism_workspace`).
+
 The unit of work is :func:`evaluate_design`, a pure module-level function of picklable arguments
 (a :class:`~kinematics.design.Design`, a :class:`~kinematics.workspace.WorkspaceSettings`, an
 optional :class:`~kinematics.orientation.OrientationSettings`) that returns a JSON-serializable
@@ -33,6 +38,7 @@ import numpy as np
 from .bytecache import ByteLRU
 from .design import PARAMS, Design, ParameterError
 from .orientation import OrientationSettings, orientation_workspace
+from .presets import PresetDesign
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .serialize import jsonable
 from .workspace import WorkspaceSettings, compute_workspace
@@ -45,17 +51,21 @@ CACHE_SCHEMA = "sweep-2"  # sweep-2: rows carry TI_saturated and saturation_note
 # the unit of work
 
 
-def evaluate_design(design: Design, settings: WorkspaceSettings, *,
+def evaluate_design(design: Design | PresetDesign, settings: WorkspaceSettings, *,
                     orientation: OrientationSettings | None = None, cancel: CancelToken = None,
                     task: Any = None, dexterity: bool = False,
                     total_orientation: tuple[float, float, float] | None = None,
-                    measures: Sequence[str] | None = None) -> dict:
+                    measures: Sequence[str] | None = None, length_step: float | None = None) -> dict:
     """Measures of one design: its position workspace and, optionally, its orientation indices.
 
     Parameters
     ----------
-    design : Design
-        The mechanism's dimensions.
+    design : Design or PresetDesign
+        The mechanism's dimensions: the paper's :class:`Design`, or a preset's parameters
+        (:class:`~kinematics.presets.PresetDesign`: its workspace is
+        :func:`kinematics.mechanism_workspace.compute_mechanism_workspace`'s, the paper's engine for
+        the paper preset, the general engine otherwise; the orientation indices, the task, the
+        dexterity and the total orientation are then refused, naming the argument).
     settings : WorkspaceSettings
         The workspace computation (:func:`compute_workspace` then :func:`measure_workspace`).
     orientation : OrientationSettings, optional
@@ -74,6 +84,8 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         Only these fields of ``WorkspaceMeasures`` (and the size and box fields that are always
         there, :func:`kinematics.measures.measure_fields`), each computed with only the steps it
         needs and equal to the full evaluation's; ``None`` (default): every field.
+    length_step : float, optional
+        A :class:`PresetDesign`'s sampled prismatic spacing (default 1; only with one).
 
     Returns
     -------
@@ -102,6 +114,11 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
     names = _measure_names(measures)
     t0 = time.perf_counter()
     check(cancel)
+    if isinstance(design, PresetDesign):
+        return _evaluate_preset(design, settings, names, t0, cancel, length_step, orientation=orientation,
+                                task=task, dexterity=dexterity, total_orientation=total_orientation)
+    if length_step is not None:
+        raise ParameterError("length_step", length_step, "only with a preset's design (PresetDesign)")
     result = compute_workspace(design, settings, cancel=cancel)
     check(cancel)
     out: dict[str, Any] = (dict(measure_workspace(result, cancel=cancel).to_dict()) if names is None
@@ -125,6 +142,28 @@ def evaluate_design(design: Design, settings: WorkspaceSettings, *,
         tilt, torsion, step = total_orientation
         out["total_orientation_volume"] = total_orientation_workspace(design, tilt, torsion, step, settings,
                                                                       position=result, cancel=cancel).volume
+    out["design"] = design.to_dict()
+    out["compute_seconds"] = time.perf_counter() - t0
+    return jsonable(out)
+
+
+def _evaluate_preset(design: PresetDesign, settings: WorkspaceSettings, names: tuple[str, ...] | None, t0: float,
+                     cancel: CancelToken, length_step: float | None, **refused: Any) -> dict:
+    """:func:`evaluate_design` of a preset's design: the measures of its position workspace."""
+    from .measures import measure_fields, measure_workspace
+    from .mechanism_workspace import compute_mechanism_workspace
+
+    for name, value in refused.items():
+        if value not in (None, False):
+            raise ParameterError(name, value if not hasattr(value, "to_dict") else type(value).__name__,
+                                 f"none for a preset's design ({design.preset}): only the position workspace's "
+                                 "measures")
+    result = compute_mechanism_workspace(design.mechanism(), settings, 1.0 if length_step is None else length_step,
+                                         cancel=cancel)
+    check(cancel)
+    out: dict[str, Any] = (dict(measure_workspace(result, cancel=cancel).to_dict()) if names is None
+                           else dict(measure_fields(result, names, cancel=cancel)))
+    out["engine"] = result.engine
     out["design"] = design.to_dict()
     out["compute_seconds"] = time.perf_counter() - t0
     return jsonable(out)
@@ -285,13 +324,49 @@ class ResultCache:
 # sweeps
 
 
-def _check_param(param: Any, field: str = "param") -> str:
+def _preset_params(design: PresetDesign) -> list[Any]:
+    from .presets import PRESETS
+
+    return [q for q in PRESETS[design.preset].params if q.numeric]
+
+
+def _check_param(param: Any, field: str = "param", design: Design | PresetDesign | None = None) -> str:
+    if isinstance(design, PresetDesign):
+        names = [q.name for q in _preset_params(design)]
+        if not isinstance(param, str) or param not in names:
+            raise ParameterError(field, param, f"a parameter of preset {design.preset!r}: {', '.join(names)}")
+        return param
     if not isinstance(param, str) or param not in PARAMS:
         raise ParameterError(field, param, "one of " + ", ".join(PARAMS))
     return param
 
 
-def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design]:
+def param_range(design: Design | PresetDesign, param: str, field: str = "param") -> tuple[float, float]:
+    """The valid range ``(lo, hi)`` of a study parameter: the paper's model range of a
+    :class:`Design` field, or a preset parameter's ``[lo, hi]`` (an unknown name raises
+    ParameterError naming ``field``)."""
+    _check_param(param, field, design)
+    if isinstance(design, PresetDesign):
+        q = next(q for q in _preset_params(design) if q.name == param)
+        return (q.lo, q.hi)
+    return (PARAMS[param].model_min, PARAMS[param].model_max)
+
+
+def param_value(design: Design | PresetDesign, param: str) -> float:
+    """The value of a study parameter in a design."""
+    return float(dict(design.values)[param]) if isinstance(design, PresetDesign) else float(getattr(design, param))
+
+
+def _engine_kw(design: Design | PresetDesign, length_step: float | None) -> dict[str, Any]:
+    """``length_step`` for a preset's design (the general engine's); refused for the paper's Design."""
+    if isinstance(design, PresetDesign):
+        return {"length_step": 1.0 if length_step is None else float(length_step)}
+    if length_step is not None:
+        raise ParameterError("length_step", length_step, "only with a preset's design (PresetDesign)")
+    return {}
+
+
+def _designs(design: Design | PresetDesign, param: str, values: Sequence[float]) -> list[Any]:
     """Validate every value up front (``Design`` raises ``ParameterError`` naming the field)."""
     try:
         vals = list(values)
@@ -300,34 +375,35 @@ def _designs(design: Design, param: str, values: Sequence[float]) -> list[Design
     return [design.replace(**{param: v}) for v in vals]
 
 
-def _evaluate_cached(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None,
-                     cancel: CancelToken, cache: ResultCache | None, task: Any = None,
-                     measures: Sequence[str] | None = None) -> dict:
-    key = cache.key(design, settings, orientation, task, measures) if cache is not None else None
+def _evaluate_cached(design: Design | PresetDesign, settings: WorkspaceSettings,
+                     orientation: OrientationSettings | None, cancel: CancelToken, cache: ResultCache | None,
+                     task: Any = None, measures: Sequence[str] | None = None, **extra: Any) -> dict:
+    key = cache.key(design, settings, orientation, task, measures, **extra) if cache is not None else None
     if cache is not None:
         hit = cache.get(key)  # type: ignore[arg-type]
         if hit is None and measures is not None:
-            hit = cache.get(cache.key(design, settings, orientation, task))  # a full row holds every measure
+            hit = cache.get(cache.key(design, settings, orientation, task, **extra))  # a full row: every measure
         if hit is not None:
             return hit
-    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task, measures=measures)
+    value = evaluate_design(design, settings, orientation=orientation, cancel=cancel, task=task, measures=measures,
+                            **extra)
     if cache is not None:
         cache.put(key, value)  # type: ignore[arg-type]
     return value
 
 
-def sweep_1d(design: Design, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
+def sweep_1d(design: Design | PresetDesign, param: str, values: Sequence[float], settings: WorkspaceSettings, *,
              orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
              cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None,
-             measures: Sequence[str] | None = None) -> list[dict]:
+             measures: Sequence[str] | None = None, length_step: float | None = None) -> list[dict]:
     """Measures against one design parameter (paper Fig. 4).
 
     Parameters
     ----------
-    design : Design
+    design : Design or PresetDesign
         The base design: ``param`` is set to each of ``values``, the other fields stay.
     param : str
-        A design field (``"a"``, ``"d_s"``, ... see ``PARAMS``).
+        A design field (``"a"``, ``"d_s"``, ... see ``PARAMS``), or a preset design's numeric parameter.
     values : sequence of float
         The values of ``param``.
     settings : WorkspaceSettings
@@ -344,6 +420,8 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
         Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
     measures : sequence of str, optional
         Only these measures at each point (:func:`evaluate_design`); default every one.
+    length_step : float, optional
+        A preset design's sampled prismatic spacing (default 1; only with a ``PresetDesign``).
 
     Returns
     -------
@@ -365,33 +443,35 @@ def sweep_1d(design: Design, param: str, values: Sequence[float], settings: Work
     >>> [(row["value"], row["volume"]) for row in rows]
     [(40.0, 3800000.0), (60.0, 6216000.0)]
     """
-    _check_param(param)
+    _check_param(param, "param", design)
     _measure_names(measures)
+    extra = _engine_kw(design, length_step)
     designs = _designs(design, param, values)
     rep = Reporter(progress)
     out: list[dict] = []
     n = len(designs)
     for i, dsg in enumerate(designs):
         check(cancel)
-        rep(i / n, f"{param} = {getattr(dsg, param):g} ({i + 1}/{n})")
-        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures)
-        out.append({"param": param, "value": float(getattr(dsg, param)), **res})
+        rep(i / n, f"{param} = {param_value(dsg, param):g} ({i + 1}/{n})")
+        res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures, **extra)
+        out.append({"param": param, "value": param_value(dsg, param), **res})
     rep(1.0, "done")
     return out
 
 
-def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: str, values_y: Sequence[float],
-             settings: WorkspaceSettings, *, orientation: OrientationSettings | None = None,
-             progress: ProgressFn | None = None, cancel: CancelToken = None,
-             cache: ResultCache | None = None, task: Any = None, measures: Sequence[str] | None = None) -> dict:
+def sweep_2d(design: Design | PresetDesign, param_x: str, values_x: Sequence[float], param_y: str,
+             values_y: Sequence[float], settings: WorkspaceSettings, *,
+             orientation: OrientationSettings | None = None, progress: ProgressFn | None = None,
+             cancel: CancelToken = None, cache: ResultCache | None = None, task: Any = None,
+             measures: Sequence[str] | None = None, length_step: float | None = None) -> dict:
     """Measures over the grid ``values_x x values_y`` of two design parameters (paper Fig. 5).
 
     Parameters
     ----------
-    design : Design
+    design : Design or PresetDesign
         The base design.
     param_x, param_y : str
-        Two different design fields.
+        Two different design fields (or a preset design's numeric parameters).
     values_x, values_y : sequence of float
         Their values.
     settings : WorkspaceSettings
@@ -408,6 +488,8 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
         Also ``task_fraction``, ``task_margin``, ``contains_task`` of each point.
     measures : sequence of str, optional
         Only these measures at each point (:func:`evaluate_design`); default every one.
+    length_step : float, optional
+        A preset design's sampled prismatic spacing (default 1; only with a ``PresetDesign``).
 
     Returns
     -------
@@ -431,13 +513,14 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
     >>> grid["volume"]  # rows: a = 90, 110; columns: d_s = 40, 60
     [[1680000.0, 1880000.0], [1048000.0, 1220000.0]]
     """
-    _check_param(param_x, "param_x")
-    _check_param(param_y, "param_y")
+    _check_param(param_x, "param_x", design)
+    _check_param(param_y, "param_y", design)
     if param_x == param_y:
         raise ParameterError("param_y", param_y, f"a parameter other than param_x={param_x!r}")
     _measure_names(measures)
-    xs = [float(getattr(d, param_x)) for d in _designs(design, param_x, values_x)]
-    ys = [float(getattr(d, param_y)) for d in _designs(design, param_y, values_y)]
+    extra = _engine_kw(design, length_step)
+    xs = [param_value(d, param_x) for d in _designs(design, param_x, values_x)]
+    ys = [param_value(d, param_y) for d in _designs(design, param_y, values_y)]
     grid_designs = [[design.replace(**{param_x: x, param_y: y}) for x in xs] for y in ys]
     rep = Reporter(progress)
     n = len(xs) * len(ys)
@@ -447,7 +530,7 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
             check(cancel)
             k = iy * len(xs) + ix
             rep(k / max(n, 1), f"{param_x} = {xs[ix]:g}, {param_y} = {ys[iy]:g} ({k + 1}/{n})")
-            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures)
+            res = _evaluate_cached(dsg, settings, orientation, cancel, cache, task, measures, **extra)
             points.append({"param_x": param_x, "param_y": param_y, "x": xs[ix], "y": ys[iy],
                            "ix": ix, "iy": iy, **res})
     rep(1.0, "done")
@@ -460,11 +543,33 @@ def sweep_2d(design: Design, param_x: str, values_x: Sequence[float], param_y: s
             "volume": grids.get("volume", [[None] * len(xs) for _ in ys]), "grids": grids, "points": points}
 
 
-def study_values(param: str, n: int = 10) -> list[float]:
+def sweep_preset(name: str, param: str, values: Sequence[float], params: dict | None = None,
+                 settings: WorkspaceSettings = WorkspaceSettings(), length_step: float = 1.0,
+                 progress: ProgressFn | None = None, cancel: CancelToken = None) -> list[dict]:
+    """Workspace measures against one parameter of the preset ``name`` (the others from ``params``,
+    else the preset's defaults): one row per value with the parameter's value, the engine, voxels,
+    volume, compute seconds and every measure of :func:`kinematics.measures.measure_workspace`.
+    A thin layer over :func:`kinematics.sweep.sweep_1d` of a :class:`~kinematics.presets.PresetDesign`
+    (2-D: :func:`kinematics.sweep.sweep_2d`, Dask: :func:`kinematics.distributed.sweep_grid`, the
+    same designs). The paper preset runs the paper's engine (the same numbers as ``sweep_1d``)."""
+    design = PresetDesign.of(name, params)
+    values = list(values)
+    if not 1 <= len(values) <= 1000:
+        raise ParameterError("values", f"{len(values)} values", "1 to 1000 values")
+    rows = sweep_1d(design, param, values, settings, progress=progress, cancel=cancel, length_step=length_step)
+    return [{param: row["value"], **{k: v for k, v in row.items() if k not in ("param", "value", "design")}}
+            for row in rows]
+
+
+def study_values(param: str, n: int = 10, design: Design | PresetDesign | None = None) -> list[float]:
     """``n`` values evenly over the paper's Table I range of ``param`` (``PARAMS[param].slider_*``),
-    both ends included."""
-    _check_param(param)
+    or over a preset parameter's study range (``PresetParam.study_range``) when ``design`` is a
+    :class:`PresetDesign`, both ends included."""
+    _check_param(param, "param", design)
     if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
         raise ParameterError("n", n, "an integer >= 1")
-    spec = PARAMS[param]
-    return [float(v) for v in np.linspace(spec.slider_min, spec.slider_max, int(n))]
+    if isinstance(design, PresetDesign):
+        lo, hi = next(q.study_range for q in _preset_params(design) if q.name == param)
+    else:
+        lo, hi = PARAMS[param].slider_min, PARAMS[param].slider_max
+    return [float(v) for v in np.linspace(lo, hi, int(n))]

@@ -243,8 +243,8 @@ def test_refusals_name_the_field() -> None:
         compute_mechanism_workspace(gs, WorkspaceSettings(voxel=H), length_step=0)
     data = gs.to_dict()
     data["chains"][2]["legs"][0]["diameter"] = 5.0
-    with pytest.raises(ParameterError, match=r"chains\[2\].legs\[0\].diameter"):
-        compute_mechanism_workspace(parse_mechanism(data), WorkspaceSettings(voxel=H))
+    with pytest.raises(ParameterError, match="bracket = True is invalid: expected not with leg diameters"):
+        compute_mechanism_workspace(parse_mechanism(data), WorkspaceSettings(voxel=H, bracket=True))
     # the paper's mechanism keeps every option of the paper's engine
     assert compute_mechanism_workspace(paper(), WorkspaceSettings(voxel=H, bracket=True)).volume_inner is not None
 
@@ -386,7 +386,7 @@ def test_sweep_over_a_preset_parameter() -> None:
     """A longer lift only adds carriage values: the workspaces nest voxel by voxel (fixed box), a
     zero lift is the Gough-Stewart platform's, and the sweep's rows are those workspaces; the paper
     preset's rows are the paper engine's."""
-    from paraspace.kinematics.mechanism_workspace import sweep_preset
+    from paraspace.kinematics.sweep import sweep_preset
 
     box = ((-120.0, -120.0, 0.0), (120.0, 120.0, 240.0))
     settings = WorkspaceSettings(voxel=H, bounds=box)
@@ -419,8 +419,14 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
     assert 0 < res.volume_inner <= min(res.volume, fine.volume)
     assert max(res.volume, fine.volume) <= res.volume_outer < math.inf
     rot = platform_rotation(mech, (0.0, 0.0, 0.0))
-    br = general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0)
+    br = general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0, WorkspaceSettings().bracket_refine)
     assert (br.volume_inner, br.volume_outer) == (res.volume_inner, res.volume_outer)
+    # each halving of the boundary cubes tightens the bracket and keeps it around the volumes
+    levels = [general_bracket(mech, kernel_tables(mech, rot), res.grid, 0.5, 1.0, 0.0, k) for k in range(3)]
+    for a, b in zip(levels, levels[1:]):
+        assert a.volume_inner <= b.volume_inner <= min(res.volume, fine.volume)
+        assert max(res.volume, fine.volume) <= b.volume_outer <= a.volume_outer
+    assert levels[2].volume_outer - levels[2].volume_inner < levels[0].volume_outer - levels[0].volume_inner
     # the cubes' states on the bracket's grid: an inside cube's centre is a reachable voxel, an
     # outside cube's is not
     rng = np.random.default_rng(11)

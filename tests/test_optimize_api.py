@@ -78,3 +78,41 @@ def test_limits_413(http):
     assert r.status_code == 413 and "max_optimize_evaluations" in r.json()["detail"]
     r = http.post(f"{V1}/optimize", json={**BODY, "settings": {"voxel": 1.0}})
     assert r.status_code == 413 and "max_optimize_voxels" in r.json()["detail"]
+
+
+PRESET_BODY = {"mechanism": {"preset": "6-pups", "params": {"platform_half_angle": 20}},
+               "params": ["lift", "platform_radius"], "objectives": ["volume", "-lift"],
+               "population": 4, "generations": 2, "seed": 3, "settings": {"voxel": 16}}
+
+
+def test_optimize_a_preset_matches_core(http):
+    r = http.post(f"{V1}/optimize", json=PRESET_BODY)
+    assert r.status_code in (200, 202), r.text
+    job_id = r.json()["job_id"]
+    assert _poll(http, job_id)["status"] == "done"
+    res = http.get(f"{V1}/jobs/{job_id}/result").json()["result"]
+    core = optimize(OptimizeSettings(preset="6-pups", preset_values={"platform_half_angle": 20.0},
+                                     params=("lift", "platform_radius"), objectives="volume,-lift",
+                                     population=4, generations=2, seed=3, workspace=WorkspaceSettings(voxel=16.0)))
+    assert [e["design"] for e in res["front"]] == [e["design"] for e in core.front]
+    assert [e["measures"]["volume"] for e in res["front"]] == [e["measures"]["volume"] for e in core.front]
+    assert res["settings"]["mechanism"] == "6-pups"
+
+
+@pytest.mark.parametrize("patch, field", [
+    ({"params": ["lift", "a"]}, "params"),
+    ({"objectives": ["volume", "TI_1"]}, "objectives"),
+    ({"mechanism": {"preset": "6-pups", "params": {"lifts": 3}}}, "lifts"),
+    ({"mechanism": {"description": {"chains": []}}}, "mechanism.preset"),
+    ({"design": {"a": 40}}, "design"),
+])
+def test_optimize_a_preset_bad_input_422_names_field(http, patch, field):
+    r = http.post(f"{V1}/optimize", json={**PRESET_BODY, **patch})
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert any(field in d["field"] for d in detail), detail
+
+
+def test_optimize_a_preset_over_the_voxel_limit_413(http):
+    r = http.post(f"{V1}/optimize", json={**PRESET_BODY, "settings": {"voxel": 1.0}})
+    assert r.status_code == 413 and "max_optimize_voxels" in r.json()["detail"], r.text

@@ -32,8 +32,6 @@ from ..schema import (  # noqa: F401 - the input models, shared with the link pa
     call_core,
 )
 
-_DEFAULT_FREE: tuple[ParamName, ...] = ("a", "d_s", "eta_s", "l_s")
-
 
 class IkRequest(BaseModel):
     """Inverse kinematics of one pose; give both ``d`` and ``eta`` to set the carriages by hand,
@@ -131,14 +129,14 @@ def study_settings(settings: WorkspaceSettingsIn, orientation: OrientationSettin
             orientation.model_copy(update={"joints": joints}).build())
 
 
-ParamName = Literal["a", "b", "d_s", "r", "l_min", "l_s", "eta_s"]
 
 
 class SweepAxis(BaseModel):
     """One swept parameter: explicit ``values`` or ``n`` values spread over its slider range."""
 
     model_config = _MODEL
-    param: ParamName = Field(description="design parameter to vary")
+    param: str = Field(max_length=40, description="design parameter to vary (a, b, d_s, r, l_min, l_s, eta_s; with "
+                                                  "a mechanism preset one of its numeric parameters)")
     values: list[Num] | None = Field(None, min_length=1, max_length=10_000,
                                           description="values (each within the parameter's model range)")
     n: int | None = Field(None, ge=1, le=10_000, description="number of values over the slider range")
@@ -158,6 +156,10 @@ class SweepRequest(BaseModel):
     y: SweepAxis | None = None
     orientation: OrientationSettingsIn | None = Field(
         None, description="orientation sampling for TI_1/TI_2; its joints are settings.joints when not given here")
+    mechanism: MechanismIn | None = Field(
+        None, description="a preset (with its fixed params) whose parameters are swept instead of design's; the "
+                          "paper preset is the paper's design, any other runs the general engine (position "
+                          "workspace measures only)")
 
 
 class OptimizeRequest(BaseModel):
@@ -168,12 +170,17 @@ class OptimizeRequest(BaseModel):
     model_config = _MODEL
     design: DesignIn = Field(default_factory=DesignIn, description="base design; non-free fields stay fixed")
     settings: WorkspaceSettingsIn = Field(default_factory=lambda: WorkspaceSettingsIn(voxel=4.0))
-    params: list[ParamName] = Field(default_factory=lambda: list(_DEFAULT_FREE), min_length=1,
-                                    max_length=7, description="free design parameters")
-    bounds: dict[ParamName, tuple[float, float]] = Field(
-        default_factory=dict, description="{param: [lo, hi]} for some free parameters; others: Table I's range")
-    objectives: list[str] = Field(default_factory=lambda: ["volume", "-footprint"], min_length=1, max_length=8,
-                                  description="measures; a leading - minimises (kinematics.optimize.MEASURES)")
+    params: list[str] | None = Field(None, min_length=1, max_length=8,
+                                     description="free design parameters (default a, d_s, eta_s, l_s); with a "
+                                                 "mechanism preset its numeric parameters (default all of them)")
+    bounds: dict[str, tuple[float, float]] = Field(
+        default_factory=dict, max_length=8,
+        description="{param: [lo, hi]} for some free parameters; others: Table I's range (a preset's: each "
+                    "parameter's study range, GET /mechanism/presets)")
+    objectives: list[str] | None = Field(None, min_length=1, max_length=8,
+                                         description="measures; a leading - minimises (kinematics.optimize.MEASURES;"
+                                                     " default volume, -footprint; with a general preset volume, "
+                                                     "-l_max)")
     constraints: list[str] = Field(default_factory=list, max_length=8,
                                    description="flags (boundary_complete) or MEASURE>=V / MEASURE<=V")
     population: int = _setting("body", OPTIMIZE["population"], strict=False)
@@ -190,12 +197,32 @@ class OptimizeRequest(BaseModel):
     total_orientation: tuple[Num, Num, Num] | None = Field(
         None, description="tilt, torsion, angle_step (degrees) of the measure total_orientation_volume "
                           "(null: 15, 15, 5)")
+    mechanism: MechanismIn | None = Field(
+        None, description="a preset (with its fixed params) whose numeric parameters are optimised instead of "
+                          "design; the paper preset is the paper's design, any other runs the general engine and "
+                          "has the position workspace's measures and its parameters only")
 
     def build(self) -> Any:
         """The core ``OptimizeSettings`` (its ParameterError names the field: 422)."""
-        from paraspace.kinematics.optimize import OptimizeSettings
+        from paraspace.kinematics.design import Design
+        from paraspace.kinematics.optimize import DEFAULT_PARAMS, OptimizeSettings
+        from paraspace.kinematics.presets import PRESETS
 
-        for text in self.objectives + self.constraints:
+        preset, values, length_step = None, {}, 1.0
+        if self.mechanism is not None:
+            if "design" in self.model_fields_set:
+                raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+            if self.mechanism.description is not None or self.mechanism.preset is None:
+                raise FieldError("mechanism.preset", "mechanism.preset: the optimiser varies a preset's parameters: "
+                                                     f"valid values {', '.join(PRESETS)} (not a description)")
+            self.mechanism.build()  # the preset's name and its params validated (422 naming mechanism.<field>)
+            preset, values, length_step = self.mechanism.preset, dict(self.mechanism.params), self.mechanism.length_step
+        general = preset not in (None, "paper")
+        params = self.params if self.params is not None else (
+            [q.name for q in PRESETS[str(preset)].params if q.numeric] if general else list(DEFAULT_PARAMS))
+        objectives = self.objectives if self.objectives is not None else (
+            ["volume", "-l_max"] if general else ["volume", "-footprint"])
+        for text in objectives + self.constraints + params:
             if len(text) > 100:
                 raise FieldError("objectives", f"{text[:40]!r}... is invalid: at most 100 characters per entry")
         workspace, orientation = study_settings(self.settings, self.orientation)
@@ -205,13 +232,17 @@ class OptimizeRequest(BaseModel):
 
             from paraspace.kinematics.task import TaskSpec
 
+            if self.task.mechanism is not None:
+                raise FieldError("task.mechanism", "task.mechanism: not in an optimisation's task (the designs are "
+                                                   "the optimisation's: design, or mechanism)")
             _, task, oset, tsettings = self.task.build()
             spec = TaskSpec(task, oset, dataclasses.replace(tsettings, joints=workspace.joints))
         return OptimizeSettings(
-            task=spec, total_orientation=self.total_orientation,
-            params=tuple(self.params),
-            bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(self.objectives),
-            constraints=list(self.constraints), design=self.design.build(), workspace=workspace,
+            task=spec, total_orientation=self.total_orientation, preset=preset, preset_values=values,
+            length_step=length_step, params=tuple(params),
+            bounds={str(k): v for k, v in self.bounds.items()}, objectives=list(objectives),
+            constraints=list(self.constraints), design=self.design.build() if preset is None else Design(),
+            workspace=workspace,
             orientation=orientation,
             population=self.population, generations=self.generations, seed=self.seed, step=self.step,
             algorithm=self.algorithm)
@@ -267,6 +298,9 @@ class TaskRequest(BaseModel):
     t: list[Num] | None = Field(None, max_length=MAX_POSES, description="times of the poses (s), increasing")
     csv: str | None = Field(None, max_length=MAX_CSV_BYTES, description="a pose list as CSV text")
     settings: TaskSettingsIn = Field(default_factory=TaskSettingsIn)
+    mechanism: MechanismIn | None = Field(
+        None, description="POST /task: a preset or a description instead of design (any mechanism other than the "
+                          "paper's: kinematics/mechanism_task.py)")
 
     def build(self) -> tuple[Any, Any, Any, Any]:
         """``(design, task, orientation set, task settings)`` of the core (ParameterError: 422)."""

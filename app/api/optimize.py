@@ -58,9 +58,12 @@ def optimize_limits_check(settings: Any, limits: ApiLimits) -> None:
     ori = settings.orientation_used
     for corner in itertools.product(*[settings.bounds_of(p) for p in settings.params]):
         try:
-            d = settings.design.replace(**dict(zip(settings.params, corner)))
+            d = settings.design_at(corner)
         except ParameterError:
-            continue  # an invalid corner (d_s > r) is never evaluated
+            continue  # an invalid corner (d_s > r, l_max <= l_min) is never evaluated
+        if settings.general:  # a preset's design: the general engine's grid and carriage samples
+            per_design = max(per_design, _general_voxels(d, settings, limits))
+            continue
         per_design = max(per_design, workspace_voxels(d, settings.workspace, analytic=True))
         if ori is not None:
             n_ori = max(n_ori, orientation_samples(d, ori))
@@ -81,6 +84,22 @@ def optimize_limits_check(settings: Any, limits: ApiLimits) -> None:
         if n_task > limits.max_task_samples:
             raise ApiError(413, f"task part of {n_task:,} samples per design exceeds the limit "
                                 f"max_task_samples = {limits.max_task_samples:,}")
+
+
+def _general_voxels(design: Any, settings: Any, limits: ApiLimits) -> int:
+    """The general engine's grid size for one preset design (its carriage samples checked as the
+    workspace route does: 413 over :data:`~.workspace.MAX_API_CARRIAGE_SAMPLES` per chain). The
+    corners of the bounds bound the grid when the reach grows monotonically with each parameter
+    (the presets' radii, lengths and strokes); a design between them may lay a slightly larger grid."""
+    from paraspace.kinematics.mechanism_workspace import general_plan
+
+    from .workspace import MAX_API_CARRIAGE_SAMPLES
+
+    grid, samples = general_plan(design.mechanism(), settings.workspace, settings.length_step)
+    if max(samples) > MAX_API_CARRIAGE_SAMPLES:
+        raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most {MAX_API_CARRIAGE_SAMPLES:,} "
+                            "per evaluation (a larger settings.eta_step or mechanism.length_step)")
+    return int(grid.size)
 
 
 def optimize_compute(settings: Any, progress: Any, cancel: Any, cache: Any = None) -> ApiResult:

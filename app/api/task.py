@@ -13,7 +13,7 @@ from paraspace.kinematics.serialize import jsonable
 
 from ..jobs import Job
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
-from .errors import ApiError
+from .errors import ApiError, FieldError
 from .models import TaskRequest
 
 router = api_router()
@@ -32,6 +32,15 @@ def _start_task(ctx: ApiContext, req: TaskRequest, request: Request) -> tuple[Jo
     from paraspace.kinematics.task import PoseList, evaluate_task, region_samples
 
     design, task, oset, settings = req.build()
+    if req.mechanism is not None:
+        from paraspace.kinematics.mechanism_workspace import paper_design
+
+        if "design" in req.model_fields_set:
+            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+        mech = req.mechanism.build()
+        design = paper_design(mech)
+        if design is None:
+            return _start_general(ctx, req, request, mech, task, oset, settings)
     import hashlib
 
     tkey = (("poses", hashlib.sha256(task.poses.tobytes() + (b"" if task.t is None else task.t.tobytes())).hexdigest(),
@@ -49,6 +58,61 @@ def _start_task(ctx: ApiContext, req: TaskRequest, request: Request) -> tuple[Jo
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = evaluate_task(design, task, oset, settings, progress, cancel)
+        return ApiResult(raw=None, payload=jsonable(res.to_dict()))
+
+    return ctx.submit(request, "task", key, compute), cached
+
+
+def _task_key(task: Any) -> Any:
+    import hashlib
+
+    from paraspace.kinematics.task import PoseList
+
+    if isinstance(task, PoseList):
+        return ("poses", hashlib.sha256(task.poses.tobytes() + (b"" if task.t is None else task.t.tobytes()))
+                .hexdigest(), task.t is None)
+    return task
+
+
+def _start_general(ctx: ApiContext, req: TaskRequest, request: Request, mech: Any, task: Any, oset: Any,
+                   settings: Any) -> tuple[Job, bool]:
+    """A task on a general mechanism (kinematics/mechanism_task.py), its sizes checked first."""
+    import json
+
+    from paraspace.kinematics.design import ParameterError
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.mechanism_task import evaluate_mechanism_task
+    from paraspace.kinematics.mechanism_workspace import general_plan
+    from paraspace.kinematics.task import PoseList, region_samples
+    from paraspace.kinematics.workspace import WorkspaceSettings
+
+    from .workspace import MAX_API_CARRIAGE_SAMPLES
+
+    assert req.mechanism is not None
+    length_step = req.mechanism.length_step
+    if settings.joints != Joints():
+        raise FieldError("settings.joints", "settings.joints: none for a mechanism description (its legs carry their "
+                                            "own u_cone/s_cone)")
+    key = ("mechanism", json.dumps(mech.to_dict(), sort_keys=True), length_step, _task_key(task), oset, settings)
+    cached = ctx.caches["task"].get(key) is not None
+    if not cached:
+        ctx.quota_check(request)
+        try:
+            _, samples = general_plan(mech, WorkspaceSettings(voxel=40.0, eta_step=settings.eta_step), length_step)
+        except ParameterError as exc:
+            raise FieldError(f"settings.{exc.field}", str(exc)) from None
+        if max(samples) > MAX_API_CARRIAGE_SAMPLES:
+            raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most {MAX_API_CARRIAGE_SAMPLES:,} "
+                                "per request (a larger settings.eta_step or mechanism.length_step)")
+        if not isinstance(task, PoseList):
+            n = region_samples(task, oset, settings)
+            if n > ctx.limits.max_task_samples:
+                raise ApiError(413, f"task of {n:,} samples (lattice points x orientations) exceeds the limit "
+                                    f"max_task_samples = {ctx.limits.max_task_samples:,}: use a coarser voxel, a "
+                                    f"smaller region or margin_range, or a larger angle_step")
+
+    def compute(progress: Any, cancel: Any) -> ApiResult:
+        res = evaluate_mechanism_task(mech, task, oset, settings, length_step, progress, cancel)
         return ApiResult(raw=None, payload=jsonable(res.to_dict()))
 
     return ctx.submit(request, "task", key, compute), cached
