@@ -174,6 +174,10 @@ class ViewController:
         if bundle is None:
             return
         mode = str(ctx.panels.shell_colour.value)
+        link = ctx.state.mechanism
+        if link is not None and mode != COLOUR_MODES[0]:  # the colour fields are the paper design's
+            ctx.notify("Shell coloured by height", f"shell colour = {mode}: {link.not_yet()}", color="orange")
+            mode = COLOUR_MODES[0]
         if mode == COLOUR_MODES[0]:
             self._show_mesh(bundle.mesh)
             assert ctx.shell is not None  # built before the controllers are wired
