@@ -121,7 +121,7 @@ class ClientSession:
         self.studies_controller = StudiesController(ctx, exports=self.exports)
         self.workspace_controller = WorkspaceController(
             ctx, orientation=self.orientation_controller, numbers=self.numbers, view=self.view_controller,
-            on_measures=lambda: self.compare.refresh(),
+            on_measures=self._after_measures,
             show_controls=self._show_result, on_state_change=self._after_stop)
         self.pose_controller = PoseController(ctx, numbers=self.numbers,
                                               submit_workspace=self.workspace_controller.submit, on_state_change=url)
@@ -248,6 +248,12 @@ class ClientSession:
         if ori is None or ori.design != s.design or ori.settings != s.orientation_settings():
             return None
         return index_row(ori)
+
+    def _after_measures(self) -> None:
+        """The full result's measures are on screen: the Compare table follows (its buttons keep the
+        selector's notes: disabled for another mechanism than the paper's)."""
+        self.compare.refresh()
+        self.notes.show(self.ctx.state.mechanism)
 
     def _show_result(self, r: Any) -> None:
         """Stop went back to the result on screen: its design or mechanism into the controls."""
