@@ -49,7 +49,7 @@ def browsers(explorer):
         b.close()
 
 
-def wait_mechanism(exp: Explorer, session, timeout: float = 120.0) -> None:
+def wait_mechanism(exp: Explorer, session, timeout: float = 240.0) -> None:
     """Until the full, measured result of the session's current mechanism is on screen."""
     def idle() -> bool:
         b, s, info = session.bundle, session.state, session.ctx.ws_info
@@ -67,9 +67,9 @@ def direct_volume(mech, h: float = H, orientation=(0.0, 0.0, 0.0)) -> float:
 def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(explorer, browsers, name):
     b = browsers(f"voxel={H:g}")
     s = b.session
-    wait_idle(explorer, s)
+    wait_idle(explorer, s, 240)
     b.set(s.panels.mechanism.selector, name)
-    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == name, 10, "selection")
+    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == name, 30, "selection")
     wait_mechanism(explorer, s)
     assert s.bundle.result.volume == direct_volume(preset(name)) > 0
     # its parameters as sliders (defaults from PresetParam), the paper's design sliders hidden
@@ -91,7 +91,7 @@ def test_a_parameter_slider_recomputes_with_that_value(explorer, browsers):
     wait_mechanism(explorer, s)
     before = s.bundle.result.volume
     b.set(s.panels.mechanism.sliders["gough-stewart"]["l_max"], 175.0)
-    wait_for(lambda: dict(s.state.mechanism.params)["l_max"] == 175.0, 10, "the slider")
+    wait_for(lambda: dict(s.state.mechanism.params)["l_max"] == 175.0, 30, "the slider")
     wait_mechanism(explorer, s)
     expected = direct_volume(preset("gough-stewart", {"l_max": 175.0}))
     assert s.bundle.result.volume == expected
@@ -105,7 +105,7 @@ def test_a_refused_parameter_names_it_and_changes_nothing(explorer, browsers):
     wait_mechanism(explorer, s)
     state = s.state
     b.set(s.panels.mechanism.sliders["gough-stewart"]["l_min"], 170.0)  # above l_max = 164.5
-    wait_for(lambda: s.panels.mechanism.message.visible, 10, "the message")
+    wait_for(lambda: s.panels.mechanism.message.visible, 30, "the message")
     text = s.panels.mechanism.message.content.replace("\\", "")
     assert "l_max" in text and "l_min < l_max" in text
     assert s.state == state
@@ -130,7 +130,7 @@ def test_a_bad_upload_is_named_and_leaves_the_state_unchanged(explorer, browsers
 def test_an_upload_computes_it_and_its_link_restores_it(explorer, browsers):
     b = browsers(f"voxel={H:g}&z=140")
     s = b.session
-    wait_idle(explorer, s)
+    wait_idle(explorer, s, 240)
     mech = preset("6-pss", {"rail_stroke": 120.0})
     assert s.mechanism_controller.apply_upload("linapod.toml", dumps_mechanism(mech).encode())
     wait_mechanism(explorer, s)
@@ -181,8 +181,8 @@ def test_back_to_paper_is_the_paper_path_unchanged(explorer, browsers):
     s = b.session
     wait_mechanism(explorer, s)
     b.set(s.panels.mechanism.selector, "paper")
-    wait_for(lambda: s.state.mechanism is None, 10, "paper")
-    wait_idle(explorer, s)
+    wait_for(lambda: s.state.mechanism is None, 30, "paper")
+    wait_idle(explorer, s, 240)
     ref = compute_workspace(Design(), WorkspaceSettings(voxel=H))
     assert s.bundle.result.volume == ref.volume
     assert np.array_equal(s.bundle.result.occupancy, ref.occupancy)
@@ -206,7 +206,7 @@ def test_the_drawing_colours_each_leg_by_its_state(explorer, browsers):
     # down to z = 130: every leg inside (lengths about 139.5, in [114.5, 164.5])
     b.set(s.panels.pose["z"], 130.0)
     wait_for(lambda: s.ctx.in_workspace and np.all(np.asarray(s.pose_controller.general.legs.batched_colors)
-                                                   == STATE_COLORS["inside"]), 10, "legs inside, in the workspace")
+                                                   == STATE_COLORS["inside"]), 30, "legs inside, in the workspace")
 
 
 def test_joint_paths_are_rails_over_the_prismatic_range_and_arcs_over_the_revolute_range():
@@ -235,3 +235,15 @@ def test_leg_state_of_a_cone():
     tilt = np.radians(20.0)
     assert leg_state(leg, np.zeros(3), 100 * np.array([np.sin(tilt), 0.0, np.cos(tilt)]), eye, eye) == "inside"
     assert leg_state(leg, np.zeros(3), np.array([0.0, 0.0, 300.0]), eye, eye) == "too_long"
+
+
+def test_fixed_length_legs_are_drawn_at_their_length_where_the_pose_is_reachable(explorer, browsers):
+    # 6-PSS: legs of length 120 on vertical rails [0, 150]; z = 150 is inside its workspace
+    b = browsers(f"voxel={H:g}&mech=6-pss&z=150")
+    s = b.session
+    wait_mechanism(explorer, s)
+    assert s.ctx.in_workspace
+    general = s.pose_controller.general
+    assert np.allclose(np.asarray(general.legs.batched_scales)[:, 2], 120.0, atol=1e-4)
+    assert np.all(np.asarray(general.legs.batched_colors) == STATE_COLORS["inside"])
+    assert "**reachable**" in s.panels.pose_table.content

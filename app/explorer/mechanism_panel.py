@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import viser
@@ -33,7 +33,9 @@ from ..textsafe import md_text
 from ..urlstate import ExplorerState, encode_query
 from .mechanism_scene import STATE_TEXT, MechanismPose
 from .pagehook import MAX_QUERY_CHARS
-from .session import SessionContext
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from .session import SessionContext
 
 #: The selector's entry of an uploaded description (offered once a file was read).
 FILE_OPTION = "uploaded file"
@@ -95,7 +97,7 @@ def mechanism_pose_table(link: MechanismLink, iks: list[Any], pose: MechanismPos
     """Markdown of the pose's verdict and its table: per chain the carriage values (degrees for a
     revolute joint), the legs' lengths with their states, and the length margin."""
     mech = link.mechanism()
-    feasible = all(ik.feasible for ik in iks)
+    feasible = pose_feasible(pose.states)
     rows = ["| chain | carriage | legs | margin |", "|---|---|---|---|"]
     k = 0
     for ik, chain in zip(iks, mech.chains):
@@ -106,17 +108,23 @@ def mechanism_pose_table(link: MechanismLink, iks: list[Any], pose: MechanismPos
             k += 1
             legs.append(fixed(length) + ("" if state == "inside" else f" **({STATE_TEXT[state]})**"))
         rows.append(f"| {ik.chain + 1} | {q or 'fixed'} | {'; '.join(legs)} | {fixed(ik.margin)} |")
-    verdict = "**reachable**" if feasible else "**not reachable: a leg leaves its length range**"
+    verdict = "**reachable**" if feasible else "**not reachable: a leg leaves its length range or its cone**"
     return (f"{verdict}  \n{md_text(link.label)}: carriages resolved (max leg margin; cones not part of the "
             "margin)\n\n" + "\n".join(rows))
 
 
-def mechanism_pose_line(iks: list[Any] | None, inside: bool | None) -> str | None:
+def pose_feasible(states: list[str]) -> bool:
+    """The pose is reachable at the drawn carriage values: every leg inside its range and cones."""
+    return all(st in ("inside", "at_limit") for st in states)
+
+
+def mechanism_pose_line(pose: MechanismPose | None, inside: bool | None) -> str | None:
     """The Numbers panel's pose line for the selector's mechanism (``None`` before the IK)."""
-    if iks is None:
+    if pose is None:
         return None
     where = "" if inside is None else (" · inside the workspace" if inside else " · outside the workspace")
-    return ("reachable" if all(ik.feasible for ik in iks) else "not reachable: a leg leaves its length range") + where
+    ok = pose_feasible(pose.states)
+    return ("reachable" if ok else "not reachable: a leg leaves its length range or its cone") + where
 
 
 def mechanism_lines(link: MechanismLink, result: Any | None) -> tuple[str, ...]:

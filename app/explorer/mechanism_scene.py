@@ -53,6 +53,10 @@ STATE_TEXT: dict[str, str] = {**LEG_STATE_TEXT, "out_of_cone": "out of its cone"
 ARC_SAMPLES = 33
 #: A leg within this fraction of its stroke from a limit is "at a limit".
 AT_LIMIT = 0.01
+#: Relative tolerance of a leg's length test: ``mechanism_ik`` places an exact prismatic joint to
+#: within ``stroke / 400^3`` (about 2e-6 for a stroke of 150), so a fixed-length leg
+#: (``length = [l, l]``) is met to that accuracy, far inside ``1e-6 l``.
+LENGTH_RTOL = 1e-6
 #: The paper drawing's nodes hidden while a description is drawn.
 PAPER_NODES = ("base_circle", "arc_rails", "legs", "joints", "carriages", "radials", "platform_mesh")
 
@@ -62,13 +66,14 @@ def leg_state(leg: Leg, base: np.ndarray, top: np.ndarray, carriage_rot: np.ndar
     """``too_short`` / ``too_long`` (length outside ``leg.length``), ``out_of_cone`` (the direction
     ``top - base`` more than a cone's angle from its axis: ``u_cone`` in the carriage frame,
     ``s_cone`` in the platform frame), ``at_limit`` (within :data:`AT_LIMIT` of the stroke from a
-    limit) or ``inside``."""
+    limit) or ``inside``; lengths are compared with the tolerance :data:`LENGTH_RTOL` ``* hi``."""
     v = np.asarray(top, float) - np.asarray(base, float)
     length = float(np.linalg.norm(v))
     lo, hi = leg.length
-    if length < lo - 1e-9:
+    tol = LENGTH_RTOL * hi
+    if length < lo - tol:
         return "too_short"
-    if length > hi + 1e-9:
+    if length > hi + tol:
         return "too_long"
     for cone, rot in ((leg.u_cone, carriage_rot), (leg.s_cone, platform_rot)):
         if cone is not None and length > 0.0:

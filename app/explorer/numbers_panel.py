@@ -181,7 +181,7 @@ class NumbersPanel:
             ori = ctx.orientation
             s = ctx.state
             shown = ctx.bundle if info is not None and not info.preview else ctx.preview
-            iks = ctx.mechanism_ik
+            drawn = ctx.mechanism_pose
         mech_lines: tuple[str, ...] = ()
         pose_line = None
         if s.mechanism is not None:
@@ -189,7 +189,7 @@ class NumbersPanel:
 
             result = shown.result if shown is not None and shown.mechanism == s.mechanism else None
             mech_lines = mechanism_lines(s.mechanism, result)
-            pose_line = mechanism_pose_line(iks, inside)
+            pose_line = mechanism_pose_line(drawn, inside)
         ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line,
                                                       mech_lines, pose_line)
         ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori, pose_line)

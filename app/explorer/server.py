@@ -55,7 +55,7 @@ from . import jsbridge, pagehook
 from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
-from .mechanism_panel import MechanismController, NotYetNotes
+from .mechanism_panel import MechanismController, NotYetNotes, build_mechanism_controls
 from .numbers_panel import NumbersPanel
 from .optimize_panel import OptimizePanel
 from .orientation_controller import OrientationController
@@ -140,6 +140,8 @@ class ClientSession:
         ctx, client = self.ctx, self.client
         s = ctx.state
         ctx.panels = build_panels(client.gui, s)
+        with ctx.panels.design_tab:  # the selector, at the top of the Design tab
+            ctx.panels.mechanism = build_mechanism_controls(client.gui, s)
         self._build_optimize_tab()
         notify = ctx.notify
         notes, p = self.notes, ctx.panels

@@ -93,8 +93,14 @@ class ViewController:
 
     # ----- camera ---------------------------------------------------------------------------------
     def _framing_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """The box to frame: the shell's (or, before one exists, the reach of the design)."""
+        """The box to frame: the shell's (or, before one exists, the reach of the design); for a
+        mechanism of the selector, together with its drawing (base and platform joints)."""
         mesh = self.ctx.shell.source if self.ctx.shell is not None else None
+        drawn = self.ctx.mechanism_pose if self.ctx.state.mechanism is not None else None
+        if drawn is not None:
+            pts = np.vstack([drawn.base, drawn.top] + ([mesh.vertices] if mesh is not None and len(mesh.vertices)
+                                                       else []))
+            return pts.min(axis=0), pts.max(axis=0)
         if mesh is not None and len(mesh.vertices):
             return mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         d = self.ctx.state.design
