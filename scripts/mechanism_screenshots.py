@@ -34,7 +34,7 @@ def main(names: list[str]) -> None:
             ctx = browser.new_context(viewport={"width": 1440, "height": 900})
             page = ctx.new_page()
             page.goto(exp.url + "?" + QUERIES[name])
-            s = wait_for(lambda: next((s for cid, s in list(exp.sessions.items())
+            s = wait_for(lambda before=before: next((s for cid, s in list(exp.sessions.items())
                                        if cid not in before and s.ready.is_set()), None), 60, "session")
 
             def done(s=s) -> bool:
