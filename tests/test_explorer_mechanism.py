@@ -247,3 +247,44 @@ def test_fixed_length_legs_are_drawn_at_their_length_where_the_pose_is_reachable
     assert np.allclose(np.asarray(general.legs.batched_scales)[:, 2], 120.0, atol=1e-4)
     assert np.all(np.asarray(general.legs.batched_colors) == STATE_COLORS["inside"])
     assert "**reachable**" in s.panels.pose_table.content
+
+
+def test_stop_goes_back_to_the_mechanism_on_screen_and_stale_jobs_are_dropped(explorer, browsers):
+    b = browsers(f"voxel={H:g}&mech=6-pups")
+    s = b.session
+    wait_mechanism(explorer, s)
+    shown = s.state.mechanism
+    explorer.shell_cache.clear()  # not a cache hit from another test
+    b.set(s.panels.voxel, 1.0)  # a slow general job
+    job = wait_for(lambda: s.workspace_controller.job if s.state.voxel == 1.0 and s.workspace_controller.job
+                   is not None and s.workspace_controller.job.status == "running" else None, 30, "h=1 job running")
+    b.click(s.panels.stop)
+    wait_for(lambda: job.is_final, 30, "stopped job")
+    assert job.status == "cancelled"
+    wait_for(lambda: s.state.voxel == H and s.panels.voxel.value == H, 30, "voxel back to the shown result")
+    assert s.state.mechanism == shown and s.bundle.mechanism == shown
+    # two selections in a row: the first one's job never shows its shell over the second's
+    b.set(s.panels.mechanism.selector, "gough-stewart")
+    b.set(s.panels.mechanism.selector, "6-pss")
+    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == "6-pss", 30, "6-pss")
+    wait_mechanism(explorer, s)
+    assert s.bundle.mechanism.preset == "6-pss" and s.bundle.result.volume == direct_volume(preset("6-pss"))
+
+
+def test_a_file_too_large_for_a_link_is_used_but_not_put_in_the_link(explorer, browsers, monkeypatch):
+    from paraspace.app.explorer import mechanism_panel
+
+    # a description's compact JSON stays under the 4,096-character query bound (six legs at most):
+    # the bound is made small here to see the refusal
+    monkeypatch.setattr(mechanism_panel, "MAX_QUERY_CHARS", 400)
+    b = browsers(f"voxel={H:g}")
+    s = b.session
+    wait_idle(explorer, s, 240)
+    mech = preset("gough-stewart", {"l_max": 170.0})
+    assert s.mechanism_controller.apply_upload("gs.toml", dumps_mechanism(mech).encode())
+    assert "too large to share in a link" in s.panels.mechanism.message.content
+    wait_mechanism(explorer, s)
+    assert s.bundle.result.volume == direct_volume(mech)
+    q = s.share_controller.query()  # the link of the state on screen
+    assert s.state.mechanism is not None and "mech=" not in q and "mfile" not in q
+    assert parse_query(q)[0].mechanism is None
