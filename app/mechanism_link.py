@@ -41,6 +41,10 @@ FILE = "file"
 MECH_PRESETS: tuple[str, ...] = tuple(name for name in PRESETS if name != "paper")
 #: Prefix of a preset parameter's link key (``mp_lift=40``): the names repeat the design's (``l_min``).
 PARAM_PREFIX = "mp_"
+#: Longest piece of a link's value quoted in a message (as ``app.urlstate.QUOTE_CHARS``).
+QUOTE_CHARS = 40
+#: Longest message about an unreadable uploaded description in a link.
+MESSAGE_CHARS = 300
 
 
 def preset_params(name: str) -> tuple[PresetParam, ...]:
@@ -173,7 +177,7 @@ def parse_mechanism_pairs(values: Mapping[str, str]) -> tuple[MechanismLink | No
         try:
             return file_link(_unpack(values["mfile"])), messages
         except (ValueError, zlib.error) as exc:
-            why = str(exc) if isinstance(exc, ParameterError) else "not base64url(zlib(JSON))"
+            why = str(exc)[:MESSAGE_CHARS] if isinstance(exc, ParameterError) else "not base64url(zlib(JSON))"
             return None, [f"mfile: the uploaded description could not be read ({why}); the paper's design is "
                           "shown"]
     if name not in MECH_PRESETS:
@@ -190,6 +194,9 @@ def parse_mechanism_pairs(values: Mapping[str, str]) -> tuple[MechanismLink | No
         try:
             return preset_link(name, typed), messages
         except ParameterError as exc:
+            value = typed.get(exc.field)
+            if isinstance(value, str) and len(value) > QUOTE_CHARS:  # the CLI's message, its quote cut
+                exc = ParameterError(exc.field, value[: QUOTE_CHARS - 1] + "…", exc.valid)
             messages.append(f"{PARAM_PREFIX}{exc}; the preset's default is used")
             if exc.field not in typed:  # a cross-field check (l_max > l_min): drop the last given
                 exc.field = next(reversed(typed)) if typed else exc.field

@@ -288,3 +288,11 @@ def test_a_file_too_large_for_a_link_is_used_but_not_put_in_the_link(explorer, b
     q = s.share_controller.query()  # the link of the state on screen
     assert s.state.mechanism is not None and "mech=" not in q and "mfile" not in q
     assert parse_query(q)[0].mechanism is None
+
+
+def test_mechanism_link_messages_quote_a_bounded_piece():
+    payload = "<script>" + "x" * 5000 + "</script>"
+    for query in (f"mech=6-pups&mp_lift={payload}", f"mech={payload}", f"mech=file&mfile={payload}"):
+        state, msgs = parse_query(urllib.parse.urlencode(dict(urllib.parse.parse_qsl(query))))
+        assert state.mechanism is None or state.mechanism == preset_link("6-pups")
+        assert msgs and all(len(m) < 400 and "</script>" not in m for m in msgs), msgs
