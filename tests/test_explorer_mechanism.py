@@ -81,6 +81,7 @@ def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(expl
     assert f"not for the {name} mechanism yet" in s.panels.numbers.content.replace("\\", "")
     assert "not for the" in s.panels.orientation_status.content
     assert s.compare.pin_button.disabled and s.tilt.run.disabled
+    assert s.panels.pose["z"].max == 350.0  # every height (the paper design's reach is 165)
     # the drawing: six legs, the paper's legs hidden
     assert s.pose_controller.general is not None and not s.mechanism.legs.visible
 
@@ -187,6 +188,7 @@ def test_back_to_paper_is_the_paper_path_unchanged(explorer, browsers):
     assert s.bundle.result.volume == ref.volume
     assert np.array_equal(s.bundle.result.occupancy, ref.occupancy)
     assert s.panels.design["a"].visible and s.mechanism.legs.visible and s.pose_controller.general is None
+    assert s.panels.pose["z"].max == 165.0  # the paper design's reach again
     assert not s.tilt.run.disabled and "not for the" not in s.panels.numbers.content
     assert "mech=" not in b.search or wait_for(lambda: "mech=" not in b.search, 5, "the link")
 

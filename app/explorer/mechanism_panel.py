@@ -30,9 +30,10 @@ from paraspace.kinematics.mechanism import MAX_TEXT_BYTES
 from ..mechanism_link import FILE, MECH_PRESETS, MechanismLink, file_link, preset_link, preset_params
 from ..numfmt import fixed
 from ..textsafe import md_text
-from ..urlstate import ExplorerState, encode_query
+from ..urlstate import POSE_SLIDERS, ExplorerState, encode_query
 from .mechanism_scene import STATE_TEXT, MechanismPose
 from .pagehook import MAX_QUERY_CHARS
+from .panels import pose_slider_span, slider_span
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from .session import SessionContext
@@ -225,6 +226,10 @@ class MechanismController:
                 h.visible = paper
             if p.joints.folder is not None:
                 p.joints.folder.visible = paper
+            # the height slider spans the paper design's reach, or every height for another mechanism
+            z, zv = p.pose["z"], float(self.ctx.state.pose.z)
+            z.min, z.max = (pose_slider_span("z", self.ctx.state.design, zv) if paper
+                            else slider_span(POSE_SLIDERS["z"].lo, POSE_SLIDERS["z"].hi, zv))
             p.design_message.visible = paper and self.ctx.design_error is not None
         self.notes.show(link)
 
