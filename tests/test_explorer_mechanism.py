@@ -82,6 +82,8 @@ def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(expl
     assert "not for the" in s.panels.orientation_status.content
     assert s.compare.pin_button.disabled and s.tilt.run.disabled
     assert s.panels.pose["z"].max == 350.0  # every height (the paper design's reach is 165)
+    s.share_controller.download_report()  # the paper design's report: said so, nothing computed
+    assert f"not for the {name} mechanism yet" in s.panels.report_status.content.replace("\\", "")
     # the drawing: six legs, the paper's legs hidden
     assert s.pose_controller.general is not None and not s.mechanism.legs.visible
 

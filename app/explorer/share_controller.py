@@ -202,6 +202,9 @@ class ShareController:
             s = ctx.state
             b = ctx.bundle
             ori = ctx.orientation
+        if s.mechanism is not None:  # the report is the paper design's (parameters, TI, pins)
+            ctx.panels.report_status.content = f"*Design report: {md_text(s.mechanism.not_yet())}.*"
+            return
         if b is None or b.measures is None or b.result.design != s.design:
             ctx.notify("Report not started", "the full workspace is still being computed; try again when the "
                        "numbers show the full result", color="orange")
