@@ -19,7 +19,8 @@ import numpy as np
 
 from paraspace.kinematics.design import Design, ParameterError
 
-__all__ = ["MAX_VOXELS", "grid_voxels", "workspace_voxels", "orientation_samples", "check_workspace_grid"]
+__all__ = ["MAX_VOXELS", "grid_voxels", "workspace_voxels", "orientation_samples", "check_workspace_grid",
+           "check_mechanism_grid"]
 
 #: Largest workspace grid one request may ask for. The paper's default design at voxel 1 (the
 #: finest explorer setting) needs 20.8 million voxels; a Table I design with every length at its
@@ -72,5 +73,20 @@ def check_workspace_grid(design: Design, settings: Any, max_voxels: int = MAX_VO
         h = float(settings.voxel)
         need = math.ceil(h * (n / max_voxels) ** (1.0 / 3.0) * 10.0 + 1e-9) / 10.0
         raise ParameterError("voxel", h, f"voxel >= {need:g} for this design (a grid of at most "
+                                         f"{max_voxels:,} voxels; voxel {h:g} makes {n:,})")
+    return n
+
+
+def check_mechanism_grid(mech: Any, settings: Any, max_voxels: int = MAX_VOXELS, length_step: float = 1.0) -> int:
+    """:func:`check_workspace_grid` for a mechanism description on the general engine (its grid is
+    laid by ``kinematics.mechanism_workspace.general_plan``): the same rule and message."""
+    from paraspace.kinematics.mechanism_workspace import general_plan
+
+    grid, _samples = general_plan(mech, settings, length_step)
+    n = int(grid.size)
+    if n > max_voxels:
+        h = float(settings.voxel)
+        need = math.ceil(h * (n / max_voxels) ** (1.0 / 3.0) * 10.0 + 1e-9) / 10.0
+        raise ParameterError("voxel", h, f"voxel >= {need:g} for this mechanism (a grid of at most "
                                          f"{max_voxels:,} voxels; voxel {h:g} makes {n:,})")
     return n

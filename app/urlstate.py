@@ -14,6 +14,7 @@ URL format (keys are the CLI's names)::
      [&theta_u=45&theta_s=45&cone_axis=home&leg_diameter=10&clearance=1]
      [&pin=10,14,50,100,114.5,50,30,centered[;80,14,50,100,114.5,50,30,centered...]]
      [&task=box,0,0,130,40,40,30,15,0]
+     [&mech=6-pups&mp_lift=40 | &mech=file&mfile=...]   (app/mechanism_link.py)
 
 Encoding policy (:func:`encode_query`): the 8 design keys and the 6 pose keys are **always**
 written, so a link states its design and pose explicitly and keeps meaning the same mechanism even
@@ -50,6 +51,7 @@ from paraspace.kinematics.settings import ORIENTATION, WORKSPACE, Setting
 from paraspace.kinematics.task import SHAPES as TASK_SHAPES
 from paraspace.kinematics.task import OrientationSet, Region
 
+from .mechanism_link import MechanismLink, encode_mechanism, param_keys, parse_mechanism_pairs
 from .schema import LINK_FIELDS, link_number_error
 
 CarriageMode = Literal["auto", "manual"]
@@ -280,6 +282,8 @@ class ExplorerState:
         pins: the pinned designs shown beside the current one (Compare tab), at most
             :data:`MAX_PINS`; the link writes them in one ``pin`` key, separated by ``;``.
         task: the Task tab's region and orientation set (:class:`TaskLink`), or ``None``.
+        mechanism: a preset other than the paper's, or an uploaded description
+            (:class:`~app.mechanism_link.MechanismLink`); ``None``: the paper's ``design``.
     """
 
     design: Design = dataclasses.field(default_factory=Design)
@@ -299,6 +303,7 @@ class ExplorerState:
     joints: Joints = dataclasses.field(default_factory=Joints)
     pins: tuple[Design, ...] = ()
     task: TaskLink | None = None
+    mechanism: MechanismLink | None = None
 
     def replace(self, **changes: Any) -> ExplorerState:
         """A copy with some fields changed (no validation beyond the dataclasses')."""
@@ -395,7 +400,7 @@ def known_keys() -> tuple[str, ...]:
     """All query keys the explorer understands, in URL order."""
     return (DESIGN_KEYS + ("eta_range",) + POSE_KEYS + ("carriages",) + D_KEYS + ETA_KEYS
             + ("voxel", "z0", "angle_range", "angle_step", "view", "cut", "cut_z", "cut_keep", "opacity")
-            + JOINT_KEYS + ("pin", "task"))
+            + JOINT_KEYS + ("pin", "task", "mech", "mfile") + param_keys())
 
 
 def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
@@ -429,7 +434,8 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         named = ", ".join(_quote(k) for k in unknown[:MAX_NAMED_UNKNOWN])
         more = f" and {len(unknown) - MAX_NAMED_UNKNOWN} more" if len(unknown) > MAX_NAMED_UNKNOWN else ""
         messages.append(f"unknown parameter{'s' if len(unknown) > 1 else ''} {named}{more} ignored; "
-                        f"known parameters: {', '.join(known_keys())}")
+                        f"known parameters: {', '.join(k for k in known_keys() if k not in param_keys())}, "
+                        "mp_NAME (a preset's parameter)")
 
     # ----- design: per-field ranges, then the model's cross-checks (d_s <= r) ------------------
     design_fields: dict[str, Any] = _parse_fields(DESIGN_KEYS, values, DESIGN_RANGES, messages)
@@ -555,8 +561,12 @@ def parse_query(query: str) -> tuple[ExplorerState, list[str]]:
         if msg:
             messages.append(msg)
 
+    mechanism, mech_messages = parse_mechanism_pairs(values)
+    messages += mech_messages
+
     state = ExplorerState(
         design=design, pose=pose, carriages=carriages, joints=joints, pins=tuple(pins), task=task,
+        mechanism=mechanism,
         d=(float(d[0]), float(d[1]), float(d[2])), eta=(float(eta[0]), float(eta[1]), float(eta[2])),
         voxel=numbers.get("voxel", DEFAULT_STATE.voxel), z0=numbers.get("z0", DEFAULT_STATE.z0),
         angle_range=numbers.get("angle_range", DEFAULT_STATE.angle_range),
@@ -603,7 +613,7 @@ def encode_pairs(state: ExplorerState) -> list[tuple[str, str]]:
         v = getattr(j, key)
         if v != getattr(DEFAULT_STATE.joints, key):
             pairs.append((key, v if isinstance(v, str) else format_number(v)))
-    return pairs
+    return pairs + encode_mechanism(state.mechanism)
 
 
 def encode_query(state: ExplorerState) -> str:

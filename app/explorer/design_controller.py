@@ -172,13 +172,14 @@ class DesignController:
         p = ctx.panels
         psi, theta, phi = r.settings.orientation
         with ctx.programmatic():
-            self.show_design(r.design)
+            if r.design is not None:  # None: a mechanism of the selector (app/mechanism_panel.py)
+                self.show_design(r.design)
             p.voxel.value = float(r.settings.voxel)
             for k, v in (("psi", psi), ("theta", theta), ("phi", phi)):
                 p.pose[k].value = v
             p.joints.show(r.settings.joints)
         s = ctx.state
-        self._set_carriage_slider_ranges(r.design, list(s.d), list(s.eta))
+        self._set_carriage_slider_ranges(s.design, list(s.d), list(s.eta))
 
     def _set_carriage_slider_ranges(self, design: Design, d: list[float], eta: list[float]) -> None:
         p = self.ctx.panels

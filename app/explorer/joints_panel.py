@@ -38,6 +38,7 @@ class JointsControls:
     diameter: Any
     clearance: Any
     message: Any
+    folder: Any = None  # the group itself (hidden while the selector shows another mechanism)
 
     def handles(self) -> tuple[Any, ...]:
         """Every input handle (for wiring ``on_update``)."""
@@ -75,7 +76,7 @@ class JointsControls:
 def build_joints_folder(gui: viser.GuiApi, joints: Joints) -> JointsControls:
     """The Joints folder (collapsed unless ``joints`` sets something) showing ``joints``."""
     cone_text = JOINT_RANGES["theta_u"][3]
-    with gui.add_folder("Joints (cones, leg interference)", expand_by_default=not joints.is_default):
+    with gui.add_folder("Joints (cones, leg interference)", expand_by_default=not joints.is_default) as folder:
         u_on = gui.add_checkbox("limit U joints", joints.theta_u is not None,
                                 hint="each U joint (on a carriage) lets its leg tilt at most theta_U from its axis")
         u_angle = gui.add_slider("theta_U (deg)", min=CONE_SLIDER[0], max=CONE_SLIDER[1], step=CONE_SLIDER[2],
@@ -102,4 +103,4 @@ def build_joints_folder(gui: viser.GuiApi, joints: Joints) -> JointsControls:
                                         f"{JOINT_RANGES['clearance'][3]}")
         message = gui.add_markdown("", visible=False)
     return JointsControls(u_on=u_on, u_angle=u_angle, s_on=s_on, s_angle=s_angle, axis=axis, diameter=diameter,
-                          clearance=clearance, message=message)
+                          clearance=clearance, message=message, folder=folder)

@@ -69,9 +69,10 @@ class LegendPanel:
     def show_computing(self, title: str, what: str) -> None:
         """The key of a colour mode whose colours are being computed: no bar, "computing...", so
         the Legend never describes colours that are not on screen."""
+        # the caption first: a reader never sees the new title beside the previous mode's caption
+        self.caption.content = f"{what}: computing... (the shell keeps its previous colours until then)"
         self.colorbar.label = title
         self.colorbar.image = _blank_bar()
-        self.caption.content = f"{what}: computing... (the shell keeps its previous colours until then)"
 
 
 @functools.lru_cache(maxsize=32)

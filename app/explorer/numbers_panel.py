@@ -54,12 +54,14 @@ def joints_text(j: Joints) -> str:
 
 def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
                      ori: OrientationResult | None,
-                     design_error: str | None, task_line: str | None = None) -> str:
+                     design_error: str | None, task_line: str | None = None, mechanism_lines: tuple[str, ...] = (),
+                     pose_line: str | None = None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
     :class:`~app.session.SessionContext`, ``None`` before one), ``res`` the pose's IK, ``inside`` whether
     the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of
-    ``s``'s design, z0 and joints)."""
-    lines: list[str] = []
+    ``s``'s design, z0 and joints). For a mechanism of the selector (``s.mechanism``),
+    ``mechanism_lines`` (its name and the shell's bounds) lead and ``pose_line`` is its pose verdict."""
+    lines: list[str] = list(mechanism_lines)
     if not s.joints.is_default:
         lines.append(f"**Joints** {md_text(joints_text(s.joints))}  ")
     if info is not None:
@@ -67,12 +69,14 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
         kind = "preview" if info.preview else "full"
         lines.append(f"**{hover('Volume', 'volume')}** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
         br = info.bracket
+        if s.mechanism is not None and info.volume > 0:
+            lines.append(f"{hover('certified', 'bracket')} bracket: {md_text(s.mechanism.not_yet())}  ")
         if br is not None and info.volume > 0:
             lines.append(f"{hover('certified', 'bracket')}: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
                          "(continuous workspace, units³)  ")
         if info.volume == 0:
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
-                         "(psi, theta, phi) with this design.")
+                         f"(psi, theta, phi) with this {'design' if s.mechanism is None else 'mechanism'}.")
         elif m is not None:
             # the measures that do not change with h lead; the raw voxel counts come last, labelled
             closed = "closed" if m.boundary_closed_stable else "open (cut or in pieces)"
@@ -98,7 +102,9 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
                      + (f", {info.shell_seconds:.2f} s shell" if info.shell_seconds else ""))
     else:
         lines.append("*workspace: computing...*")
-    if ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
+    if s.mechanism is not None:
+        lines.append(f"**TI₁ / TI₂** {md_text(s.mechanism.not_yet())}")
+    elif ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
         sat = {x.index for x in figures.orientation_saturation(ori)}
         flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
         lines.append(f"**{hover('TI₁', 'TI_1')}** {fmt(ori.ti1, 4)}{flag['TI_1']}  "
@@ -108,7 +114,9 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
             lines.append(f"⚠ {md_text(figures.saturation_warning(ori), 600)}")
     else:
         lines.append("**TI₁ / TI₂** *computing...*")
-    if res is not None:
+    if pose_line is not None:
+        lines.append(f"**{hover('Pose', 'pose')}** {md_text(pose_line)}")
+    elif res is not None:
         where = "" if inside is None else (" · inside the workspace" if inside else " · outside the workspace")
         if res.feasible:
             lines.append(f"**{hover('Pose', 'pose')}** reachable{where}")
@@ -122,7 +130,7 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
 
 
 def summary_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
-                     ori: OrientationResult | None) -> str:
+                     ori: OrientationResult | None, pose_line: str | None = None) -> str:
     """The pinned strip above the tabs: volume with its bracket, boundary, TI_1, TI_2 and the pose,
     in two short lines (the Numbers below the tabs hold the rest). The same values and digits as
     :func:`numbers_markdown`; each name carries its definition as a hover text."""
@@ -140,13 +148,17 @@ def summary_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
         if m is not None:
             first += f" · {hover('boundary', 'boundary')} {'complete' if m.boundary_complete else 'incomplete'}"
     parts = []
-    if ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
+    if s.mechanism is not None:
+        parts.append(f"TI₁ / TI₂ {md_text(s.mechanism.not_yet())}")
+    elif ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
         sat = {x.index for x in figures.orientation_saturation(ori)}
         for key, label, value in (("TI_1", "TI₁", ori.ti1), ("TI_2", "TI₂", ori.ti2)):
             parts.append(f"**{hover(label, key)}** {'≥ ' if key in sat else ''}{fmt(value, 4)}")
     else:
         parts.append("TI₁ / TI₂ *computing...*")
-    if res is not None:
+    if pose_line is not None:
+        parts.append(f"{hover('pose', 'pose')} {'reachable' if pose_line.startswith('reachable') else 'not reachable'}")
+    elif res is not None:
         parts.append(f"{hover('pose', 'pose')} {'reachable' if res.feasible else 'not reachable'}")
     return first + "  \n" + " · ".join(parts)
 
@@ -168,5 +180,16 @@ class NumbersPanel:
             inside = ctx.in_workspace
             ori = ctx.orientation
             s = ctx.state
-        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line)
-        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori)
+            shown = ctx.bundle if info is not None and not info.preview else ctx.preview
+            drawn = ctx.mechanism_pose
+        mech_lines: tuple[str, ...] = ()
+        pose_line = None
+        if s.mechanism is not None:
+            from .mechanism_panel import mechanism_lines, mechanism_pose_line
+
+            result = shown.result if shown is not None and shown.mechanism == s.mechanism else None
+            mech_lines = mechanism_lines(s.mechanism, result)
+            pose_line = mechanism_pose_line(drawn, inside)
+        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line,
+                                                      mech_lines, pose_line)
+        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori, pose_line)

@@ -73,7 +73,8 @@ class OrientationController:
 
     @staticmethod
     def _key(s: ExplorerState) -> tuple:
-        return (s.design.key(), s.orientation_settings().key())
+        what = s.design.key() if s.mechanism is None else ("mechanism", s.mechanism.key())
+        return (what, s.orientation_settings().key())
 
     def forget_stale(self, s: ExplorerState) -> None:
         """Maps of another design than ``s``'s are stale: never show them, and free the worker at once."""
@@ -98,6 +99,10 @@ class OrientationController:
             s = ctx.state
             key = self._key(s)
             self.key = key
+        if s.mechanism is not None:  # the maps and TI are the paper's (eq. (28)) for now
+            ctx.cancel_job(self.job)
+            self._set_status(gen, f"Orientation maps and TI₁ / TI₂: {md_text(s.mechanism.not_yet())}.")
+            return
         cache = ctx.explorer.orientation_cache
         hit = cache.get(key)
         if hit is not None:

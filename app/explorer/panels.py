@@ -68,6 +68,7 @@ class Panels:
     tabs: Any
     legend: LegendPanel
     # design
+    design_tab: Any
     design: dict[str, Any]
     eta_range: Any
     reset: Any
@@ -129,6 +130,8 @@ class Panels:
     download_report: Any
     report_status: Any
     version: Any
+    #: the mechanism selector at the top of the Design tab (app/mechanism_panel.py; built by the session)
+    mechanism: Any = None
 
 
 #: ``order`` of the folders below the tab group (viser sorts a container's children by ``order``;
@@ -190,7 +193,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         numbers = gui.add_markdown("*computing...*")
     legend = build_legend_folder(gui, order=LOWER_ORDER + 1)
 
-    with tabs.add_tab("Design", viser.Icon.RULER_MEASURE):
+    design_tab = tabs.add_tab("Design", viser.Icon.RULER_MEASURE)
+    with design_tab:
         design = {}
         for key in DESIGN_KEYS:
             rng = DESIGN_SLIDERS[key]
@@ -312,6 +316,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         url_messages=url_messages, progress=progress, status=status, stop=stop, numbers=numbers, summary=summary,
         tabs=tabs,
         legend=legend,
+        design_tab=design_tab,
         design=design, eta_range=eta_range, reset=reset, voxel=voxel, design_message=design_message, joints=joints,
         pose_tab=pose_tab, plots_tab=plots_tab, pose=pose, gizmo=gizmo, carriages=carriages, d=d, eta=eta,
         pose_table=pose_table,

@@ -24,9 +24,10 @@ from paraspace.kinematics.workspace import reachable
 
 from ..numfmt import fixed
 from ..urlstate import POSE_KEYS, POSE_RANGES, POSE_SLIDERS, ExplorerState
+from .mechanism_scene import GeneralMechanismScene, mechanism_pose, show_paper_drawing
 from .numbers_panel import NumbersPanel
 from .panels import pose_slider_span
-from .scene import LEG_STATE_TEXT, MechanismScene
+from .scene import LEG_STATE_TEXT, MechanismScene, rotation_wxyz
 from .session import SessionContext
 
 log = logging.getLogger(__name__)
@@ -78,6 +79,7 @@ class PoseController:
         self.on_state_change = on_state_change
         self.mechanism: MechanismScene
         self.gizmo: viser.TransformControlsHandle
+        self.general: GeneralMechanismScene | None = None  # the selector's mechanism drawn (not the paper's)
 
     def build_scene(self, res: Resolution) -> None:
         """Draw the mechanism at ``res`` and the drag gizmo (the caller holds ``client.atomic()``)."""
@@ -111,6 +113,14 @@ class PoseController:
         with ctx.mech_lock:
             with ctx.lock:
                 s = ctx.state
+            if s.mechanism is not None:
+                self._update_general(s)
+                return None  # type: ignore[return-value]
+            if self.general is not None and not ctx.closed:  # back to the paper's design: its own drawing
+                with ctx.client.atomic():
+                    self.general.remove()
+                    self.general = None
+                    show_paper_drawing(self.mechanism, True)
             res = resolve(s)
             inside = bool(reachable(s.design, s.pose.position[None, :], (s.pose.psi, s.pose.theta, s.pose.phi),
                                     joints=s.joints)[0])
@@ -130,6 +140,44 @@ class PoseController:
             self._update_pose_views(res)
             ctx.event("mechanism")
             return res
+
+    def _update_general(self, s: ExplorerState) -> None:
+        """IK of the selector's mechanism (``mechanism_ik``: each chain's legs furthest inside their
+        ranges) and its drawing (``app/mechanism_scene.py``); the caller holds ``mech_lock``."""
+        from paraspace.kinematics.mechanism_workspace import mechanism_ik, platform_rotation, reachable_general
+
+        from .mechanism_panel import mechanism_pose_table
+
+        ctx = self.ctx
+        assert s.mechanism is not None
+        mech = s.mechanism.mechanism()
+        orientation = (s.pose.psi, s.pose.theta, s.pose.phi)
+        iks = mechanism_ik(mech, s.pose.position, orientation)
+        rot = platform_rotation(mech, orientation)
+        inside = bool(reachable_general(mech, s.pose.position[None, :], orientation)[0])
+        geo = mechanism_pose(mech, [ik.q for ik in iks], s.pose.position, rot)
+        if ctx.closed:
+            return
+        with ctx.client.atomic():
+            if self.general is None or self.general.mech != mech:
+                if self.general is not None:
+                    self.general.remove()
+                show_paper_drawing(self.mechanism, False)
+                self.general = GeneralMechanismScene(ctx.client.scene, mech, geo)
+            self.general.update(geo, inside)
+            self.mechanism.set_reachable(inside)
+            self.mechanism.platform.position = s.pose.position
+            self.mechanism.platform.wxyz = rotation_wxyz(rot)
+            self.gizmo.position = s.pose.position
+            self.gizmo.wxyz = self.mechanism.platform.wxyz
+        with ctx.lock:
+            ctx.resolution = None
+            ctx.in_workspace = inside
+            ctx.mechanism_pose = geo
+            ctx.mechanism_ik = iks
+        ctx.panels.pose_table.content = mechanism_pose_table(s.mechanism, iks, geo)
+        self.numbers.render()
+        ctx.event("mechanism")
 
     def _update_pose_views(self, res: Resolution) -> None:
         if self.ctx.closed:

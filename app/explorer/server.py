@@ -55,6 +55,7 @@ from . import jsbridge, pagehook
 from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
+from .mechanism_panel import MechanismController, NotYetNotes, build_mechanism_controls
 from .numbers_panel import NumbersPanel
 from .optimize_panel import OptimizePanel
 from .orientation_controller import OrientationController
@@ -120,14 +121,18 @@ class ClientSession:
         self.studies_controller = StudiesController(ctx, exports=self.exports)
         self.workspace_controller = WorkspaceController(
             ctx, orientation=self.orientation_controller, numbers=self.numbers, view=self.view_controller,
-            on_measures=lambda: self.compare.refresh(),
-            show_controls=lambda r: self.design_controller.show_result(r), on_state_change=self._after_stop)
+            on_measures=self._after_measures,
+            show_controls=self._show_result, on_state_change=self._after_stop)
         self.pose_controller = PoseController(ctx, numbers=self.numbers,
                                               submit_workspace=self.workspace_controller.submit, on_state_change=url)
         self.design_controller = DesignController(ctx, numbers=self.numbers,
                                                   update_mechanism=self.pose_controller.update_mechanism,
                                                   submit_workspace=self.workspace_controller.submit,
                                                   on_state_change=url)
+        self.notes = NotYetNotes()  # panels on the paper's design only say so for another mechanism
+        self.mechanism_controller = MechanismController(ctx, update_mechanism=self.pose_controller.update_mechanism,
+                                                        submit_workspace=self.workspace_controller.submit,
+                                                        on_state_change=url, notes=self.notes)
 
     # ----- build --------------------------------------------------------------------------------
     def build(self) -> None:
@@ -135,16 +140,23 @@ class ClientSession:
         ctx, client = self.ctx, self.client
         s = ctx.state
         ctx.panels = build_panels(client.gui, s)
+        with ctx.panels.design_tab:  # the selector, at the top of the Design tab
+            ctx.panels.mechanism = build_mechanism_controls(client.gui, s)
         self._build_optimize_tab()
         notify = ctx.notify
+        notes, p = self.notes, ctx.panels
         with ctx.panels.pose_tab:
+            notes.add(client.gui, "Manual carriages, tilt and torsion, the dexterous workspace", (p.carriages,))
             self.tilt = TiltPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                   get_input=lambda: (ctx.state.design, ctx.state.pose.position, ctx.state.joints),
                                   notify=notify)
             self.dexterous = DexterousPanel(client.gui, client.scene, ctx.jobs, client=ctx.job_client,
                                             get_input=lambda: (ctx.state.design, ctx.state.joints), notify=notify)
+        notes.attach("Manual carriages, tilt and torsion, the dexterous workspace",
+                     (self.tilt.run, self.dexterous.show))
         cache = self.explorer.shell_cache
         with ctx.panels.tabs.add_tab("Compare", viser.Icon.GIT_COMPARE):
+            notes.add(client.gui, "Compare pins")
             self.compare = ComparePanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
                                         CompareHooks(get_state=lambda: ctx.state, set_pins=self._set_pins,
                                                      bundle_for=lambda st: cached_bundle(cache, st),
@@ -152,19 +164,26 @@ class ClientSession:
                                                      current_bundle=lambda: ctx.bundle,
                                                      load_design=self.design_controller.load_design, notify=notify,
                                                      current_indices=self._current_indices))
+        notes.attach("Compare pins", (self.compare.pin_button, self.compare.views_button))
         self.orientation_controller.on_shown = self.compare.refresh
         with ctx.panels.plots_tab:
             self.usage = UsagePanel(client.gui, ctx.jobs, ctx.job_client,
                                     get_input=lambda: (ctx.state.design, ctx.state.joints))
+            notes.add(client.gui, "Orientation maps, TI, the Fig. 4 / Fig. 5 studies, the actuator usage",
+                      (p.sweep_run, p.surface_run, self.usage.run))
         with ctx.panels.tabs.add_tab("Task", viser.Icon.TARGET):
+            notes.add(client.gui, "The Task tab")
             self.task = TaskPanel(client.gui, client.scene, ctx.jobs, ctx.job_client,
                                   TaskHooks(get_input=lambda: (ctx.state.design, ctx.state.joints, ctx.state.voxel),
                                             get_task=lambda: ctx.state.task, set_task=self._set_task,
                                             move_to=self.pose_controller.set_pose, notify=notify,
                                             show_in_numbers=self._show_task_line))
+        notes.attach("The Task tab", (self.task.run,))
         with ctx.panels.tabs.add_tab("Paper", viser.Icon.BOOK):
+            notes.add(client.gui, "The Paper tab")
             self.paper = PaperPanel(client.gui, ctx.jobs, client=ctx.job_client,
                                     cache=self.explorer.paper_results, notify=notify)
+        notes.attach("The Paper tab", (self.paper.run,))
         jsbridge.show_panel(client)  # the GUI is complete: the page may show its panel (app/pagehook.py)
         if ctx.closed:  # the browser left while its GUI was being built
             return
@@ -175,9 +194,9 @@ class ClientSession:
             grid = self.pose_controller.mechanism.grid
             self.view_controller.show_grid = lambda on: setattr(grid, "visible", on)
             ctx.shell = ShellScene(client.scene, is_closed=lambda: ctx.closed)
-        for controller in (self.design_controller, self.pose_controller, self.view_controller,
-                           self.workspace_controller, self.orientation_controller, self.studies_controller,
-                           self.share_controller):
+        for controller in (self.mechanism_controller, self.design_controller, self.pose_controller,
+                           self.view_controller, self.workspace_controller, self.orientation_controller,
+                           self.studies_controller, self.share_controller):
             controller.wire()
         self.share_controller.show_link_messages()
         self.pose_controller.update_mechanism()  # pose marker, gizmo, tables
@@ -193,12 +212,14 @@ class ClientSession:
         design, its front, "Load this design"; its settings travel in the link (opt_* keys)."""
         ctx = self.ctx
         with ctx.panels.tabs.add_tab("Optimize", viser.Icon.CHART_DOTS):
+            self.notes.add(self.client.gui, "The optimiser")
             self.optimize = OptimizePanel(
                 self.client.gui, ctx.jobs, client=ctx.job_client,
                 get_design=lambda: ctx.state.design, load_design=self.design_controller.load_design,
                 get_joints=lambda: ctx.state.joints,
                 cache=self.explorer.study_cache, results=self.explorer.optimize_results,
                 on_settings_change=lambda _q: self.share_controller.schedule_url())
+        self.notes.attach("The optimiser", (self.optimize.run_button,))
         self.share_controller.optimize = self.optimize
         if self.optimize_query:
             ctx.url_messages += self.optimize.apply_query(self.optimize_query)
@@ -229,6 +250,17 @@ class ClientSession:
         if ori is None or ori.design != s.design or ori.settings != s.orientation_settings():
             return None
         return index_row(ori)
+
+    def _after_measures(self) -> None:
+        """The full result's measures are on screen: the Compare table follows (its buttons keep the
+        selector's notes: disabled for another mechanism than the paper's)."""
+        self.compare.refresh()
+        self.notes.show(self.ctx.state.mechanism)
+
+    def _show_result(self, r: Any) -> None:
+        """Stop went back to the result on screen: its design or mechanism into the controls."""
+        self.design_controller.show_result(r)
+        self.mechanism_controller.show(self.ctx.state.mechanism)
 
     def _after_stop(self) -> None:
         """Stop put the state back to the shell on screen: the mechanism and the link follow."""

@@ -169,13 +169,14 @@ class ShareController:
             res = ctx.resolution
         doc: dict[str, Any] = {
             "link": self.link(),
-            "design": s.design.to_dict(),
+            "design": s.design.to_dict() if s.mechanism is None else None,
+            "mechanism": None if s.mechanism is None else s.mechanism.mechanism().to_dict(),
             "pose": s.pose.to_dict(),
             "workspace_settings": None if b is None else dataclasses.asdict(b.result.settings),
             "grid": None if b is None else b.result.grid.to_dict(),
             "compute_seconds": None if b is None else b.result.compute_seconds,
             "measures": None if b is None or b.measures is None else b.measures.to_dict(),
-            "orientation": None if ori is None else ori.to_dict(),
+            "orientation": None if ori is None or s.mechanism is not None else ori.to_dict(),
             "pose_resolution": None if res is None else res.to_dict(),
         }
         return doc
@@ -201,6 +202,9 @@ class ShareController:
             s = ctx.state
             b = ctx.bundle
             ori = ctx.orientation
+        if s.mechanism is not None:  # the report is the paper design's (parameters, TI, pins)
+            ctx.panels.report_status.content = f"*Design report: {md_text(s.mechanism.not_yet())}.*"
+            return
         if b is None or b.measures is None or b.result.design != s.design:
             ctx.notify("Report not started", "the full workspace is still being computed; try again when the "
                        "numbers show the full result", color="orange")

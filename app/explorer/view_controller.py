@@ -93,8 +93,14 @@ class ViewController:
 
     # ----- camera ---------------------------------------------------------------------------------
     def _framing_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """The box to frame: the shell's (or, before one exists, the reach of the design)."""
+        """The box to frame: the shell's (or, before one exists, the reach of the design); for a
+        mechanism of the selector, together with its drawing (base and platform joints)."""
         mesh = self.ctx.shell.source if self.ctx.shell is not None else None
+        drawn = self.ctx.mechanism_pose if self.ctx.state.mechanism is not None else None
+        if drawn is not None:
+            pts = np.vstack([drawn.base, drawn.top] + ([mesh.vertices] if mesh is not None and len(mesh.vertices)
+                                                       else []))
+            return pts.min(axis=0), pts.max(axis=0)
         if mesh is not None and len(mesh.vertices):
             return mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
         d = self.ctx.state.design
@@ -174,6 +180,10 @@ class ViewController:
         if bundle is None:
             return
         mode = str(ctx.panels.shell_colour.value)
+        link = ctx.state.mechanism
+        if link is not None and mode != COLOUR_MODES[0]:  # the colour fields are the paper design's
+            ctx.notify("Shell coloured by height", f"shell colour = {mode}: {link.not_yet()}", color="orange")
+            mode = COLOUR_MODES[0]
         if mode == COLOUR_MODES[0]:
             self._show_mesh(bundle.mesh)
             assert ctx.shell is not None  # built before the controllers are wired

@@ -19,7 +19,7 @@ from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.workspace import WorkspaceResult
 
 from ..jobs import Job, LimitExceeded
-from ..limits import check_workspace_grid
+from ..limits import check_mechanism_grid, check_workspace_grid
 from ..textsafe import md_text
 from .legend import colorbar_image
 from .numbers_panel import NumbersPanel
@@ -74,7 +74,10 @@ class WorkspaceController:
             s = ctx.state
         self.orientation.forget_stale(s)
         try:  # the same grid limit as the API, before any work is queued
-            check_workspace_grid(s.design, ws_settings(s, s.voxel), ctx.explorer.max_voxels)
+            if s.mechanism is None:
+                check_workspace_grid(s.design, ws_settings(s, s.voxel), ctx.explorer.max_voxels)
+            else:
+                check_mechanism_grid(s.mechanism.mechanism(), ws_settings(s, s.voxel), ctx.explorer.max_voxels)
         except ParameterError as exc:
             ctx.cancel_job(self.job)
             self.set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
@@ -254,7 +257,9 @@ class WorkspaceController:
         with ctx.input_lock:
             with ctx.lock:
                 s = ctx.state
-                back = s.replace(design=r.design, voxel=float(r.settings.voxel), joints=r.settings.joints,
+                back = s.replace(design=r.design or s.design, voxel=float(r.settings.voxel),
+                                 joints=r.settings.joints if r.design is not None else s.joints,
+                                 mechanism=shown.mechanism,
                                  pose=dataclasses.replace(s.pose, psi=psi, theta=theta, phi=phi))
                 self.gen += 1  # late progress of the cancelled job must not touch the status
                 info = ctx.ws_info

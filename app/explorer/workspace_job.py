@@ -3,7 +3,9 @@
 On the data path slider -> state -> job -> engine -> mesh -> scene this module is "job -> engine ->
 mesh": :func:`workspace_job` turns one :class:`~app.urlstate.ExplorerState` into a job function
 for the :class:`~app.jobs.JobManager` that computes a coarse preview (h = :data:`PREVIEW_VOXEL`)
-and then the full workspace (``kinematics.workspace.compute_workspace``), re-meshes each shell for
+and then the full workspace (:func:`run_engine`: ``kinematics.workspace.compute_workspace`` for the
+paper's design, ``kinematics.mechanism_workspace.compute_mechanism_workspace`` for another
+mechanism of the selector, ``ExplorerState.mechanism``), re-meshes each shell for
 display (:func:`make_shell`) and measures it; it hands each :class:`ShellBundle` to the callbacks
 it is given (``app/workspace_controller.py`` puts them on screen). Finished bundles go into the
 explorer's shared cache under :func:`ws_key` (results are immutable).
@@ -23,6 +25,7 @@ from paraspace.kinematics.display_mesh import DISPLAY_FACES
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
+from ..mechanism_link import MechanismLink
 from ..urlstate import ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only (the modules are imported where they are used)
@@ -58,6 +61,7 @@ class ShellBundle:
     measures: WorkspaceMeasures | None = None
     shell_seconds: float = 0.0
     bracket: VolumeBracket | None = None  # certified volume_inner <= V <= volume_outer
+    mechanism: MechanismLink | None = None  # the selector's mechanism it was computed for (None: the design)
 
 
 def make_shell(result: WorkspaceResult, max_faces: int, display_faces: int | None = DISPLAY_FACES) -> trimesh.Trimesh:
@@ -104,19 +108,37 @@ def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> V
     bracket does not model). Raises :class:`~kinematics.progress.Cancelled` once ``cancel`` is set."""
     from paraspace.kinematics.bracket import bracket_of
 
-    if result.settings.joints.min_distance > 0.0:
+    if result.settings.joints.min_distance > 0.0 or result.design is None:  # None: a general mechanism
         return None
     return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, cancel=cancel)
 
 
 def ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
-    """The engine settings of ``s`` at voxel edge ``voxel`` (its orientation and joint options)."""
-    return WorkspaceSettings(voxel=voxel, orientation=(s.pose.psi, s.pose.theta, s.pose.phi), joints=s.joints)
+    """The engine settings of ``s`` at voxel edge ``voxel`` (its orientation and joint options; a
+    mechanism of the selector has none: its legs carry their own cones)."""
+    orientation = (s.pose.psi, s.pose.theta, s.pose.phi)
+    if s.mechanism is not None:
+        return WorkspaceSettings(voxel=voxel, orientation=orientation)
+    return WorkspaceSettings(voxel=voxel, orientation=orientation, joints=s.joints)
 
 
 def ws_key(s: ExplorerState, voxel: float) -> tuple:
     """Cache key of the workspace of ``s`` at voxel edge ``voxel``."""
+    if s.mechanism is not None:
+        return (("mechanism", s.mechanism.key()), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel))
     return (s.design.key(), (s.pose.psi, s.pose.theta, s.pose.phi), float(voxel), s.joints.key())
+
+
+def run_engine(s: ExplorerState, voxel: float, progress: Progress | None = None,
+               cancel: threading.Event | None = None) -> WorkspaceResult:
+    """The workspace of ``s`` at ``voxel``: the paper's engine on its design, or
+    ``compute_mechanism_workspace`` on the selector's mechanism."""
+    if s.mechanism is None:
+        return compute_workspace(s.design, ws_settings(s, voxel), progress=progress, cancel=cancel)
+    from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
+
+    return compute_mechanism_workspace(s.mechanism.mechanism(), ws_settings(s, voxel), progress=progress,
+                                       cancel=cancel)
 
 
 def cached_bundle(cache: ByteLRU, state: ExplorerState) -> ShellBundle | None:
@@ -138,7 +160,7 @@ def compute_bundle(cache: ByteLRU, state: ExplorerState, progress: Progress, can
 def wants_preview(s: ExplorerState, voxel: float) -> bool:
     """Whether the job shows the coarse preview before the full workspace of ``s`` at ``voxel``
     (:data:`PREVIEW_BELOW`)."""
-    return voxel < PREVIEW_VOXEL and (voxel < PREVIEW_BELOW or s.joints.min_distance > 0.0)
+    return voxel < PREVIEW_VOXEL and (voxel < PREVIEW_BELOW or s.joints.min_distance > 0.0 or s.mechanism is not None)
 
 
 def workspace_job(s: ExplorerState, cache: ByteLRU, show: Callable[[ShellBundle, bool, float], Any],
@@ -150,7 +172,6 @@ def workspace_job(s: ExplorerState, cache: ByteLRU, show: Callable[[ShellBundle,
     (``show_measures(bundle, preview=False)``). Everything before the full shell is on its critical
     path, so nothing else runs there; the certified bracket is a job of its own (:func:`bracket`,
     submitted by the controller). Raises :class:`~kinematics.progress.Cancelled` once cancelled."""
-    design = s.design
     voxel = s.voxel
 
     def fn(progress: Progress, cancel: threading.Event) -> ShellBundle:
@@ -160,22 +181,19 @@ def workspace_job(s: ExplorerState, cache: ByteLRU, show: Callable[[ShellBundle,
             pkey = ws_key(s, PREVIEW_VOXEL)
             pre = cache.get(pkey)
             if pre is None:
-                res = compute_workspace(design, ws_settings(s, PREVIEW_VOXEL),
-                                        progress=lambda f, m: progress(0.12 * f, f"preview: {m}"), cancel=cancel)
+                res = run_engine(s, PREVIEW_VOXEL, lambda f, m: progress(0.12 * f, f"preview: {m}"), cancel)
                 t1 = time.perf_counter()
-                pre = ShellBundle(res, make_shell(res, PREVIEW_FACES))
+                pre = ShellBundle(res, make_shell(res, PREVIEW_FACES), mechanism=s.mechanism)
                 pre.shell_seconds = time.perf_counter() - t1
                 cache.put(pkey, pre)
             if cancel.is_set():
                 raise Cancelled()
             show(pre, True, time.perf_counter() - t0)
             progress(0.15, f"full workspace h = {voxel:g}...")
-        res = compute_workspace(design, ws_settings(s, voxel),
-                                progress=lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"),
-                                cancel=cancel)
+        res = run_engine(s, voxel, lambda f, m: progress(0.15 + 0.6 * f, f"full h = {voxel:g}: {m}"), cancel)
         progress(0.78, "meshing the shell...")
         t1 = time.perf_counter()
-        bundle = ShellBundle(res, make_shell(res, FULL_FACES))
+        bundle = ShellBundle(res, make_shell(res, FULL_FACES), mechanism=s.mechanism)
         bundle.shell_seconds = time.perf_counter() - t1
         if cancel.is_set():
             raise Cancelled()
