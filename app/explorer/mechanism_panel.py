@@ -5,7 +5,8 @@ sliders, or an uploaded description file.
 tab as before), a preset of :data:`app.mechanism_link.MECH_PRESETS` (a
 :class:`~app.mechanism_link.MechanismLink` holding every parameter), or :data:`FILE_OPTION` (the
 uploaded TOML/JSON description). A preset parameter's slider is made from its
-:class:`~kinematics.presets.PresetParam` alone (label and unit, range ``[lo, hi]``, default, its
+:class:`~kinematics.presets.PresetParam` alone (label and unit, the study range widened to hold the
+value, the valid range ``[lo, hi]`` in its hint, default, its
 words as the hint), so every setting is defined once; a value the preset's builder refuses is
 not applied and its message (the CLI's ``--param`` message) is shown. An upload is read by
 :func:`kinematics.mechanism.loads_mechanism` (at most ``MAX_TEXT_BYTES``); a bad file is refused in
@@ -88,8 +89,9 @@ def build_mechanism_controls(gui: viser.GuiApi, state: ExplorerState) -> Mechani
             sliders[name] = {}
             for p in preset_params(name):
                 v = float(values.get(p.name, p.default)) if shown else float(p.default)  # type: ignore[arg-type]
+                lo, hi = slider_span(*p.study_range, v)  # the study range, widened to hold the value
                 sliders[name][p.name] = gui.add_slider(
-                    _slider_label(p.name, p.unit), min=p.lo, max=p.hi, step=0.5, initial_value=v,
+                    _slider_label(p.name, p.unit), min=lo, max=hi, step=0.5, initial_value=v,
                     hint=f"{p.description}; valid range [{p.lo:g}, {p.hi:g}]{' ' + p.unit if p.unit else ''}")
     return MechanismControls(selector, upload, message, folders, sliders)
 
