@@ -15,11 +15,13 @@ import pytest
 from explorer_client import FakeBrowser, wait_for, wait_idle  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.explorer import Explorer
+from paraspace.app.explorer.numbers_panel import fmt, ori_current
 from paraspace.app.explorer.mechanism_scene import STATE_COLORS, joint_paths, leg_state
 from paraspace.app.mechanism_link import MECH_PRESETS, file_link, preset_link, preset_params
 from paraspace.app.urlstate import encode_query, parse_query
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.mechanism import Cone, Leg, dumps_mechanism
+from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace
 from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
 from paraspace.kinematics.presets import preset
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
@@ -77,9 +79,15 @@ def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(expl
     assert folder.visible and not s.panels.design["a"].visible
     for p in preset_params(name):
         assert s.panels.mechanism.sliders[name][p.name].value == p.default
-    # the panels on the paper's design say so in words; nothing shows the paper's TI
+    # the panels on the paper's design say so in words
     assert f"not for the {name} mechanism yet" in s.panels.numbers.content.replace("\\", "")
-    assert "not for the" in s.panels.orientation_status.content
+    # the orientation maps and TI are the mechanism's own (its symmetry lines), as computed directly
+    ori = wait_for(lambda: s.ctx.orientation if ori_current(s.state, s.ctx.orientation) else None, 120,
+                   "the mechanism's orientation maps")
+    ref = mechanism_orientation_workspace(preset(name), s.state.orientation_settings())
+    assert (ori.ti1, ori.ti2) == (ref.ti1, ref.ti2) and ref.ti1 > 0
+    assert f"TI₁ = {fmt(ref.ti1, 4)}" in s.panels.orientation_status.content
+    wait_for(lambda: f"{fmt(ref.ti1, 4)}" in s.panels.summary.content, 10, "TI in the strip")
     assert s.compare.pin_button.disabled and s.tilt.run.disabled
     assert s.panels.pose["z"].max == 350.0  # every height (the paper design's reach is 165)
     s.share_controller.download_report()  # the paper design's report: said so, nothing computed

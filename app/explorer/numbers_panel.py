@@ -52,6 +52,18 @@ def joints_text(j: Joints) -> str:
     return ", ".join(parts)
 
 
+def ori_current(s: ExplorerState, ori: OrientationResult | None) -> bool:
+    """Whether ``ori`` holds the maps of ``s``: its scan settings, and its design (the paper) or its
+    mechanism (a mechanism of the selector: a :class:`MechanismOrientationResult` of the same
+    description)."""
+    if ori is None or ori.settings != s.orientation_settings():
+        return False
+    mech = getattr(ori, "mechanism", None)
+    if s.mechanism is None:
+        return mech is None and ori.design == s.design
+    return mech is not None and mech == s.mechanism.mechanism()
+
+
 def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
                      ori: OrientationResult | None,
                      design_error: str | None, task_line: str | None = None, mechanism_lines: tuple[str, ...] = (),
@@ -102,9 +114,8 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
                      + (f", {info.shell_seconds:.2f} s shell" if info.shell_seconds else ""))
     else:
         lines.append("*workspace: computing...*")
-    if s.mechanism is not None:
-        lines.append(f"**TI₁ / TI₂** {md_text(s.mechanism.not_yet())}")
-    elif ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
+    if ori_current(s, ori):
+        assert ori is not None
         sat = {x.index for x in figures.orientation_saturation(ori)}
         flag = {k: (" (lower bound ⚠)" if k in sat else "") for k in ("TI_1", "TI_2")}
         lines.append(f"**{hover('TI₁', 'TI_1')}** {fmt(ori.ti1, 4)}{flag['TI_1']}  "
@@ -148,9 +159,8 @@ def summary_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
         if m is not None:
             first += f" · {hover('boundary', 'boundary')} {'complete' if m.boundary_complete else 'incomplete'}"
     parts = []
-    if s.mechanism is not None:
-        parts.append(f"TI₁ / TI₂ {md_text(s.mechanism.not_yet())}")
-    elif ori is not None and ori.settings == s.orientation_settings() and ori.design == s.design:
+    if ori_current(s, ori):
+        assert ori is not None
         sat = {x.index for x in figures.orientation_saturation(ori)}
         for key, label, value in (("TI_1", "TI₁", ori.ti1), ("TI_2", "TI₂", ori.ti2)):
             parts.append(f"**{hover(label, key)}** {'≥ ' if key in sat else ''}{fmt(value, 4)}")

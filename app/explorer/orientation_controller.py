@@ -3,9 +3,12 @@
 On the data path slider -> state -> job -> engine -> mesh -> scene this is a side branch after the
 workspace job: once a workspace is finished (``app/workspace_controller.py``), or when z0 moves,
 :meth:`OrientationController.submit` runs ``kinematics.orientation.orientation_workspace`` for the
-current design, z0 and joints as an ``"orientation"`` job and draws its figure
-(``app/figures.py``). Maps of a design that is no longer current are cancelled at once and never
-shown (:meth:`OrientationController.forget_stale`). Results are cached per (design, z0, joints).
+current design, z0 and joints (for a mechanism of the selector,
+``kinematics.mechanism_orientation.mechanism_orientation_workspace``: the scan lines along its
+symmetry axis) as an ``"orientation"`` job and draws its figure (``app/figures.py``). Maps of a
+design that is no longer current are cancelled at once and never shown
+(:meth:`OrientationController.forget_stale`). Results are cached per (design or mechanism, z0,
+joints).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from paraspace.kinematics.design import ParameterError
+from paraspace.kinematics.mechanism_orientation import mechanism_orientation_workspace
 from paraspace.kinematics.orientation import OrientationResult, orientation_workspace
 
 from .. import figures
@@ -99,10 +103,6 @@ class OrientationController:
             s = ctx.state
             key = self._key(s)
             self.key = key
-        if s.mechanism is not None:  # the maps and TI are the paper's (eq. (28)) for now
-            ctx.cancel_job(self.job)
-            self._set_status(gen, f"Orientation maps and TI₁ / TI₂: {md_text(s.mechanism.not_yet())}.")
-            return
         cache = ctx.explorer.orientation_cache
         hit = cache.get(key)
         if hit is not None:
@@ -111,8 +111,12 @@ class OrientationController:
             return
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> Any:
-            res = orientation_workspace(s.design, s.orientation_settings(),
-                                        progress=lambda f, m: progress(0.85 * f, m), cancel=cancel)
+            scale = lambda f, m: progress(0.85 * f, m)  # noqa: E731
+            if s.mechanism is None:
+                res = orientation_workspace(s.design, s.orientation_settings(), progress=scale, cancel=cancel)
+            else:  # scan lines along the mechanism's symmetry axis (kinematics/mechanism_orientation.py)
+                res = mechanism_orientation_workspace(s.mechanism.mechanism(), s.orientation_settings(),
+                                                      progress=scale, cancel=cancel)
             progress(0.9, "drawing...")
             spec = figures.orientation_spec(res, s.z0)
             cache.put(key, (res, spec))

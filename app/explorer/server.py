@@ -165,11 +165,11 @@ class ClientSession:
                                                      load_design=self.design_controller.load_design, notify=notify,
                                                      current_indices=self._current_indices))
         notes.attach("Compare pins", (self.compare.pin_button, self.compare.views_button))
-        self.orientation_controller.on_shown = self.compare.refresh
+        self.orientation_controller.on_shown = self._after_measures  # the table, and the notes kept
         with ctx.panels.plots_tab:
             self.usage = UsagePanel(client.gui, ctx.jobs, ctx.job_client,
                                     get_input=lambda: (ctx.state.design, ctx.state.joints))
-            notes.add(client.gui, "Orientation maps, TI, the Fig. 4 / Fig. 5 studies, the actuator usage",
+            notes.add(client.gui, "The Fig. 4 / Fig. 5 studies and the actuator usage",
                       (p.sweep_run, p.surface_run, self.usage.run))
         with ctx.panels.tabs.add_tab("Task", viser.Icon.TARGET):
             notes.add(client.gui, "The Task tab")
