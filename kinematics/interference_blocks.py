@@ -62,7 +62,7 @@ from numba import njit, prange
 
 from .blocks import _split, rounding_margin
 from .design import Design
-from .feasibility import ChainTables, _feasible_at, _leg_sets, chain_points
+from .feasibility import ChainTables, _leg_sets, chain_points
 from .geometry import platform_points_local
 from .interference import _pose_clear, segment_closest, segment_distance
 from .joints import Joints, cone_table
@@ -73,10 +73,10 @@ __all__ = ["interference_free_grid", "TOP"]
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP = 16
-#: Samples per chain a block may keep in ``K`` (module doc) before it is split instead.
-MAX_K = 12
 #: Distance evaluations one hull-pair bisection may spend before the block is split instead.
-MAX_EVAL = 48
+MAX_EVAL = 16
+#: Samples per chain whose own legs are tried as the last witness before the block is split instead.
+MAX_OWN = 8
 
 UNDECIDED, DONE = 0, 1
 
@@ -91,12 +91,15 @@ def _u_joints(rho, c, s, hb, leg):
 
 @njit(cache=True)
 def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e):
-    """Hull ``(ok, r0, r1)`` of the feasible ``rho`` at one carriage angle with the leg limits
-    ``[lo2, hi2]`` (squared) and the cones relaxed by ``cone_e``."""
+    """Hull ``(ok, r0, r1, g1a, g1b, g2a, g2b)`` of the feasible ``rho`` at one carriage angle with the
+    leg limits ``[lo2, hi2]`` (squared) and the cones relaxed by ``cone_e``, and each leg's gap
+    ``(g_a, g_b)`` of (F2) (:mod:`kinematics.feasibility`; ``(1, 0)`` when it has none)."""
     ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, r_lo, r_hi = _leg_sets(
         b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e)
+    g1a, g1b = (a1, a2) if n1 == 2 else (1.0, 0.0)
+    g2a, g2b = (c1, c2) if n2 == 2 else (1.0, 0.0)
     if not ok:
-        return False, 0.0, 0.0
+        return False, 0.0, 0.0, g1a, g1b, g2a, g2b
     h0, h1 = 1e300, -1e300
     for u in range(n1):
         lo_a, hi_a = (a0, a1) if u == 0 else (a2, a3)
@@ -106,15 +109,15 @@ def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, h
             hi = min(hi_a, hi_b, r_hi)
             if lo <= hi:
                 h0, h1 = min(h0, lo), max(h1, hi)
-    return h0 <= h1, h0, h1
+    return h0 <= h1, h0, h1, g1a, g1b, g2a, g2b
 
 
 @njit(cache=True)
 def _own_bounds(rho, c, s, hb, bx, by, bz, shift):
-    """Lower and upper bounds ``(lo, hi)`` of the distance of the two legs of one carriage (S joints
-    ``bx/by/bz[0..1]``, the carriage at ``rho`` on the rail ``(c, s)``) after the platform and the
-    carriage move so that leg 1's vector ``X = B_1 - D_1`` moves by at most ``shift`` (module doc,
-    own legs)."""
+    """Lower and upper bounds ``(lo, hi, d0)`` of the distance of the two legs of one carriage (S
+    joints ``bx/by/bz[0..1]``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
+    before the move) after the platform and the carriage move so that leg 1's vector ``X = B_1 -
+    D_1`` moves by at most ``shift`` (module doc, own legs)."""
     x1, y1 = _u_joints(rho, c, s, hb, 0)
     x2, y2 = _u_joints(rho, c, s, hb, 1)
     s0, t0 = segment_closest(x1, y1, 0.0, bx[0], by[0], bz[0], x2, y2, 0.0, bx[1], by[1], bz[1])
@@ -146,15 +149,14 @@ def _own_bounds(rho, c, s, hb, bx, by, bz, shift):
     else:
         sig = 2.0
     lo = math.sqrt(f0 + sig * sig * alpha2) - sig * shift - lam * shift
-    return lo, hi
+    return lo, hi, d0
 
 
 @njit(cache=True)
-def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear):
+def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear, stack):
     """Whether the two legs of one carriage are at least ``thr`` apart (``clear``) or below ``thr``
     (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform move of at most ``e``
-    (bisection of the rail range with :func:`_own_bounds`)."""
-    stack = np.empty((64, 2))
+    (bisection of the rail range with :func:`_own_bounds`; ``stack``: scratch of shape (64, >= 2))."""
     stack[0, 0], stack[0, 1] = r0, r1
     top = 1
     evals = 0
@@ -162,19 +164,17 @@ def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear):
         top -= 1
         a, b = stack[top, 0], stack[top, 1]
         m = 0.5 * (a + b)
-        lo, hi = _own_bounds(m, c, s, hb, bx, by, bz, e + 0.5 * (b - a))
+        lo, hi, d0 = _own_bounds(m, c, s, hb, bx, by, bz, e + 0.5 * (b - a))
         evals += 1
         if clear:
             if lo >= thr:
                 continue
-            lo0, hi0 = _own_bounds(m, c, s, hb, bx, by, bz, 0.0)
-            if hi0 < thr:
+            if d0 < thr:
                 return False
         else:
             if hi <= thr:
                 continue
-            lo0, hi0 = _own_bounds(m, c, s, hb, bx, by, bz, 0.0)
-            if hi0 > thr:
+            if d0 > thr:
                 return False
         if evals > MAX_EVAL or top + 2 > 64:
             return False
@@ -185,12 +185,11 @@ def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear):
 
 
 @njit(cache=True)
-def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb, b0, b1, need):
+def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb, b0, b1, need, stack):
     """Whether leg ``la`` of a carriage on rail ``(ca, sa)`` (``rho`` in ``[a0, a1]``, S joint ``a*``)
     and leg ``lb`` of another on rail ``(cb, sb)`` (``rho`` in ``[b0, b1]``) are at least ``need`` apart
     for every pair of ``rho`` (bisection of the wider range; the lemma bounds the change by the sum
-    of the half-widths)."""
-    stack = np.empty((64, 4))
+    of the half-widths; ``stack``: scratch of shape (64, 4))."""
     stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = a0, a1, b0, b1
     top = 1
     evals = 0
@@ -217,9 +216,11 @@ def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb
 
 
 @njit(cache=True)
-def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin):
+def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks, hull,
+                 bx, by, bz):
     """The module doc's certificate at the block centre ``P`` with ``e = delta + eps``: True when
-    every centre of the block is clear."""
+    every centre of the block is clear (``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2):
+    scratch)."""
     need = dmin + e + margin
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
@@ -229,37 +230,57 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
     if lo_t > hi_t:
         return False
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
-    ks = np.empty((3, MAX_K), np.int64)
-    hull = np.empty((3, MAX_K, 2))
     nk = np.zeros(3, np.int64)
-    bx = np.empty((3, 2))
-    by = np.empty((3, 2))
-    bz = np.empty((3, 2))
     mid = n // 2
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         stopped = False
+        tries = 0
         for step in range(n):  # the witness search's order (interference._witnesses)
             off = (step + 1) // 2
             k = mid + off if step % 2 == 1 else mid - off
             if k < 0 or k >= n:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
-            ok, r0, r1 = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                       jc[i], e)
+            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                                          jc[i], e)
             if not ok:
                 continue
-            if nk[i] == MAX_K:
-                return False
+            if _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                continue  # its own legs collide at every probe and centre: never a witness
             ks[i, nk[i]] = k
             hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
             nk[i] += 1
-            if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_t2, hi_t2, jc[i], -e) \
-                    and _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin + margin, True):
-                stopped = True
-                break
+            okt, t0, t1, g1a, g1b, g2a, g2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
+                                                            lo_t2, hi_t2, jc[i], -e)
+            # the feasible set is one interval at every centre when no leg's widest gap (at the tightened
+            # lower limit) meets the relaxed hull
+            one = (g1a > g1b or g1b <= r0 or g1a >= r1) and (g2a > g2b or g2b <= r0 or g2a >= r1)
+            if okt:
+                tries += 1
+                if tries > MAX_OWN:
+                    return False
+                # the probes' ranges over the block (module doc): the least feasible rho in [r0, t0];
+                # with one interval also the greatest in [t1, r1], then the middle
+                w0, w1 = 1e300, -1e300
+                for probe in range(3 if one else 1):
+                    q0, q1 = (r0, t0) if probe == 0 else ((t1, r1) if probe == 1 else
+                                                          (0.5 * (r0 + t1), 0.5 * (t0 + r1)))
+                    if _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin + margin, True, stack):
+                        hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = min(w0, q0), max(w1, q1)
+                        stopped = True
+                        break
+                    if not _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin - margin, False, stack):
+                        w0, w1 = min(w0, q0), max(w1, q1)
+                if stopped:
+                    break
+                if one:  # the witness, if here, is a probe whose range does not always collide
+                    if w0 > w1:
+                        nk[i] -= 1
+                    else:
+                        hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = w0, w1
         if not stopped:
             return False
     # every U joint a chain's first witness can use lies within ``rad`` of ``cen`` (per chain and leg)
@@ -288,7 +309,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                         far = False
             if far:
                 continue
-            if nk[i] * nk[j] > 16:
+            if nk[i] * nk[j] > 4:
                 return False
             for a in range(nk[i]):
                 ka = ks[i, a]
@@ -299,13 +320,14 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                             if not _pair_clear(bx[i, la], by[i, la], bz[i, la], cos_t[i, ka], sin_t[i, ka], hb, la,
                                                hull[i, a, 0], hull[i, a, 1],
                                                bx[j, lb], by[j, lb], bz[j, lb], cos_t[j, kb], sin_t[j, kb], hb, lb,
-                                               hull[j, b, 0], hull[j, b, 1], need):
+                                               hull[j, b, 0], hull[j, b, 1], need, stack):
                                 return False
     return True
 
 
 @njit(cache=True)
-def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin):
+def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx, by,
+                   bz):
     """True when some chain has no witness at any centre of the block (``e = delta + eps``): at every
     arc sample that passes at the centre with the limits relaxed by ``e``, its two legs stay below
     ``d_min - margin`` over the relaxed hull after any move of at most ``e``, so at every centre
@@ -314,19 +336,16 @@ def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lma
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e
     lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
-    bx = np.empty(2)
-    by = np.empty(2)
-    bz = np.empty(2)
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-        bx[0], by[0], bz[0] = b1x, b1y, b1z
-        bx[1], by[1], bz[1] = b2x, b2y, b2z
+        bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
+        bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         blocked = True
         for k in range(n):
             c, s = cos_t[i, k], sin_t[i, k]
-            ok, r0, r1 = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                       jc[i], e)
-            if ok and not _own_legs(bx, by, bz, c, s, hb, r0, r1, e, dmin - margin, False):
+            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                                          jc[i], e)
+            if ok and not _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
                 blocked = False
                 break
         if blocked:
@@ -364,13 +383,21 @@ def _blocks_kernel(b0, bn, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin
         py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
         pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
         e = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2) + eps
-        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin):
+        stack = np.empty((64, 4))
+        ks = np.empty((3, cos_t.shape[1]), np.int64)
+        hull = np.empty((3, cos_t.shape[1], 2))
+        bx = np.empty((3, 2))
+        by = np.empty((3, 2))
+        bz = np.empty((3, 2))
+        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks,
+                        hull, bx, by, bz):
             for x in range(b0[b, 0], b0[b, 0] + nx):
                 for y in range(b0[b, 1], b0[b, 1] + ny):
                     for z in range(b0[b, 2], b0[b, 2] + nz):
                         out[x, y, z] = where[x, y, z]
             state[b] = DONE
-        elif _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin):
+        elif _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx,
+                            by, bz):
             state[b] = DONE  # every voxel interferes: out stays False
         else:
             state[b] = UNDECIDED

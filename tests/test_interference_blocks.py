@@ -58,7 +58,7 @@ def test_own_leg_bounds_hold_for_sampled_moves():
         b = np.array([[rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(80, 200)] for _ in range(2)])
         b[1] = b[0] + rng.normal(size=3) * 15.0
         shift = rng.uniform(0.0, 6.0)
-        lo, hi = _own_bounds(rho, c, s, hb, b[:, 0].copy(), b[:, 1].copy(), b[:, 2].copy(), shift)
+        lo, hi, d0 = _own_bounds(rho, c, s, hb, b[:, 0].copy(), b[:, 1].copy(), b[:, 2].copy(), shift)
         for _ in range(40):
             v = rng.normal(size=3)
             v *= rng.uniform(0, 1) * shift / np.linalg.norm(v)
