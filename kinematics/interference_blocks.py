@@ -25,13 +25,19 @@ the arc samples in the witness search's order (outward from the middle sample) a
 
 * nothing for a sample that fails at ``Pc`` with the leg limits relaxed by ``e`` (cones by ``(1 + k)
   e``): it fails at every centre of the block (:mod:`kinematics.blocks`), so it is no witness there;
+  nor for a sample whose two legs stay below ``d_min`` over its whole relaxed hull (below);
 * for any other sample, the hull ``[r0, r1]`` of its relaxed feasible ``rho`` at ``Pc``: at every
   centre ``P`` of the block the sample's feasible ``rho`` (hence every probe of the witness search)
   lies in it;
-* and stop at the first sample that passes at ``Pc`` with the limits tightened by ``e`` and whose two
-  legs stay ``d_min`` apart over the whole hull and every move of at most ``e`` (bisection of the
-  hull with the own-leg lower bound): at every ``P`` it is feasible and its first probe clears, so
-  the witness search stops there at the latest.
+* and stop at the first sample (of at most :data:`MAX_OWN` that pass the tightened test) where some
+  probe clears at every centre. The feasible set at ``P`` lies between the tightened set at ``Pc``
+  (``[t0, t1]`` its hull) and the relaxed one, so the first probe (the least feasible ``rho``: the
+  pieces come in increasing ``rho``) lies in ``[r0, t0]``; when no leg's widest gap (lower limit
+  tightened) meets ``[r0, r1]`` the set is one interval at every ``P`` and the next probes, its
+  greatest and middle ``rho``, lie in ``[t1, r1]`` and ``[(r0 + t1) / 2, (t0 + r1) / 2]``. A probe
+  range whose legs stay ``d_min`` apart under every move of at most ``e`` (own-leg lower bound,
+  bisection of the range) stops the search there at every ``P``; the ranges tried before it whose
+  legs do not always collide replace the sample's hull.
 
 **Clear.** At every centre of the block each chain's first witness is then a carriage pose ``(k,
 rho)`` with ``k`` in ``K`` and ``rho`` in its hull. When, for every two chains and every pair of their
