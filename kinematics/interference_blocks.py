@@ -434,13 +434,15 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
     gx, gy, gz = np.meshgrid(*starts, indexing="ij")
     b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
     bn = np.minimum(TOP, np.array(mask.shape, np.int64)[None, :] - b0)
+    step = 8192  # blocks per launch: cancellation within a fraction of a second
     while b0.shape[0]:
-        check(cancel)
         state = np.empty(b0.shape[0], np.int8)
-        with KERNEL_LOCK:
-            _blocks_kernel(b0, bn, sat, mask, xs, ys, zs, float(h), eps, margin, u, tab.cos_t, tab.sin_t, tab.arc,
-                           tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc, float(joints.min_distance),
-                           state, out)
+        for s in range(0, b0.shape[0], step):
+            check(cancel)
+            with KERNEL_LOCK:
+                _blocks_kernel(b0[s:s + step], bn[s:s + step], sat, mask, xs, ys, zs, float(h), eps, margin, u,
+                               tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc,
+                               float(joints.min_distance), state[s:s + step], out)
         keep = state == UNDECIDED
         b0, bn = _split(b0[keep], bn[keep])
     return out

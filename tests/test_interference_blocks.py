@@ -59,6 +59,8 @@ def test_own_leg_bounds_hold_for_sampled_moves():
         b[1] = b[0] + rng.normal(size=3) * 15.0
         shift = rng.uniform(0.0, 6.0)
         lo, hi, d0 = _own_bounds(rho, c, s, hb, b[:, 0].copy(), b[:, 1].copy(), b[:, 2].copy(), shift)
+        at = (rho * c - hb * s, rho * s + hb * c, 0.0), (rho * c + hb * s, rho * s - hb * c, 0.0)
+        assert d0 == pytest.approx(segment_distance(*at[0], *b[0], *at[1], *b[1]), abs=1e-9)
         for _ in range(40):
             v = rng.normal(size=3)
             v *= rng.uniform(0, 1) * shift / np.linalg.norm(v)
@@ -82,3 +84,19 @@ def test_interference_bit_is_set_where_the_legs_interfere():
     assert np.array_equal(flagged, plain.occupancy & ~res.occupancy)
     assert flagged.any()
     assert default_n_eta(design) == res.n_eta
+
+
+def test_cancel_stops_the_block_search():
+    from paraspace.kinematics.progress import Cancelled
+
+    design = Design()
+    plain = compute_workspace(design, WorkspaceSettings(voxel=8.0))
+    calls = []
+
+    def cancel() -> bool:  # set after the first check: the search stops between launches
+        calls.append(1)
+        return len(calls) > 1
+
+    with pytest.raises(Cancelled):
+        interference_free_grid(design, Joints(leg_diameter=10.0), plain.grid.axes(), 8.0, np.eye(3), plain.n_eta,
+                               plain.occupancy, cancel)
