@@ -82,7 +82,7 @@ TOP = 16
 #: Distance evaluations one hull-pair bisection may spend before the block is split instead.
 MAX_EVAL = 16
 #: Samples per chain whose own legs are tried as the last witness before the block is split instead.
-MAX_OWN = 8
+MAX_OWN = 16
 
 UNDECIDED, DONE = 0, 1
 
