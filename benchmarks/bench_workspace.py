@@ -30,7 +30,8 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
      row that issue 24's work touched, the new path beside the old one it replaced (the dexterity
-     field at h = 2 is one run of each: the full search takes over a minute).
+     field at h = 2 is one run of each: the full search takes over a minute). Target 4: the engine
+     with leg interference, blocks decided by Lipschitz bounds against the per-voxel search.
      Target 10: the explorer's display shell at h = 2 (re-mesh and decimation to the display budget,
      against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
      design, serially, on a local cluster of 2 workers started by the run, and on the warm client
@@ -422,6 +423,168 @@ def total_orientation_rows(design: Design, runs: int = 3) -> None:
     _row("every orientation per pair (before)", med["pairs"], med["engine"])
 
 
+def _per_voxel_interference():
+    """The engine's leg interference on its former path (before issue 24): the witness search of
+    kinematics/interference.py at every voxel the chains reach."""
+    import numpy as np
+
+    from paraspace.kinematics import workspace
+    from paraspace.kinematics.interference import interference_free
+
+    def per_voxel(design, joints, axes, h, rot, n_eta, where, cancel=None):
+        idx = np.argwhere(where)
+        out = np.zeros(where.shape, bool)
+        pts = np.stack([axes[a][idx[:, a]] for a in range(3)], axis=1)
+        out[idx[:, 0], idx[:, 1], idx[:, 2]] = interference_free(design, joints, pts, rot[None], n_eta)[:, 0]
+        return out
+
+    saved = workspace.interference_free_grid
+    workspace.interference_free_grid = per_voxel
+    try:
+        yield
+    finally:
+        workspace.interference_free_grid = saved
+
+
+def interference_rows(design: Design, runs: int = 3) -> None:
+    """Target 4: the engine with leg interference (diameter 10) at h = 2 and h = 1, blocks decided
+    with Lipschitz bounds (kinematics/interference_blocks.py) and the former per-voxel search."""
+    import numpy as np
+
+    from paraspace.kinematics.joints import Joints
+
+    for h in (2.0, 1.0):
+        plain = WorkspaceSettings(voxel=h)
+        legs = WorkspaceSettings(voxel=h, joints=Joints(leg_diameter=10.0))
+
+        def old(legs=legs):
+            with _per_voxel_interference():
+                return compute_workspace(design, legs)
+
+        same = np.array_equal(old().occupancy, compute_workspace(design, legs).occupancy)
+        med = _alternating({"engine": lambda s=plain: compute_workspace(design, s),
+                            "new": lambda s=legs: compute_workspace(design, s), "old": old}, runs)
+        print(f"  target 4, leg interference (diameter 10) h={h:g} (load average {os.getloadavg()[0]:.2f}; "
+              f"engine {med['engine'] * 1e3:.0f} ms; identical voxels: {same}):")
+        _row("engine + interference, blocks", med["new"], med["engine"], "(target <= 4x at h = 1)")
+        _row("engine + interference, per voxel (before)", med["old"], med["engine"])
+
+
+class _StageClock:
+    """Exclusive seconds per stage: each patched callable's time less that of the patched callables it
+    calls (a stack), summed per label over every call while the clock is on."""
+
+    def __init__(self, patches: list) -> None:
+        self.patches, self.saved, self.times, self.stack = patches, [], {}, []
+
+    def _wrap(self, label: str, fn):
+        def timed(*a, **k):
+            self.stack.append(0.0)
+            t = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                dt = time.perf_counter() - t
+                inner = self.stack.pop()
+                self.times[label] = self.times.get(label, 0.0) + dt - inner
+                if self.stack:
+                    self.stack[-1] += dt
+        return timed
+
+    def __enter__(self):
+        for obj, attr, label in self.patches:
+            fn = getattr(obj, attr)
+            self.saved.append((obj, attr, fn))
+            setattr(obj, attr, self._wrap(label, fn))
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for obj, attr, fn in reversed(self.saved):
+            setattr(obj, attr, fn)
+
+
+def stage_rows(design: Design, h: float = 1.0, runs: int = 3) -> None:
+    """Target 7: each stage of the engine (bounds scout, block classification per level, the serial
+    per-level bookkeeping ``_advance``, the fused mirror/``== 7`` pass, Python glue) and of
+    ``measure_workspace`` (each step of ``_Steps``, exclusive of the steps it calls) at ``h``, with 1
+    and 2 numba threads (medians of alternating runs), and the single-threaded share of the 1-thread
+    time: the stages that are serial code (``_advance``, glue, and each measure step by Amdahl's
+    law from its 1- and 2-thread times, ``s = 2 t2 / t1 - 1`` clipped to [0, 1])."""
+    import numba
+
+    from paraspace.kinematics import blocks, measures, workspace
+    from paraspace.kinematics.measures import measure_workspace
+
+    ws = WorkspaceSettings(voxel=h)
+    res = compute_workspace(design, ws)
+    measure_workspace(res)
+    eng_patch = [(workspace, "default_bounds", "bounds scout (blocks engine on a coarse grid)"),
+                 (blocks, "_classify_kernel", "classify blocks (parallel kernel)"),
+                 (blocks, "_advance", "_advance: write decided blocks, split (serial)"),
+                 (workspace, "_finish_kernel", "mirror fill + == 7 (parallel kernel)")]
+    meas_patch = [(measures._Steps, "get", None)]
+    per: dict = {}
+    for n in (1, 2) * runs:
+        numba.set_num_threads(n)
+        clock = _StageClock(eng_patch)
+        with clock:
+            t = time.perf_counter()
+            compute_workspace(design, ws)
+            total = time.perf_counter() - t
+        clock.times["Python glue (serial)"] = total - sum(clock.times.values())
+        clock.times["engine total"] = total
+        steps: dict = {}
+        get = measures._Steps.get
+
+        def timed_get(self, name, steps=steps, get=get, stack=[]):  # noqa: B006
+            if name in self._memo:
+                return get(self, name)
+            stack.append(0.0)
+            t0 = time.perf_counter()
+            out = get(self, name)
+            dt = time.perf_counter() - t0
+            inner = stack.pop()
+            steps["measures: " + name] = steps.get("measures: " + name, 0.0) + dt - inner
+            if stack:
+                stack[-1] += dt
+            return out
+
+        measures._Steps.get = timed_get  # type: ignore[method-assign]
+        try:
+            t = time.perf_counter()
+            measure_workspace(res)
+            mtotal = time.perf_counter() - t
+        finally:
+            measures._Steps.get = get  # type: ignore[method-assign]
+        steps["measures: outside the steps"] = mtotal - sum(steps.values())
+        steps["measures total"] = mtotal
+        for k, v in {**clock.times, **steps}.items():
+            per.setdefault(k, {1: [], 2: []})[n].append(v)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    del meas_patch
+    med = {k: {n: statistics.median(v[n]) for n in (1, 2)} for k, v in per.items()}
+    print(f"  target 7, stages at h={h:g} ({res.grid.size:,} voxels; load average {os.getloadavg()[0]:.2f}, a loaded "
+          f"2-core machine: read the 2-thread column as indicative):")
+    serial = {"_advance: write decided blocks, split (serial)", "Python glue (serial)"}
+    one = med["engine total"][1] + med["measures total"][1]
+    ser = 0.0
+    for k, v in med.items():
+        t1, t2 = v[1], v[2]
+        if k in ("engine total", "measures total"):
+            share = float("nan")
+        elif k in serial:
+            share = 1.0
+        elif k.startswith("measures:"):
+            share = min(1.0, max(0.0, 2.0 * t2 / t1 - 1.0)) if t1 > 0 else 0.0
+        else:
+            share = 0.0
+        if share == share:
+            ser += share * t1
+        print(f"    {k:<52} 1 thread {t1 * 1e3:8.1f} ms   2 threads {t2 * 1e3:8.1f} ms   serial share "
+              f"{'' if share != share else f'{share:.2f}'}")
+    print(f"    single-threaded share of the 1-thread time (engine + measures): {ser / one:.1%} (target < 10 %)")
+
+
 def throughput_rows(design: Design) -> None:
     """Item 7 of the module docstring."""
     print(f"\nissue 24, throughput as ratios to the plain engine (load average {os.getloadavg()[0]:.2f}, "
@@ -432,6 +595,8 @@ def throughput_rows(design: Design) -> None:
     tail_rows(design)
     display_rows(design)
     optimizer_cluster_rows()
+    interference_rows(design)
+    stage_rows(design)
     total_orientation_rows(design)
     dexterity_rows(design)
 

@@ -39,7 +39,7 @@ from .geometry import platform_points_local
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 
-__all__ = ["segment_distance", "interference_free", "clear_configuration", "SPREAD"]
+__all__ = ["segment_distance", "segment_closest", "interference_free", "clear_configuration", "SPREAD"]
 
 #: Witnesses per chain combined when the first ones collide.
 SPREAD = 4
@@ -49,6 +49,17 @@ SPREAD = 4
 def segment_distance(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     """Distance between the segments ``[A, B]`` and ``[C, D]`` (closest points by clamped
     parameters, Ericson, *Real-Time Collision Detection*, sec. 5.1.9)."""
+    s, t = segment_closest(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz)
+    d1x, d1y, d1z = bx - ax, by - ay, bz - az
+    d2x, d2y, d2z = dx - cx, dy - cy, dz - cz
+    px, py, pz = ax + d1x * s - (cx + d2x * t), ay + d1y * s - (cy + d2y * t), az + d1z * s - (cz + d2z * t)
+    return math.sqrt(px * px + py * py + pz * pz)
+
+
+@njit(cache=True, inline="always")
+def segment_closest(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
+    """Parameters ``(s, t)`` of the closest points ``A + s (B - A)`` and ``C + t (D - C)`` of the
+    segments ``[A, B]`` and ``[C, D]`` (:func:`segment_distance`)."""
     d1x, d1y, d1z = bx - ax, by - ay, bz - az
     d2x, d2y, d2z = dx - cx, dy - cy, dz - cz
     rx, ry, rz = ax - cx, ay - cy, az - cz
@@ -78,8 +89,7 @@ def segment_distance(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
             elif t > 1.0:
                 t = 1.0
                 s = min(max((b - c) / a, 0.0), 1.0)
-    px, py, pz = ax + d1x * s - (cx + d2x * t), ay + d1y * s - (cy + d2y * t), az + d1z * s - (cz + d2z * t)
-    return math.sqrt(px * px + py * py + pz * pz)
+    return s, t
 
 
 @njit(cache=True)

@@ -476,6 +476,25 @@ def box_contact_fraction(occupancy: np.ndarray) -> float:
     return float((int(occ.sum()) - int(inner.sum())) / n_face) if n_face else 0.0
 
 
+@njit(cache=True, inline="always")
+def _facet_clip(eq, f, i, j, tol, lo, hi):
+    """Column ``(i, j)``'s z-interval ``[lo, hi]`` cut by facet ``f`` (``n . p + d <= 0`` inside):
+    ``(lo, hi, outside)``, ``outside`` (with ``lo > hi``) when a vertical facet leaves the column out."""
+    s = eq[f, 0] * i + eq[f, 1] * j + eq[f, 3] - tol
+    nz = eq[f, 2]
+    if nz > 1e-12:
+        v = -s / nz
+        if v < hi:
+            hi = v
+    elif nz < -1e-12:
+        v = -s / nz
+        if v > lo:
+            lo = v
+    elif s > 0.0:
+        return np.inf, -np.inf, True
+    return lo, hi, False
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _hull_columns_kernel(nx, ny, eq, tol, zlo, zhi):
     """Per column ``(i, j)`` the z-interval ``[zlo, zhi]`` (index units) inside the hull ``eq``.
@@ -490,19 +509,8 @@ def _hull_columns_kernel(nx, ny, eq, tol, zlo, zhi):
         lo = -np.inf
         hi = np.inf
         for f in range(nf):
-            s = eq[f, 0] * i + eq[f, 1] * j + eq[f, 3] - tol
-            nz = eq[f, 2]
-            if nz > 1e-12:
-                v = -s / nz
-                if v < hi:
-                    hi = v
-            elif nz < -1e-12:
-                v = -s / nz
-                if v > lo:
-                    lo = v
-            elif s > 0.0:
-                lo = np.inf
-                hi = -np.inf
+            lo, hi, outside = _facet_clip(eq, f, i, j, tol, lo, hi)
+            if outside:
                 break
         zlo[i, j] = lo
         zhi[i, j] = hi
@@ -587,20 +595,8 @@ def _hull_columns_tiled_kernel(nx, ny, eq, tol, tile, keep, n_keep, zlo, zhi):
         lo = -np.inf
         hi = np.inf
         for q in range(n_keep[t]):
-            f = keep[t, q]
-            s = eq[f, 0] * i + eq[f, 1] * j + eq[f, 3] - tol
-            nz = eq[f, 2]
-            if nz > 1e-12:
-                v = -s / nz
-                if v < hi:
-                    hi = v
-            elif nz < -1e-12:
-                v = -s / nz
-                if v > lo:
-                    lo = v
-            elif s > 0.0:
-                lo = np.inf
-                hi = -np.inf
+            lo, hi, outside = _facet_clip(eq, keep[t, q], i, j, tol, lo, hi)
+            if outside:
                 break
         zlo[i, j] = lo
         zhi[i, j] = hi

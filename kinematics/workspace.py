@@ -38,6 +38,7 @@ from .feasibility import _chain_excluded, chain_points, chain_search, default_n_
 from .geometry import platform_points_local
 from .grid import GridSpec
 from .interference import interference_free
+from .interference_blocks import interference_free_grid
 from .joints import Joints, cone_table
 from .kernel_args import kernel_args
 from .parallel import KERNEL_LOCK
@@ -432,14 +433,12 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         _finish_kernel(out, ny_eval, mirror, _MIRROR_BITS, occ)
     if settings.joints.min_distance > 0.0:
         check(cancel)
-        idx = np.argwhere(occ)
-        if idx.size:
-            pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+        if occ.any():
             rot = euler_zyx_deg(*settings.orientation)
-            ok = interference_free(design, settings.joints, pts, rot[None], n_eta)[:, 0]
-            bad = idx[~ok]
-            out[bad[:, 0], bad[:, 1], bad[:, 2]] |= INTERFERENCE
-            occ[bad[:, 0], bad[:, 1], bad[:, 2]] = False
+            ok = interference_free_grid(design, settings.joints, (xs, ys, zs), grid.h, rot, n_eta, occ, cancel)
+            bad = occ & ~ok
+            out[bad] |= INTERFERENCE
+            occ &= ok
     return out, n_eta, occ
 
 

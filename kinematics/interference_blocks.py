@@ -1,0 +1,448 @@
+"""Leg interference on a voxel grid, decided block by block: the same voxels as the per-voxel
+witness search of :mod:`kinematics.interference`, with its work spent near where legs come close.
+
+Lemma (Lipschitz). For a fixed carriage pose every S joint is ``B = P + R u`` and every U joint
+``D`` is fixed, so moving the platform centre by ``v`` moves the point ``D + s (B - D)`` of a leg by
+``s v``; the distance of two legs (:func:`kinematics.interference.segment_distance`) changes by at
+most ``|s - t| |v| <= |v|``. Moving a carriage by ``dr`` along its rail moves its U joints by ``dr``
+and the points of its legs by ``(1 - s) dr``, so the distance changes by at most ``|dr|``.
+
+Own legs (the two legs of one carriage, nearly parallel, so ``|s - t|`` stays small). Both moves
+shift leg 1's vector ``X = B_1 - D_1`` by ``dX`` with ``|dX| <= |v| + |dr|`` and move the points
+``(s, t)`` apart by ``(s - t) dX``. With ``(s0, t0)`` the closest points and ``d0`` the distance
+before the move, ``a``, ``b`` the legs' vectors and ``g = a - b``:
+
+* upper bound ``d0 + |s0 - t0| |dX|`` (the same two points);
+* lower bound: ``|w(s, t)|^2 >= d0^2 - r + |xi_s a - xi_t b|^2`` (a convex quadratic on the unit
+  square, ``xi = (s, t) - (s0, t0)``, ``r`` the first-order optimality residual of the computed
+  ``(s0, t0)``) and ``|xi_s a - xi_t b| >= |sigma| alpha`` with ``sigma = xi_s - xi_t`` and ``alpha``
+  the part of ``a`` normal to ``g``; so the distance is at least ``min over 0 <= sigma <= 2`` of
+  ``sqrt(d0^2 - r + sigma^2 alpha^2) - (|s0 - t0| + sigma) |dX|`` (closed form, :func:`_own_bounds`).
+
+Let a block be a box of voxel centres with centre ``Pc`` and half-diagonal ``delta``, ``e = delta +
+eps`` (``eps`` the rounding margin of :func:`kinematics.blocks.rounding_margin`). For a chain, walk
+the arc samples in the witness search's order (outward from the middle sample) and keep in ``K``:
+
+* nothing for a sample that fails at ``Pc`` with the leg limits relaxed by ``e`` (cones by ``(1 + k)
+  e``): it fails at every centre of the block (:mod:`kinematics.blocks`), so it is no witness there;
+  nor for a sample whose two legs stay below ``d_min`` over its whole relaxed hull (below);
+* for any other sample, the hull ``[r0, r1]`` of its relaxed feasible ``rho`` at ``Pc``: at every
+  centre ``P`` of the block the sample's feasible ``rho`` (hence every probe of the witness search)
+  lies in it;
+* and stop at the first sample (of at most :data:`MAX_OWN` that pass the tightened test) where some
+  probe clears at every centre. The feasible set at ``P`` lies between the tightened set at ``Pc``
+  (``[t0, t1]`` its hull) and the relaxed one, so the first probe (the least feasible ``rho``: the
+  pieces come in increasing ``rho``) lies in ``[r0, t0]``; when no leg's widest gap (lower limit
+  tightened) meets ``[r0, r1]`` the set is one interval at every ``P`` and the next probes, its
+  greatest and middle ``rho``, lie in ``[t1, r1]`` and ``[(r0 + t1) / 2, (t0 + r1) / 2]``. A probe
+  range whose legs stay ``d_min`` apart under every move of at most ``e`` (own-leg lower bound,
+  bisection of the range) stops the search there at every ``P``; the ranges tried before it whose
+  legs do not always collide replace the sample's hull.
+
+**Clear.** At every centre of the block each chain's first witness is then a carriage pose ``(k,
+rho)`` with ``k`` in ``K`` and ``rho`` in its hull. When, for every two chains and every pair of their
+legs, the legs are at least ``d_min + e`` apart at ``Pc`` for every such pose (first with every U
+joint a chain can use in a disc around the discs' centres, then sample pair by sample pair with a
+bisection of both hulls), the first witnesses clear each other at every centre: the per-voxel search
+answers "clear" at each of them (it accepts the first witnesses).
+
+**Interferes.** When for some chain, at every sample that passes the relaxed test at ``Pc``, the
+own-leg upper bound stays below ``d_min`` over the whole hull (bisection), no probe of that chain
+clears at any centre: the per-voxel search finds no witness and answers "interferes".
+
+Any other block is split in eight; a single voxel is decided by the per-voxel search itself
+(:func:`kinematics.interference._pose_clear`), so the result is voxel-identical to it. Blocks with
+no voxel to test are skipped. Distances get one more margin of ``1e-7`` of the design's scale so the
+rounding of the closed-form distance never matters.
+
+Cost: about the number of blocks near poses where legs come within ``d_min`` of each other, instead
+of every voxel of the workspace.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .blocks import _split, rounding_margin
+from .design import Design
+from .feasibility import ChainTables, _leg_sets, chain_points
+from .geometry import platform_points_local
+from .interference import _pose_clear, segment_closest, segment_distance
+from .joints import Joints, cone_table
+from .parallel import KERNEL_LOCK
+from .progress import CancelToken, check
+
+__all__ = ["interference_free_grid", "TOP"]
+
+#: Edge (in voxels) of the coarsest blocks.
+TOP = 16
+#: Distance evaluations one hull-pair bisection may spend before the block is split instead.
+MAX_EVAL = 16
+#: Samples per chain whose own legs are tried as the last witness before the block is split instead.
+MAX_OWN = 16
+
+UNDECIDED, DONE = 0, 1
+
+
+@njit(cache=True, inline="always")
+def _u_joints(rho, c, s, hb, leg):
+    """U joint of leg ``leg`` (0 or 1) of a carriage at ``rho`` on the rail of direction ``(c, s)``."""
+    if leg == 0:
+        return rho * c - hb * s, rho * s + hb * c
+    return rho * c + hb * s, rho * s - hb * c
+
+
+@njit(cache=True)
+def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e):
+    """Hull ``(ok, r0, r1, g1a, g1b, g2a, g2b)`` of the feasible ``rho`` at one carriage angle with the
+    leg limits ``[lo2, hi2]`` (squared) and the cones relaxed by ``cone_e``, and each leg's gap
+    ``(g_a, g_b)`` of (F2) (:mod:`kinematics.feasibility`; ``(1, 0)`` when it has none)."""
+    ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, r_lo, r_hi = _leg_sets(
+        b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e)
+    g1a, g1b = (a1, a2) if n1 == 2 else (1.0, 0.0)
+    g2a, g2b = (c1, c2) if n2 == 2 else (1.0, 0.0)
+    if not ok:
+        return False, 0.0, 0.0, g1a, g1b, g2a, g2b
+    h0, h1 = 1e300, -1e300
+    for u in range(n1):
+        lo_a, hi_a = (a0, a1) if u == 0 else (a2, a3)
+        for v in range(n2):
+            lo_b, hi_b = (c0, c1) if v == 0 else (c2, c3)
+            lo = max(lo_a, lo_b, r_lo)
+            hi = min(hi_a, hi_b, r_hi)
+            if lo <= hi:
+                h0, h1 = min(h0, lo), max(h1, hi)
+    return h0 <= h1, h0, h1, g1a, g1b, g2a, g2b
+
+
+@njit(cache=True)
+def _own_bounds(rho, c, s, hb, bx, by, bz, shift):
+    """Lower and upper bounds ``(lo, hi, d0)`` of the distance of the two legs of one carriage (S
+    joints ``bx/by/bz[0..1]``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
+    before the move) after the platform and the carriage move so that leg 1's vector ``X = B_1 -
+    D_1`` moves by at most ``shift`` (module doc, own legs)."""
+    x1, y1 = _u_joints(rho, c, s, hb, 0)
+    x2, y2 = _u_joints(rho, c, s, hb, 1)
+    s0, t0 = segment_closest(x1, y1, 0.0, bx[0], by[0], bz[0], x2, y2, 0.0, bx[1], by[1], bz[1])
+    ax, ay, az = bx[0] - x1, by[0] - y1, bz[0]
+    qx, qy, qz = bx[1] - x2, by[1] - y2, bz[1]
+    wx = x1 + ax * s0 - (x2 + qx * t0)
+    wy = y1 + ay * s0 - (y2 + qy * t0)
+    wz = az * s0 - qz * t0
+    d0 = math.sqrt(wx * wx + wy * wy + wz * wz)
+    lam = abs(s0 - t0)
+    hi = d0 + lam * shift
+    # f = |w|^2 grows from (s0, t0) by at least |xi_s a - xi_t b|^2 less the KKT residual of (s0, t0)
+    gs = 2.0 * (wx * ax + wy * ay + wz * az)
+    gt = -2.0 * (wx * qx + wy * qy + wz * qz)
+    res = 0.0
+    res += abs(gs) if 0.0 < s0 < 1.0 else (max(-gs, 0.0) if s0 <= 0.0 else max(gs, 0.0))
+    res += abs(gt) if 0.0 < t0 < 1.0 else (max(-gt, 0.0) if t0 <= 0.0 else max(gt, 0.0))
+    f0 = max(d0 * d0 - res, 0.0)
+    gx, gy, gz = ax - qx, ay - qy, az - qz
+    aa = ax * ax + ay * ay + az * az
+    gg = gx * gx + gy * gy + gz * gz
+    ag = ax * gx + ay * gy + az * gz
+    alpha2 = max(aa - ag * ag / gg, 0.0) if gg > 0.0 else aa
+    alpha = math.sqrt(alpha2)
+    # min over sigma in [0, 2] of sqrt(f0 + sigma^2 alpha^2) - sigma shift (convex in sigma)
+    if alpha > shift:
+        sig = shift * math.sqrt(f0) / (alpha * math.sqrt(alpha2 - shift * shift))
+        sig = min(sig, 2.0)
+    else:
+        sig = 2.0
+    lo = math.sqrt(f0 + sig * sig * alpha2) - sig * shift - lam * shift
+    return lo, hi, d0
+
+
+@njit(cache=True)
+def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear, stack):
+    """Whether the two legs of one carriage are at least ``thr`` apart (``clear``) or below ``thr``
+    (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform move of at most ``e``
+    (bisection of the rail range with :func:`_own_bounds`; ``stack``: scratch of shape (64, >= 2))."""
+    stack[0, 0], stack[0, 1] = r0, r1
+    top = 1
+    evals = 0
+    while top > 0:
+        top -= 1
+        a, b = stack[top, 0], stack[top, 1]
+        m = 0.5 * (a + b)
+        lo, hi, d0 = _own_bounds(m, c, s, hb, bx, by, bz, e + 0.5 * (b - a))
+        evals += 1
+        if clear:
+            if lo >= thr:
+                continue
+            if d0 < thr:
+                return False
+        else:
+            if hi <= thr:
+                continue
+            if d0 > thr:
+                return False
+        if evals > MAX_EVAL or top + 2 > 64:
+            return False
+        stack[top, 0], stack[top, 1] = a, m
+        stack[top + 1, 0], stack[top + 1, 1] = m, b
+        top += 2
+    return True
+
+
+@njit(cache=True)
+def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb, b0, b1, need, stack):
+    """Whether leg ``la`` of a carriage on rail ``(ca, sa)`` (``rho`` in ``[a0, a1]``, S joint ``a*``)
+    and leg ``lb`` of another on rail ``(cb, sb)`` (``rho`` in ``[b0, b1]``) are at least ``need`` apart
+    for every pair of ``rho`` (bisection of the wider range; the lemma bounds the change by the sum
+    of the half-widths; ``stack``: scratch of shape (64, 4))."""
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = a0, a1, b0, b1
+    top = 1
+    evals = 0
+    while top > 0:
+        top -= 1
+        p, q, r, t = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+        ma, mb = 0.5 * (p + q), 0.5 * (r + t)
+        x1, y1 = _u_joints(ma, ca, sa, hba, la)
+        x2, y2 = _u_joints(mb, cb, sb, hbb, lb)
+        d = segment_distance(x1, y1, 0.0, ax, ay, az, x2, y2, 0.0, bx, by, bz)
+        evals += 1
+        if d < need or evals > MAX_EVAL or top + 2 > 64:
+            return False
+        if d - 0.5 * (q - p) - 0.5 * (t - r) >= need:
+            continue
+        if q - p >= t - r:
+            stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = p, ma, r, t
+            stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = ma, q, r, t
+        else:
+            stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = p, q, r, mb
+            stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = p, q, mb, t
+        top += 2
+    return True
+
+
+@njit(cache=True)
+def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks, hull,
+                 bx, by, bz):
+    """The module doc's certificate at the block centre ``P`` with ``e = delta + eps``: True when
+    every centre of the block is clear (``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2):
+    scratch)."""
+    need = dmin + e + margin
+    n = cos_t.shape[1]
+    lo_r = max(lmin - e, 0.0)
+    hi_r = lmax + e
+    lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
+    lo_t, hi_t = lmin + e, lmax - e
+    if lo_t > hi_t:
+        return False
+    lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
+    nk = np.zeros(3, np.int64)
+    mid = n // 2
+    for i in range(3):
+        b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+        bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
+        bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
+        stopped = False
+        tries = 0
+        for step in range(n):  # the witness search's order (interference._witnesses)
+            off = (step + 1) // 2
+            k = mid + off if step % 2 == 1 else mid - off
+            if k < 0 or k >= n:
+                continue
+            c, s = cos_t[i, k], sin_t[i, k]
+            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                                          jc[i], e)
+            if not ok:
+                continue
+            if _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                continue  # its own legs collide at every probe and centre: never a witness
+            ks[i, nk[i]] = k
+            hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
+            nk[i] += 1
+            okt, t0, t1, g1a, g1b, g2a, g2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
+                                                            lo_t2, hi_t2, jc[i], -e)
+            # the feasible set is one interval at every centre when no leg's widest gap (at the tightened
+            # lower limit) meets the relaxed hull
+            one = (g1a > g1b or g1b <= r0 or g1a >= r1) and (g2a > g2b or g2b <= r0 or g2a >= r1)
+            if okt:
+                tries += 1
+                if tries > MAX_OWN:
+                    return False
+                # the probes' ranges over the block (module doc): the least feasible rho in [r0, t0];
+                # with one interval also the greatest in [t1, r1], then the middle
+                w0, w1 = 1e300, -1e300
+                for probe in range(3 if one else 1):
+                    q0, q1 = (r0, t0) if probe == 0 else ((t1, r1) if probe == 1 else
+                                                          (0.5 * (r0 + t1), 0.5 * (t0 + r1)))
+                    if _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin + margin, True, stack):
+                        hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = min(w0, q0), max(w1, q1)
+                        stopped = True
+                        break
+                    if not _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin - margin, False, stack):
+                        w0, w1 = min(w0, q0), max(w1, q1)
+                if stopped:
+                    break
+                if one:  # the witness, if here, is a probe whose range does not always collide
+                    if w0 > w1:
+                        nk[i] -= 1
+                    else:
+                        hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = w0, w1
+        if not stopped:
+            return False
+    # every U joint a chain's first witness can use lies within ``rad`` of ``cen`` (per chain and leg)
+    cen = np.empty((3, 2, 2))
+    rad = np.zeros((3, 2))
+    for i in range(3):
+        for la in range(2):
+            x_lo, x_hi, y_lo, y_hi = 1e300, -1e300, 1e300, -1e300
+            for a in range(nk[i]):
+                for r in range(2):
+                    x, y = _u_joints(hull[i, a, r], cos_t[i, ks[i, a]], sin_t[i, ks[i, a]], hb, la)
+                    x_lo, x_hi, y_lo, y_hi = min(x_lo, x), max(x_hi, x), min(y_lo, y), max(y_hi, y)
+            cen[i, la, 0], cen[i, la, 1] = 0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)
+            for a in range(nk[i]):
+                for r in range(2):
+                    x, y = _u_joints(hull[i, a, r], cos_t[i, ks[i, a]], sin_t[i, ks[i, a]], hb, la)
+                    rad[i, la] = max(rad[i, la], math.hypot(x - cen[i, la, 0], y - cen[i, la, 1]))
+    for i in range(3):
+        for j in range(i + 1, 3):
+            far = True
+            for la in range(2):
+                for lb in range(2):
+                    dd = segment_distance(cen[i, la, 0], cen[i, la, 1], 0.0, bx[i, la], by[i, la], bz[i, la],
+                                          cen[j, lb, 0], cen[j, lb, 1], 0.0, bx[j, lb], by[j, lb], bz[j, lb])
+                    if dd - rad[i, la] - rad[j, lb] < need:
+                        far = False
+            if far:
+                continue
+            if nk[i] * nk[j] > 4:
+                return False
+            for a in range(nk[i]):
+                ka = ks[i, a]
+                for b in range(nk[j]):
+                    kb = ks[j, b]
+                    for la in range(2):
+                        for lb in range(2):
+                            if not _pair_clear(bx[i, la], by[i, la], bz[i, la], cos_t[i, ka], sin_t[i, ka], hb, la,
+                                               hull[i, a, 0], hull[i, a, 1],
+                                               bx[j, lb], by[j, lb], bz[j, lb], cos_t[j, kb], sin_t[j, kb], hb, lb,
+                                               hull[j, b, 0], hull[j, b, 1], need, stack):
+                                return False
+    return True
+
+
+@njit(cache=True)
+def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx, by,
+                   bz):
+    """True when some chain has no witness at any centre of the block (``e = delta + eps``): at every
+    arc sample that passes at the centre with the limits relaxed by ``e``, its two legs stay below
+    ``d_min - margin`` over the relaxed hull after any move of at most ``e``, so at every centre
+    every probe of the witness search collides (the per-voxel search answers "interferes")."""
+    n = cos_t.shape[1]
+    lo_r = max(lmin - e, 0.0)
+    hi_r = lmax + e
+    lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
+    for i in range(3):
+        b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+        bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
+        bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
+        blocked = True
+        for k in range(n):
+            c, s = cos_t[i, k], sin_t[i, k]
+            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
+                                          jc[i], e)
+            if ok and not _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                blocked = False
+                break
+        if blocked:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _count(sat, b0, bn, b):
+    """Voxels to test in block ``b`` (``sat``: the summed-volume table of the mask)."""
+    x0, y0, z0 = b0[b, 0], b0[b, 1], b0[b, 2]
+    x1, y1, z1 = x0 + bn[b, 0], y0 + bn[b, 1], z0 + bn[b, 2]
+    return (sat[x1, y1, z1] - sat[x0, y1, z1] - sat[x1, y0, z1] - sat[x1, y1, z0]
+            + sat[x0, y0, z1] + sat[x0, y1, z0] + sat[x1, y0, z0] - sat[x0, y0, z0])
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _blocks_kernel(b0, bn, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
+                   lmin2, lmax2, jc, dmin, state, out):
+    """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED."""
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    for b in prange(b0.shape[0]):
+        if _count(sat, b0, bn, b) == 0:
+            state[b] = DONE
+            continue
+        nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
+        if nx == 1 and ny == 1 and nz == 1:
+            sel = np.empty((3, 6))
+            ix, iy, iz = b0[b, 0], b0[b, 1], b0[b, 2]
+            out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
+                                          lmin2, lmax2, jc, dmin, sel)
+            state[b] = DONE
+            continue
+        px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
+        py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
+        pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
+        e = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2) + eps
+        stack = np.empty((64, 4))
+        ks = np.empty((3, cos_t.shape[1]), np.int64)
+        hull = np.empty((3, cos_t.shape[1], 2))
+        bx = np.empty((3, 2))
+        by = np.empty((3, 2))
+        bz = np.empty((3, 2))
+        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks,
+                        hull, bx, by, bz):
+            for x in range(b0[b, 0], b0[b, 0] + nx):
+                for y in range(b0[b, 1], b0[b, 1] + ny):
+                    for z in range(b0[b, 2], b0[b, 2] + nz):
+                        out[x, y, z] = where[x, y, z]
+            state[b] = DONE
+        elif _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx,
+                            by, bz):
+            state[b] = DONE  # every voxel interferes: out stays False
+        else:
+            state[b] = UNDECIDED
+
+
+def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
+                           h: float, rotation: np.ndarray, n_eta: int, where: np.ndarray,
+                           cancel: CancelToken = None) -> np.ndarray:
+    """:func:`kinematics.interference.interference_free` at the voxel centres of a grid (``axes``, edge
+    ``h``) at one ``rotation``, for the voxels where ``where`` is True (the others are False), decided
+    block by block (module docstring): bool array of ``where``'s shape, the per-voxel answer at each
+    voxel."""
+    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
+    mask = np.ascontiguousarray(where, dtype=np.bool_)
+    out = np.zeros(mask.shape, np.bool_)
+    if not mask.any():
+        return out
+    tab = ChainTables(design, n_eta)
+    rot = np.asarray(rotation, dtype=np.float64).reshape(1, 3, 3)
+    u = np.ascontiguousarray(np.einsum("ijk,mlk->mijl", platform_points_local(design), rot)[0])
+    jc = np.ascontiguousarray(cone_table(design, joints, rot[0]))
+    lmax = math.sqrt(tab.lmax2)
+    eps = rounding_margin(lmax, (xs, ys, zs))
+    margin = 100.0 * eps  # 1e-7 of the design's scale (module doc)
+    sat = np.zeros(tuple(s + 1 for s in mask.shape), np.int64)
+    sat[1:, 1:, 1:] = mask.cumsum(0, dtype=np.int64).cumsum(1).cumsum(2)
+    starts = [np.arange(0, s, TOP) for s in mask.shape]
+    gx, gy, gz = np.meshgrid(*starts, indexing="ij")
+    b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
+    bn = np.minimum(TOP, np.array(mask.shape, np.int64)[None, :] - b0)
+    step = 8192  # blocks per launch: cancellation within a fraction of a second
+    while b0.shape[0]:
+        state = np.empty(b0.shape[0], np.int8)
+        for s in range(0, b0.shape[0], step):
+            check(cancel)
+            with KERNEL_LOCK:
+                _blocks_kernel(b0[s:s + step], bn[s:s + step], sat, mask, xs, ys, zs, float(h), eps, margin, u,
+                               tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc,
+                               float(joints.min_distance), state[s:s + step], out)
+        keep = state == UNDECIDED
+        b0, bn = _split(b0[keep], bn[keep])
+    return out

@@ -1,0 +1,102 @@
+"""Leg interference decided block by block (kinematics/interference_blocks.py) against the per-voxel
+witness search of kinematics/interference.py at every voxel, and the own-leg distance bounds against
+brute-force sampled moves."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.feasibility import default_n_eta
+from paraspace.kinematics.interference import interference_free, segment_distance
+from paraspace.kinematics.interference_blocks import _own_bounds, interference_free_grid
+from paraspace.kinematics.joints import Joints
+from paraspace.kinematics.rotation import euler_zyx_deg
+from paraspace.kinematics.workspace import INTERFERENCE, WorkspaceSettings, compute_workspace
+
+
+@pytest.mark.parametrize("design,joints,orient,h", [
+    (Design(), Joints(leg_diameter=10.0), (0.0, 0.0, 0.0), 3.0),
+    (Design(), Joints(leg_diameter=6.0, clearance=1.0), (0.0, 0.0, 0.0), 3.5),
+    (Design(), Joints(leg_diameter=30.0, clearance=5.0), (0.0, 0.0, 0.0), 4.0),
+    (Design(a=30.0), Joints(theta_u=45.0, leg_diameter=10.0, clearance=2.0), (5.0, 0.0, 10.0), 3.0),
+    (Design(b=30.0, eta_s=60.0, eta_range="from-zero"), Joints(leg_diameter=12.0), (0.0, 8.0, 0.0), 5.0),
+])
+def test_blocks_decide_the_voxels_of_the_per_voxel_search(design, joints, orient, h):
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h, orientation=orient, joints=Joints(
+        theta_u=joints.theta_u, theta_s=joints.theta_s, cone_axis=joints.cone_axis)))
+    occ = plain.occupancy
+    xs, ys, zs = plain.grid.axes()
+    rot = euler_zyx_deg(*orient)
+    idx = np.argwhere(occ)
+    pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+    old = interference_free(design, joints, pts, rot[None], plain.n_eta)[:, 0]
+    new = interference_free_grid(design, joints, (xs, ys, zs), h, rot, plain.n_eta, occ)
+    assert not np.any(new & ~occ)  # only the voxels asked about
+    assert np.array_equal(new[idx[:, 0], idx[:, 1], idx[:, 2]], old)
+    if joints.min_distance < 30.0:
+        assert 0 < old.sum() < old.size  # both answers occur: the test can tell them apart
+    # the engine uses it: its voxels are the plain ones less the interfering ones, flagged
+    full = compute_workspace(design, WorkspaceSettings(voxel=h, orientation=orient, joints=joints,
+                                                       bounds=(plain.grid.lo, plain.grid.hi)))
+    assert np.array_equal(full.occupancy, new)
+
+
+def test_own_leg_bounds_hold_for_sampled_moves():
+    """``_own_bounds(rho, ..., shift)`` brackets the two legs' distance after every move of the platform
+    and the carriage that shifts leg 1's vector by at most ``shift`` (random moves, closed-form
+    distance)."""
+    design = Design()
+    rng = np.random.default_rng(5)
+    hb = 0.5 * design.b
+    checked = 0
+    for _ in range(300):
+        eta = rng.uniform(-0.3, 0.3)
+        c, s = np.cos(eta), np.sin(eta)
+        rho = rng.uniform(50.0, 100.0)
+        b = np.array([[rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(80, 200)] for _ in range(2)])
+        b[1] = b[0] + rng.normal(size=3) * 15.0
+        shift = rng.uniform(0.0, 6.0)
+        lo, hi, d0 = _own_bounds(rho, c, s, hb, b[:, 0].copy(), b[:, 1].copy(), b[:, 2].copy(), shift)
+        at = (rho * c - hb * s, rho * s + hb * c, 0.0), (rho * c + hb * s, rho * s - hb * c, 0.0)
+        assert d0 == pytest.approx(segment_distance(*at[0], *b[0], *at[1], *b[1]), abs=1e-9)
+        for _ in range(40):
+            v = rng.normal(size=3)
+            v *= rng.uniform(0, 1) * shift / np.linalg.norm(v)
+            dr = rng.uniform(-1, 1) * (shift - np.linalg.norm(v))  # rail move: the rest of the budget
+            r = rho + dr
+            d1 = (r * c - hb * s, r * s + hb * c, 0.0)
+            d2 = (r * c + hb * s, r * s - hb * c, 0.0)
+            dist = segment_distance(*d1, *(b[0] + v), *d2, *(b[1] + v))
+            assert lo - 1e-9 <= dist <= hi + 1e-9
+            checked += 1
+    assert checked == 12000
+
+
+def test_interference_bit_is_set_where_the_legs_interfere():
+    design = Design()
+    joints = Joints(leg_diameter=10.0)
+    res = compute_workspace(design, WorkspaceSettings(voxel=6.0, joints=joints, diagnostics=True))
+    plain = compute_workspace(design, WorkspaceSettings(voxel=6.0, diagnostics=True, bounds=(res.grid.lo,
+                                                                                              res.grid.hi)))
+    flagged = (res.chain_mask & INTERFERENCE) > 0
+    assert np.array_equal(flagged, plain.occupancy & ~res.occupancy)
+    assert flagged.any()
+    assert default_n_eta(design) == res.n_eta
+
+
+def test_cancel_stops_the_block_search():
+    from paraspace.kinematics.progress import Cancelled
+
+    design = Design()
+    plain = compute_workspace(design, WorkspaceSettings(voxel=8.0))
+    calls = []
+
+    def cancel() -> bool:  # set after the first check: the search stops between launches
+        calls.append(1)
+        return len(calls) > 1
+
+    with pytest.raises(Cancelled):
+        interference_free_grid(design, Joints(leg_diameter=10.0), plain.grid.axes(), 8.0, np.eye(3), plain.n_eta,
+                               plain.occupancy, cancel)
