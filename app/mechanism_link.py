@@ -109,7 +109,7 @@ def preset_link(name: str, values: Mapping[str, Any] | None = None) -> Mechanism
         if key not in known:
             raise ParameterError(key, values[key], f"a parameter of preset {name!r}: {', '.join(sorted(known))}")
     PRESETS[name].mechanism(values)  # validates (the builder's own checks: types, ranges, l_min < l_max)
-    params = tuple((p.name, float(values.get(p.name, p.default))) for p in specs)  # type: ignore[arg-type]
+    params = tuple((p.name, float(values.get(p.name, p.default))) for p in specs)
     return MechanismLink(name, params)
 
 

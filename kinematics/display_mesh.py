@@ -82,7 +82,7 @@ def display_mesh(mesh: trimesh.Trimesh, max_faces: int = DISPLAY_FACES) -> trime
     if v0 > 0:
         c = out.vertices.mean(axis=0)
         out.vertices = c + (out.vertices - c) * (v0 / v1) ** (1.0 / 3.0)
-    if mesh.visual.kind == "vertex" and len(mesh.vertices):
+    if mesh.visual is not None and mesh.visual.kind == "vertex" and len(mesh.vertices):
         _, nearest = cKDTree(mesh.vertices).query(out.vertices)
         out.visual.vertex_colors = np.asarray(mesh.visual.vertex_colors)[nearest]  # type: ignore[union-attr]
     meta = dict(mesh.metadata.get("paraspace", {}))

@@ -43,11 +43,14 @@ import os
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .design import PARAMS, Design, ParameterError
 from .progress import Cancelled, CancelToken, ProgressFn, is_cancelled
 from .workspace import WorkspaceSettings
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from .presets import PresetDesign
 
 __all__ = ["sweep_grid", "grid_designs", "WORKER_ENV", "LOCAL_CLUSTER_MIN_CORES", "usable_cores", "default_workers",
            "shared_client", "close_clients"]
@@ -78,8 +81,8 @@ def default_workers(cores: int | None = None) -> int | None:
     return n // 2 if n >= LOCAL_CLUSTER_MIN_CORES else None
 
 
-def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
-                 ) -> tuple[list[tuple[int, ...]], list[dict[str, float]], list[Design]]:
+def grid_designs(design: Design | PresetDesign, params: Mapping[str, Sequence[float]]
+                 ) -> tuple[list[tuple[int, ...]], list[dict[str, float]], list[Design | PresetDesign]]:
     """The points of the grid, validated before anything runs (``design`` may also be a preset's
     :class:`~kinematics.presets.PresetDesign`: its numeric parameters, each in its ``[lo, hi]``;
     then pass ``evaluate=functools.partial(evaluate_design, length_step=...)`` to :func:`sweep_grid`
@@ -116,7 +119,7 @@ def grid_designs(design: Design, params: Mapping[str, Sequence[float]]
         lists.append(vals)
     indices: list[tuple[int, ...]] = []
     values: list[dict[str, float]] = []
-    designs: list[Design] = []
+    designs: list[Design | PresetDesign] = []
     for idx in itertools.product(*[range(len(v)) for v in lists]):
         point = {n: lists[k][i] for k, (n, i) in enumerate(zip(names, idx))}
         designs.append(design.replace(**point))
@@ -265,7 +268,7 @@ def close_clients() -> int:
     return len(entries)
 
 
-def sweep_grid(design: Design, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
+def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[float]], settings: WorkspaceSettings, *,
                orientation: Any = None, scheduler: str | None = None, n_workers: int | None = None,
                progress: ProgressFn | None = None, cancel: CancelToken = None, retries: int = 1,
                evaluate: Callable[..., dict] | None = None, connect_timeout: float = 10.0,

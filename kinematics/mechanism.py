@@ -145,7 +145,7 @@ class Mechanism:
         """Every leg as ``(chain index, leg index in its chain, leg)``, in description order."""
         return [(c, j, leg) for c, chain in enumerate(self.chains) for j, leg in enumerate(chain.legs)]
 
-    def platform_points(self, position: Sequence[float], rotation: np.ndarray) -> np.ndarray:
+    def platform_points(self, position: Sequence[float] | np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """(M2): ``B_j = p + R u_j`` for every leg in description order, shape (6, 3)."""
         u = np.array([leg.platform for _, _, leg in self.legs], float)
         return np.asarray(position, float) + u @ np.asarray(rotation, float).T

@@ -113,8 +113,8 @@ def mechanism_limit_binding(result: MechanismWorkspaceResult, *, voxels: np.ndar
             if entry == "interference":
                 collisions += 1
                 continue
-            c, lim = entry.split(":")
-            counts[int(c), LIMITS.index(lim)] += 1
+            chain, lim = entry.split(":")
+            counts[int(chain), LIMITS.index(lim)] += 1
     total = int(counts.sum()) + collisions
     frac = {lim: (float(counts[:, k].sum()) / total if total else 0.0) for k, lim in enumerate(LIMITS)}
     frac["interference"] = collisions / total if total else 0.0

@@ -226,6 +226,11 @@ def scan_range(tables: KernelTables, plat0: np.ndarray, line: str, settings: Ori
 # the scans
 
 
+def _listed(v: np.ndarray | None) -> list[float] | None:
+    """A direction as a JSON list (``None`` for the z line, which has no horizontal direction)."""
+    return None if v is None else [float(x) for x in v]
+
+
 @dataclasses.dataclass
 class MechanismOrientationResult(OrientationResult):
     """An :class:`~kinematics.orientation.OrientationResult` of a description: ``order`` (S1),
@@ -242,7 +247,7 @@ class MechanismOrientationResult(OrientationResult):
         out["engine"] = self.engine
         out["symmetry_order"] = self.order
         out["lines"] = {ln: {"symbol": LINE_SYMBOL[ln],
-                             "direction": None if ln == "z" else [float(v) for v in line_direction(ln, self.azimuth)]}
+                             "direction": _listed(line_direction(ln, self.azimuth))}
                         for ln in LINES}
         out["rotation_axes"] = {rt: [float(v) for v in rotation_axis(rt, self.azimuth)] for rt in ROTATIONS}
         out["second_line_azimuth"] = float(self.azimuth)

@@ -173,8 +173,8 @@ def mechanism_pose_list_task(mech: Mechanism, poses: PoseList, settings: TaskSet
                      "q": [x for c in chains for x in c.lengths] + [x for c in chains for x in c.q],
                      **({} if poses.t is None else {"t": float(poses.t[n])})})
         rep((n + 1) / len(poses), f"task: pose {n + 1}/{len(poses)}")
-    margins = np.array([r["margin"] for r in rows])
-    w = int(np.argmin(margins))
+    pose_margins = np.array([r["margin"] for r in rows])
+    w = int(np.argmin(pose_margins))
     n_ok = sum(r["reachable"] for r in rows)
     worst = {"index": w, "pose": rows[w]["pose"], "reachable": rows[w]["reachable"]}
     binding = {"chain": rows[w]["binding_chain"], "chains": [rows[w]["binding_chain"]], "leg": None, "limit": None,
@@ -184,7 +184,7 @@ def mechanism_pose_list_task(mech: Mechanism, poses: PoseList, settings: TaskSet
     details = {"count": len(rows), "mechanism": mech.to_dict(), "engine": "general", "length_step": length_step,
                "unreachable": [r["index"] for r in rows if not r["reachable"]], "actuator_names": names}
     return TaskResult(kind="poses", fraction=n_ok / len(rows), contained=n_ok == len(rows), certified="undecided",
-                      margin=float(margins[w]), worst=worst, binding=binding, slack={}, details=details,
+                      margin=float(pose_margins[w]), worst=worst, binding=binding, slack={}, details=details,
                       seconds=time.perf_counter() - t0, poses=rows, discontinuities=[])
 
 

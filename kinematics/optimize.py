@@ -512,7 +512,7 @@ class OptimizeSettings:
         set_("preset_values", dict(base.values))
         set_("length_step", check_length_step(self.length_step))
         if self.preset == "paper":
-            set_("design", Design(**dict(base.values)))
+            set_("design", Design(**dict(base.values)))  # type: ignore[arg-type]  # the paper preset's values
         elif isinstance(self.workspace, WorkspaceSettings) and self.workspace.joints != Joints():
             raise ParameterError("workspace.joints", self.workspace.joints.to_dict(),
                                  "none for a general mechanism: its legs carry their own u_cone/s_cone")

@@ -211,9 +211,9 @@ def _canon(obj: Any) -> Any:
     return str(obj)
 
 
-def cache_key(design: Design, settings: WorkspaceSettings, orientation: OrientationSettings | None = None,
-              version: str | None = None, task: Any = None, measures: Sequence[str] | None = None,
-              **extra: Any) -> str:
+def cache_key(design: Design | PresetDesign, settings: WorkspaceSettings,
+              orientation: OrientationSettings | None = None, version: str | None = None, task: Any = None,
+              measures: Sequence[str] | None = None, **extra: Any) -> str:
     """Stable hash (hex sha256) of the design fields, the workspace and orientation settings fields,
     the task (when given), the code version and, when only some measures are asked for
     (``measures``), their names."""
@@ -259,7 +259,7 @@ class ResultCache:
         self.hits = 0
         self.misses = 0
 
-    def key(self, design: Design, settings: WorkspaceSettings,
+    def key(self, design: Design | PresetDesign, settings: WorkspaceSettings,
             orientation: OrientationSettings | None = None, task: Any = None,
             measures: Sequence[str] | None = None, **extra: Any) -> str:
         """:func:`cache_key` with this cache's version."""

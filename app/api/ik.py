@@ -10,7 +10,7 @@ from paraspace.kinematics.serialize import jsonable
 
 from .context import api_router
 from .errors import FieldError, call_core
-from .models import IkRequest
+from .models import IkRequest, mechanism_or_design
 
 router = api_router()
 
@@ -22,18 +22,10 @@ async def ik(req: IkRequest) -> dict[str, Any]:  # ~1 ms of numpy: on the event 
     from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
     pose = req.pose.build()
-    if req.mechanism is not None:
-        from paraspace.kinematics.mechanism_workspace import paper_design
-
-        if "design" in req.model_fields_set:
-            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
-        mech = req.mechanism.build()
-        found = paper_design(mech)
-        if found is None:
-            return await run_in_threadpool(_ik_general, req, mech, pose)
-        design = found
-    else:
-        design = req.design.build()
+    mech, found = mechanism_or_design(req)
+    if found is None:
+        return await run_in_threadpool(_ik_general, req, mech, pose)
+    design = found
     if (req.d is None) != (req.eta is None):
         missing = "eta" if req.eta is None else "d"
         raise FieldError(missing, f"{missing} is required when {'d' if missing == 'eta' else 'eta'} is "

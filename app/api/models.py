@@ -95,6 +95,26 @@ class MechanismIn(BaseModel):
 IkRequest.model_rebuild()
 
 
+
+def refuse_design_with_mechanism(req: BaseModel) -> None:
+    """A request gives ``mechanism`` or ``design``, never both (422 naming ``design``)."""
+    if "design" in req.model_fields_set:
+        raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+
+
+def mechanism_or_design(req: Any) -> tuple[Any, Any]:
+    """A request's ``(mechanism, design)``: without ``mechanism``, ``(None, req.design)``; the paper
+    preset or a description equal to it, ``(mechanism, its Design)`` (the paper's engine); any other
+    description, ``(mechanism, None)`` (the general engine). ``design`` beside ``mechanism`` is refused."""
+    if req.mechanism is None:
+        return None, req.design.build()
+    from paraspace.kinematics.mechanism_workspace import paper_design
+
+    refuse_design_with_mechanism(req)
+    mech = req.mechanism.build()
+    return mech, paper_design(mech)
+
+
 class WorkspaceRequest(BaseModel):
     """A constant-orientation position workspace: of the paper's ``design``, or of a ``mechanism``."""
 
@@ -210,8 +230,7 @@ class OptimizeRequest(BaseModel):
 
         preset, values, length_step = None, {}, 1.0
         if self.mechanism is not None:
-            if "design" in self.model_fields_set:
-                raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+            refuse_design_with_mechanism(self)
             if self.mechanism.description is not None or self.mechanism.preset is None:
                 raise FieldError("mechanism.preset", "mechanism.preset: the optimiser varies a preset's parameters: "
                                                      f"valid values {', '.join(PRESETS)} (not a description)")

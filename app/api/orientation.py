@@ -13,8 +13,8 @@ from paraspace.kinematics.serialize import jsonable
 from ..jobs import Job
 from ..limits import orientation_samples
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
-from .errors import ApiError, FieldError, call_core
-from .models import OrientationRequest
+from .errors import ApiError, call_core
+from .models import OrientationRequest, mechanism_or_design
 
 router = api_router()
 
@@ -33,18 +33,9 @@ def _start_orientation(ctx: ApiContext, req: OrientationRequest, request: Reques
 
     limits = ctx.limits
     settings = req.settings.build()
-    if req.mechanism is not None:
-        from paraspace.kinematics.mechanism_workspace import paper_design
-
-        if "design" in req.model_fields_set:
-            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
-        mech = req.mechanism.build()
-        paper = paper_design(mech)
-        if paper is None:
-            return _start_general(ctx, req, request, mech, settings)
-        design = paper
-    else:
-        design = req.design.build()
+    mech, design = mechanism_or_design(req)
+    if design is None:
+        return _start_general(ctx, req, request, mech, settings)
     key = (design.key(), settings.key())
     cached = ctx.caches["orientation"].get(key) is not None
     if not cached:

@@ -19,7 +19,7 @@ from ..jobs import Job
 from ..limits import orientation_samples, workspace_voxels
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
 from .errors import ApiError, FieldError, call_core
-from .models import SweepRequest, study_settings
+from .models import SweepRequest, refuse_design_with_mechanism, study_settings
 
 router = api_router()
 
@@ -107,7 +107,7 @@ def _start_sweep(ctx: ApiContext, req: SweepRequest, request: Request) -> tuple[
     sweep_cache = ctx.sweep_cache
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
-        more = {"length_step": length_step} if general else {}
+        more: dict[str, Any] = {"length_step": length_step} if general else {}
         if len(axes) == 1:
             rows = sw.sweep_1d(design, req.x.param, vals[0], settings, orientation=ori,
                                progress=progress, cancel=cancel, cache=sweep_cache, **more)
@@ -130,8 +130,7 @@ def _study_design(req: SweepRequest) -> tuple[Design | PresetDesign, float | Non
         return req.design.build(), None
     from paraspace.kinematics.presets import PRESETS
 
-    if "design" in req.model_fields_set:
-        raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
+    refuse_design_with_mechanism(req)
     if req.mechanism.description is not None or req.mechanism.preset is None:
         raise FieldError("mechanism.preset", "mechanism.preset: a sweep varies a preset's parameters: valid values "
                                              f"{', '.join(PRESETS)} (not a description)")

@@ -14,7 +14,7 @@ from paraspace.kinematics.serialize import jsonable
 from ..jobs import Job
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
 from .errors import ApiError, FieldError
-from .models import TaskRequest
+from .models import TaskRequest, mechanism_or_design
 
 router = api_router()
 
@@ -31,16 +31,10 @@ async def task(req: TaskRequest, request: Request, ctx: Ctx, wait: float = WAIT_
 def _start_task(ctx: ApiContext, req: TaskRequest, request: Request) -> tuple[Job, bool]:
     from paraspace.kinematics.task import PoseList, evaluate_task, region_samples
 
-    design, task, oset, settings = req.build()
-    if req.mechanism is not None:
-        from paraspace.kinematics.mechanism_workspace import paper_design
-
-        if "design" in req.model_fields_set:
-            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
-        mech = req.mechanism.build()
-        design = paper_design(mech)
-        if design is None:
-            return _start_general(ctx, req, request, mech, task, oset, settings)
+    _, task, oset, settings = req.build()
+    mech, design = mechanism_or_design(req)
+    if design is None:
+        return _start_general(ctx, req, request, mech, task, oset, settings)
     import hashlib
 
     tkey = (("poses", hashlib.sha256(task.poses.tobytes() + (b"" if task.t is None else task.t.tobytes())).hexdigest(),

@@ -17,7 +17,7 @@ from .. import memory
 from ..jobs import Job
 from .context import WAIT_QUERY, ApiContext, ApiResult, Ctx, api_router
 from .errors import RANGES, ApiError, FieldError
-from .models import WorkspaceRequest
+from .models import WorkspaceRequest, mechanism_or_design
 
 router = api_router()
 RANGES[("query", "max_faces")] = "[100, 2000000]"
@@ -39,17 +39,9 @@ def _start_workspace(ctx: ApiContext, req: WorkspaceRequest, request: Request) -
     from paraspace.kinematics.workspace import compute_workspace
 
     settings = req.settings.build()
-    if req.mechanism is not None:
-        from paraspace.kinematics.mechanism_workspace import paper_design
-
-        if "design" in req.model_fields_set:
-            raise FieldError("design", "design: not with mechanism (set a preset's parameters in mechanism.params)")
-        mech = req.mechanism.build()
-        design = paper_design(mech)
-        if design is None:
-            return _start_general(ctx, req, request, mech, settings)
-    else:
-        design = req.design.build()
+    mech, design = mechanism_or_design(req)
+    if design is None:
+        return _start_general(ctx, req, request, mech, settings)
     key = (design.key(), settings.key())
     cached = ctx.caches["workspace"].get(key) is not None
     if not cached:

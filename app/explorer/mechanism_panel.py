@@ -88,7 +88,7 @@ def build_mechanism_controls(gui: viser.GuiApi, state: ExplorerState) -> Mechani
             folders[name] = folder
             sliders[name] = {}
             for p in preset_params(name):
-                v = float(values.get(p.name, p.default)) if shown else float(p.default)  # type: ignore[arg-type]
+                v = float(values.get(p.name, p.default)) if shown else float(p.default)
                 lo, hi = slider_span(*p.study_range, v)  # the study range, widened to hold the value
                 sliders[name][p.name] = gui.add_slider(
                     _slider_label(p.name, p.unit), min=lo, max=hi, step=0.5, initial_value=v,
@@ -206,7 +206,13 @@ class MechanismController:
         for sliders in c.sliders.values():
             for h in sliders.values():
                 h.on_update(cb(self.on_param))
-        c.upload.on_upload(lambda e: cb(lambda: self.apply_upload(e.target.value.name, e.target.value.content))())
+
+        def on_upload(event: Any) -> None:
+            def read() -> None:
+                self.apply_upload(event.target.value.name, event.target.value.content)
+            cb(read)(event)
+
+        c.upload.on_upload(on_upload)
         self.show(self.ctx.state.mechanism)
 
     # ----- what is shown ------------------------------------------------------------------------
@@ -304,7 +310,8 @@ class MechanismController:
         workspace job, link."""
         ctx = self.ctx
         with ctx.lock:
-            if ctx.state.mechanism == link and (link is None or link.in_link == ctx.state.mechanism.in_link):
+            cur = ctx.state.mechanism
+            if cur == link and (link is None or cur is None or link.in_link == cur.in_link):
                 self.show(link)
                 return
             ctx.state = ctx.state.replace(mechanism=link)

@@ -200,7 +200,8 @@ class GeneralMechanismScene:
                 lab.visible = False
                 continue
             lab.text = f"leg {k + 1}: {STATE_TEXT[state]}"
-            lab.position = tuple(float(x) for x in pose.top[k])
+            x, y, z = (float(v) for v in pose.top[k])
+            lab.position = (x, y, z)
             lab.visible = True
 
     def update(self, pose: MechanismPose, reachable: bool) -> None:
