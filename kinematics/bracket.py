@@ -142,55 +142,11 @@ def _cube_kernel(b0, bn, state, win, xs, ys, zs, h, eps, arc_slack, cone_slack, 
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _subcube_kernel(centres, pbits, pwin, size, eps, arc_slack, cone_slack, zfloor, offsets,
-                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, kids, bits, win, out):
-    """INSIDE / OUTSIDE / BOUNDARY (``out``) of the 8 children, of edge ``size``, of each parent cube
-    centred at ``centres`` (N, 3): child ``8 p + j`` is centred at ``centres[p] + size offsets[j]``
-    (``kids``, 8N x 3). It inherits its parent's chains proven inside (bit ``i`` of ``pbits[p]``;
-    ``bits`` receives the child's) and sample windows (``pwin[p]``, (3, 3); ``win``, 8N x 3 x 3,
-    receives the child's). A parent's children run in order in one thread; a chain that failed one
-    child is tested first on the next (a FAIL ends the child's tests; the class of a child does not
-    depend on the order, and the bits and windows of the chains tested are the same whenever the
-    child is not outside, since then every untested chain is tested)."""
-    delta = 0.5 * size * math.sqrt(3.0)
-    for p in prange(centres.shape[0]):
-        first = 0
-        for j in range(8):
-            c = 8 * p + j
-            px = centres[p, 0] + size * offsets[j, 0]
-            py = centres[p, 1] + size * offsets[j, 1]
-            pz = centres[p, 2] + size * offsets[j, 2]
-            kids[c, 0], kids[c, 1], kids[c, 2] = px, py, pz
-            bits[c] = pbits[p]
-            for i in range(3):
-                for k in range(3):
-                    win[c, i, k] = pwin[p, i, k]
-            below = pz - 0.5 * size < zfloor - eps
-            cls = INSIDE
-            for step in range(3):
-                i = (first + step) % 3
-                if (bits[c] >> i) & 1:
-                    continue
-                st = _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, win[c, i],
-                                 u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
-                if st == FAIL:
-                    cls = OUTSIDE
-                    first = i
-                    break
-                if st == UNKNOWN:
-                    cls = BOUNDARY
-                else:
-                    bits[c] |= 1 << i
-            out[c] = cls
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _subcube_reference_kernel(centres, bits, win, size, eps, arc_slack, cone_slack, zfloor,
-                              u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
-    """The former path of :func:`_subcube_kernel` (one thread per child, chains in order 0, 1, 2;
-    the tests' and benchmarks' reference): INSIDE / OUTSIDE / BOUNDARY of cubes of edge ``size``
-    centred at ``centres`` (N, 3); bit ``i`` of ``bits`` marks chain ``i`` as already inside
-    (inherited from the parent cube; updated); ``win`` (N, 3, 3): each chain's sample window (updated)."""
+def _subcube_kernel(centres, bits, win, size, eps, arc_slack, cone_slack, zfloor,
+                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out):
+    """INSIDE / OUTSIDE / BOUNDARY of cubes of edge ``size`` centred at ``centres`` (N, 3); bit ``i``
+    of ``bits`` marks chain ``i`` as already inside (inherited from the parent cube; updated);
+    ``win`` (N, 3, 3): each chain's sample window (updated)."""
     delta = 0.5 * size * math.sqrt(3.0)
     for c in prange(centres.shape[0]):
         px, py, pz = centres[c, 0], centres[c, 1], centres[c, 2]
@@ -318,13 +274,11 @@ _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) f
 
 def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float, cls: np.ndarray,
                     chain_bits: np.ndarray, levels: int, progress: Reporter | None = None,
-                    cancel: CancelToken = None, reference: bool = False) -> tuple[float, float, int]:
+                    cancel: CancelToken = None) -> tuple[float, float, int]:
     """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
     same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
     boundary children left)``; the bracket becomes ``[V_in + inside, V_out - outside]``. A child
-    inherits the chains its parent proved inside (``chain_bits``) and tests only the others.
-    ``reference``: the former path (:func:`_subcube_reference_kernel`, children built in numpy), for
-    the tests and benchmarks; the same values."""
+    inherits the chains its parent proved inside (``chain_bits``) and tests only the others."""
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     idx = np.argwhere(cls == BOUNDARY)
@@ -343,27 +297,13 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
         left, left_bits, left_win = [], [], []
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
-            if reference:
-                kids = (centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3)
-                kids = np.ascontiguousarray(kids)
-                bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
-                win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
-                out = np.empty(kids.shape[0], np.uint8)
-                with KERNEL_LOCK:
-                    _subcube_reference_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack,
-                                              float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb,
-                                              rho_lo, rho_hi, lmin, lmax, jc, out)
-            else:
-                par = np.ascontiguousarray(centres[s:s + chunk // 8])
-                kids = np.empty((8 * par.shape[0], 3))
-                bits = np.empty(kids.shape[0], np.uint8)
-                win = np.empty((kids.shape[0], 3, 3), parent_win.dtype)
-                out = np.empty(kids.shape[0], np.uint8)
-                with KERNEL_LOCK:
-                    _subcube_kernel(par, np.ascontiguousarray(parent_bits[s:s + chunk // 8]),
-                                    np.ascontiguousarray(parent_win[s:s + chunk // 8]), size, fa.eps, fa.arc_slack,
-                                    fa.cone_slack, float(z_floor), _CHILDREN, u, fa.cos_t, fa.sin_t, arc, fa.seg_k,
-                                    fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, kids, bits, win, out)
+            kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
+            bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
+            win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
+            out = np.empty(kids.shape[0], np.uint8)
+            with KERNEL_LOCK:
+                _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
+                                fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out)
             inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
             outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
             left.append(kids[out == BOUNDARY])

@@ -144,23 +144,3 @@ def test_bracket_agrees_with_an_independent_interval_oracle():
     ours_bracket = (ours[INSIDE] * v, (ours[INSIDE] + ours[BOUNDARY]) * v)
     oracle_bracket = (c_in * v, (len(quarter) - c_out) * v)
     assert max(ours_bracket[0], oracle_bracket[0]) <= min(ours_bracket[1], oracle_bracket[1])
-
-
-@pytest.mark.parametrize("design", [Design(), Design(a=10), Design(eta_range="from-zero", l_s=80),
-                                    Design(r=90.0, eta_s=20.0)])
-def test_refinement_equals_its_former_path(design):
-    """The refinement (children built in the kernel, a failing chain tested first on its siblings)
-    gives the same inside / outside volumes and boundary count as the former per-child path, at each
-    refinement level."""
-    from paraspace.kinematics.bracket import refine_boundary
-
-    res = compute_workspace(design, WorkspaceSettings(voxel=8.0))
-    args = kernel_args(design, (0.0, 0.0, 0.0), res.n_eta)
-    bits = np.zeros(res.grid.shape, np.uint8)
-    cls = cube_classes(design, res.grid, args, res.n_eta, 0.0, chain_bits=bits)
-    assert np.count_nonzero(cls == BOUNDARY) > 100
-    for levels in (1, 2, 3):
-        new = refine_boundary(design, res.grid, args, res.n_eta, 0.0, cls, bits, levels)
-        old = refine_boundary(design, res.grid, args, res.n_eta, 0.0, cls, bits, levels, reference=True)
-        assert new == old
-        assert new[0] > 0 and new[1] > 0 and new[2] > 0
