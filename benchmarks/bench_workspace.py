@@ -297,6 +297,63 @@ def measure_rows(design: Design, runs: int = 3) -> None:
         _row("measure_workspace, former path (before)", med["old"], med["engine"])
 
 
+def feature_filter_rows(design: Design, runs: int = 3) -> None:
+    """Target 1, the feature filter alone (its four ball dilations of the padded solid) at h = 2 and
+    h = 1, with 1 and 2 numba threads: the capped, mirrored, block-skipping kernel against the former
+    int32 whole-grid kernel (``ball_dilate_reference``), each as a ratio to the engine (at the
+    machine's thread count) in the same run."""
+    import numba
+    import numpy as np
+
+    from paraspace.kinematics import measures as mod
+
+    threads = numba.get_num_threads()
+
+    def former(mask, r, complement=False, symmetric=False):
+        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
+
+    for h in (2.0, 1.0):
+        res = compute_workspace(design, WorkspaceSettings(voxel=h))
+        m = mod.measure_workspace(res)
+        occ, rv = res.occupancy, m.feature_radius_voxels
+        new_out = mod.feature_filter(occ, rv)
+        fast = mod.ball_dilate
+        mod.ball_dilate = former
+        try:
+            same = bool(np.array_equal(mod.feature_filter(occ, rv), new_out))
+        finally:
+            mod.ball_dilate = fast
+
+        def old(occ=occ, rv=rv, fast=fast):
+            mod.ball_dilate = former
+            try:
+                return mod.feature_filter(occ, rv)
+            finally:
+                mod.ball_dilate = fast
+
+        fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
+        for nt in sorted({1, min(2, threads)}):
+            def with_threads(f, nt=nt):
+                def run():
+                    numba.set_num_threads(nt)
+                    try:
+                        return f()
+                    finally:
+                        numba.set_num_threads(threads)
+                return run
+            fns[f"new {nt}"] = with_threads(lambda occ=occ, rv=rv: mod.feature_filter(occ, rv))
+            fns[f"old {nt}"] = with_threads(old)
+        med = _alternating(fns, runs)
+        print(f"  target 1, feature filter h={h:g} (r = {rv:.2f} voxels, {occ.size:,} voxels; load average "
+              f"{os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms, {threads} threads; "
+              f"identical: {same}):")
+        for k in fns:
+            if k != "engine":
+                kind, nt = k.split()
+                name = "feature filter" if kind == "new" else "feature filter, former int32 (before)"
+                _row(f"{name}, {nt} thread{'s' if nt != '1' else ''}", med[k], med["engine"])
+
+
 def tail_rows(design: Design, runs: int = 3) -> None:
     """Target 7: the engine's serial tail at h = 1 and 0.5: the former numpy mirror fill and ``== 7``
     test against the fused parallel pass on the same chain masks."""
@@ -592,6 +649,7 @@ def throughput_rows(design: Design) -> None:
     shell_rows(design)
     evaluation_rows(design)
     measure_rows(design)
+    feature_filter_rows(design)
     tail_rows(design)
     display_rows(design)
     optimizer_cluster_rows()
