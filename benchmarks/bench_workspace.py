@@ -30,7 +30,9 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
      row that issue 24's work touched, the new path beside the old one it replaced (the dexterity
-     field at h = 2 is one run of each: the full search takes over a minute). Target 4: the engine
+     field at h = 2 is one run of each: the full search takes over a minute). Target 1 also has a
+     row for the feature filter alone (its four dilations) with 1 and 2 numba threads, against the
+     former int32 whole-grid kernel, with whether both give the same solid. Target 4: the engine
      with leg interference, blocks decided by Lipschitz bounds against the per-voxel search.
      Target 10: the explorer's display shell at h = 2 (re-mesh and decimation to the display budget,
      against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
