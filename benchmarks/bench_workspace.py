@@ -30,7 +30,9 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
   8. issue 24 (throughput): each step around the engine as a ratio to the plain engine on the same
      design, measured in the same run (medians of alternating runs), with the load average: every
      row that issue 24's work touched, the new path beside the old one it replaced (the dexterity
-     field at h = 2 is one run of each: the full search takes over a minute). Target 4: the engine
+     field at h = 2 is one run of each: the full search takes over a minute). Target 1 also has a
+     row for the feature filter alone (its four dilations) with 1 and 2 numba threads, against the
+     former int32 whole-grid kernel, with whether both give the same solid. Target 4: the engine
      with leg interference, blocks decided by Lipschitz bounds against the per-voxel search.
      Target 10: the explorer's display shell at h = 2 (re-mesh and decimation to the display budget,
      against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
@@ -296,6 +298,63 @@ def measure_rows(design: Design, runs: int = 3) -> None:
               f"engine {med['engine'] * 1e3:.0f} ms):")
         _row("measure_workspace", med["new"], med["engine"], "(target <= 1x)")
         _row("measure_workspace, former path (before)", med["old"], med["engine"])
+
+
+def feature_filter_rows(design: Design, runs: int = 3) -> None:
+    """Target 1, the feature filter alone (its four ball dilations of the padded solid) at h = 2 and
+    h = 1, with 1 and 2 numba threads: the capped, mirrored, block-skipping kernel against the former
+    int32 whole-grid kernel (``ball_dilate_reference``), each as a ratio to the engine (at the
+    machine's thread count) in the same run."""
+    import numba
+    import numpy as np
+
+    from paraspace.kinematics import measures as mod
+
+    threads = numba.get_num_threads()
+
+    def former(mask, r, complement=False, symmetric=False):
+        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
+
+    for h in (2.0, 1.0):
+        res = compute_workspace(design, WorkspaceSettings(voxel=h))
+        m = mod.measure_workspace(res)
+        occ, rv = res.occupancy, m.feature_radius_voxels
+        new_out = mod.feature_filter(occ, rv)
+        fast = mod.ball_dilate
+        mod.ball_dilate = former
+        try:
+            same = bool(np.array_equal(mod.feature_filter(occ, rv), new_out))
+        finally:
+            mod.ball_dilate = fast
+
+        def old(occ=occ, rv=rv, fast=fast):
+            mod.ball_dilate = former
+            try:
+                return mod.feature_filter(occ, rv)
+            finally:
+                mod.ball_dilate = fast
+
+        fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
+        for nt in sorted({1, min(2, threads)}):
+            def with_threads(f, nt=nt):
+                def run():
+                    numba.set_num_threads(nt)
+                    try:
+                        return f()
+                    finally:
+                        numba.set_num_threads(threads)
+                return run
+            fns[f"new {nt}"] = with_threads(lambda occ=occ, rv=rv: mod.feature_filter(occ, rv))
+            fns[f"old {nt}"] = with_threads(old)
+        med = _alternating(fns, runs)
+        print(f"  target 1, feature filter h={h:g} (r = {rv:.2f} voxels, {occ.size:,} voxels; load average "
+              f"{os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms, {threads} threads; "
+              f"identical: {same}):")
+        for k in fns:
+            if k != "engine":
+                kind, nt = k.split()
+                name = "feature filter" if kind == "new" else "feature filter, former int32 (before)"
+                _row(f"{name}, {nt} thread{'s' if nt != '1' else ''}", med[k], med["engine"])
 
 
 def tail_rows(design: Design, runs: int = 3) -> None:
@@ -612,6 +671,7 @@ def throughput_rows(design: Design) -> None:
     shell_rows(design)
     evaluation_rows(design)
     measure_rows(design)
+    feature_filter_rows(design)
     tail_rows(design)
     display_rows(design)
     optimizer_cluster_rows()

@@ -857,24 +857,29 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out)
     cap = 255
     for j in prange(j0, ny):
         # the distance along x to the nearest set voxel, by a forward and a backward sweep
-        near_i = np.empty(nz, np.int64)
+        near_i = np.empty(nz, np.int32)
+        far = np.int32(-(1 << 30))
         for k in range(nz):
-            near_i[k] = -(1 << 40)
+            near_i[k] = far
         for i in range(nx):
+            ii = np.int32(i)
             for k in range(nz):
-                if m[i, j, k] != inv_in:
-                    near_i[k] = i
-                d = i - near_i[k]
+                q = ii if m[i, j, k] != inv_in else near_i[k]
+                near_i[k] = q
+                d = ii - q
                 d1[i, j, k] = d * d if d <= w else cap
+        far = np.int32(1 << 30)
         for k in range(nz):
-            near_i[k] = 1 << 40
+            near_i[k] = far
         for i in range(nx - 1, -1, -1):
+            ii = np.int32(i)
             for k in range(nz):
-                if m[i, j, k] != inv_in:
-                    near_i[k] = i
-                d = near_i[k] - i
-                if d <= w and d * d < d1[i, j, k]:
-                    d1[i, j, k] = d * d
+                q = ii if m[i, j, k] != inv_in else near_i[k]
+                near_i[k] = q
+                d = q - ii
+                v = d * d if d <= w else cap
+                o = np.int32(d1[i, j, k])
+                d1[i, j, k] = v if v < o else o
     kb = np.empty(nz, np.int64)
     for k in range(nz):
         kb[k] = k // bs

@@ -1,0 +1,79 @@
+"""Issue 24 target 1: the feature filter's dilation kernels against scipy.ndimage.
+
+``ball_dilate`` (capped uint8 distances, mirrored half, blocks skipped) and ``feature_filter`` (its
+four dilations) are compared with ``scipy.ndimage``'s binary erosion and dilation by the digital
+Euclidean ball ``{d in Z^3 : |d|^2 <= r^2}`` on random grids of odd and even sizes, empty and full
+grids, mirror-symmetric grids and real workspaces at coarse voxels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage as ndi
+
+from paraspace.kinematics.design import Design
+from paraspace.kinematics.measures import ball_dilate, ball_dilate_reference, feature_filter
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+
+def ball_structure(rv: float) -> np.ndarray:
+    w = int(np.floor(rv + 1e-9))
+    d = np.arange(-w, w + 1)
+    x, y, z = np.meshgrid(d, d, d, indexing="ij")
+    return x * x + y * y + z * z <= rv * rv + 1e-9
+
+
+def scipy_dilate(m: np.ndarray, rv: float) -> np.ndarray:
+    return ndi.binary_dilation(m, structure=ball_structure(rv))  # outside the array: not in m
+
+
+def scipy_erode(m: np.ndarray, rv: float) -> np.ndarray:
+    return ndi.binary_erosion(m, structure=ball_structure(rv), border_value=1)  # outside: in m
+
+
+def scipy_feature_filter(occ: np.ndarray, rv: float) -> np.ndarray:
+    w = int(np.floor(rv + 1e-9))
+    if w <= 0:
+        return occ.copy()
+    p = w + 1
+    o = np.pad(occ, p)
+    closed = scipy_erode(scipy_dilate(scipy_dilate(scipy_erode(o, rv), rv), rv), rv)
+    return closed[p:-p, p:-p, p:-p]
+
+
+def grids() -> list[np.ndarray]:
+    rng = np.random.default_rng(2024)
+    out = [np.zeros((9, 8, 7), bool), np.ones((9, 8, 7), bool), np.zeros((1, 1, 1), bool), np.ones((3, 1, 5), bool)]
+    for shape in ((17, 13, 11), (16, 15, 21), (5, 23, 9), (2, 3, 29)):
+        for p in (0.05, 0.5, 0.93):
+            m = rng.random(shape) < p
+            out += [m, m | m[:, ::-1]]
+    for design in (Design(), Design(a=10)):
+        occ = compute_workspace(design, WorkspaceSettings(voxel=8.0)).occupancy
+        out += [occ, occ[:, :-1]]  # the real (symmetric) grid and an odd cut of it
+    return out
+
+
+GRIDS = grids()
+
+
+@pytest.mark.parametrize("rv", [0.9, 1.0, 1.5, 2.3, 3.7])
+def test_ball_dilate_equals_scipy(rv):
+    for m in GRIDS:
+        sym = bool(np.array_equal(m, m[:, ::-1]))
+        ref = scipy_dilate(m, rv) if rv >= 1 else m
+        assert np.array_equal(ball_dilate(m, rv, symmetric=sym), ref), m.shape
+        assert np.array_equal(ball_dilate(m, rv), ref), m.shape
+        assert np.array_equal(ball_dilate_reference(m, rv), ref), m.shape
+        ref_e = scipy_erode(m, rv) if rv >= 1 else m
+        assert np.array_equal(ball_dilate(m, rv, complement=True, symmetric=sym), ref_e), m.shape
+
+
+@pytest.mark.parametrize("rv", [1.0, 1.8, 3.2])
+def test_feature_filter_equals_scipy_open_close(rv):
+    changed = 0
+    for m in GRIDS:
+        got = feature_filter(m, rv)
+        assert np.array_equal(got, scipy_feature_filter(m, rv)), m.shape
+        changed += int((got != m).sum())
+    assert changed > 0  # the filter did something on these grids
