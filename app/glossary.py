@@ -16,6 +16,7 @@ from __future__ import annotations
 import html
 
 from paraspace.kinematics.design import PARAMS
+from paraspace.kinematics.presets import PRESETS, PresetParam
 
 __all__ = ["DEFINITIONS", "define", "hover"]
 
@@ -105,6 +106,17 @@ DEFINITIONS.update({
 # a design parameter offered as a measure (a size to minimise) is defined by its own description
 DEFINITIONS.update({name: f"{spec.description} ({spec.unit or 'length units'}): a design parameter, offered as a "
                           "size to minimise" for name, spec in PARAMS.items()})
+# a mechanism preset's numeric parameter, likewise, by its PresetParam's words (kinematics/presets.py)
+
+
+def _preset_parameter(q: PresetParam) -> str:
+    names = sorted(n for n, pr in PRESETS.items() if q in pr.params)
+    return (f"{q.description} ({q.unit or 'length units'}): a parameter of the {', '.join(names)} "
+            f"preset{'s' if len(names) > 1 else ''}, offered as a size to minimise")
+
+
+DEFINITIONS.update({q.name: _preset_parameter(q)
+                    for spec in PRESETS.values() for q in spec.params if q.numeric and q.name not in DEFINITIONS})
 
 
 def define(name: str) -> str:
