@@ -45,14 +45,13 @@ from .mechanism_workspace import check_length_step, mechanism_ik, reachable_gene
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .rotation import euler_zyx_deg
 from .task import (
-    MAX_POINTS,
     OrientationSet,
     PoseList,
     Region,
     TaskResult,
     TaskSettings,
-    _lattice,
     _rot_of,
+    region_lattice,
 )
 
 __all__ = ["mechanism_region_task", "mechanism_pose_list_task", "evaluate_mechanism_task", "failing_chains"]
@@ -89,19 +88,7 @@ def mechanism_region_task(mech: Mechanism, region: Region, orientations: Orienta
     length_step = check_length_step(length_step)
     rep = Reporter(progress)
     t0 = time.perf_counter()
-    rots = orientations.rotations()
-    axes, count, half = _lattice(region, settings.voxel, settings.margin_range)
-    if count * rots.shape[0] > MAX_POINTS:
-        raise ParameterError("task", f"{count:,} lattice points x {rots.shape[0]} orientations",
-                             f"at most {MAX_POINTS:,} samples (a coarser voxel, a smaller region or margin_range, "
-                             "or a larger angle_step)")
-    gx, gy, gz = np.meshgrid(*axes, indexing="ij")
-    pts = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
-    sdf = region.sdf(pts)
-    tol = 1e-9 * max(1.0, float(np.abs(pts).max()))
-    keep = sdf <= settings.margin_range + tol
-    pts, sdf = pts[keep], sdf[keep]
-    inside = sdf <= tol
+    rots, half, pts, sdf, inside, _ = region_lattice(region, orientations, settings)
     ok = np.ones(len(pts), bool)
     failed_at = np.full(len(pts), -1, np.int64)
     for m in range(rots.shape[0]):

@@ -662,13 +662,12 @@ def region_samples(region: Region, orientations: OrientationSet = OrientationSet
     return count * int(orientations.rotations().shape[0])
 
 
-def region_task(design: Design, region: Region, orientations: OrientationSet = OrientationSet(),
-                settings: TaskSettings = TaskSettings(), progress: ProgressFn | None = None,
-                cancel: CancelToken = None, certify: bool = True) -> TaskResult:
-    """The answers of the module docstring for a region with an orientation set (``certify=False``:
-    ``certified`` is ``"undecided"`` without running the certification, for studies)."""
-    rep = Reporter(progress)
-    t0 = time.perf_counter()
+def region_lattice(region: Region, orientations: OrientationSet, settings: TaskSettings
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """A region task's samples: ``(rotations, half cell, points, sdf, inside, tol)``, the lattice
+    points within ``margin_range`` of the region (with their signed distance), those in it, and the
+    distance tolerance of both tests; refused past
+    :data:`MAX_POINTS` samples (lattice points x orientations)."""
     rots = orientations.rotations()
     axes, count, half = _lattice(region, settings.voxel, settings.margin_range)
     if count * rots.shape[0] > MAX_POINTS:
@@ -681,7 +680,17 @@ def region_task(design: Design, region: Region, orientations: OrientationSet = O
     tol = 1e-9 * max(1.0, float(np.abs(pts).max()))
     keep = sdf <= settings.margin_range + tol
     pts, sdf = pts[keep], sdf[keep]
-    inside = sdf <= tol
+    return rots, half, pts, sdf, sdf <= tol, tol
+
+
+def region_task(design: Design, region: Region, orientations: OrientationSet = OrientationSet(),
+                settings: TaskSettings = TaskSettings(), progress: ProgressFn | None = None,
+                cancel: CancelToken = None, certify: bool = True) -> TaskResult:
+    """The answers of the module docstring for a region with an orientation set (``certify=False``:
+    ``certified`` is ``"undecided"`` without running the certification, for studies)."""
+    rep = Reporter(progress)
+    t0 = time.perf_counter()
+    rots, half, pts, sdf, inside, tol = region_lattice(region, orientations, settings)
     delta = float(np.linalg.norm(half))
     ok, failed_at = _reach_points(design, pts, rots, settings, rep.sub(0.0, 0.8), cancel)
     n_in = int(inside.sum())
