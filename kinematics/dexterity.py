@@ -42,10 +42,14 @@ Jacobians are assembled by a compiled kernel and ``J`` and its singular values a
 numpy's batched ``solve``/``svd`` in chunks of :data:`CHUNK` voxels. ``mode="best"`` adds
 ``sweeps x 3 x n_eta x n_d`` Jacobians per voxel (252 with the defaults). Measured on 2 shared
 cores for the paper's design (resolved): 17 s for the 189,656 voxels at ``h = 3``, 51 s for the
-640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search). The
-field's default ``search="sweep"`` (:mod:`kinematics.dexterity_sweep`) finds the same carriage
-poses with fewer margins (each grid pruned with the previous voxel's margins) and computes
-``1/kappa`` in the same compiled pass (to 1e-9 relative of the SVD's).
+640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search).
+``search="sweep"`` (:mod:`kinematics.dexterity_sweep`) finds the same carriage poses with fewer
+margins (each grid pruned with the previous voxel's margins) and computes ``1/kappa`` in the same
+compiled pass (to 1e-9 relative of the SVD's). The field's default ``search="neighbour"``
+(:mod:`kinematics.dexterity_neighbour`) climbs from the neighbour voxel's carriage pose to a local
+maximum of the same margin instead: not the same poses, but within a stated tolerance of the full
+search's margin, checked at run time on a seeded sample of voxels (the result's ``check``; a broken
+tolerance is reported, never silent).
 """
 
 from __future__ import annotations
@@ -60,6 +64,7 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design, ParameterError
+from .dexterity_neighbour import MARGIN_TOLERANCE, SampleCheck, chain_margins, compare, neighbour_field, sample_indices
 from .dexterity_sweep import _constants, _lin, _margin_cs, continuation_field
 from .parallel import KERNEL_LOCK
 from .pose import Pose
@@ -68,8 +73,13 @@ from .redundancy import resolve_redundancy
 from .workspace import WorkspaceResult
 
 MODES: tuple[str, ...] = ("resolved", "best")
-#: How the field finds the resolved carriage poses (:func:`dexterity_field`).
-SEARCHES: tuple[str, ...] = ("sweep", "full")
+#: How the field finds the resolved carriage poses (:func:`dexterity_field`); the first is the default.
+SEARCHES: tuple[str, ...] = ("neighbour", "sweep", "full")
+#: What each search means (the CLI's help and the check's messages).
+SEARCH_TEXT = {"neighbour": "a local climb from the neighbour voxel's carriage pose, checked against the full search "
+                            "on a sample (tolerance on the margin; kinematics/dexterity_neighbour.py)",
+               "sweep": "the resolver's exact carriage poses, pruned (kinematics/dexterity_sweep.py)",
+               "full": "the resolver's full search at every voxel and numpy's SVD (the slow path)"}
 #: Voxels per batched ``solve``/``svd`` call.
 CHUNK = 32768
 
@@ -361,6 +371,8 @@ class DexterityField:
     seconds: float
     minimum: float
     maximum: float
+    search: str = "full"  # how the carriage poses were found (SEARCHES)
+    check: SampleCheck | None = None  # search="neighbour": the run-time check against the full search
 
     def well_conditioned_result(self, result: WorkspaceResult) -> WorkspaceResult:
         """The well-conditioned workspace as a :class:`WorkspaceResult` on ``result``'s grid (so its
@@ -377,7 +389,9 @@ class DexterityField:
                 "well_conditioned_volume": float(self.well_conditioned_volume),
                 "well_conditioned_fraction": f(self.well_conditioned_volume / self.volume) if self.volume else None,
                 "inverse_condition_min": f(self.minimum), "inverse_condition_max": f(self.maximum),
-                "dexterity_mode": self.mode, "dexterity_seconds": self.seconds}
+                "dexterity_mode": self.mode, "dexterity_seconds": self.seconds,
+                "dexterity_search": self.search,
+                "dexterity_check": None if self.check is None else self.check.to_dict()}
 
 
 def check_kappa_min(kappa_min: float) -> float:
@@ -391,17 +405,52 @@ def check_kappa_min(kappa_min: float) -> float:
     return v
 
 
+def check_search(search: str) -> str:
+    """Validate the dexterity field's carriage search: one of :data:`SEARCHES`."""
+    if search not in SEARCHES:
+        raise ParameterError("dexterity_search", search, " or ".join(SEARCHES))
+    return search
+
+
+def check_margin_tolerance(margin_tolerance: float) -> float:
+    """Validate the neighbour search's tolerance ``epsilon`` on the margin gap: a number ``>= 0``."""
+    try:
+        v = float(margin_tolerance)
+    except (TypeError, ValueError):
+        raise ParameterError("margin_tolerance", margin_tolerance, "[0, inf) length units (a number)") from None
+    if not (math.isfinite(v) and v >= 0.0):
+        raise ParameterError("margin_tolerance", margin_tolerance, "[0, inf) length units")
+    return v
+
+
+def _sample_check(design: Design, pts: np.ndarray, vals: np.ndarray, margins: np.ndarray,
+                  orientation: Sequence[float], margin_tolerance: float) -> SampleCheck:
+    """The neighbour search's run-time check (:mod:`kinematics.dexterity_neighbour`): a seeded sample
+    of the voxels through the full search (:func:`resolved_carriages`, numpy's SVD)."""
+    idx = sample_indices(pts.shape[0])
+    p = pts[idx]
+    d, eta = resolved_carriages(design, p, orientation)
+    full = inverse_condition_batch(design, p, d, eta, orientation)
+    return compare(vals[idx], margins[idx], full, chain_margins(design, p, d, eta, orientation), pts.shape[0],
+                   margin_tolerance)
+
+
 def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved", *,
                     n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: ProgressFn | None = None,
-                    cancel: CancelToken = None, search: str = "sweep") -> DexterityField:
+                    cancel: CancelToken = None, search: str = SEARCHES[0],
+                    margin_tolerance: float = MARGIN_TOLERANCE) -> DexterityField:
     """``1/kappa`` at every reachable voxel centre of ``result`` (at its orientation), the GCI and
     the well-conditioned workspace ``1/kappa >= kappa_min`` (module docstring). ``search`` (resolved
-    mode): ``"sweep"`` finds the resolver's carriage poses voxel after voxel, pruned with the
-    previous voxel's margins (:mod:`kinematics.dexterity_sweep`: the same poses), ``"full"`` runs
-    the resolver's full search at every voxel and numpy's SVD."""
+    mode): ``"neighbour"`` (default) climbs from the neighbour voxel's carriage pose to a local
+    maximum of the resolver's margin and checks a sample against the full search with the stated
+    tolerance ``margin_tolerance`` (:mod:`kinematics.dexterity_neighbour`; the result's ``check``),
+    ``"sweep"`` finds the resolver's carriage poses voxel after voxel, pruned with the previous
+    voxel's margins (:mod:`kinematics.dexterity_sweep`: the same poses), ``"full"`` runs the
+    resolver's full search at every voxel and numpy's SVD. ``mode="best"`` starts from the full
+    search's poses whatever ``search`` says."""
     _check_mode(mode)
-    if search not in SEARCHES:
-        raise ParameterError("search", search, " or ".join(SEARCHES))
+    check_search(search)
+    margin_tolerance = check_margin_tolerance(margin_tolerance)
     kappa_min = check_kappa_min(kappa_min)
     rep = Reporter(progress)
     t0 = time.perf_counter()
@@ -409,7 +458,12 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     occ = np.asarray(result.occupancy, bool)
     pts = result.grid.points()[occ]
     orientation = result.settings.orientation
-    if mode == "resolved" and search == "sweep":
+    sample = None
+    if mode == "resolved" and search == "neighbour":
+        vals, _d, _eta, margins = neighbour_field(design, occ, result.grid.axes(), orientation, rep, cancel)
+        check(cancel)
+        sample = _sample_check(design, pts, vals, margins, orientation, margin_tolerance)
+    elif mode == "resolved" and search == "sweep":
         vals = continuation_field(design, occ, result.grid.axes(), orientation, rep, cancel)[0]
     else:
         vals = np.zeros(pts.shape[0])
@@ -434,4 +488,5 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
         inverse_condition=field, gci=float(vals.mean()) if n else float("nan"), kappa_min=kappa_min,
         well_conditioned=well, well_conditioned_volume=float(well.sum()) * vv, volume=n * vv, mode=mode,
         seconds=time.perf_counter() - t0, minimum=float(vals.min()) if n else float("nan"),
-        maximum=float(vals.max()) if n else float("nan"))
+        maximum=float(vals.max()) if n else float("nan"),
+        search=search if mode == "resolved" else "full", check=sample)

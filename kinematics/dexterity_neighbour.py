@@ -1,0 +1,335 @@
+"""Dexterity field by neighbour continuation: each voxel's carriage pose is climbed to a local maximum
+of the resolver's margin from the carriage pose chosen at the voxel before it, and checked against
+the full search on a sample with a stated tolerance.
+
+Definition
+----------
+The resolver's criterion for chain ``i`` at a position ``P`` is the chain margin
+``m_i(P; eta, rho) = min_j min(l_j - l_min, l_max - l_j)`` (:mod:`kinematics.dexterity_sweep`);
+the **full search** (``search="full"`` / ``"sweep"``) takes its first maximiser over a 73 x 61 grid
+on the strokes and two 21 x 21 zooms (spacings ``s0 = (de, dr)`` = the coarse grid's, ``s0/5``,
+``s0/25``).
+
+The **neighbour search** (``search="neighbour"``) visits the voxels of one ``x`` plane in the sweep's
+serpentine ``(y, z)`` order (so consecutive voxels are neighbours except across a gap). The first
+voxel of a plane gets the full search. Every later voxel, per chain, starts at the carriage pose
+chosen at the voxel before it and **climbs coarse to fine**: at the steps ``s0``, ``s0/5``, ``s0/25``
+it moves ``eta`` by one step while the *profile* ``max_rho m_i(eta, rho)`` strictly grows, each
+profile value found by the same 1-D ascent in ``rho`` from the current ``rho`` (so a ridge of the
+margin in any direction is followed, which an ascent over the 8 grid neighbours is not); it stops at
+a local maximum of ``m_i`` on the full search's finest spacing. The margin can have several local
+maxima, and the one followed from the neighbour can be overtaken by another: so a second climb
+starts from the best point of a 13 x 11 scan of the strokes when that point's margin is within
+2 length units of the first climb's, and the larger of the two maxima is kept (the neighbour's on a
+tie). ``1/kappa`` of
+eq. (26) is then computed at that pose as :mod:`kinematics.dexterity_sweep` does.
+
+**Tolerance** (stated; checked at run time and by the tests). With ``m_i^full`` the full search's
+margin and ``m_i^nb`` the neighbour search's at the same voxel, the *margin gap* of a voxel is
+``g = max_i (m_i^full - m_i^nb)`` (length units; negative where the climb found more margin than the
+full search's grid). The neighbour search is within tolerance when ``g <= epsilon`` at every voxel,
+``epsilon`` = :data:`MARGIN_TOLERANCE` (2 length units by default; the ``margin_tolerance``
+argument). What that means for ``1/kappa``: the chosen carriage pose keeps every leg within
+``epsilon`` of the largest margin the resolver can keep, i.e. it is an equally valid resolution of
+the redundancy to within ``epsilon``; ``1/kappa`` is **not** bounded by it, because the margin has
+flat ridges (about a quarter of the carriage grid within 2 mm of the maximum) along which ``J``
+changes. The run-time check therefore reports, on its sample, the largest ``|1/kappa - 1/kappa_full|``
+and the difference of the sample's GCI as well (README, dexterity section: their distribution on
+three designs).
+
+**Run-time check**: a fixed, seeded sample of the reachable voxels (:data:`SAMPLE_FRACTION` of them,
+at least :data:`SAMPLE_MIN`, all when fewer) is run through the full search
+(:func:`kinematics.dexterity.resolved_carriages` and numpy's SVD); the result reports the sample
+size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI difference on the sample,
+and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
+prints. A check that passes on the sample does not prove the bound at every voxel.
+
+Cost: about 30-100 margins per chain and voxel instead of the full search's 5,300; see
+``benchmarks/bench_workspace.py --throughput`` (target 3).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit, prange
+
+from .design import Design
+from .dexterity_sweep import _NE, _NR, PLANES, _constants, _inverse_condition, _lin, _margin_cs, _pruned_carriage
+from .parallel import kernel_launch
+from .progress import CancelToken, Reporter, check
+
+#: Default ``epsilon`` of the stated tolerance on the margin gap (length units, module docstring).
+MARGIN_TOLERANCE = 2.0
+#: Share of the reachable voxels run through the full search at run time, and the least number.
+SAMPLE_FRACTION, SAMPLE_MIN = 0.01, 50
+#: Seed of the run-time sample (fixed: the same voxels for the same workspace).
+SAMPLE_SEED = 24
+#: Refinement factor between the climb's steps (the full search's zoom factor: 4 cells -> 20).
+_ZOOM = 5.0
+#: Climb levels: s0, s0/5, s0/25.
+_LEVELS = 3
+#: The coarse scan of the second start: _CE x _CR points on the strokes; it is climbed from when its
+#: best margin is within _RESTART_SLACK of the neighbour's climb's.
+_CE, _CR, _RESTART_SLACK = 13, 11, 2.0
+#: Moves allowed per level (a safeguard; a climb on a stroke grid never needs this many).
+_MAX_MOVES = 100000
+
+
+@njit(cache=True, inline="always")
+def _clamp(v, lo, hi):
+    return lo if v < lo else (hi if v > hi else v)
+
+
+@njit(cache=True, inline="always")
+def _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m, sr):
+    """1-D ascent in ``rho`` at one step ``sr``: from ``(r, m)`` towards the better side while the
+    margin strictly grows. Returns ``(r, m)``."""
+    if sr <= 0.0:
+        return r, m
+    ru = _clamp(r + sr, r_lo, r_hi)
+    mu = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, ru, hb, lmin, lmax)
+    rd = _clamp(r - sr, r_lo, r_hi)
+    md = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rd, hb, lmin, lmax)
+    if mu > m and mu >= md:
+        step, r, m = sr, ru, mu
+    elif md > m:
+        step, r, m = -sr, rd, md
+    else:
+        return r, m
+    for _ in range(_MAX_MOVES):
+        rn = _clamp(r + step, r_lo, r_hi)
+        mn = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rn, hb, lmin, lmax)
+        if mn > m:
+            r, m = rn, mn
+        else:
+            break
+    return r, m
+
+
+@njit(cache=True, inline="always")
+def _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
+    """The best ``rho`` at the arc angle ``e`` by 1-D ascent from ``r``, ``levels`` steps from ``sr``
+    down by :data:`_ZOOM`. Returns ``(r, m)``."""
+    c, s = math.cos(gamma + e), math.sin(gamma + e)
+    m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
+    for _lev in range(levels):
+        r, m = _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m, sr)
+        sr /= _ZOOM
+    return r, m
+
+
+@njit(cache=True)
+def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r):
+    """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
+    in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
+    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``."""
+    se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
+    sr = (r_hi - r_lo) / (_NR - 1) if r_hi > r_lo else 0.0
+    e = _clamp(e, e_lo, e_hi)
+    r = _clamp(r, r_lo, r_hi)
+    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
+    for lev in range(_LEVELS):
+        if se > 0.0:
+            direction = 0.0
+            for _ in range(_MAX_MOVES):
+                best, be, br = m, e, r
+                for sg in (-1.0, 1.0):
+                    if direction != 0.0 and sg != direction:
+                        continue
+                    ee = _clamp(e + sg * se, e_lo, e_hi)
+                    rr, mm = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, ee, hb, lmin, lmax, r_lo, r_hi, r, sr,
+                                      _LEVELS - lev)
+                    if mm > best:
+                        best, be, br = mm, ee, rr
+                        direction = sg
+                if best > m:
+                    m, e, r = best, be, br
+                else:
+                    break
+        se /= _ZOOM
+        sr /= _ZOOM
+    return r, e, m
+
+
+@njit(cache=True)
+def _coarse_best(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax):
+    """First maximiser ``(eta, rho, margin)`` of the margin on the :data:`_CE` x :data:`_CR` scan of
+    the strokes."""
+    n_e = 1 if e_hi <= e_lo else _CE
+    n_r = 1 if r_hi <= r_lo else _CR
+    best, be, br = -np.inf, e_lo, r_lo
+    for a in range(n_e):
+        e = _lin(e_lo, e_hi, n_e, a)
+        c, s = math.cos(gamma + e), math.sin(gamma + e)
+        for b in range(n_r):
+            r = _lin(r_lo, r_hi, n_r, b)
+            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
+            if m > best:
+                best, be, br = m, e, r
+    return be, br, best
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
+                      out, rho_out, eta_out, margin_out):
+    """The neighbour search (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
+    ``1/kappa``, ``rho_out``/``eta_out``/``margin_out`` (N, 3; ``rho = r - d``, ``eta`` in radians)
+    the chosen carriage and its chain margins, for the reachable voxels in C order."""
+    ny, nz = occ.shape[1], occ.shape[2]
+    for i in prange(i0, i1):
+        W = np.empty((3, _NE * _NR))
+        RM = np.empty((3, _NE))
+        rho = np.zeros(3)
+        eta = np.zeros(3)
+        A = np.empty((6, 18))
+        G = np.empty((6, 6))
+        index = np.empty((ny, nz), np.int64)
+        n = offset[i]
+        for j in range(ny):
+            for k in range(nz):
+                if occ[i, j, k]:
+                    index[j, k] = n
+                    n += 1
+        px = xs[i]
+        first = True
+        for j in range(ny):
+            py = ys[j]
+            for kk in range(nz):
+                k = kk if j % 2 == 0 else nz - 1 - kk
+                if not occ[i, j, k]:
+                    continue
+                pz = zs[k]
+                m = index[j, k]
+                for c in range(3):
+                    g = 2.0 * math.pi * c / 3.0
+                    bx0, by0, bz0 = px + u[c, 0, 0], py + u[c, 0, 1], pz + u[c, 0, 2]
+                    bx1, by1, bz1 = px + u[c, 1, 0], py + u[c, 1, 1], pz + u[c, 1, 2]
+                    if first:
+                        ST = np.zeros((3, 9))  # no previous grid: the full search, unpruned
+                        r, e = _pruned_carriage(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
+                                                lmin, lmax, W, RM, ST, 0.0)
+                        mg = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(g + e), math.sin(g + e), r, hb,
+                                        lmin, lmax)
+                    else:
+                        r, e, mg = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
+                                          eta[c], rho[c])
+                        # a second start at the best of a coarse scan of the strokes: another local
+                        # maximum may have overtaken the one followed from the neighbour
+                        ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
+                                                  lmin, lmax)
+                        if cm > mg - _RESTART_SLACK:
+                            r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
+                                                lmax, ce, cr)
+                            if m2 > mg:
+                                r, e, mg = r2, e2, m2
+                    rho[c] = r
+                    eta[c] = e
+                    rho_out[m, c] = r
+                    eta_out[m, c] = e
+                    margin_out[m, c] = mg
+                first = False
+                out[m] = _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _margins_kernel(points, u, rho, eta, hb, lmin, lmax, out):
+    """Chain margins (N, 3) at per-point carriages ``rho`` and ``eta`` (N, 3, radians)."""
+    for p in prange(points.shape[0]):
+        for c in range(3):
+            v = 2.0 * math.pi * c / 3.0 + eta[p, c]
+            out[p, c] = _margin_cs(points[p, 0] + u[c, 0, 0], points[p, 1] + u[c, 0, 1], points[p, 2] + u[c, 0, 2],
+                                   points[p, 0] + u[c, 1, 0], points[p, 1] + u[c, 1, 1], points[p, 2] + u[c, 1, 2],
+                                   math.cos(v), math.sin(v), rho[p, c], hb, lmin, lmax)
+
+
+def chain_margins(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np.ndarray,
+                  orientation: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """The resolver's chain margins ``m_i`` (N, 3) at positions ``points`` (N, 3) of one orientation
+    with per-point carriages ``d`` and ``eta_deg`` (N, 3 each)."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    n = pts.shape[0]
+    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
+    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
+    u, _R2, hb, _ = _constants(design, orientation)
+    out = np.zeros((n, 3))
+    if n:
+        with kernel_launch(n):
+            _margins_kernel(pts, u, rho, eta, hb, float(design.l_min), float(design.l_max), out)
+    return out
+
+
+def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                    orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
+                    cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``1/kappa`` at the neighbour search's carriage pose (module docstring) of every reachable voxel
+    of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3))."""
+    occ = np.ascontiguousarray(np.asarray(occupancy, bool))
+    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
+    u, R2, hb, inv_L = _constants(design, orientation)
+    e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
+    r_lo, r_hi = design.rho_limits
+    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
+    offset = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    n = int(counts.sum())
+    out = np.zeros(n)
+    rho = np.zeros((n, 3))
+    eta = np.zeros((n, 3))
+    margin = np.zeros((n, 3))
+    nx = occ.shape[0]
+    for i0 in range(0, nx, PLANES):
+        check(cancel)
+        i1 = min(nx, i0 + PLANES)
+        with kernel_launch(i1 - i0):
+            _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, float(r_lo), float(r_hi), hb,
+                              inv_L, float(design.l_min), float(design.l_max), out, rho, eta, margin)
+        if progress is not None:
+            progress(i1 / nx, "dexterity")
+    return out, design.r - rho, np.degrees(eta) + 0.0, margin
+
+
+def sample_indices(n: int, fraction: float = SAMPLE_FRACTION, minimum: int = SAMPLE_MIN,
+                   seed: int = SAMPLE_SEED) -> np.ndarray:
+    """The run-time check's sample of ``range(n)``: ``max(minimum, ceil(fraction n))`` indices (all
+    when ``n`` is smaller), drawn without replacement with a fixed seed, sorted."""
+    k = min(n, max(int(minimum), math.ceil(fraction * n)))
+    return np.sort(np.random.default_rng(seed).choice(n, k, replace=False)) if k < n else np.arange(n)
+
+
+@dataclasses.dataclass
+class SampleCheck:
+    """The run-time check of the neighbour search against the full search (module docstring)."""
+
+    sample_size: int
+    voxels: int
+    margin_tolerance: float  # epsilon
+    max_margin_gap: float  # largest max_i (m_i^full - m_i^nb) over the sample
+    max_abs_delta_inverse_condition: float  # largest |1/kappa - 1/kappa_full| over the sample
+    gci_difference: float  # mean 1/kappa - mean 1/kappa_full over the sample
+    tolerance_held: bool
+    message: str
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def compare(vals: np.ndarray, margins: np.ndarray, full_vals: np.ndarray, full_margins: np.ndarray,
+            voxels: int, margin_tolerance: float) -> SampleCheck:
+    """:class:`SampleCheck` of a sample's neighbour-search values and margins against the full
+    search's (arrays over the same sample voxels)."""
+    n = int(vals.size)
+    if n == 0:
+        return SampleCheck(0, voxels, margin_tolerance, 0.0, 0.0, 0.0, True, "no reachable voxel to check")
+    gap = float(np.max(full_margins - margins))
+    dk = float(np.max(np.abs(vals - full_vals)))
+    dg = float(vals.mean() - full_vals.mean())
+    held = gap <= margin_tolerance
+    what = (f"on {n} of {voxels} voxels checked against the full search, the largest margin gap is {gap:.3g} "
+            f"(tolerance {margin_tolerance:g}), largest |delta 1/kappa| {dk:.3g}, GCI difference {dg:+.3g}")
+    message = (what if held else
+               f"dexterity tolerance broken: {what}; the neighbour search's carriage poses keep less leg margin "
+               f"than the resolver's, rerun with --dexterity-search sweep for the exact poses")
+    return SampleCheck(n, voxels, margin_tolerance, gap, dk, dg, held, message)
