@@ -268,6 +268,21 @@ def _total_and_dexterity(ns: argparse.Namespace) -> tuple[tuple[float, float, fl
     return total, dexterity
 
 
+def _dexterity_search(ns: argparse.Namespace) -> dict[str, Any]:
+    """``--dexterity-search`` and ``--margin-tolerance``, validated by their definitions
+    (kinematics.dexterity.SEARCHES, kinematics.settings.DEXTERITY): keyword arguments of
+    ``dexterity_field``; only the ones the user gave."""
+    from paraspace.kinematics.dexterity import check_search
+    from paraspace.kinematics.settings import DEXTERITY
+
+    out: dict[str, Any] = {}
+    if ns.dexterity_search is not None:
+        out["search"] = check_search(ns.dexterity_search)
+    if ns.margin_tolerance is not None:
+        out["margin_tolerance"] = DEXTERITY["margin_tolerance"].parse(ns.margin_tolerance)
+    return out
+
+
 def _add_dexterity(out: dict[str, Any], dex: dict[str, Any]) -> None:
     out["gci"], out["well_conditioned_volume"], out["kappa_min"] = (
         dex["gci"], dex["well_conditioned_volume"], dex["kappa_min"])
@@ -278,9 +293,14 @@ def _print_total_and_dexterity(out: dict[str, Any]) -> None:
     if "dexterity" in out:
         d = out["dexterity"]
         print(f"gci             {significant(d['gci'], 4)}  (mean 1/kappa of eq. (26), "
-              f"{d['dexterity_mode']} carriages; "
+              f"{d['dexterity_mode']} carriages, {d.get('dexterity_search', 'full')} search; "
               f"range {d['inverse_condition_min']:.3g} .. {d['inverse_condition_max']:.3g})")
         print(f"well_cond_volume {significant(d['well_conditioned_volume'], 4)}  (1/kappa >= {d['kappa_min']:g})")
+        chk = d.get("dexterity_check")
+        if chk is not None:
+            print(f"dexterity_check  {chk['message']}")
+            if not chk["tolerance_held"]:
+                print(f"paraspace: warning: {chk['message']}", file=sys.stderr)
     if "total_orientation" in out:
         t = out["total_orientation"]
         print(f"total_orient_vol {significant(t['volume'], 4)}  (tilt <= {t['tilt']:g}, "
@@ -302,6 +322,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
     length_step = _length_step(ns)
     total, dexterity = _total_and_dexterity(ns)
+    search = _dexterity_search(ns) if dexterity is not None else {}
     if dexterity is not None:
         from paraspace.kinematics.mechanism_dexterity import check_general_mode
 
@@ -324,7 +345,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     if dexterity:
         from paraspace.kinematics.mechanism_dexterity import mechanism_dexterity_field
 
-        _add_dexterity(out, mechanism_dexterity_field(result, *dexterity).summary())
+        _add_dexterity(out, mechanism_dexterity_field(result, *dexterity, **search).summary())
     if total:
         from paraspace.kinematics.mechanism_orientation import mechanism_total_orientation
 
@@ -415,7 +436,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if dexterity:
         from paraspace.kinematics.dexterity import dexterity_field
 
-        _add_dexterity(out, dexterity_field(result, *dexterity).summary())
+        _add_dexterity(out, dexterity_field(result, *dexterity, **_dexterity_search(ns)).summary())
     if total:
         from paraspace.kinematics.dexterous import total_orientation_workspace
 
@@ -1321,6 +1342,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="threshold on 1/kappa of the well-conditioned workspace, (0, 1] (default 0.005)")
     w.add_argument("--dexterity-mode", dest="dexterity_mode", default="resolved", metavar="resolved|best",
                    help="carriage pose of 1/kappa: the redundancy resolution's (default) or the best sampled")
+    from paraspace.kinematics.settings import DEXTERITY, DEXTERITY_SEARCHES
+
+    searches = list(DEXTERITY_SEARCHES)
+    w.add_argument("--dexterity-search", dest="dexterity_search", metavar="|".join(searches),
+                   help="how the resolved carriage poses are found: "
+                        + "; ".join(f"{k}: {v}" for k, v in DEXTERITY_SEARCHES.items()) + f" (default {searches[0]})")
+    mt = DEXTERITY["margin_tolerance"]
+    w.add_argument("--margin-tolerance", dest="margin_tolerance", metavar="V",
+                   help=f"the neighbour search's {mt.label}, checked on a sample; valid range {mt.range_text()} "
+                        f"(default {mt.default:g})")
     _add_joint_flags(w)
     add_mechanism_flags(w)
     w.set_defaults(func=cmd_workspace)

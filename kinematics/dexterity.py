@@ -70,16 +70,13 @@ from .parallel import KERNEL_LOCK
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .redundancy import resolve_redundancy
+from .settings import DEXTERITY, DEXTERITY_SEARCHES
 from .workspace import WorkspaceResult
 
 MODES: tuple[str, ...] = ("resolved", "best")
-#: How the field finds the resolved carriage poses (:func:`dexterity_field`); the first is the default.
-SEARCHES: tuple[str, ...] = ("neighbour", "sweep", "full")
-#: What each search means (the CLI's help and the check's messages).
-SEARCH_TEXT = {"neighbour": "a local climb from the neighbour voxel's carriage pose, checked against the full search "
-                            "on a sample (tolerance on the margin; kinematics/dexterity_neighbour.py)",
-               "sweep": "the resolver's exact carriage poses, pruned (kinematics/dexterity_sweep.py)",
-               "full": "the resolver's full search at every voxel and numpy's SVD (the slow path)"}
+#: How the field finds the resolved carriage poses (:func:`dexterity_field`; the first is the
+#: default; defined with their words in :data:`kinematics.settings.DEXTERITY_SEARCHES`).
+SEARCHES: tuple[str, ...] = tuple(DEXTERITY_SEARCHES)
 #: Voxels per batched ``solve``/``svd`` call.
 CHUNK = 32768
 
@@ -413,14 +410,9 @@ def check_search(search: str) -> str:
 
 
 def check_margin_tolerance(margin_tolerance: float) -> float:
-    """Validate the neighbour search's tolerance ``epsilon`` on the margin gap: a number ``>= 0``."""
-    try:
-        v = float(margin_tolerance)
-    except (TypeError, ValueError):
-        raise ParameterError("margin_tolerance", margin_tolerance, "[0, inf) length units (a number)") from None
-    if not (math.isfinite(v) and v >= 0.0):
-        raise ParameterError("margin_tolerance", margin_tolerance, "[0, inf) length units")
-    return v
+    """Validate the neighbour search's tolerance ``epsilon`` on the margin gap
+    (:data:`kinematics.settings.DEXTERITY`)."""
+    return float(DEXTERITY["margin_tolerance"].check(margin_tolerance))
 
 
 def _sample_check(design: Design, pts: np.ndarray, vals: np.ndarray, margins: np.ndarray,

@@ -61,9 +61,11 @@ from .design import Design
 from .dexterity_sweep import _NE, _NR, PLANES, _constants, _inverse_condition, _lin, _margin_cs, _pruned_carriage
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
+from .settings import DEXTERITY
 
-#: Default ``epsilon`` of the stated tolerance on the margin gap (length units, module docstring).
-MARGIN_TOLERANCE = 2.0
+#: Default ``epsilon`` of the stated tolerance on the margin gap (length units, module docstring;
+#: its range: :data:`kinematics.settings.DEXTERITY`).
+MARGIN_TOLERANCE = float(DEXTERITY["margin_tolerance"].default)
 #: Share of the reachable voxels run through the full search at run time, and the least number.
 SAMPLE_FRACTION, SAMPLE_MIN = 0.01, 50
 #: Seed of the run-time sample (fixed: the same voxels for the same workspace).

@@ -201,11 +201,20 @@ def check_general_mode(mode: str) -> str:
 
 
 def mechanism_dexterity_field(result: MechanismWorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved",
-                              progress: ProgressFn | None = None, cancel: CancelToken = None) -> DexterityField:
+                              progress: ProgressFn | None = None, cancel: CancelToken = None, *,
+                              search: str | None = None, margin_tolerance: float | None = None) -> DexterityField:
     """(X1)-(X2) over the reachable voxels of ``result`` (a workspace of a description, at its
-    orientation); the paper's engine's results run :func:`kinematics.dexterity.dexterity_field`."""
+    orientation); the paper's engine's results run :func:`kinematics.dexterity.dexterity_field`
+    (``search`` and ``margin_tolerance``: its carriage search, when given). A general description's
+    field runs its resolver's search at every voxel: a ``search`` other than ``"full"`` is refused."""
     if result.engine == "paper":
-        return dexterity_field(result, kappa_min, mode, progress=progress, cancel=cancel)
+        extra: dict = {} if search is None else {"search": search}
+        if margin_tolerance is not None:
+            extra["margin_tolerance"] = margin_tolerance
+        return dexterity_field(result, kappa_min, mode, progress=progress, cancel=cancel, **extra)
+    if search is not None and search != "full":
+        raise ParameterError("dexterity_search", search, "full (a general description's dexterity runs its "
+                                                         "resolver's search at every voxel)")
     check_general_mode(mode)
     kappa_min = check_kappa_min(kappa_min)
     mech = result.mechanism

@@ -11,7 +11,8 @@ Each settings object has one table (a dict name -> Setting) here: :data:`WORKSPA
 :class:`~kinematics.optimize.OptimizeSettings`, :data:`TOTAL_ORIENTATION` for the total-orientation
 workspace (:func:`~kinematics.dexterous.total_orientation_workspace`) and :data:`TILT_TORSION` for
 :class:`~kinematics.tilt_torsion.TiltTorsionSettings` and :data:`TASK` for
-:class:`~kinematics.task.TaskSettings` (a task's sampling and its region's numbers). The core's
+:class:`~kinematics.task.TaskSettings` (a task's sampling and its region's numbers) and :data:`DEXTERITY` for
+the dexterity field (:func:`~kinematics.dexterity.dexterity_field`). The core's
 validation, the URL parser's ranges,
 the REST models' bounds (and the OpenAPI document's), the CLI flags' messages and the explorer's
 slider specs are all derived from these entries, so a bound is written once and the message
@@ -143,3 +144,19 @@ TASK: dict[str, Setting] = _table(
     Setting("size", 10.0, 0.0, 1e4, "a region's edge, radius or height"),
     Setting("max_poses", 10000, 1, 10000, "poses of a pose list", integer=True),
 )
+
+
+#: The dexterity field's numbers (:func:`kinematics.dexterity.dexterity_field`; the tolerance is
+#: defined in :mod:`kinematics.dexterity_neighbour`).
+DEXTERITY: dict[str, Setting] = _table(
+    Setting("margin_tolerance", 2.0, 0.0, 1000.0,
+            "largest margin gap of the neighbour search's carriage poses to the full search's"),
+)
+
+#: The dexterity field's carriage searches, the default first, with their words (the CLI's help).
+DEXTERITY_SEARCHES: dict[str, str] = {
+    "neighbour": "a local climb from the neighbour voxel's carriage pose, checked against the full search on a "
+                 "sample (tolerance on the margin; kinematics/dexterity_neighbour.py)",
+    "sweep": "the resolver's exact carriage poses, pruned (kinematics/dexterity_sweep.py)",
+    "full": "the resolver's full search at every voxel and numpy's SVD (the slow path)",
+}

@@ -217,7 +217,8 @@ class ViewController:
             ctx.panels.legend.show_field_range(
                 lo, hi, "1/kappa (eq. (26), L = a/2)",
                 f"Shell colour = local dexterity 1/kappa at the resolved carriages, from {lo:.3g} to {hi:.3g} "
-                f"(h = {DEXTERITY_VOXEL:g}); GCI (mean) {dex.gci:.3g}")
+                f"(h = {DEXTERITY_VOXEL:g}); GCI (mean) {dex.gci:.3g}"
+                + ("" if dex.check is None or dex.check.tolerance_held else f". {dex.check.message}"))
 
         self._submit_colours(fn, done, "Dexterity colours not started")
 
