@@ -72,7 +72,8 @@ def warm_up() -> float:
         region_task(d, Region("box", (0.0, 0.0, 165.0), (10.0, 10.0, 10.0)), OrientationSet(), coarse)
         pose_list_task(d, PoseList(np.array([[0.0, 0.0, 130.0, 0.0, 0.0, 0.0], [0.0, 0.0, 400.0, 0.0, 0.0, 0.0]])),
                        coarse)
-        dexterity_field(res)
+        for search in ("neighbour", "sweep"):  # the full search's kernels: the neighbour's run-time check
+            dexterity_field(res, search=search)
         measure_workspace(res)
         workspace_shell(res)
         from .mechanism_workspace import warm_up_general
