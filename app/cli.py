@@ -287,6 +287,9 @@ def _add_dexterity(out: dict[str, Any], dex: dict[str, Any]) -> None:
     out["gci"], out["well_conditioned_volume"], out["kappa_min"] = (
         dex["gci"], dex["well_conditioned_volume"], dex["kappa_min"])
     out["dexterity"] = dex
+    chk = dex.get("dexterity_check")
+    if chk is not None and not chk["tolerance_held"]:  # never silent, with --json too
+        print(f"paraspace: warning: {chk['message']}", file=sys.stderr)
 
 
 def _print_total_and_dexterity(out: dict[str, Any]) -> None:
@@ -299,8 +302,6 @@ def _print_total_and_dexterity(out: dict[str, Any]) -> None:
         chk = d.get("dexterity_check")
         if chk is not None:
             print(f"dexterity_check  {chk['message']}")
-            if not chk["tolerance_held"]:
-                print(f"paraspace: warning: {chk['message']}", file=sys.stderr)
     if "total_orientation" in out:
         t = out["total_orientation"]
         print(f"total_orient_vol {significant(t['volume'], 4)}  (tilt <= {t['tilt']:g}, "

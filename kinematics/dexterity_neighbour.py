@@ -34,8 +34,11 @@ argument). What that means for ``1/kappa``: the chosen carriage pose keeps every
 the redundancy to within ``epsilon``; ``1/kappa`` is **not** bounded by it, because the margin has
 flat ridges (about a quarter of the carriage grid within 2 mm of the maximum) along which ``J``
 changes. The run-time check therefore reports, on its sample, the largest ``|1/kappa - 1/kappa_full|``
-and the difference of the sample's GCI as well (README, dexterity section: their distribution on
-three designs).
+and the difference of the sample's GCI as well. Measured at ``h = 4`` against the full search at
+every voxel (three designs: the default, ``a=30, b=20, eta_s=60`` at orientation (8, -5, 3) and
+``d_s=80, eta_s=45``): margin gap median <= 0.001, 99 % <= 0.09, largest 0.58 / 1.72 / 1.25;
+``|delta 1/kappa|`` median <= 3.4e-6, 99 % <= 5.2e-4, largest 3.9e-3 / 1.2e-2 / 6.6e-3 (1/kappa
+itself is up to about 0.012); GCI -5.0e-6 / -4.0e-7 / -1.3e-5 (0.2 %, 0.02 %, 0.5 %).
 
 **Run-time check**: a fixed, seeded sample of the reachable voxels (:data:`SAMPLE_FRACTION` of them,
 at least :data:`SAMPLE_MIN`, all when fewer) is run through the full search

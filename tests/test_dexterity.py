@@ -86,7 +86,9 @@ def coarse():
 
 
 def test_field_gci_and_well_conditioned_workspace(coarse):
-    f = dexterity_field(coarse, kappa_min=0.004)
+    # the resolver's exact carriage poses (search="sweep"); the default neighbour search's are
+    # within a margin tolerance of them (tests/test_dexterity_neighbour.py)
+    f = dexterity_field(coarse, kappa_min=0.004, search="sweep")
     occ = coarse.occupancy
     assert np.all(np.isfinite(f.inverse_condition[occ])) and np.all(np.isnan(f.inverse_condition[~occ]))
     # spot-check voxels against the finite-difference oracle at the resolver's carriage pose
@@ -107,7 +109,7 @@ def test_field_gci_and_well_conditioned_workspace(coarse):
     wr = f.well_conditioned_result(coarse)
     assert wr.volume == pytest.approx(f.well_conditioned_volume) and wr.grid == coarse.grid
     # a higher threshold only removes voxels
-    g = dexterity_field(coarse, kappa_min=0.006)
+    g = dexterity_field(coarse, kappa_min=0.006, search="sweep")
     assert not np.any(g.well_conditioned & ~f.well_conditioned)
     assert g.gci == pytest.approx(f.gci)
 
@@ -191,7 +193,7 @@ def test_cli_dexterity_bad_input(args, field, valid):
 @pytest.mark.parametrize("design,voxel,orientation", [(DESIGN, 8.0, (0.0, 0.0, 0.0)),
                                                       (Design(a=30, b=20, eta_s=60), 10.0, (8.0, -5.0, 3.0))])
 def test_sweep_field_is_the_full_search(design, voxel, orientation):
-    """Issue 24 target 3: the pruned sweep (kinematics/dexterity_sweep.py, the default) finds the
+    """Issue 24 target 3: the pruned sweep (kinematics/dexterity_sweep.py, search="sweep") finds the
     resolver's full-search carriage poses bit for bit and 1/kappa within the stated tolerance of
     numpy's SVD at every voxel, also where 1/kappa is about 1e-5 (the slow path: resolved_carriages
     and inverse_condition_batch)."""
@@ -206,7 +208,7 @@ def test_sweep_field_is_the_full_search(design, voxel, orientation):
     assert np.array_equal(d, d_full) and np.array_equal(eta, eta_full)
     full = inverse_condition_batch(design, pts, d_full, eta_full, orientation)
     assert np.all(np.abs(vals - full) <= TOL_REL * full + TOL_ABS)
-    f = dexterity_field(res, 0.005)
+    f = dexterity_field(res, 0.005, search="sweep")
     g = dexterity_field(res, 0.005, search="full")
     np.testing.assert_array_equal(f.inverse_condition[occ], vals)
     np.testing.assert_allclose(f.inverse_condition[occ], g.inverse_condition[occ], rtol=TOL_REL, atol=TOL_ABS)

@@ -1,0 +1,128 @@
+"""Issue 24 target 3: the dexterity field's neighbour search (kinematics/dexterity_neighbour.py)
+against the resolver's full search (resolved_carriages, the slow path) at every voxel of coarse
+workspaces of several designs, the stated tolerance on the margin, and its run-time check."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.dexterity import dexterity_field, inverse_condition_batch, resolved_carriages
+from paraspace.kinematics.dexterity_neighbour import (
+    MARGIN_TOLERANCE,
+    SAMPLE_MIN,
+    chain_margins,
+    compare,
+    neighbour_field,
+    sample_indices,
+)
+from paraspace.kinematics.dexterity_sweep import TOL_ABS, TOL_REL
+from paraspace.kinematics.inverse import leg_lengths, leg_margin
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+CASES = [(Design(), 10.0, (0.0, 0.0, 0.0)),
+         (Design(a=30, b=20, eta_s=60), 10.0, (8.0, -5.0, 3.0)),
+         (Design(d_s=80, eta_s=45), 12.0, (0.0, 0.0, 0.0))]
+
+
+def _margins_from_ik(design: Design, point, d, eta) -> np.ndarray:
+    """Chain margins from the IK's leg lengths (independent of the compiled margin)."""
+    lengths = leg_lengths(design, Pose(*point), np.asarray(d), np.asarray(eta))
+    return np.array([leg_margin(design, lengths[i]).min() for i in range(3)])
+
+
+@pytest.mark.parametrize("design,voxel,orientation", CASES)
+def test_neighbour_search_is_within_the_stated_tolerance_of_the_full_search(design, voxel, orientation):
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    occ = res.occupancy
+    pts = res.grid.points()[occ]
+    vals, d, eta, margins = neighbour_field(design, occ, res.grid.axes(), orientation)
+    d_full, eta_full = resolved_carriages(design, pts, orientation)
+    full_margins = chain_margins(design, pts, d_full, eta_full, orientation)
+    # the tolerance (module docstring) at every voxel, not only on a sample
+    gap = (full_margins - margins).max(axis=1)
+    assert gap.max() <= MARGIN_TOLERANCE
+    # the chosen carriage poses lie on the strokes
+    lo, hi = design.eta_limits
+    assert np.all((d >= -1e-9) & (d <= design.d_s + 1e-9) & (eta >= lo - 1e-9) & (eta <= hi + 1e-9))
+    # 1/kappa is eq. (26)'s at the chosen pose (numpy's SVD, the slow path)
+    slow = inverse_condition_batch(design, pts, d, eta, orientation)
+    assert np.all(np.abs(vals - slow) <= TOL_REL * slow + TOL_ABS)
+    # the margins reported are the IK's leg margins at the chosen and the full search's poses
+    rng = np.random.default_rng(3)
+    for k in rng.choice(len(pts), 6, replace=False):
+        np.testing.assert_allclose(margins[k], _margins_from_ik(design, pts[k], d[k], eta[k]), atol=1e-9)
+        np.testing.assert_allclose(full_margins[k], _margins_from_ik(design, pts[k], d_full[k], eta_full[k]),
+                                   atol=1e-9)
+
+
+def test_the_field_reports_its_sample_check_against_the_full_search():
+    design, voxel, orientation = CASES[1]
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    f = dexterity_field(res, 0.005)
+    assert f.search == "neighbour" and f.check is not None
+    n = res.voxels
+    idx = sample_indices(n)
+    assert f.check.sample_size == len(idx) == min(n, max(SAMPLE_MIN, math.ceil(0.01 * n)))
+    assert len(np.unique(idx)) == len(idx) and np.array_equal(idx, sample_indices(n))  # fixed seed
+    # recompute the check's numbers from the full search on the same voxels
+    pts = res.grid.points()[res.occupancy][idx]
+    d, eta = resolved_carriages(design, pts, orientation)
+    full = inverse_condition_batch(design, pts, d, eta, orientation)
+    mine = f.inverse_condition[res.occupancy][idx]
+    _v, d_nb, eta_nb, _m = neighbour_field(design, res.occupancy, res.grid.axes(), orientation)
+    gap = (chain_margins(design, pts, d, eta, orientation)
+           - chain_margins(design, pts, d_nb[idx], eta_nb[idx], orientation)).max()
+    assert f.check.max_margin_gap == pytest.approx(gap, abs=1e-12)
+    assert f.check.max_abs_delta_inverse_condition == pytest.approx(np.abs(mine - full).max(), abs=1e-15)
+    assert f.check.gci_difference == pytest.approx(mine.mean() - full.mean(), abs=1e-15)
+    assert f.check.tolerance_held and f.summary()["dexterity_check"]["tolerance_held"]
+
+
+def test_a_broken_tolerance_is_reported():
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=8.0))
+    f = dexterity_field(res, 0.005, margin_tolerance=0.0)
+    # on this sample the climb keeps a little less margin than the full search somewhere (0.03)
+    assert f.check.max_margin_gap > 0.0
+    assert not f.check.tolerance_held and "tolerance broken" in f.check.message
+    assert f.summary()["dexterity_check"]["tolerance_held"] is False
+    # the comparison itself, on numbers made up for it
+    c = compare(np.array([0.5, 0.4]), np.array([[1.0, 2.0, 3.0], [1.0, 1.0, 1.0]]), np.array([0.5, 0.1]),
+                np.array([[1.0, 2.5, 3.0], [0.5, 1.0, 1.0]]), 1000, 0.25)
+    assert (c.sample_size, c.max_margin_gap, c.max_abs_delta_inverse_condition) == (2, 0.5, pytest.approx(0.3))
+    assert c.gci_difference == pytest.approx(0.15) and not c.tolerance_held
+    assert compare(np.array([0.5]), np.ones((1, 3)), np.array([0.5]), np.ones((1, 3)), 1, 0.0).tolerance_held
+
+
+@pytest.mark.parametrize("kw,field", [({"search": "local"}, "dexterity_search"),
+                                      ({"margin_tolerance": -1.0}, "margin_tolerance"),
+                                      ({"margin_tolerance": float("nan")}, "margin_tolerance"),
+                                      ({"margin_tolerance": "x"}, "margin_tolerance")])
+def test_search_settings_are_validated(kw, field):
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=16.0))
+    with pytest.raises(ParameterError, match=field):
+        dexterity_field(res, 0.005, **kw)
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=600)
+
+
+def test_cli_reports_the_check_and_a_broken_tolerance():
+    proc = _cli("workspace", "--voxel", "8", "--dexterity", "--margin-tolerance", "0", "--json")
+    assert proc.returncode == 0, proc.stderr
+    chk = json.loads(proc.stdout)["dexterity"]["dexterity_check"]
+    assert chk["margin_tolerance"] == 0.0 and chk["tolerance_held"] is False
+    assert "paraspace: warning: dexterity tolerance broken" in proc.stderr
+    proc = _cli("workspace", "--voxel", "16", "--dexterity", "--dexterity-search", "local", "--json")
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and proc.stdout == "" and len(lines) == 1
+    assert lines[0].startswith("paraspace: error: dexterity_search = ") and "neighbour or sweep or full" in lines[0]
