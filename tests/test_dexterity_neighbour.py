@@ -32,9 +32,9 @@ CASES = [(Design(), 10.0, (0.0, 0.0, 0.0)),
          (Design(d_s=80, eta_s=45), 12.0, (0.0, 0.0, 0.0))]
 
 
-def _margins_from_ik(design: Design, point, d, eta) -> np.ndarray:
+def _margins_from_ik(design: Design, point, orientation, d, eta) -> np.ndarray:
     """Chain margins from the IK's leg lengths (independent of the compiled margin)."""
-    lengths = leg_lengths(design, Pose(*point), np.asarray(d), np.asarray(eta))
+    lengths = leg_lengths(design, Pose(*point, *orientation), np.asarray(d), np.asarray(eta))
     return np.array([leg_margin(design, lengths[i]).min() for i in range(3)])
 
 
@@ -60,9 +60,9 @@ def test_neighbour_search_is_within_the_stated_tolerance_of_the_full_search(desi
     # the margins reported are the IK's leg margins at the chosen and the full search's poses
     rng = np.random.default_rng(3)
     for k in rng.choice(len(pts), 6, replace=False):
-        np.testing.assert_allclose(margins[k], _margins_from_ik(design, pts[k], d[k], eta[k]), atol=1e-9)
-        np.testing.assert_allclose(full_margins[k], _margins_from_ik(design, pts[k], d_full[k], eta_full[k]),
-                                   atol=1e-9)
+        np.testing.assert_allclose(margins[k], _margins_from_ik(design, pts[k], orientation, d[k], eta[k]), atol=1e-9)
+        np.testing.assert_allclose(full_margins[k],
+                                   _margins_from_ik(design, pts[k], orientation, d_full[k], eta_full[k]), atol=1e-9)
 
 
 def test_the_field_reports_its_sample_check_against_the_full_search():
