@@ -16,9 +16,11 @@ with timestamps taken *in the page* (``performance.now()``, sampled once per ani
 * connect: page load -> first full shell on screen, with its legs (page load event, plotly.js
   evaluated in the page, the server's first job and first full shell) and the websocket bytes.
 
-``--display full`` is the "before" of issue 24 target 10: the full shell sent as the 50 000-face
-re-mesh, without the decimation to the display budget (``kinematics.display_mesh``; the default,
-``light``, is what the explorer sends). The load average is printed before and after: the machine
+``--display`` selects the shell sent (issue 24 target 10): ``light`` (default) is what the explorer
+sends, ``kinematics.display_mesh.display_shell`` (a re-mesh of at most 36 000 faces, smoothed,
+decimated to 12 000); ``decimated`` the path before it (the 50 000-face block re-mesh of at most
+60 000, smoothed, then decimated to 12 000 by ``display_mesh``); ``full`` the path before that (the
+50 000-face re-mesh, not decimated). The load average is printed before and after: the machine
 is shared, so compare runs taken side by side.
 
 ``--trace DIR`` also records a Chrome trace and a JS CPU profile of the connect and of one more
@@ -29,7 +31,7 @@ then never sent), to measure what lazily created plots would save. Numbers only,
 Usage::
 
     python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots]
-                                          [--display light|full]
+                                          [--display light|decimated|full]
 """
 
 from __future__ import annotations
@@ -156,13 +158,20 @@ def _no_plots() -> None:
 STEPS: list[tuple[str, float, float]] = []
 
 
-def _undecimated_display() -> None:
-    """The explorer's shells as before issue 24 target 10: the re-mesh, not decimated for display."""
-    import functools
-
+def _before_display(decimate: bool) -> None:
+    """The explorer's shells as before issue 24 target 10: the block re-mesh to the job's budget
+    (60 000 faces for the full shell), smoothed, then decimated to the display budget by
+    ``display_mesh`` (``decimate``) or not at all."""
     from paraspace.app.explorer import workspace_job
+    from paraspace.kinematics.display_mesh import DISPLAY_FACES, display_mesh
 
-    workspace_job.make_shell = functools.partial(workspace_job.make_shell, display_faces=None)  # type: ignore[assignment]
+    make_shell = workspace_job.make_shell
+
+    def before(result: Any, max_faces: int, display_faces: int | None = DISPLAY_FACES) -> Any:
+        remesh = make_shell(result, max_faces, display_faces=None)
+        return display_mesh(remesh, display_faces) if decimate and display_faces is not None else remesh
+
+    workspace_job.make_shell = before  # type: ignore[assignment]
 
 
 def _time_server_steps() -> None:
@@ -308,13 +317,13 @@ def main() -> None:
     ap.add_argument("--trace", type=Path, default=None, help="write Chrome traces and CPU profiles here")
     ap.add_argument("--connects", type=int, default=3, help="page loads timed (each a new design)")
     ap.add_argument("--no-plots", action="store_true", help="what-if: no plotly plots (stand-ins)")
-    ap.add_argument("--display", choices=("light", "full"), default="light",
-                    help="full: the shell on screen not decimated to the display budget (before issue 24 target 10)")
+    ap.add_argument("--display", choices=("light", "decimated", "full"), default="light",
+                    help="decimated / full: the shell on screen as before issue 24 target 10 (module docstring)")
     args = ap.parse_args()
     if args.no_plots:
         _no_plots()
-    if args.display == "full":
-        _undecimated_display()
+    if args.display != "light":
+        _before_display(decimate=args.display == "decimated")
     load_before = os.getloadavg()
     _time_server_steps()
     if args.trace is not None:
@@ -512,6 +521,10 @@ def main() -> None:
         print(f"{name:44s} {_stats(vals)}")
     for name, svals in sizes.items():
         print(f"{name:44s} {_stats(svals)}")
+    mesh, comp = rows["server: full mesh (s)"], rows["server: full compute (s)"]
+    if mesh and comp:
+        ratios = [m / c for m, c in zip(mesh, comp)]
+        print(f"{'server: full mesh / full compute (ratio)':44s} {_stats(ratios)}")
     print(f"{'presses whose preview was never drawn':44s} {skipped_previews:8d}")
 
 

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from paraspace.kinematics.display_mesh import DISPLAY_FACES
+from paraspace.kinematics.display_mesh import DISPLAY_FACES, REMESH_FACTOR
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
@@ -41,7 +41,8 @@ PREVIEW_VOXEL = 6.0
 #: of engine and 0.08 s of meshing on 2 idle cores), faster than a preview would help: the preview is
 #: shown first only below it, or with leg interference (about 3x slower) (:func:`wants_preview`).
 PREVIEW_BELOW = 2.0
-#: Face budgets of the block re-mesh of the preview and full shells (then decimated to DISPLAY_FACES).
+#: Face budgets of the block re-mesh of the preview and full shells, at most ``REMESH_FACTOR`` times
+#: the display budget when decimated to it (:func:`make_shell`).
 PREVIEW_FACES = 20_000
 FULL_FACES = 60_000
 #: Boundary refinements of the explorer's certified bracket (one: about 2 s of CPU at h = 2, after the
@@ -65,21 +66,27 @@ class ShellBundle:
 
 
 def make_shell(result: WorkspaceResult, max_faces: int, display_faces: int | None = DISPLAY_FACES) -> trimesh.Trimesh:
-    """Marching-cubes shell of ``result`` colored by z, re-meshed to at most ``max_faces`` faces
-    (block re-mesh), smoothed for display (no voxel terracing) and scaled to the voxel volume
-    (:func:`kinematics.shell.smooth_for_display`): the final scaling sets the volume, so the re-mesh
-    needs no volume-matching passes (1 % is enough; the exported meshes keep 1e-4); then decimated to
-    ``display_faces`` for the screen (:func:`kinematics.display_mesh.display_mesh`; ``None``: not)."""
-    from paraspace.kinematics.display_mesh import display_mesh
+    """The shell of ``result`` on screen, colored by z over the voxels' heights (:func:`voxel_z_range`):
+    the display shell of :func:`kinematics.display_mesh.display_shell` (a re-mesh of at most
+    ``min(max_faces, REMESH_FACTOR * display_faces)`` faces, smoothed, decimated to ``display_faces``,
+    enclosing the voxel volume).
+
+    ``display_faces=None``: not decimated, the block re-mesh to ``max_faces`` of
+    :func:`kinematics.shell.workspace_shell`, smoothed for display and scaled to the voxel volume
+    (:func:`kinematics.shell.smooth_for_display`; the path the explorer took before the display shell)."""
+    from paraspace.kinematics.display_mesh import display_shell
     from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
     zr = voxel_z_range(result)
+    if display_faces is not None:
+        return display_shell(result, display_faces, remesh_faces=min(max_faces, REMESH_FACTOR * display_faces),
+                             color_range=zr)
     mesh = workspace_shell(result, max_faces=max_faces, color_by_z=True, reduction="remesh", volume_rtol=1e-2,
                            color_range=zr)
     mesh = smooth_for_display(mesh, volume=result.volume)
     if zr is not None:
         mesh.metadata.setdefault("paraspace", {})["color_range"] = zr
-    return mesh if display_faces is None else display_mesh(mesh, display_faces)
+    return mesh
 
 
 def voxel_z_range(result: WorkspaceResult) -> tuple[float, float] | None:
