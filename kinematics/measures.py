@@ -456,27 +456,40 @@ _EULER_26 = np.asarray(_EULER_COEFS3D_26, dtype=np.int64)
 def _euler_hist_kernel(occ, hist):
     """``hist[i, c]``: 2x2x2 windows of low corner x index ``i - 1`` with configuration ``c``, over
     every window that meets the grid (voxels outside it empty); bits as skimage's convolution
-    gives them (``1`` the window's far corner, ``128`` its low corner)."""
+    gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
+    window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
+    previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
+    voxels, so each window reads four voxels."""
     n0, n1, n2 = occ.shape
-    for i in prange(-1, n0):
+    for ii in prange(n0 + 1):
+        i = ii - 1
+        x0 = i >= 0
+        x1 = i + 1 < n0
+        row = np.zeros(256, np.int64)
         for j in range(-1, n1):
+            y0 = j >= 0
+            y1 = j + 1 < n1
+            c00 = x0 and y0
+            c01 = x0 and y1
+            c10 = x1 and y0
+            c11 = x1 and y1
+            code = 0
             for k in range(-1, n2):
-                c = 0
-                for a in range(2):
-                    x = i + a
-                    if x < 0 or x >= n0:
-                        continue
-                    for b in range(2):
-                        y = j + b
-                        if y < 0 or y >= n1:
-                            continue
-                        for e in range(2):
-                            z = k + e
-                            if z < 0 or z >= n2:
-                                continue
-                            if occ[x, y, z]:
-                                c |= 1 << (4 * (1 - a) + (1 - b) + 2 * (1 - e))
-                hist[i + 1, c] += 1
+                z = k + 1
+                far = 0
+                if z < n2:
+                    if c00 and occ[i, j, z]:
+                        far |= 32
+                    if c01 and occ[i, j + 1, z]:
+                        far |= 16
+                    if c10 and occ[i + 1, j, z]:
+                        far |= 2
+                    if c11 and occ[i + 1, j + 1, z]:
+                        far |= 1
+                code = ((code & 0x33) << 2) | far
+                row[code] += 1
+        for c in range(256):
+            hist[ii, c] = row[c]
 
 
 def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
