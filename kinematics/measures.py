@@ -201,15 +201,11 @@ Computation
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
 the Euler number counts the 2x2x2 configurations in one parallel pass with skimage's (Ohser's)
-coefficients, reading four voxels per window; the voids are the unreachable voxels that have
-reachable ones on both sides along all three axes (any other unreachable voxel sees the padding
-along a straight line) less a flood from those that leak (:mod:`kinematics.void_flood`: a sealed
-cavity is never visited, and only the voids are labelled, when their number is asked for); the
-components are labelled by x slabs in parallel (:mod:`kinematics.labelling`, scipy's labels); the
+coefficients; the voids label only the unreachable voxels that have reachable ones on both sides
+along all three axes (any other unreachable voxel sees the padding along a straight line); the
 dilations keep capped uint8 distances, compute half the rows of a mirror-symmetric solid and skip
 the voxels with no set voxel within their block's neighbourhood; the hull's columns test the facets
-their tile keeps, and qhull gets only the column ends that are vertices of their x line's and y
-line's 2-D hulls (:func:`hull_points`). :func:`measure_fields` computes only the steps the asked-for fields need. The
+their tile keeps. :func:`measure_fields` computes only the steps the asked-for fields need. The
 whole :func:`measure_workspace` of the default design takes about 0.23 s at h = 2 and 2.4 s at
 h = 1 on the shared 2-core machine (load 3.4-3.6: 4.4x and 9.6x the engine in the same run, from
 0.52 s and 7.8 s on the former path; ``benchmarks/bench_workspace.py --throughput``).
@@ -226,7 +222,6 @@ from scipy import ndimage as ndi
 from scipy.spatial import ConvexHull, QhullError
 from skimage.measure._regionprops_utils import EULER_COEFS3D_26 as _EULER_COEFS3D_26
 
-from .labelling import label_components
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
 from .serialize import jsonable
@@ -1141,7 +1136,7 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     if not occ.any():
         return 0, 0
     filled = occ | void_mask(occ, connectivity)
-    _, b0 = label_components(filled, connectivity)
+    _, b0 = ndi.label(filled, structure=_structure(connectivity))
     return int(b0), int(b0 - euler_characteristic(filled, connectivity))
 
 
@@ -1305,7 +1300,7 @@ class _Steps:
 
     def _labels(self):
         occ, n, conn = self.occ, self.n, self.o["connectivity"]
-        labels, components = label_components(occ, conn)
+        labels, components = ndi.label(occ, structure=_structure(conn))
         sizes = np.bincount(labels.ravel())[1:]
         largest = float(sizes.max() / n)
         is_piece = sizes >= self.o["piece_fraction"] * n
@@ -1327,7 +1322,7 @@ class _Steps:
         voids_m, n_voids, _ = self.get("voids")
         if n_voids:
             filled = self.occ | voids_m
-            _, filled_components = label_components(filled, conn)
+            _, filled_components = ndi.label(filled, structure=_structure(conn))
             return int(filled_components), euler_characteristic(filled, conn)
         return self.get("labels")[0], self.get("chi_w")
 

@@ -461,30 +461,3 @@ def test_void_flood_and_extreme_hull_points_equal_the_former_path():
             n_with_voids += n > 0
         assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, extreme=False))
     assert n_with_voids >= 4  # the comparison saw voids, not only empty sets
-
-
-def test_parallel_labelling_equals_scipy():
-    """Issue 24 targets 1 and 7: the slab-parallel union-find labelling (kinematics/labelling.py) gives
-    scipy.ndimage.label's labels (same partition, same numbering by first voxel) for 6 and 26
-    neighbours, with 1 and 2 numba threads (the slab joins then differ), on random fields and on a
-    design whose workspace has many components (a = 10: specks beside the body)."""
-    import numba
-    from scipy import ndimage as ndi
-
-    from paraspace.kinematics.labelling import label_components
-
-    rng = np.random.default_rng(7)
-    fields = [rng.random(tuple(rng.integers(1, 14, 3))) < rng.uniform(0.05, 0.95) for _ in range(30)]
-    fields.append(compute_workspace(Design(a=10), WorkspaceSettings(voxel=4.0)).occupancy)
-    threads = numba.get_num_threads()
-    try:
-        for nt in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
-            numba.set_num_threads(nt)
-            for occ in fields:
-                for conn in (1, 3):
-                    lab, n = label_components(occ, conn)
-                    ref, n_ref = ndi.label(occ, structure=ndi.generate_binary_structure(3, conn))
-                    assert n == n_ref and np.array_equal(lab, ref)
-    finally:
-        numba.set_num_threads(threads)
-    assert ndi.label(fields[-1])[1] > 10  # the design's field is not one blob
