@@ -304,10 +304,9 @@ def measure_rows(design: Design, runs: int = 3) -> None:
 def _measures_before_meas1():
     """kinematics.measures as it was before the meas1 branch: every candidate component labelled
     (voids, sealed cavity), qhull given every column end, the Euler kernel reading eight voxels per
-    window, scipy's serial labelling."""
+    window."""
     import numpy as np
     from numba import njit, prange
-    from scipy import ndimage as ndi
 
     from paraspace.kinematics import measures as mod
 
@@ -346,8 +345,7 @@ def _measures_before_meas1():
     patch = {"_voids": mod._voids_labelled_candidates,
              "_void_set": lambda occ, conn: (mod._voids_labelled_candidates(occ, conn)[0], None),
              "hull_mask": lambda occ, tiled=True: hull(occ, tiled, extreme=False),
-             "euler_characteristic": euler,
-             "label_components": lambda occ, conn=1: ndi.label(occ, structure=mod._structure(conn))}
+             "euler_characteristic": euler}
     saved = {k: getattr(mod, k) for k in patch}
     for k, v in patch.items():
         setattr(mod, k, v)
@@ -360,7 +358,7 @@ def _measures_before_meas1():
 
 def measure_meas1_rows(design: Design, runs: int = 3) -> None:
     """Targets 1 and 7 (meas1): measure_workspace at h = 2 and h = 1 with the voids by a flood, the
-    hull from the extreme column ends, the four-read Euler kernel and the slab-parallel labelling,
+    hull from the extreme column ends and the four-read Euler kernel,
     against the same function on the path before them, with 1 and 2 numba threads, each as a ratio
     to the engine (machine's threads) in the same run; and whether every measure is identical."""
     import numba

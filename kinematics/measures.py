@@ -201,11 +201,14 @@ Computation
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
 the Euler number counts the 2x2x2 configurations in one parallel pass with skimage's (Ohser's)
-coefficients; the voids label only the unreachable voxels that have reachable ones on both sides
-along all three axes (any other unreachable voxel sees the padding along a straight line); the
+coefficients, reading four voxels per window; the voids are the unreachable voxels that have
+reachable ones on both sides along all three axes (any other unreachable voxel sees the padding
+along a straight line) less a flood from those that leak (:mod:`kinematics.void_flood`: a sealed
+cavity is never visited, and only the voids are labelled, when their number is asked for); the
 dilations keep capped uint8 distances, compute half the rows of a mirror-symmetric solid and skip
 the voxels with no set voxel within their block's neighbourhood; the hull's columns test the facets
-their tile keeps. :func:`measure_fields` computes only the steps the asked-for fields need. The
+their tile keeps, and qhull gets only the column ends that are vertices of their x line's and y
+line's 2-D hulls (:func:`hull_points`). :func:`measure_fields` computes only the steps the asked-for fields need. The
 whole :func:`measure_workspace` of the default design takes about 0.23 s at h = 2 and 2.4 s at
 h = 1 on the shared 2-core machine (load 3.4-3.6: 4.4x and 9.6x the engine in the same run, from
 0.52 s and 7.8 s on the former path; ``benchmarks/bench_workspace.py --throughput``).
