@@ -300,6 +300,105 @@ def measure_rows(design: Design, runs: int = 3) -> None:
         _row("measure_workspace, former path (before)", med["old"], med["engine"])
 
 
+@contextlib.contextmanager
+def _measures_before_meas1():
+    """kinematics.measures as it was before the meas1 branch: every candidate component labelled
+    (voids, sealed cavity), qhull given every column end, the Euler kernel reading eight voxels per
+    window."""
+    import numpy as np
+    from numba import njit, prange
+
+    from paraspace.kinematics import measures as mod
+
+    @njit(parallel=True, cache=True, nogil=True)
+    def euler_hist_windows(occ, hist):  # the former _euler_hist_kernel, verbatim
+        n0, n1, n2 = occ.shape
+        for i in prange(-1, n0):
+            for j in range(-1, n1):
+                for k in range(-1, n2):
+                    c = 0
+                    for a in range(2):
+                        x = i + a
+                        if x < 0 or x >= n0:
+                            continue
+                        for b in range(2):
+                            y = j + b
+                            if y < 0 or y >= n1:
+                                continue
+                            for e in range(2):
+                                z = k + e
+                                if z < 0 or z >= n2:
+                                    continue
+                                if occ[x, y, z]:
+                                    c |= 1 << (4 * (1 - a) + (1 - b) + 2 * (1 - e))
+                    hist[i + 1, c] += 1
+
+    def euler(occ, conn=1):
+        occ = np.ascontiguousarray(occ, dtype=np.bool_)
+        coefs = mod._EULER_26[::-1] if conn == 1 else mod._EULER_26
+        hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
+        with mod.KERNEL_LOCK:
+            euler_hist_windows(occ, hist)
+        return int(0.125 * int(coefs @ hist.sum(axis=0)))
+
+    hull = mod.hull_mask
+    patch = {"_voids": mod._voids_labelled_candidates,
+             "_void_set": lambda occ, conn: (mod._voids_labelled_candidates(occ, conn)[0], None),
+             "hull_mask": lambda occ, tiled=True: hull(occ, tiled, extreme=False),
+             "euler_characteristic": euler}
+    saved = {k: getattr(mod, k) for k in patch}
+    for k, v in patch.items():
+        setattr(mod, k, v)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            setattr(mod, k, v)
+
+
+def measure_meas1_rows(design: Design, runs: int = 3) -> None:
+    """Targets 1 and 7 (meas1): measure_workspace at h = 2 and h = 1 with the voids by a flood, the
+    hull from the extreme column ends and the four-read Euler kernel,
+    against the same function on the path before them, with 1 and 2 numba threads, each as a ratio
+    to the engine (machine's threads) in the same run; and whether every measure is identical."""
+    import numba
+
+    from paraspace.kinematics.measures import measure_workspace
+
+    threads = numba.get_num_threads()
+    for h in (2.0, 1.0):
+        res = compute_workspace(design, WorkspaceSettings(voxel=h))
+        new_d = measure_workspace(res).to_dict()
+        with _measures_before_meas1():
+            same = measure_workspace(res).to_dict() == new_d
+
+        def before(res=res):
+            with _measures_before_meas1():
+                return measure_workspace(res)
+
+        fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
+        for nt in sorted({1, min(2, threads)}):
+            def with_threads(f, nt=nt):
+                def run():
+                    numba.set_num_threads(nt)
+                    try:
+                        return f()
+                    finally:
+                        numba.set_num_threads(threads)
+                return run
+            fns[f"new {nt}"] = with_threads(lambda res=res: measure_workspace(res))
+            fns[f"old {nt}"] = with_threads(before)
+        med = _alternating(fns, runs)
+        print(f"  targets 1/7 (meas1), measure_workspace h={h:g} (load average {os.getloadavg()[0]:.2f}, loaded "
+              f"machine; engine {med['engine'] * 1e3:.0f} ms, {threads} threads; identical measures: {same}):")
+        for k in fns:
+            if k != "engine":
+                kind, nt = k.split()
+                name = "measure_workspace" if kind == "new" else "measure_workspace, before meas1"
+                _row(f"{name}, {nt} thread{'s' if nt != '1' else ''}", med[k], med["engine"],
+                     "(target <= 1x)" if kind == "new" else "")
+
+
 def feature_filter_rows(design: Design, runs: int = 3) -> None:
     """Target 1, the feature filter alone (its four ball dilations of the padded solid) at h = 2 and
     h = 1, with 1 and 2 numba threads: the capped, mirrored, block-skipping kernel against the former
@@ -703,6 +802,7 @@ def throughput_rows(design: Design) -> None:
     shell_rows(design)
     evaluation_rows(design)
     measure_rows(design)
+    measure_meas1_rows(design)
     feature_filter_rows(design)
     tail_rows(design)
     display_rows(design)

@@ -201,11 +201,14 @@ Computation
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
 the Euler number counts the 2x2x2 configurations in one parallel pass with skimage's (Ohser's)
-coefficients; the voids label only the unreachable voxels that have reachable ones on both sides
-along all three axes (any other unreachable voxel sees the padding along a straight line); the
+coefficients, reading four voxels per window; the voids are the unreachable voxels that have
+reachable ones on both sides along all three axes (any other unreachable voxel sees the padding
+along a straight line) less a flood from those that leak (:mod:`kinematics.void_flood`: a sealed
+cavity is never visited, and only the voids are labelled, when their number is asked for); the
 dilations keep capped uint8 distances, compute half the rows of a mirror-symmetric solid and skip
 the voxels with no set voxel within their block's neighbourhood; the hull's columns test the facets
-their tile keeps. :func:`measure_fields` computes only the steps the asked-for fields need. The
+their tile keeps, and qhull gets only the column ends that are vertices of their x line's and y
+line's 2-D hulls (:func:`hull_points`). :func:`measure_fields` computes only the steps the asked-for fields need. The
 whole :func:`measure_workspace` of the default design takes about 0.23 s at h = 2 and 2.4 s at
 h = 1 on the shared 2-core machine (load 3.4-3.6: 4.4x and 9.6x the engine in the same run, from
 0.52 s and 7.8 s on the former path; ``benchmarks/bench_workspace.py --throughput``).
@@ -225,6 +228,7 @@ from skimage.measure._regionprops_utils import EULER_COEFS3D_26 as _EULER_COEFS3
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
 from .serialize import jsonable
+from .void_flood import enclosed_voids
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -371,29 +375,31 @@ def _open_labels_kernel(cand, lab, occ, full, n_labels):
     return opened
 
 
-def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
-    """``(void_mask, number of voids)`` without labelling the whole complement.
-
-    An unreachable voxel with no reachable voxel on one side along some axis is joined to the
-    padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
-    is outside. The others, the candidates (:func:`_enclosed_kernel`), are labelled with the dual
-    adjacency inside their bounding box: a candidate component is outside exactly when one of its
-    voxels has a dual neighbour that is unreachable and not a candidate (a path to the padding
-    leaves the candidates there), and a void otherwise. Distinct candidate components are not
-    adjacent, so each void component is one candidate component.
-    """
+def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple] | None:
+    """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
+    (:func:`_enclosed_kernel`) and their bounding box grown by one voxel (the neighbours the tests
+    look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
     occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
     cand = np.zeros(occ.shape, np.bool_)
     if occ.size:
         with KERNEL_LOCK:
             _enclosed_kernel(occ, cand)
     if not cand.any():
-        return cand, 0
+        return None
     flags = [np.asarray(cand.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1))]
     lo = [int(np.argmax(m)) for m in flags]
     hi = [len(m) - int(np.argmax(m[::-1])) for m in flags]
-    # one voxel of margin: the neighbours the test looks at (candidates never lie on the grid's edge)
     box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
+    return occ, cand, box
+
+
+def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
+    """:func:`_voids` by labelling every candidate component and testing each for a leak (the former
+    path, kept as a reference: the same set and number)."""
+    found = _candidates_box(occupancy)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_), 0
+    occ, cand, box = found
     sub = cand[box]
     lab, n = ndi.label(sub, structure=_structure(dual_connectivity(connectivity)))
     with KERNEL_LOCK:
@@ -405,10 +411,44 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
     return voids, int(keep.sum())
 
 
+def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tuple | None]:
+    """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
+    (:func:`_enclosed_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
+    which never visits a sealed cavity; ``box`` bounds the voids (``None``: no void)."""
+    found = _candidates_box(occupancy)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_), None
+    occ, cand, box = found
+    with KERNEL_LOCK:
+        sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
+    voids = np.zeros(occ.shape, np.bool_)
+    if not n_void:
+        return voids, None
+    voids[box] = sub
+    return voids, box
+
+
+def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
+    """``(void_mask, number of voids)`` without labelling the whole complement.
+
+    An unreachable voxel with no reachable voxel on one side along some axis is joined to the
+    padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
+    is outside. The others, the candidates (:func:`_enclosed_kernel`), are outside exactly when they
+    are joined within the candidates to one with a dual neighbour that is unreachable and not a
+    candidate (:func:`_void_set`); only the voids left are labelled, to count them (each void
+    component is one candidate component: distinct candidate components are not adjacent).
+    """
+    voids, box = _void_set(occupancy, connectivity)
+    if box is None:
+        return voids, 0
+    _, n = ndi.label(voids[box], structure=_structure(dual_connectivity(connectivity)))
+    return voids, int(n)
+
+
 def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
     """Voxels of the enclosed voids (complement components not connected to the padded outside);
-    computed by :func:`_voids`, the same set as :func:`void_mask_labelled`."""
-    return _voids(occupancy, connectivity)[0]
+    computed by :func:`_void_set` (no labelling), the same set as :func:`void_mask_labelled`."""
+    return _void_set(occupancy, connectivity)[0]
 
 
 #: skimage's Ohser coefficients of the 256 2x2x2 configurations (26-adjacency; reversed for 6)
@@ -419,27 +459,40 @@ _EULER_26 = np.asarray(_EULER_COEFS3D_26, dtype=np.int64)
 def _euler_hist_kernel(occ, hist):
     """``hist[i, c]``: 2x2x2 windows of low corner x index ``i - 1`` with configuration ``c``, over
     every window that meets the grid (voxels outside it empty); bits as skimage's convolution
-    gives them (``1`` the window's far corner, ``128`` its low corner)."""
+    gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
+    window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
+    previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
+    voxels, so each window reads four voxels."""
     n0, n1, n2 = occ.shape
-    for i in prange(-1, n0):
+    for ii in prange(n0 + 1):
+        i = ii - 1
+        x0 = i >= 0
+        x1 = i + 1 < n0
+        row = np.zeros(256, np.int64)
         for j in range(-1, n1):
+            y0 = j >= 0
+            y1 = j + 1 < n1
+            c00 = x0 and y0
+            c01 = x0 and y1
+            c10 = x1 and y0
+            c11 = x1 and y1
+            code = 0
             for k in range(-1, n2):
-                c = 0
-                for a in range(2):
-                    x = i + a
-                    if x < 0 or x >= n0:
-                        continue
-                    for b in range(2):
-                        y = j + b
-                        if y < 0 or y >= n1:
-                            continue
-                        for e in range(2):
-                            z = k + e
-                            if z < 0 or z >= n2:
-                                continue
-                            if occ[x, y, z]:
-                                c |= 1 << (4 * (1 - a) + (1 - b) + 2 * (1 - e))
-                hist[i + 1, c] += 1
+                z = k + 1
+                far = 0
+                if z < n2:
+                    if c00 and occ[i, j, z]:
+                        far |= 32
+                    if c01 and occ[i, j + 1, z]:
+                        far |= 16
+                    if c10 and occ[i + 1, j, z]:
+                        far |= 2
+                    if c11 and occ[i + 1, j + 1, z]:
+                        far |= 1
+                code = ((code & 0x33) << 2) | far
+                row[code] += 1
+        for c in range(256):
+            hist[ii, c] = row[c]
 
 
 def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
@@ -637,13 +690,94 @@ def _column_ends_kernel(occ, kbot, ktop):
             ktop[i, j] = hi
 
 
-def hull_mask(occupancy: np.ndarray, tiled: bool = True) -> np.ndarray:
+@njit(cache=True, inline="always")
+def _chain_flags(idx, val, m, upper, stack, flag):
+    """Strict vertices of the upper (``upper``) or lower chain of the points ``(idx[q], val[q])``,
+    ``q < m``, sorted by ``idx`` (Andrew's monotone chain; a point on or beyond the segment of its
+    neighbours is popped): ``flag[q]`` set for each."""
+    top = 0
+    for q in range(m):
+        while top >= 2:
+            a = stack[top - 2]
+            b = stack[top - 1]
+            cross = (idx[b] - idx[a]) * (val[q] - val[a]) - (val[b] - val[a]) * (idx[q] - idx[a])
+            if (cross >= 0) if upper else (cross <= 0):
+                top -= 1
+            else:
+                break
+        stack[top] = q
+        top += 1
+    for q in range(top):
+        flag[stack[q]] = True
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _line_extreme_kernel(kbot, ktop, axis, keep_bot, keep_top):
+    """Clear ``keep_top[i, j]`` (``keep_bot``) where column ``(i, j)``'s highest (lowest) centre is
+    not a strict vertex of the 2-D hull of the column ends along its line of columns (x lines for
+    ``axis == 0``, y lines for ``axis == 1``): such a point lies in the hull of other points of the
+    set, so the 3-D hull does not need it (a vertex of the 3-D hull is extreme in every subset)."""
+    nx, ny = kbot.shape
+    n_lines = ny if axis == 0 else nx
+    n_along = nx if axis == 0 else ny
+    for ln in prange(n_lines):
+        line = np.int64(ln)
+        idx = np.empty(n_along, np.int64)
+        top = np.empty(n_along, np.int64)
+        bot = np.empty(n_along, np.int64)
+        stack = np.empty(n_along, np.int64)
+        f_top = np.zeros(n_along, np.bool_)
+        f_bot = np.zeros(n_along, np.bool_)
+        m = 0
+        for p in range(n_along):
+            pp = np.int64(p)
+            i = pp if axis == 0 else line
+            j = line if axis == 0 else pp
+            if ktop[i, j] >= 0:
+                idx[m] = p
+                top[m] = ktop[i, j]
+                bot[m] = kbot[i, j]
+                m += 1
+        _chain_flags(idx, top, m, True, stack, f_top)
+        _chain_flags(idx, bot, m, False, stack, f_bot)
+        for q in range(m):
+            i = idx[q] if axis == 0 else line
+            j = line if axis == 0 else idx[q]
+            if not f_top[q]:
+                keep_top[i, j] = False
+            if not f_bot[q] and not (f_top[q] and top[q] == bot[q]):  # a one-point column is both ends
+                keep_bot[i, j] = False
+
+
+def hull_points(kbot: np.ndarray, ktop: np.ndarray, extreme: bool = True) -> np.ndarray:
+    """The points whose convex hull is that of the reachable centres: each occupied column's lowest
+    and highest centre (index units, the lowest first, the highest only where it differs), and with
+    ``extreme`` (default) only those that are strict vertices of the 2-D hull of their x line's and of
+    their y line's column ends (:func:`_line_extreme_kernel`; every vertex of the 3-D hull stays, so
+    the hull is the same polytope from far fewer points)."""
+    col = ktop >= 0
+    keep_bot = col.copy()
+    keep_top = col & (ktop != kbot)
+    if extreme:
+        kb = np.ascontiguousarray(kbot, dtype=np.int64)
+        kt = np.ascontiguousarray(ktop, dtype=np.int64)
+        with KERNEL_LOCK:
+            _line_extreme_kernel(kb, kt, 0, keep_bot, keep_top)
+            _line_extreme_kernel(kb, kt, 1, keep_bot, keep_top)
+    ib, jb = np.nonzero(keep_bot)
+    it, jt = np.nonzero(keep_top)
+    return np.concatenate([np.stack([ib, jb, kbot[ib, jb]], 1),
+                           np.stack([it, jt, ktop[it, jt]], 1)]).astype(np.float64)
+
+
+def hull_mask(occupancy: np.ndarray, tiled: bool = True, extreme: bool = True) -> np.ndarray:
     """Voxels whose centre lies in the convex hull of the reachable voxels' centres.
 
     The hull is that of each occupied column's lowest and highest centre (the same polytope as
     the hull of all centres, from fewer points). A workspace whose centres are coplanar (no
     3-D hull) returns the workspace itself. ``tiled=False`` tests every facet at every column
-    (:func:`hull_columns`; the same mask).
+    (:func:`hull_columns`; the same mask); ``extreme=False`` gives qhull every column end instead of
+    the extreme ones of :func:`hull_points` (the same polytope, the same mask).
     """
     occ = np.asarray(occupancy, dtype=bool)
     if not occ.any():
@@ -655,10 +789,8 @@ def hull_mask(occupancy: np.ndarray, tiled: bool = True) -> np.ndarray:
         _column_ends_kernel(np.ascontiguousarray(occ), kbot, ktop)
     col = ktop >= 0
     ii, jj = np.nonzero(col)
-    kb, kt = kbot[ii, jj], ktop[ii, jj]
-    two = kt != kb
-    pts = np.concatenate([np.stack([ii, jj, kb], 1), np.stack([ii[two], jj[two], kt[two]], 1)])
-    pts = pts.astype(np.float64)
+    pts = hull_points(kbot, ktop, extreme)
+    # the extreme points span the same affine hull as all the column ends
     if len(pts) < 4 or np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 3:
         return occ.copy()
     # coplanar triangles of one facet share an equation: keep one (about halves the planes)

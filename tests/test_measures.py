@@ -431,3 +431,33 @@ def test_fast_measures_equal_the_former_path_on_several_designs(monkeypatch):
     _slow_measures(monkeypatch)
     slow = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast == slow
+
+
+def test_void_flood_and_extreme_hull_points_equal_the_former_path():
+    """Issue 24 target 1: the voids by a flood from the leaking candidates (kinematics/void_flood.py)
+    are the set and number of the former labelling of every candidate component, and of the
+    definition (the whole padded complement labelled); the hull from the extreme column ends only is
+    the mask of the hull of every column end; on random fields and on designs with and without voids
+    (with the base layer of ``sealed_mask``: a large sealed cavity), both connectivities."""
+    from paraspace.kinematics import measures as mod
+
+    rng = np.random.default_rng(2024)
+    fields = [rng.random(tuple(rng.integers(2, 12, 3))) < rng.uniform(0.1, 0.9) for _ in range(20)]
+    for d, h in ((Design(), 6.0), (Design(l_s=20), 6.0), (Design(a=10), 8.0), (Design(d_s=80), 8.0)):
+        occ = compute_workspace(d, WorkspaceSettings(voxel=h)).occupancy
+        fields += [occ, np.concatenate([np.ones(occ.shape[:2] + (1,), bool), occ], axis=2)]
+    shell = np.zeros((9, 9, 9), bool)  # a hollow cube with a 2-voxel void inside and a speck in it
+    shell[1:8, 1:8, 1:8] = True
+    shell[3:6, 3:6, 3:5] = False
+    shell[4, 4, 3] = True
+    fields.append(shell)
+    n_with_voids = 0
+    for occ in fields:
+        for conn in (1, 3):
+            voids, n = mod._voids(occ, conn)
+            ref, n_ref = mod._voids_labelled_candidates(occ, conn)
+            assert np.array_equal(voids, ref) and n == n_ref
+            assert np.array_equal(voids, mod.void_mask_labelled(occ, conn))
+            n_with_voids += n > 0
+        assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, extreme=False))
+    assert n_with_voids >= 4  # the comparison saw voids, not only empty sets

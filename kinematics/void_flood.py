@@ -1,0 +1,129 @@
+r"""Voids of a voxel set by a flood from where the complement leaks, not by labelling it.
+
+Definition (that of :mod:`kinematics.measures`): pad the grid with one unreachable layer; the
+complement ``C = pad(G) \ W``, split into components with the dual adjacency (26 neighbours for a
+6-connected ``W``, 6 for a 26-connected one), has one component holding the padding, the outside
+``O``; the voids are ``C \ O``.
+
+Computation. An unreachable voxel with no reachable voxel on one side along some axis is joined to
+the padding by that straight line (a path for 6 and for 26 neighbours), so it lies in ``O``. The
+others are the *candidates* ``K`` (``measures._enclosed_kernel``). A path from a candidate to the
+padding leaves ``K`` at a first step onto an unreachable non-candidate, so the candidates in ``O``
+are exactly those joined, within ``K`` and by the dual adjacency, to a *seed*: a candidate with a
+dual neighbour that is unreachable and not a candidate. Hence
+
+    voids = K \ flood_K(seeds),
+
+the flood (breadth first through ``K``) touching only the candidates that leak, and never the
+candidates of a sealed cavity; labelling (the number of voids) is only needed on the voids
+themselves, and only when their number is asked for.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _seed_kernel(cand, occ, full, out):
+    """``out``: candidates with a dual neighbour (``full``: 26, else 6) that is unreachable and not a
+    candidate, or that lies outside the array (never, for candidates of a margin-padded box)."""
+    n0, n1, n2 = cand.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                if not cand[i, j, k]:
+                    out[i, j, k] = False
+                    continue
+                hit = False
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        for dk in range(-1, 2):
+                            if not full and abs(di) + abs(dj) + abs(dk) != 1:
+                                continue
+                            a, b, e = i + di, j + dj, k + dk
+                            if a < 0 or b < 0 or e < 0 or a >= n0 or b >= n1 or e >= n2:
+                                hit = True
+                            elif not occ[a, b, e] and not cand[a, b, e]:
+                                hit = True
+                out[i, j, k] = hit
+
+
+@njit(cache=True, nogil=True)
+def _flood_kernel(cand, reached, full):
+    """Grow ``reached`` (the seeds on entry) to every candidate joined to it within ``cand`` by the
+    dual adjacency (breadth first; each candidate enters the queue once)."""
+    n0, n1, n2 = cand.shape
+    n_seed = 0
+    for i in range(n0):
+        for j in range(n1):
+            for k in range(n2):
+                if reached[i, j, k]:
+                    n_seed += 1
+    size = n_seed + 1
+    queue = np.empty((size, 3), np.int64)
+    head = 0
+    tail = 0
+    for i in range(n0):
+        for j in range(n1):
+            for k in range(n2):
+                if reached[i, j, k]:
+                    queue[tail, 0] = i
+                    queue[tail, 1] = j
+                    queue[tail, 2] = k
+                    tail += 1
+    while head < tail:
+        i = queue[head, 0]
+        j = queue[head, 1]
+        k = queue[head, 2]
+        head += 1
+        for di in range(-1, 2):
+            for dj in range(-1, 2):
+                for dk in range(-1, 2):
+                    if not full and abs(di) + abs(dj) + abs(dk) != 1:
+                        continue
+                    a, b, e = i + di, j + dj, k + dk
+                    if a < 0 or b < 0 or e < 0 or a >= n0 or b >= n1 or e >= n2:
+                        continue
+                    if cand[a, b, e] and not reached[a, b, e]:
+                        reached[a, b, e] = True
+                        if tail == size:  # grow the queue (amortised doubling)
+                            size *= 2
+                            bigger = np.empty((size, 3), np.int64)
+                            bigger[:tail] = queue[:tail]
+                            queue = bigger
+                        queue[tail, 0] = a
+                        queue[tail, 1] = b
+                        queue[tail, 2] = e
+                        tail += 1
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _unreached_kernel(cand, reached, out):
+    """``out = cand & ~reached`` in one parallel pass; returns the number of such voxels."""
+    n0, n1, n2 = cand.shape
+    counts = np.zeros(n0, np.int64)
+    for i in prange(n0):
+        c = 0
+        for j in range(n1):
+            for k in range(n2):
+                v = cand[i, j, k] and not reached[i, j, k]
+                out[i, j, k] = v
+                if v:
+                    c += 1
+        counts[i] = c
+    return counts.sum()
+
+
+def enclosed_voids(cand: np.ndarray, occ: np.ndarray, full: bool) -> tuple[np.ndarray, int]:
+    """``(voids, |voids|)`` of the module docstring for the candidates ``cand`` of ``occ`` (both on a
+    box whose outer layer holds no candidate); ``full``: the dual adjacency is 26 (else 6)."""
+    cand = np.ascontiguousarray(cand, dtype=np.bool_)
+    occ = np.ascontiguousarray(occ, dtype=np.bool_)
+    reached = np.empty(cand.shape, np.bool_)
+    _seed_kernel(cand, occ, full, reached)
+    _flood_kernel(cand, reached, full)
+    out = np.empty(cand.shape, np.bool_)
+    n = int(_unreached_kernel(cand, reached, out))
+    return out, n
