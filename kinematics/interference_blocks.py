@@ -50,8 +50,17 @@ answers "clear" at each of them (it accepts the first witnesses).
 own-leg upper bound stays below ``d_min`` over the whole hull (bisection), no probe of that chain
 clears at any centre: the per-voxel search finds no witness and answers "interferes".
 
+**Marks.** Both tests meet arc samples that are no witness at any centre of the block (the first
+two cases of the walk above: they fail relaxed, or their own legs always collide). Each block marks
+those it meets (the interferes test walks a chain only up to its first sample that may serve, so it
+costs what it did before the marks), and its children inherit the marks: a child's centres are
+centres of the parent. Both tests and the per-voxel search pass over marked samples, which changes
+no answer (a marked sample yields no witness, so the witness search finds the same witnesses in the
+same order) and saves most of the scan of a chain whose own legs collide.
+
 Any other block is split in eight; a single voxel is decided by the per-voxel search itself
-(:func:`kinematics.interference._pose_clear`), so the result is voxel-identical to it. Blocks with
+(:func:`kinematics.interference._pose_clear`, with the marks its block inherited), so the result is
+voxel-identical to it. Blocks with
 no voxel to test are skipped. Distances get one more margin of ``1e-7`` of the design's scale so the
 rounding of the closed-form distance never matters.
 
