@@ -94,9 +94,11 @@ def segment_closest(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
 
 @njit(cache=True)
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
-               cap, out):
+               cap, out, skip):
     """Up to ``cap`` witness carriage poses of one chain (module doc, step 2) as the two U joints
-    ``(D1, D2)`` in ``out[w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found."""
+    ``(D1, D2)`` in ``out[w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found. Samples ``k``
+    with ``skip[k]`` are passed over: the caller knows they are no witness (all False: every sample
+    is tried)."""
     n = cos_t.shape[0]
     pieces = np.empty((4, 2))
     cnt = 0
@@ -104,7 +106,7 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi, l
     for step in range(n):
         off = (step + 1) // 2
         k = mid + off if step % 2 == 1 else mid - off
-        if k < 0 or k >= n:
+        if k < 0 or k >= n or skip[k]:
             continue
         c, s = cos_t[k], sin_t[k]
         npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, pieces)
@@ -142,9 +144,10 @@ def _clear(bp, wa, ia, wb, ib, i, j, dmin):
 
 
 @njit(cache=True)
-def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel):
+def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip):
     """Module doc, steps 2-3, for one platform pose (``u``: its rotated platform points); the chosen
-    U joints are written to ``sel`` (3, 6) when it returns True."""
+    U joints are written to ``sel`` (3, 6) when it returns True. ``skip`` (3, n): arc samples known to
+    be no witness of their chain at this pose, passed over (:func:`_witnesses`; all False: none)."""
     n = cos_t.shape[1]
     bp = np.empty((3, 2, 3))
     w0 = np.empty((n, 6))
@@ -159,7 +162,7 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
             return False
         w = w0 if i == 0 else (w1 if i == 1 else w2)
         counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc[i], dmin, 1, w)
+                               lmin2, lmax2, jc[i], dmin, 1, w, skip[i])
         if counts[i] == 0:
             return False
     if _clear(bp, w0, 0, w1, 0, 0, 1, dmin) and _clear(bp, w1, 0, w2, 0, 1, 2, dmin) \
@@ -171,7 +174,7 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         w = w0 if i == 0 else (w1 if i == 1 else w2)
         counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc[i], dmin, n, w)
+                               lmin2, lmax2, jc[i], dmin, n, w, skip[i])
     pick = np.empty((3, SPREAD), np.int64)
     npick = np.empty(3, np.int64)
     for i in range(3):
@@ -194,13 +197,14 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
 @njit(parallel=True, cache=True, nogil=True)
 def _clear_kernel(points, us, jcs, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, dmin, where, out):
     n_m = us.shape[0]
+    skip = np.zeros((3, cos_t.shape[1]), np.bool_)  # read only: every sample is tried
     for q in prange(points.shape[0] * n_m):
         p = q // n_m
         m = q - p * n_m
         if where[p, m]:
             sel = np.empty((3, 6))
             out[p, m] = _pose_clear(points[p, 0], points[p, 1], points[p, 2], us[m], cos_t, sin_t, arc, hb,
-                                    rho_lo, rho_hi, lmin2, lmax2, jcs[m], dmin, sel)
+                                    rho_lo, rho_hi, lmin2, lmax2, jcs[m], dmin, sel, skip)
 
 
 def interference_free(design: Design, joints: Joints, points: np.ndarray, rotations: np.ndarray, n_eta: int,
@@ -241,7 +245,7 @@ def clear_configuration(design: Design, joints: Joints, position, rotation: np.n
     px, py, pz = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
     with KERNEL_LOCK:
         ok = _pose_clear(px, py, pz, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                         tab.lmax2, jc, float(joints.min_distance), sel)
+                         tab.lmax2, jc, float(joints.min_distance), sel, np.zeros(tab.cos_t.shape, np.bool_))
     if not ok:
         return None
     mid = 0.5 * (sel[:, 0:2] + sel[:, 3:5])  # carriage centre rho e on the base plane

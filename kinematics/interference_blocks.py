@@ -50,8 +50,17 @@ answers "clear" at each of them (it accepts the first witnesses).
 own-leg upper bound stays below ``d_min`` over the whole hull (bisection), no probe of that chain
 clears at any centre: the per-voxel search finds no witness and answers "interferes".
 
+**Marks.** Both tests meet arc samples that are no witness at any centre of the block (the first
+two cases of the walk above: they fail relaxed, or their own legs always collide). Each block marks
+those it meets (the interferes test walks a chain only up to its first sample that may serve, so it
+costs what it did before the marks), and its children inherit the marks: a child's centres are
+centres of the parent. Both tests and the per-voxel search pass over marked samples, which changes
+no answer (a marked sample yields no witness, so the witness search finds the same witnesses in the
+same order) and saves most of the scan of a chain whose own legs collide.
+
 Any other block is split in eight; a single voxel is decided by the per-voxel search itself
-(:func:`kinematics.interference._pose_clear`), so the result is voxel-identical to it. Blocks with
+(:func:`kinematics.interference._pose_clear`, with the marks its block inherited), so the result is
+voxel-identical to it. Blocks with
 no voxel to test are skipped. Distances get one more margin of ``1e-7`` of the design's scale so the
 rounding of the closed-form distance never matters.
 
@@ -222,11 +231,11 @@ def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb
 
 
 @njit(cache=True)
-def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks, hull,
-                 bx, by, bz):
+def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, stack, ks,
+                 hull, bx, by, bz):
     """The module doc's certificate at the block centre ``P`` with ``e = delta + eps``: True when
-    every centre of the block is clear (``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2):
-    scratch)."""
+    every centre of the block is clear (``skip`` (3, n): samples known to be no witness anywhere in
+    the block, passed over; ``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2): scratch)."""
     need = dmin + e + margin
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
@@ -247,15 +256,14 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         for step in range(n):  # the witness search's order (interference._witnesses)
             off = (step + 1) // 2
             k = mid + off if step % 2 == 1 else mid - off
-            if k < 0 or k >= n:
+            if k < 0 or k >= n or skip[i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
                                           jc[i], e)
-            if not ok:
+            if not ok or _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                skip[i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
                 continue
-            if _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
-                continue  # its own legs collide at every probe and centre: never a witness
             ks[i, nk[i]] = k
             hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
             nk[i] += 1
@@ -332,12 +340,14 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
 
 
 @njit(cache=True)
-def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx, by,
-                   bz):
-    """True when some chain has no witness at any centre of the block (``e = delta + eps``): at every
-    arc sample that passes at the centre with the limits relaxed by ``e``, its two legs stay below
-    ``d_min - margin`` over the relaxed hull after any move of at most ``e``, so at every centre
-    every probe of the witness search collides (the per-voxel search answers "interferes")."""
+def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, stack, bx, by,
+             bz):
+    """Mark in ``skip`` (3, n) every arc sample that is no witness of its chain at any centre of the
+    block (``e = delta + eps``; samples already marked, by the parent block, are not tested again):
+    it fails at ``P`` with the limits relaxed by ``e``, or its two legs stay below ``d_min - margin``
+    over the relaxed hull after any move of at most ``e`` (every probe of the witness search
+    collides). Returns True when some chain has every sample marked: it has no witness at any
+    centre, and the per-voxel search answers "interferes" there (module doc)."""
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
     hi_r = lmax + e
@@ -346,15 +356,19 @@ def _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lma
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
-        blocked = True
+        alive = False
         for k in range(n):
+            if skip[i, k]:
+                continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                          jc[i], e)
-            if ok and not _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
-                blocked = False
-                break
-        if blocked:
+                                                   jc[i], e)
+            if not ok or _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                skip[i, k] = True
+            else:
+                alive = True
+                break  # a chain with a possible witness: the rest of its samples stay to be tested
+        if not alive:
             return True
     return False
 
@@ -369,9 +383,10 @@ def _count(sat, b0, bn, b):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _blocks_kernel(b0, bn, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
+def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
                    lmin2, lmax2, jc, dmin, state, out):
-    """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED."""
+    """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED, with the
+    samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children)."""
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     for b in prange(b0.shape[0]):
         if _count(sat, b0, bn, b) == 0:
@@ -382,7 +397,7 @@ def _blocks_kernel(b0, bn, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin
             sel = np.empty((3, 6))
             ix, iy, iz = b0[b, 0], b0[b, 1], b0[b, 2]
             out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                                          lmin2, lmax2, jc, dmin, sel)
+                                          lmin2, lmax2, jc, dmin, sel, skip[b])
             state[b] = DONE
             continue
         px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
@@ -395,15 +410,15 @@ def _blocks_kernel(b0, bn, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin
         bx = np.empty((3, 2))
         by = np.empty((3, 2))
         bz = np.empty((3, 2))
-        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, ks,
-                        hull, bx, by, bz):
+        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip[b],
+                        stack, ks, hull, bx, by, bz):
             for x in range(b0[b, 0], b0[b, 0] + nx):
                 for y in range(b0[b, 1], b0[b, 1] + ny):
                     for z in range(b0[b, 2], b0[b, 2] + nz):
                         out[x, y, z] = where[x, y, z]
             state[b] = DONE
-        elif _block_blocked(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, stack, bx,
-                            by, bz):
+        elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip[b], stack,
+                      bx, by, bz):
             state[b] = DONE  # every voxel interferes: out stays False
         else:
             state[b] = UNDECIDED
@@ -434,15 +449,16 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
     gx, gy, gz = np.meshgrid(*starts, indexing="ij")
     b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
     bn = np.minimum(TOP, np.array(mask.shape, np.int64)[None, :] - b0)
+    skip = np.zeros((b0.shape[0], 3, tab.cos_t.shape[1]), np.bool_)  # samples no witness in the block
     step = 8192  # blocks per launch: cancellation within a fraction of a second
     while b0.shape[0]:
         state = np.empty(b0.shape[0], np.int8)
         for s in range(0, b0.shape[0], step):
             check(cancel)
             with KERNEL_LOCK:
-                _blocks_kernel(b0[s:s + step], bn[s:s + step], sat, mask, xs, ys, zs, float(h), eps, margin, u,
-                               tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc,
-                               float(joints.min_distance), state[s:s + step], out)
+                _blocks_kernel(b0[s:s + step], bn[s:s + step], skip[s:s + step], sat, mask, xs, ys, zs, float(h), eps,
+                               margin, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
+                               tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out)
         keep = state == UNDECIDED
-        b0, bn = _split(b0[keep], bn[keep])
+        b0, bn, skip = _split(b0[keep], bn[keep], skip[keep])
     return out

@@ -100,3 +100,56 @@ def test_cancel_stops_the_block_search():
     with pytest.raises(Cancelled):
         interference_free_grid(design, Joints(leg_diameter=10.0), plain.grid.axes(), 8.0, np.eye(3), plain.n_eta,
                                plain.occupancy, cancel)
+
+
+def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
+    """``_exclude`` marks the arc samples children and voxels then pass over: at every voxel centre of
+    the block, the per-voxel witness search restricted to one marked sample finds no witness there
+    (brute force over every voxel, chain and marked sample), and a block it calls blocked interferes
+    at every voxel."""
+    import math
+
+    from paraspace.kinematics.blocks import rounding_margin
+    from paraspace.kinematics.feasibility import ChainTables, chain_points
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.interference import _witnesses
+    from paraspace.kinematics.interference_blocks import _exclude
+    from paraspace.kinematics.joints import cone_table
+
+    design, joints, h, m = Design(), Joints(leg_diameter=10.0), 4.0, 3
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h))
+    occ = plain.occupancy
+    xs, ys, zs = plain.grid.axes()
+    tab = ChainTables(design, plain.n_eta)
+    rot = np.eye(3)
+    u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
+    jc = np.ascontiguousarray(cone_table(design, joints, rot))
+    eps = rounding_margin(math.sqrt(tab.lmax2), (xs, ys, zs))
+    n = tab.cos_t.shape[1]
+    ok = interference_free_grid(design, joints, (xs, ys, zs), h, rot, plain.n_eta, occ)
+    marked = blocked = 0
+    rng = np.random.default_rng(3)
+    starts = np.argwhere(occ[:-m, :-m, :-m])
+    for x0, y0, z0 in starts[rng.choice(len(starts), 60, replace=False)]:
+        cx, cy, cz = (0.5 * (a[i] + a[i + m - 1]) for a, i in ((xs, x0), (ys, y0), (zs, z0)))
+        e = 0.5 * h * math.sqrt(3.0) * (m - 1) + eps
+        skip = np.zeros((3, n), np.bool_)
+        bx, by, bz = np.empty((3, 2)), np.empty((3, 2)), np.empty((3, 2))
+        is_blocked = _exclude(cx, cy, cz, e, u, tab.cos_t, tab.sin_t, tab.hb, tab.rho_lo, tab.rho_hi,
+                              math.sqrt(tab.lmin2), math.sqrt(tab.lmax2), jc, joints.min_distance, 100.0 * eps, skip,
+                              np.empty((64, 4)), bx, by, bz)
+        block = occ[x0:x0 + m, y0:y0 + m, z0:z0 + m]
+        if is_blocked:
+            blocked += 1
+            assert not ok[x0:x0 + m, y0:y0 + m, z0:z0 + m][block].any()
+        w = np.empty((n, 6))
+        for ix, iy, iz in np.argwhere(block) + (x0, y0, z0):
+            for i in range(3):
+                pts = chain_points(xs[ix], ys[iy], zs[iz], u, i)
+                for k in np.nonzero(skip[i])[0]:
+                    solo = np.ones(n, np.bool_)
+                    solo[k] = False
+                    assert _witnesses(*pts, tab.cos_t[i], tab.sin_t[i], tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
+                                      tab.lmax2, jc[i], joints.min_distance, 1, w, solo) == 0
+                    marked += 1
+    assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
