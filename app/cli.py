@@ -60,7 +60,7 @@ from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterErr
 from .fileout import write_atomic
 from .mechanism_cli import add_mechanism_flags
 from .numfmt import fixed, significant
-from .progressline import progress_line
+from .progressline import progress_line, progress_scope
 
 
 class _Parser(argparse.ArgumentParser):
@@ -159,6 +159,13 @@ def _scan(ns: argparse.Namespace) -> dict[str, Any]:
 
     return {name: float(ORIENTATION[name].parse(getattr(ns, f"scan_{name}"))) for name in SCAN_FLAGS.values()
             if getattr(ns, f"scan_{name}", None) is not None}
+
+
+def _bracket_refine(ns: argparse.Namespace) -> int:
+    """``--bracket-refine``, read by its one definition (kinematics.settings.WORKSPACE)."""
+    from paraspace.kinematics.settings import WORKSPACE
+
+    return int(WORKSPACE["bracket_refine"].parse(ns.bracket_refine))
 
 
 def _voxel(ns: argparse.Namespace) -> float:
@@ -316,10 +323,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
-    try:
-        refine = int(ns.bracket_refine)
-    except (TypeError, ValueError):
-        raise ParameterError("bracket_refine", ns.bracket_refine, "[0, 3] (an integer)") from None
+    refine = _bracket_refine(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
     length_step = _length_step(ns)
     total, dexterity = _total_and_dexterity(ns)
@@ -330,11 +334,8 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
         check_general_mode(dexterity[1])
     fmt = _export_format(ns)
     warm_up_general()
-    progress, done = progress_line("workspace")
-    try:
+    with progress_scope("workspace") as progress:
         result = compute_mechanism_workspace(mech, settings, length_step, progress)
-    finally:
-        done()
     measures = measure_workspace(result)
     out = {"mechanism": mech.to_dict(), "engine": result.engine, **measures.to_dict(),
            "voxel_size": result.grid.h, "voxels": result.voxels, "volume": result.volume,
@@ -404,21 +405,15 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
         return _workspace_general(ns, mech)
     if mech is not None:
         _length_step(ns)  # validated; the paper's engine solves d exactly and samples no other prismatic joint
-    try:
-        refine = int(ns.bracket_refine)
-    except (TypeError, ValueError):
-        raise ParameterError("bracket_refine", ns.bracket_refine, "[0, 3] (an integer)") from None
+    refine = _bracket_refine(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
                                  bracket_refine=refine,
                                  joints=_joints(ns))
     total, dexterity = _total_and_dexterity(ns)
     fmt = _export_format(ns)
     warm_up()
-    progress, done = progress_line("workspace")
-    try:
+    with progress_scope("workspace") as progress:
         result = compute_workspace(design, settings, progress)
-    finally:
-        done()
     measures = measure_workspace(result)
     out = {"design": design.to_dict(), "joints": settings.joints.to_dict(), **measures.to_dict(),
            "voxel_size": result.grid.h, "voxels": result.voxels,
@@ -495,11 +490,8 @@ def _orientation_general(ns: argparse.Namespace, mech: Any) -> int:
     settings = OrientationSettings(z0=z0, position_delta=ns.position_delta, **_scan(ns))
     length_step = _length_step(ns)
     warm_up_general()
-    progress, done = progress_line("orientation")
-    try:
+    with progress_scope("orientation") as progress:
         result = mechanism_orientation_workspace(mech, settings, length_step, progress)
-    finally:
-        done()
     out = result.to_dict()
     if ns.json:
         _emit(out)
@@ -534,11 +526,8 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     z0 = float(ORIENTATION["z0"].parse(ns.z0))
     settings = OrientationSettings(z0=z0, joints=_joints(ns), position_delta=ns.position_delta, **_scan(ns))
     warm_up()
-    progress, done = progress_line("orientation")
-    try:
+    with progress_scope("orientation") as progress:
         result = orientation_workspace(design, settings, progress)
-    finally:
-        done()
     out = {"design": design.to_dict(), **result.to_dict()}
     if mech is not None:
         out["mechanism"], out["engine"] = mech.to_dict(), "paper"
@@ -767,8 +756,7 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     if ns.fit and "angle_range" in scan:
         raise ParameterError("angle-range", scan["angle_range"], "not with --fit (the fit scans its own ranges)")
     warm_up()
-    progress, done = progress_line("paper")
-    try:
+    with progress_scope("paper") as progress:
         if ns.fit:
             steps = {"angle_step": scan.get("angle_step", 2.0), "position_step": scan.get("position_step", 4.0)}
             out = fit_assumptions(voxel, progress=progress, **steps)
@@ -776,8 +764,6 @@ def cmd_paper(ns: argparse.Namespace) -> int:
             steps = {"angle_step": scan.get("angle_step", 1.0), "position_step": scan.get("position_step", 2.0)}
             out = paper_comparison(voxel, progress, assumptions=keys, **steps,
                                    angle_range=scan.get("angle_range", ORIENTATION["angle_range"].default))
-    finally:
-        done()
     if ns.json:
         _emit(out)
         return 0
@@ -1221,11 +1207,8 @@ def cmd_optimize(ns: argparse.Namespace) -> int:
     else:
         warm_up()
 
-    progress, done = progress_line("optimize", force=ns.progress)
-    try:
+    with progress_scope("optimize", force=ns.progress) as progress:
         result = optimize(settings, scheduler=ns.scheduler, workers=_backend_workers(ns), progress=progress).to_dict()
-    finally:
-        done()
     from paraspace.app.optimize_plots import front_csv, front_png
 
     if ns.csv:

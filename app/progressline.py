@@ -10,13 +10,14 @@ touched.
 
 from __future__ import annotations
 
+import contextlib
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TextIO
 
 from tqdm import tqdm
 
-__all__ = ["progress_line"]
+__all__ = ["progress_line", "progress_scope"]
 
 WIDTH = 24
 #: per mille: the bar counts 0..1000 so that fractions of a percent still move it
@@ -49,3 +50,15 @@ def progress_line(label: str, stream: TextIO | None = None, *,
             bars[0].close()
 
     return progress, close
+
+
+@contextlib.contextmanager
+def progress_scope(label: str, stream: TextIO | None = None, *,
+                   force: bool = False) -> Iterator[Callable[[float, str], None] | None]:
+    """``with progress_scope(label) as progress:``: :func:`progress_line`'s callback, its bar cleared
+    when the block ends, normally or by an exception."""
+    progress, close = progress_line(label, stream, force=force)
+    try:
+        yield progress
+    finally:
+        close()

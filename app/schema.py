@@ -222,7 +222,8 @@ class OrientationSettingsIn(BaseModel):
     eta_step: float = _setting("orientation", ORIENTATION["eta_step"])
     z_min: float = _setting("orientation", ORIENTATION["z_min"])
     z_max: float | None = Field(None, ge=-1e4, le=1e4, allow_inf_nan=False,
-                                   description="upper end of the z line; null: l_max; valid range [z_min, 10000]")
+                                   description="upper end of the z line; null: a rigorous cover (l_max for the paper's "
+                                               "design, the chains' reach for a mechanism); valid range [z_min, 10000]")
     s_max: float | None = Field(None, ge=0.0, le=1e4, allow_inf_nan=False,
                                    description="half-length of the x and y' lines; null: derived; "
                                                "valid range [0, 10000]")

@@ -138,7 +138,8 @@ class OrientationSettings:
         position_delta: ``"per_region"`` or ``"line"`` (union of a line's three regions).
         eta_step: arc-stroke sampling of the reachability test, degrees, [0.01, 10].
         z_min: lower end of the z line (default 0, the base plane).
-        z_max: upper end of the z line; ``None``: ``l_max`` (a rigorous cover).
+        z_max: upper end of the z line; ``None``: a rigorous cover (``l_max`` for the paper's design; for a
+            mechanism description the chains' reach, (S3) of :mod:`kinematics.mechanism_orientation`).
         s_max: half-length of the x and y' lines; ``None``: ``sqrt(r^2 + b^2/4) + l_max``.
         joints: passive-joint cones and leg interference of the reachability test
             (:mod:`kinematics.joints`); default: none (the paper's model).

@@ -308,3 +308,25 @@ def test_mechanism_link_messages_quote_a_bounded_piece():
         state, msgs = parse_query(urllib.parse.urlencode(dict(urllib.parse.parse_qsl(query))))
         assert state.mechanism is None or state.mechanism == preset_link("6-pups")
         assert msgs and all(len(m) < 400 and "</script>" not in m for m in msgs), msgs
+
+
+def test_pins_of_the_paper_design_wait_while_another_mechanism_is_selected(explorer, browsers):
+    """A link's Compare pins are paper designs: with the 6-pss mechanism selected their ghosts leave
+    the scene and the table says why, while the pin stays in the state and the link; back on the
+    paper's mechanism the ghost and the table return."""
+    b = browsers(f"voxel={H:g}&angle_step=10&pin=70,14,50,100,114.5,50,30,centered")
+    s = b.session
+    wait_idle(explorer, s, 240)
+    wait_for(lambda: s.compare.pinned is not None and s.compare.handle is not None, 60, "the pin's ghost")
+    b.set(s.panels.mechanism.selector, "6-pss")
+    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == "6-pss", 30, "selection")
+    wait_mechanism(explorer, s)
+    wait_for(lambda: s.compare.handle is None and s.compare.cage is None, 10, "the ghost hidden")
+    assert ("The pinned design is of the paper's mechanism, not the 6-pss mechanism"
+            in s.compare.table.content.replace("\\", ""))
+    assert [d.a for d in s.state.pins] == [70.0]
+    wait_for(lambda: "pin=70," in urllib.parse.unquote(b.search) and "mech=6-pss" in b.search, 5, "the link")
+    b.set(s.panels.mechanism.selector, "paper")
+    wait_for(lambda: s.state.mechanism is None, 30, "back to the paper")
+    wait_idle(explorer, s, 240)
+    wait_for(lambda: s.compare.handle is not None and "| volume" in s.compare.table.content, 30, "the ghost back")

@@ -29,26 +29,17 @@ async def task(req: TaskRequest, request: Request, ctx: Ctx, wait: float = WAIT_
 
 
 def _start_task(ctx: ApiContext, req: TaskRequest, request: Request) -> tuple[Job, bool]:
-    from paraspace.kinematics.task import PoseList, evaluate_task, region_samples
+    from paraspace.kinematics.task import evaluate_task
 
     _, task, oset, settings = req.build()
     mech, design = mechanism_or_design(req)
     if design is None:
         return _start_general(ctx, req, request, mech, task, oset, settings)
-    import hashlib
-
-    tkey = (("poses", hashlib.sha256(task.poses.tobytes() + (b"" if task.t is None else task.t.tobytes())).hexdigest(),
-             task.t is None) if isinstance(task, PoseList) else task)
-    key = (design.key(), tkey, oset, settings)
+    key = (design.key(), _task_key(task), oset, settings)
     cached = ctx.caches["task"].get(key) is not None
     if not cached:
         ctx.quota_check(request)
-        if not isinstance(task, PoseList):
-            n = region_samples(task, oset, settings)
-            if n > ctx.limits.max_task_samples:
-                raise ApiError(413, f"task of {n:,} samples (lattice points x orientations) exceeds the limit "
-                                    f"max_task_samples = {ctx.limits.max_task_samples:,}: use a coarser voxel, a "
-                                    f"smaller region or margin_range, or a larger angle_step")
+        _check_region_size(ctx, task, oset, settings)
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = evaluate_task(design, task, oset, settings, progress, cancel)
@@ -68,6 +59,20 @@ def _task_key(task: Any) -> Any:
     return task
 
 
+def _check_region_size(ctx: ApiContext, task: Any, oset: Any, settings: Any) -> None:
+    """413 when a region task's lattice points x orientations exceed ``max_task_samples`` (a pose list is
+    bounded by the body limit already)."""
+    from paraspace.kinematics.task import PoseList, region_samples
+
+    if isinstance(task, PoseList):
+        return
+    n = region_samples(task, oset, settings)
+    if n > ctx.limits.max_task_samples:
+        raise ApiError(413, f"task of {n:,} samples (lattice points x orientations) exceeds the limit "
+                            f"max_task_samples = {ctx.limits.max_task_samples:,}: use a coarser voxel, a "
+                            f"smaller region or margin_range, or a larger angle_step")
+
+
 def _start_general(ctx: ApiContext, req: TaskRequest, request: Request, mech: Any, task: Any, oset: Any,
                    settings: Any) -> tuple[Job, bool]:
     """A task on a general mechanism (kinematics/mechanism_task.py), its sizes checked first."""
@@ -77,7 +82,6 @@ def _start_general(ctx: ApiContext, req: TaskRequest, request: Request, mech: An
     from paraspace.kinematics.joints import Joints
     from paraspace.kinematics.mechanism_task import evaluate_mechanism_task
     from paraspace.kinematics.mechanism_workspace import general_plan
-    from paraspace.kinematics.task import PoseList, region_samples
     from paraspace.kinematics.workspace import WorkspaceSettings
 
     from .workspace import MAX_API_CARRIAGE_SAMPLES
@@ -98,12 +102,7 @@ def _start_general(ctx: ApiContext, req: TaskRequest, request: Request, mech: An
         if max(samples) > MAX_API_CARRIAGE_SAMPLES:
             raise ApiError(413, f"{max(samples):,} carriage samples in a chain: at most {MAX_API_CARRIAGE_SAMPLES:,} "
                                 "per request (a larger settings.eta_step or mechanism.length_step)")
-        if not isinstance(task, PoseList):
-            n = region_samples(task, oset, settings)
-            if n > ctx.limits.max_task_samples:
-                raise ApiError(413, f"task of {n:,} samples (lattice points x orientations) exceeds the limit "
-                                    f"max_task_samples = {ctx.limits.max_task_samples:,}: use a coarser voxel, a "
-                                    f"smaller region or margin_range, or a larger angle_step")
+        _check_region_size(ctx, task, oset, settings)
 
     def compute(progress: Any, cancel: Any) -> ApiResult:
         res = evaluate_mechanism_task(mech, task, oset, settings, length_step, progress, cancel)

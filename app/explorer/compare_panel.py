@@ -207,6 +207,9 @@ class ComparePanel:
         self.undo_state: tuple[Design, tuple[Design, ...]] | None = None
         self.views_job: Job | None = None
         self.view_images: list[Any] = []
+        #: the selected mechanism's label while it is not the paper's: the pins (paper designs) stay
+        #: pinned and in the link, but their ghosts and table wait until the paper's mechanism is back
+        self.other_mechanism: str | None = None
         gui.add_markdown(f"Pin up to {MAX_PINS} designs: each keeps its workspace as a ghost in its own colour "
                          "(height contours over a faint surface) and its numbers beside the current design's.")
         self.pin_button = gui.add_button("Pin this design", icon=viser.Icon.PIN)
@@ -411,7 +414,7 @@ class ComparePanel:
                 return
             k = self.pins.index(pin)
         mesh = None if pin.bundle is None else pin.bundle.mesh
-        if not self.show_ghost.value or mesh is None or len(mesh.faces) == 0:
+        if self.other_mechanism is not None or not self.show_ghost.value or mesh is None or len(mesh.faces) == 0:
             return
         node = self.NODE if k == 0 else f"{self.NODE}_{k + 1}"
         pin.handle = self.scene.add_glb(node, ghost_glb(mesh, pin.colour), cast_shadow=False, receive_shadow=False)
@@ -420,12 +423,26 @@ class ComparePanel:
             pin.cage = self.scene.add_line_segments(node + "_cage", cage.astype(np.float32), pin.colour[:3],
                                                     thickness=GHOST_LINE_PX, thickness_units="screen")
 
+    def set_mechanism(self, label: str | None) -> None:
+        """The selected mechanism (its label, ``None`` for the paper's): the ghosts hide or show again."""
+        if label == self.other_mechanism:
+            return
+        self.other_mechanism = label
+        self._show_ghosts()
+        self.refresh()
+
     def refresh(self) -> None:
         """Redraw the table (the session calls it when the current design's measures arrive)."""
         self._update_controls()
         with self.lock:
             pins = list(self.pins)
         if not pins:
+            return
+        if self.other_mechanism is not None:
+            which = f"The {len(pins)} pinned designs are" if len(pins) > 1 else "The pinned design is"
+            self.table.content = (f"*{which} of the "
+                                  f"paper's mechanism, not the {md_text(self.other_mechanism)} mechanism: "
+                                  "shown again when the Mechanism is paper.*")
             return
         if any(p.bundle is None or p.bundle.measures is None for p in pins):
             self.table.content = "*pinned designs: computing...*"

@@ -204,6 +204,7 @@ class ClientSession:
         self.share_controller.sync_url_now()
         self.workspace_controller.submit()
         if s.pins:
+            self.compare.set_mechanism(None if s.mechanism is None else s.mechanism.label)
             self.compare.restore(s.pins)
         self.ready.set()
 
@@ -254,8 +255,10 @@ class ClientSession:
     def _after_measures(self) -> None:
         """The full result's measures are on screen: the Compare table follows (its buttons keep the
         selector's notes: disabled for another mechanism than the paper's)."""
+        link = self.ctx.state.mechanism
+        self.compare.set_mechanism(None if link is None else link.label)
         self.compare.refresh()
-        self.notes.show(self.ctx.state.mechanism)
+        self.notes.show(link)
 
     def _show_result(self, r: Any) -> None:
         """Stop went back to the result on screen: its design or mechanism into the controls."""
