@@ -104,10 +104,33 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax
 
 
 @njit(cache=True, inline="always")
+def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i, rho_lo, rho_hi, lo_b, hi_b):
+    """Whether :func:`kinematics.blocks.decide_chain` visits sample ``k`` of the window: always when
+    ``narrow``, else when a sub-arc holding it is open (its bound computed once, cached in
+    ``seg_state``: 0 not yet, 1 open, 2 rejected)."""
+    if narrow:
+        return True
+    n_seg = seg_k.shape[0]
+    per = seg_k[0, 1] - seg_k[0, 0]
+    g1 = min(k // per, n_seg - 1) if per > 0 else 0
+    for g in range(max(g1 - 1, 0), min(g1 + 1, n_seg - 1) + 1):
+        if seg_k[g, 0] <= k <= seg_k[g, 1]:
+            if seg_state[g] == 0:
+                seg_state[g] = 1 if _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i[g], rho_lo, rho_hi,
+                                                  lo_b, hi_b) else 2
+            if seg_state[g] == 1:
+                return True
+    return False
+
+
+@njit(cache=True, inline="always")
 def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
-                 e_bound, e_relax, cone_relax, e_tight, can_ok, win, flags, flo, seg_open):
-    """:func:`kinematics.blocks.decide_chain`'s decision (and window) for one child, visiting only
-    the samples its parent's ``flags`` (from sample ``flo``) leave open (module docstring)."""
+                 e_bound, e_relax, cone_relax, e_tight, can_ok, win, flags, flo, seg_state, need_window):
+    """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
+    its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
+    ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
+    reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
+    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     klo = max(win[1], 0)
@@ -131,53 +154,14 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             break
     if not any_r1:  # no sample can pass the relaxed test, and the tight one implies it
         return FAIL
-    if can_ok and flags[hint - flo] & _X and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint],
-                                                         sin_t[i, hint], hb, rho_lo, rho_hi, lo_t2, hi_t2, jc[i],
-                                                         -e_tight):
-        win[0] = hint
-        return OK
-    lo_b = max(lmin - e_bound, 0.0)
-    hi_b = lmax + e_bound
-    narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]
-    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
-        return FAIL
-    # the visited samples: those of the window in open sub-arcs (all of it when narrow)
-    n_seg = seg_k.shape[0]
-    g_lo = 0
-    while g_lo < n_seg - 1 and seg_k[g_lo, 1] < klo:
-        g_lo += 1
-    g_hi = n_seg - 1
-    while g_hi > 0 and seg_k[g_hi, 0] > khi:
-        g_hi -= 1
-    for g in range(g_lo, g_hi + 1):
-        if narrow:
-            seg_open[g] = True
-            continue
-        has = False
-        for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):
-            if flags[k - flo] & _R1:
-                has = True
-                break
-        # a sub-arc without a candidate needs no bound: none of its samples can pass
-        seg_open[g] = has and _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi,
-                                            lo_b, hi_b)
-    # the tight test where X leaves it open (each after the relaxed test, as decide_chain does)
-    p_lo = n
-    p_hi = -1
-    for g in range(g_lo, g_hi + 1):
-        if not seg_open[g]:
-            continue
-        for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):
+    if can_ok:
+        if flags[hint - flo] & _X and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
+                                                   rho_lo, rho_hi, lo_t2, hi_t2, jc[i], -e_tight):
+            win[0] = hint
+            return OK
+        for k in range(klo, khi + 1):
             f = flags[k - flo]
-            if not (f & _R1):
-                continue
-            if not can_ok:
-                if f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
-                                           rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
-                    win[0] = k
-                    return UNKNOWN
-                continue
-            if not (f & _X):
+            if k == hint or not (f & _X):
                 continue
             if f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
                                        lo_r2, hi_r2, jc[i], cone_relax):
@@ -185,41 +169,38 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
                                 lo_t2, hi_t2, jc[i], -e_tight):
                     win[0] = k
                     return OK
-                p_lo = min(p_lo, k)
-                p_hi = max(p_hi, k)
-    if not can_ok:
+    lo_b = max(lmin - e_bound, 0.0)
+    hi_b = lmax + e_bound
+    narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]
+    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
         return FAIL
-    # the window: the first and the last visited samples that pass the relaxed test
-    lo_found = False
-    for g in range(g_lo, g_hi + 1):
-        if not seg_open[g] or lo_found:
-            continue
-        for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):
-            if k >= p_lo:
-                lo_found = True
-                break
-            f = flags[k - flo]
-            if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+    for g in range(seg_k.shape[0]):
+        seg_state[g] = 0
+    # the first visited sample (from below) that passes the relaxed test
+    p_lo = -1
+    for k in range(klo, khi + 1):
+        f = flags[k - flo]
+        if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                                rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                        lo_b, hi_b):
                 p_lo = k
-                p_hi = max(p_hi, k)
-                lo_found = True
                 break
-    if p_hi < 0:
+    if p_lo < 0:
         return FAIL
-    hi_found = False
-    for g in range(g_hi, g_lo - 1, -1):
-        if not seg_open[g] or hi_found:
-            continue
-        for k in range(min(seg_k[g, 1], khi), max(seg_k[g, 0], klo) - 1, -1):
-            if k <= p_hi:
-                hi_found = True
-                break
-            f = flags[k - flo]
-            if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+    if not can_ok:
+        win[0] = p_lo
+        return UNKNOWN
+    if not need_window:
+        return UNKNOWN
+    p_hi = p_lo
+    for k in range(khi, p_lo, -1):
+        f = flags[k - flo]
+        if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                                rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                        lo_b, hi_b):
                 p_hi = k
-                hi_found = True
                 break
     win[0] = min(max(hint, p_lo), p_hi)
     win[1] = p_lo
@@ -229,13 +210,14 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
 
 @njit(parallel=True, cache=True, nogil=True)
 def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zfloor,
-                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, offsets,
+                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, offsets, need_window,
                     out, kbits, kwin):
     """INSIDE / OUTSIDE / BOUNDARY of the 8 children (edge ``size``, centres ``parent + size *
     offsets[j]``) of each parent cube (``parents`` (N, 3)): child ``8 p + j`` in ``out``, its chains
     proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
-    ``kwin`` (from the parent's ``pwin``, updated) -- as :func:`kinematics.bracket._subcube_kernel`
-    on the same children, with the parent's sample flags (module docstring)."""
+    ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
+    :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
+    (module docstring)."""
     delta = 0.5 * size * math.sqrt(3.0)
     e_relax = delta + arc_slack + eps
     e_tight = delta + eps
@@ -248,7 +230,7 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
         flags = np.zeros((3, n), np.uint8)
         flo = np.zeros(3, np.int64)
         done = np.zeros(3, np.bool_)
-        seg_open = np.zeros(seg_k.shape[0], np.bool_)
+        seg_state = np.zeros(seg_k.shape[0], np.int8)
         for j in range(8):
             c = 8 * p + j
             px = parents[p, 0] + size * offsets[j, 0]
@@ -273,7 +255,7 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
                     done[i] = True
                 st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
                                   lmax, jc, delta + eps, e_relax, delta + cone_slack + eps, e_tight, not below,
-                                  kwin[c, i], flags[i], flo[i], seg_open)
+                                  kwin[c, i], flags[i], flo[i], seg_state, need_window)
                 if st == FAIL:
                     cls = OUTSIDE
                     break
