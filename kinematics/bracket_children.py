@@ -16,6 +16,10 @@ tested ONCE per sample ``k`` with three limits, flags:
   at ``k`` (the same ``(k, rho)`` gives each child legs within ``delta`` of ``Pp``'s);
 * ``X`` (tightening ``e_t - delta - s``) fails at ``Pp``  =>  no child passes the tight test at ``k``.
 
+The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
+the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
+sample of it has ``R1``.
+
 A child then evaluates (exactly as :func:`kinematics.blocks.decide_chain` does: the same
 functions, limits and samples) only the samples these flags leave open: the relaxed test where
 ``R1`` passes and ``R0`` fails, and the tight test where ``X`` passes. Its decision does not depend
@@ -78,12 +82,23 @@ def _passes(p1, q1, p2, q2, lo, hi, rho_lo, rho_hi):
 
 
 @njit(cache=True, nogil=True)
-def _parent_flags(px, py, pz, u, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags):
+def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x,
+                  flags):
     """``flags[k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
-    (module docstring); returns how many have ``R1``."""
+    (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
+    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    n_r1 = 0
     for k in range(klo, khi + 1):
+        flags[k - klo] = 255
+    lo1, hi1 = max(lmin - r1, 0.0), lmax + r1
+    for g in range(seg_k.shape[0]):
+        a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
+        if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo1, hi1):
+            for k in range(a, b + 1):
+                flags[k - klo] = 0
+    for k in range(klo, khi + 1):
+        if flags[k - klo] != 255:
+            continue
         c, s = cos_t[i, k], sin_t[i, k]
         p1 = b1x * c + b1y * s
         m1 = -b1x * s + b1y * c - hb
@@ -94,13 +109,11 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax
         f = 0
         if _passes(p1, q1, p2, q2, lmin - r1, lmax + r1, rho_lo, rho_hi):
             f = _R1
-            n_r1 += 1
             if _passes(p1, q1, p2, q2, lmin - r0, lmax + r0, rho_lo, rho_hi):
                 f |= _R0
             if _passes(p1, q1, p2, q2, lmin + x, lmax - x, rho_lo, rho_hi):
                 f |= _X
         flags[k - klo] = f
-    return n_r1
 
 
 @njit(cache=True, inline="always")
@@ -250,8 +263,8 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
                     khi = min(pwin[p, i, 2], n - 1)
                     flo[i] = klo
                     if klo <= khi:
-                        _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, hb, rho_lo,
-                                      rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
+                        _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
+                                      seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
                     done[i] = True
                 st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
                                   lmax, jc, delta + eps, e_relax, delta + cone_slack + eps, e_tight, not below,
