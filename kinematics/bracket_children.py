@@ -189,12 +189,22 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return FAIL
     for g in range(seg_k.shape[0]):
         seg_state[g] = 0
-    # the first visited sample (from below) that passes the relaxed test
-    p_lo = -1
+    # visited samples with R0 pass the relaxed test untested: the lowest and highest of them first
+    r0_lo = -1
     for k in range(klo, khi + 1):
+        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
+                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+            r0_lo = k
+            break
+    if r0_lo >= 0 and (not can_ok or not need_window):
+        win[0] = r0_lo
+        return UNKNOWN
+    # the first visited sample (from below) that passes the relaxed test: only below r0_lo
+    p_lo = r0_lo
+    for k in range(klo, r0_lo if r0_lo >= 0 else khi + 1):
         f = flags[k - flo]
-        if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
-                                                rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
@@ -206,11 +216,17 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return UNKNOWN
     if not need_window:
         return UNKNOWN
-    p_hi = p_lo
+    r0_hi = -1
     for k in range(khi, p_lo, -1):
+        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
+                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+            r0_hi = k
+            break
+    p_hi = max(p_lo, r0_hi)
+    for k in range(khi, p_hi, -1):
         f = flags[k - flo]
-        if f & _R1 and (f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
-                                                rho_hi, lo_r2, hi_r2, jc[i], cone_relax)):
+        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k
