@@ -72,11 +72,12 @@ from .blocks import (
     rounding_margin,
     sub_arcs,
 )
+from .bracket_children import children_kernel, has_cones
 from .design import Design, ParameterError
 from .feasibility import ChainTables
 from .grid import GridSpec
 from .kernel_args import KernelArgs, kernel_args
-from .parallel import KERNEL_LOCK
+from .parallel import KERNEL_LOCK, kernel_launch
 from .progress import CancelToken, Reporter, check
 
 __all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
@@ -84,6 +85,8 @@ __all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
 INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
 #: Halvings of the boundary cubes by default (each one divides the bracket's gap by about 2).
 REFINE = 2
+#: How :func:`refine_boundary` decides a boundary cube's children (its ``method``).
+METHODS = ("parents", "cubes")
 #: Most arc samples per gap of the workspace's samples in the outside test (:func:`_arc`).
 MAX_FINE = 16
 
@@ -274,12 +277,19 @@ _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) f
 
 def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float, cls: np.ndarray,
                     chain_bits: np.ndarray, levels: int, progress: Reporter | None = None,
-                    cancel: CancelToken = None) -> tuple[float, float, int]:
+                    cancel: CancelToken = None, method: str = "parents") -> tuple[float, float, int]:
     """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
     same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
     boundary children left)``; the bracket becomes ``[V_in + inside, V_out - outside]``. A child
-    inherits the chains its parent proved inside (``chain_bits``) and tests only the others."""
+    inherits the chains its parent proved inside (``chain_bits``) and tests only the others.
+
+    ``method``: ``"parents"`` (default) decides the 8 children of a cube together, after one pass
+    over the cube's samples at its centre (:mod:`kinematics.bracket_children`; without joint cones);
+    ``"cubes"`` tests each child on its own. Both give the same classes (tested)."""
+    if method not in METHODS:
+        raise ParameterError("method", method, " or ".join(METHODS))
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    per_parent = method == "parents" and not has_cones(jc)
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     idx = np.argwhere(cls == BOUNDARY)
     centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
@@ -298,12 +308,24 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
             kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
-            bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
-            win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
             out = np.empty(kids.shape[0], np.uint8)
-            with KERNEL_LOCK:
-                _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
-                                fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, out)
+            if per_parent:
+                bits = np.empty(kids.shape[0], np.uint8)
+                win = np.empty((kids.shape[0], 3, 3), np.int64)
+                with kernel_launch(min(chunk // 8, centres.shape[0] - s)):
+                    children_kernel(np.ascontiguousarray(centres[s:s + chunk // 8]),
+                                    np.ascontiguousarray(parent_bits[s:s + chunk // 8]),
+                                    np.ascontiguousarray(parent_win[s:s + chunk // 8]), size, fa.eps, fa.arc_slack,
+                                    fa.cone_slack, float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc,
+                                    hb, rho_lo, rho_hi, lmin, lmax, jc, _CHILDREN, level < levels - 1, out, bits,
+                                    win)
+            else:
+                bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
+                win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
+                with KERNEL_LOCK:
+                    _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
+                                    fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
+                                    out)
             inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
             outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
             left.append(kids[out == BOUNDARY])
@@ -319,15 +341,17 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
 
 def volume_bracket(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float = 0.0,
                    progress: Reporter | None = None, cancel: CancelToken = None,
-                   refine: int = REFINE) -> VolumeBracket:
+                   refine: int = REFINE, method: str = "parents") -> VolumeBracket:
     """The certified bracket of the continuous workspace volume over ``grid`` (module docstring):
-    cubes of the grid, then ``refine`` halvings of the boundary cubes (:func:`refine_boundary`)."""
+    cubes of the grid, then ``refine`` halvings of the boundary cubes (:func:`refine_boundary`, with
+    its ``method``)."""
     bits = np.zeros(grid.shape, np.uint8)
     cls = cube_classes(design, grid, args, n_eta, z_floor, progress, cancel, chain_bits=bits)
     n_in = int(np.count_nonzero(cls == INSIDE))
     n_b = int(np.count_nonzero(cls == BOUNDARY))
     v = grid.voxel_volume
-    add, cut, left = (refine_boundary(design, grid, args, n_eta, z_floor, cls, bits, refine, progress, cancel)
+    add, cut, left = (refine_boundary(design, grid, args, n_eta, z_floor, cls, bits, refine, progress, cancel,
+                                          method)
                       if refine > 0 else (0.0, 0.0, n_b))
     return VolumeBracket(volume_inner=n_in * v + add, volume_outer=(n_in + n_b) * v - cut, cubes_inside=n_in,
                          cubes_boundary=n_b, voxel=grid.h, refine=refine, boundary_left=left)

@@ -1,0 +1,295 @@
+"""The bracket's refinement step decided per parent cube: one pass over the parent's arc samples
+tells each of its 8 children which samples need a test of their own.
+
+A boundary cube (centre ``Pp``) is split into 8 children of half the edge, each with centre ``Pc``,
+half-diagonal ``delta`` and ``|Pc - Pp| <= delta``. Each child decides each chain with
+:func:`kinematics.blocks.decide_chain` (via :func:`kinematics.bracket._cube_chain`): the relaxed
+test at ``Pc`` with ``e_r = delta + arc_slack + eps`` and the tight test with ``e_t = delta + eps``
+at the samples of its window. For a fixed carriage pose ``(k, rho)`` every leg length is
+1-Lipschitz in the platform position (:mod:`kinematics.blocks`), so with a safety margin ``s``
+(half the rounding margin ``eps``, far above the rounding error of one test) the parent's centre,
+tested ONCE per sample ``k`` with three limits, flags:
+
+* ``R1`` (relaxation ``e_r + delta + s``) fails at ``Pp``  =>  no child passes the relaxed test at
+  ``k`` (a child's ``(k, rho)`` would give ``Pp`` legs within ``delta`` of its own);
+* ``R0`` (relaxation ``e_r - delta - s``) passes at ``Pp``  =>  every child passes the relaxed test
+  at ``k`` (the same ``(k, rho)`` gives each child legs within ``delta`` of ``Pp``'s);
+* ``X`` (tightening ``e_t - delta - s``) fails at ``Pp``  =>  no child passes the tight test at ``k``.
+
+The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
+the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
+sample of it has ``R1``.
+
+A child then evaluates (exactly as :func:`kinematics.blocks.decide_chain` does: the same
+functions, limits and samples) only the samples these flags leave open: the relaxed test where
+``R1`` passes and ``R0`` fails, and the tight test where ``X`` passes. Its decision does not depend
+on the order in which its samples are visited -- OK iff the hint or a visited sample passes both
+tests, FAIL iff the whole-stroke bound rejects or no visited sample passes the relaxed test, and on
+UNKNOWN the window becomes the first and last visited samples that pass the relaxed test -- so it is
+the same decision, window included, as the per-child path (``method="cubes"`` of
+:func:`kinematics.bracket.refine_boundary`; tested child by child). Visited samples are those of
+the window in sub-arcs the child's whole-stroke bound leaves open (every sample of the window when
+it is narrower than a sub-arc), as there. Joint cones are not covered (their relaxation enters
+each cone with its own factor): with cones the bracket takes the per-child path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .blocks import FAIL, OK, UNKNOWN, _segment_open
+from .feasibility import _feasible_at, _leg_intervals, _overlap, chain_points
+
+__all__ = ["children_kernel", "has_cones"]
+
+INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
+#: Flags of a parent's sample (module docstring).
+_R1, _R0, _X = 1, 2, 4
+
+
+def has_cones(jc: np.ndarray) -> bool:
+    """Whether any chain's tests include joint cones (as :func:`kinematics.feasibility._leg_sets` decides)."""
+    return bool(np.any((jc[:, 0, 6] > -1.0) | (jc[:, 0, 7] > -1.0)))
+
+
+@njit(cache=True, inline="always")
+def _passes(p1, q1, p2, q2, lo, hi, rho_lo, rho_hi):
+    """The test of :func:`kinematics.feasibility._feasible_at` without cones, from both legs'
+    ``p``, ``q`` (F1) and the leg limits ``[lo, hi]`` (clipped at 0 below)."""
+    lo = max(lo, 0.0)
+    if lo > hi:
+        return False
+    lo2, hi2 = lo * lo, hi * hi
+    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
+    if n1 == 0:
+        return False
+    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
+    if n2 == 0:
+        return False
+    if _overlap(a0, a1, c0, c1, rho_lo, rho_hi):
+        return True
+    if n2 == 2 and _overlap(a0, a1, c2, c3, rho_lo, rho_hi):
+        return True
+    if n1 == 2:
+        if _overlap(a2, a3, c0, c1, rho_lo, rho_hi):
+            return True
+        if n2 == 2 and _overlap(a2, a3, c2, c3, rho_lo, rho_hi):
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x,
+                  flags):
+    """``flags[k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
+    (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
+    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there."""
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    for k in range(klo, khi + 1):
+        flags[k - klo] = 255
+    lo1, hi1 = max(lmin - r1, 0.0), lmax + r1
+    for g in range(seg_k.shape[0]):
+        a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
+        if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo1, hi1):
+            for k in range(a, b + 1):
+                flags[k - klo] = 0
+    for k in range(klo, khi + 1):
+        if flags[k - klo] != 255:
+            continue
+        c, s = cos_t[i, k], sin_t[i, k]
+        p1 = b1x * c + b1y * s
+        m1 = -b1x * s + b1y * c - hb
+        q1 = b1z * b1z + m1 * m1
+        p2 = b2x * c + b2y * s
+        m2 = -b2x * s + b2y * c + hb
+        q2 = b2z * b2z + m2 * m2
+        f = 0
+        if _passes(p1, q1, p2, q2, lmin - r1, lmax + r1, rho_lo, rho_hi):
+            f = _R1
+            if _passes(p1, q1, p2, q2, lmin - r0, lmax + r0, rho_lo, rho_hi):
+                f |= _R0
+            if _passes(p1, q1, p2, q2, lmin + x, lmax - x, rho_lo, rho_hi):
+                f |= _X
+        flags[k - klo] = f
+
+
+@njit(cache=True, inline="always")
+def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i, rho_lo, rho_hi, lo_b, hi_b):
+    """Whether :func:`kinematics.blocks.decide_chain` visits sample ``k`` of the window: always when
+    ``narrow``, else when a sub-arc holding it is open (its bound computed once, cached in
+    ``seg_state``: 0 not yet, 1 open, 2 rejected)."""
+    if narrow:
+        return True
+    n_seg = seg_k.shape[0]
+    per = seg_k[0, 1] - seg_k[0, 0]
+    g1 = min(k // per, n_seg - 1) if per > 0 else 0
+    for g in range(max(g1 - 1, 0), min(g1 + 1, n_seg - 1) + 1):
+        if seg_k[g, 0] <= k <= seg_k[g, 1]:
+            if seg_state[g] == 0:
+                seg_state[g] = 1 if _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i[g], rho_lo, rho_hi,
+                                                  lo_b, hi_b) else 2
+            if seg_state[g] == 1:
+                return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
+                 e_bound, e_relax, cone_relax, e_tight, can_ok, win, flags, flo, seg_state, need_window):
+    """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
+    its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
+    ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
+    reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
+    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test."""
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    n = cos_t.shape[1]
+    klo = max(win[1], 0)
+    khi = min(win[2], n - 1)
+    hint = win[0]
+    if hint < klo or hint > khi:
+        hint = (klo + khi) // 2
+    lo_r = max(lmin - e_relax, 0.0)
+    hi_r = lmax + e_relax
+    lo_r2, hi_r2 = lo_r * lo_r, hi_r * hi_r
+    lo_t = lmin + e_tight
+    hi_t = lmax - e_tight
+    can_ok = can_ok and lo_t <= hi_t
+    lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
+    if klo > khi:
+        return FAIL
+    any_r1 = False
+    for k in range(klo, khi + 1):
+        if flags[k - flo] & _R1:
+            any_r1 = True
+            break
+    if not any_r1:  # no sample can pass the relaxed test, and the tight one implies it
+        return FAIL
+    if can_ok:
+        if flags[hint - flo] & _X and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
+                                                   rho_lo, rho_hi, lo_t2, hi_t2, jc[i], -e_tight):
+            win[0] = hint
+            return OK
+        for k in range(klo, khi + 1):
+            f = flags[k - flo]
+            if k == hint or not (f & _X):
+                continue
+            if f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                                       lo_r2, hi_r2, jc[i], cone_relax):
+                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                                lo_t2, hi_t2, jc[i], -e_tight):
+                    win[0] = k
+                    return OK
+    lo_b = max(lmin - e_bound, 0.0)
+    hi_b = lmax + e_bound
+    narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]
+    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
+        return FAIL
+    for g in range(seg_k.shape[0]):
+        seg_state[g] = 0
+    # visited samples with R0 pass the relaxed test untested: the lowest and highest of them first
+    r0_lo = -1
+    for k in range(klo, khi + 1):
+        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
+                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+            r0_lo = k
+            break
+    if r0_lo >= 0 and (not can_ok or not need_window):
+        win[0] = r0_lo
+        return UNKNOWN
+    # the first visited sample (from below) that passes the relaxed test: only below r0_lo
+    p_lo = r0_lo
+    for k in range(klo, r0_lo if r0_lo >= 0 else khi + 1):
+        f = flags[k - flo]
+        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                        lo_b, hi_b):
+                p_lo = k
+                break
+    if p_lo < 0:
+        return FAIL
+    if not can_ok:
+        win[0] = p_lo
+        return UNKNOWN
+    if not need_window:
+        return UNKNOWN
+    r0_hi = -1
+    for k in range(khi, p_lo, -1):
+        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
+                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+            r0_hi = k
+            break
+    p_hi = max(p_lo, r0_hi)
+    for k in range(khi, p_hi, -1):
+        f = flags[k - flo]
+        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                        lo_b, hi_b):
+                p_hi = k
+                break
+    win[0] = min(max(hint, p_lo), p_hi)
+    win[1] = p_lo
+    win[2] = p_hi
+    return UNKNOWN
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zfloor,
+                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, offsets, need_window,
+                    out, kbits, kwin):
+    """INSIDE / OUTSIDE / BOUNDARY of the 8 children (edge ``size``, centres ``parent + size *
+    offsets[j]``) of each parent cube (``parents`` (N, 3)): child ``8 p + j`` in ``out``, its chains
+    proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
+    ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
+    :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
+    (module docstring)."""
+    delta = 0.5 * size * math.sqrt(3.0)
+    e_relax = delta + arc_slack + eps
+    e_tight = delta + eps
+    s = 0.5 * eps
+    r1 = e_relax + delta + s
+    r0 = e_relax - delta - s
+    x = e_tight - delta - s
+    n = cos_t.shape[1]
+    for p in prange(parents.shape[0]):
+        flags = np.zeros((3, n), np.uint8)
+        flo = np.zeros(3, np.int64)
+        done = np.zeros(3, np.bool_)
+        seg_state = np.zeros(seg_k.shape[0], np.int8)
+        for j in range(8):
+            c = 8 * p + j
+            px = parents[p, 0] + size * offsets[j, 0]
+            py = parents[p, 1] + size * offsets[j, 1]
+            pz = parents[p, 2] + size * offsets[j, 2]
+            below = pz - 0.5 * size < zfloor - eps
+            kbits[c] = pbits[p]
+            for i in range(3):
+                for t in range(3):
+                    kwin[c, i, t] = pwin[p, i, t]
+            cls = INSIDE
+            for i in range(3):
+                if (kbits[c] >> i) & 1:
+                    continue
+                if not done[i]:
+                    klo = max(pwin[p, i, 1], 0)
+                    khi = min(pwin[p, i, 2], n - 1)
+                    flo[i] = klo
+                    if klo <= khi:
+                        _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
+                                      seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
+                    done[i] = True
+                st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
+                                  lmax, jc, delta + eps, e_relax, delta + cone_slack + eps, e_tight, not below,
+                                  kwin[c, i], flags[i], flo[i], seg_state, need_window)
+                if st == FAIL:
+                    cls = OUTSIDE
+                    break
+                if st == UNKNOWN:
+                    cls = BOUNDARY
+                else:
+                    kbits[c] |= 1 << i
+            out[c] = cls

@@ -1,0 +1,100 @@
+"""The bracket's per-parent refinement (kinematics.bracket_children) against the per-child path it
+replaces (``method="cubes"``: every child decided on its own by kinematics.blocks.decide_chain):
+the same class, chains proven inside and sample windows for every child, level after level, and
+the same bracket, on several designs, orientations and refinement levels."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from paraspace.kinematics.blocks import initial_windows
+from paraspace.kinematics.bracket import (
+    _CHILDREN,
+    BOUNDARY,
+    _arc,
+    _rescale_windows,
+    _subcube_kernel,
+    cube_classes,
+    volume_bracket,
+)
+from paraspace.kinematics.bracket_children import children_kernel, has_cones
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.joints import Joints
+from paraspace.kinematics.kernel_args import kernel_args
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
+
+CASES = [
+    (Design(), (0.0, 0.0, 0.0), 0.0),
+    (Design(a=10), (8.0, -5.0, 12.0), 0.0),
+    (Design(eta_range="from-zero", l_s=80), (0.0, 0.0, 0.0), 20.0),
+]
+
+
+def _setup(design: Design, orientation: tuple[float, float, float], voxel: float):
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    args = kernel_args(design, orientation, res.n_eta)
+    return res, args
+
+
+@pytest.mark.parametrize("design, orientation, z_floor", CASES)
+def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
+    res, args = _setup(design, orientation, 8.0)
+    grid, n_eta = res.grid, res.n_eta
+    u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    bits = np.zeros(grid.shape, np.uint8)
+    cls = cube_classes(design, grid, args, n_eta, z_floor, chain_bits=bits)
+    centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * np.argwhere(cls == BOUNDARY)
+    pbits, pwin = bits[cls == BOUNDARY], initial_windows(centres.shape[0], n_eta)
+    size, fine_before, levels = float(grid.h), 1, 3
+    for level in range(levels):
+        size *= 0.5
+        fa = _arc(design, grid, args, n_eta, 0.5 * size * math.sqrt(3.0))
+        pwin = _rescale_windows(pwin, fa.fine // fine_before, fa.cos_t.shape[1])
+        fine_before = fa.fine
+        kids = np.ascontiguousarray((centres[:, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
+        # the former path: each child on its own
+        ref_bits = np.ascontiguousarray(np.repeat(pbits, 8))
+        ref_win = np.ascontiguousarray(np.repeat(pwin, 8, axis=0))
+        ref = np.empty(kids.shape[0], np.uint8)
+        _subcube_kernel(kids, ref_bits, ref_win, size, fa.eps, fa.arc_slack, fa.cone_slack, z_floor, u, fa.cos_t,
+                        fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, ref)
+        out = np.empty(kids.shape[0], np.uint8)
+        kb = np.empty(kids.shape[0], np.uint8)
+        kw = np.empty((kids.shape[0], 3, 3), np.int64)
+        need_window = level < levels - 1
+        children_kernel(np.ascontiguousarray(centres), pbits, np.ascontiguousarray(pwin), size, fa.eps, fa.arc_slack,
+                        fa.cone_slack, z_floor, u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi,
+                        lmin, lmax, jc, _CHILDREN, need_window, out, kb, kw)
+        assert {0, 1, 2} <= set(np.unique(ref).tolist())
+        np.testing.assert_array_equal(out, ref)
+        left = ref == BOUNDARY
+        np.testing.assert_array_equal(kb[left], ref_bits[left])
+        if need_window:  # the next level starts from them; the hint only orders the visit
+            np.testing.assert_array_equal(kw[left][..., 1:], ref_win[left][..., 1:])
+        centres, pbits, pwin = kids[left], ref_bits[left], ref_win[left]
+
+
+@pytest.mark.parametrize("design, orientation, z_floor", CASES)
+def test_the_same_bracket_at_each_refinement(design, orientation, z_floor):
+    res, args = _setup(design, orientation, 10.0)
+    for refine in (1, 2, 3):
+        new = volume_bracket(design, res.grid, args, res.n_eta, z_floor, refine=refine)
+        old = volume_bracket(design, res.grid, args, res.n_eta, z_floor, refine=refine, method="cubes")
+        assert new == old
+        assert new.volume_inner < new.volume_outer
+
+
+def test_joint_cones_take_the_per_child_path_and_a_bad_method_is_refused():
+    joints = Joints(theta_u=60.0, theta_s=50.0)
+    design = Design()
+    res = compute_workspace(design, WorkspaceSettings(voxel=10.0, joints=joints))
+    args = kernel_args(design, (0.0, 0.0, 0.0), res.n_eta, joints)
+    assert has_cones(args[9]) and not has_cones(kernel_args(design, (0.0, 0.0, 0.0), res.n_eta)[9])
+    a = volume_bracket(design, res.grid, args, res.n_eta, refine=1)
+    assert a == volume_bracket(design, res.grid, args, res.n_eta, refine=1, method="cubes")
+    with pytest.raises(ParameterError, match="method"):
+        volume_bracket(design, res.grid, args, res.n_eta, refine=1, method="children")
