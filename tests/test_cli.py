@@ -1,4 +1,8 @@
-"""The `paraspace` command line as outside scripts call it (subprocesses, JSON contract)."""
+"""The `paraspace` command line as outside scripts call it (JSON contract, exit codes, one-line errors).
+
+The JSON contract runs in a real subprocess (`python -m paraspace.app.cli`, as an outside script
+calls it); the other commands run in-process through the same ``main()`` (tests/cli_inprocess.py):
+the same parser, commands, output and exit codes, without a fresh interpreter per call."""
 
 from __future__ import annotations
 
@@ -8,6 +12,7 @@ import sys
 
 import numpy as np
 import pytest
+from cli_inprocess import run_cli  # tests/ (pytest's prepend import mode)
 
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.inverse import leg_lengths
@@ -16,15 +21,24 @@ from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
 def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
-    proc = subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True, timeout=300)
+    """``paraspace ARGS...`` in this process (the same main(); see the module's docstring)."""
+    proc = run_cli(*args)
     if check:
         assert proc.returncode == 0, proc.stderr
     return proc
 
 
+def run_process(*args: str) -> subprocess.CompletedProcess:
+    """``paraspace ARGS...`` as a real subprocess: the entry point as outside scripts call it."""
+    proc = subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
 def test_workspace_json_contract(tmp_path):
     out = tmp_path / "shell.stl"
-    data = json.loads(run("workspace", "--voxel", "8", "--a", "60", "--json", "--export", str(out)).stdout)
+    data = json.loads(run_process("workspace", "--voxel", "8", "--a", "60", "--json", "--export", str(out)).stdout)
     for key in ("volume", "voxel_size", "voxels", "compute_seconds", "components", "void_volume", "void_ratio",
                 "hollowness", "boundary_closed", "genus", "bounds"):
         assert key in data, key
@@ -121,14 +135,7 @@ def test_significant_digits_read_the_same_everywhere():
 
 
 def test_cli_joint_flags_echo_and_one_message():
-    import subprocess
-    import sys as _sys
-
-    def run(*args):
-        return subprocess.run([_sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
-                              timeout=300)
-
-    r = run("workspace", "--voxel", "8", "--u-cone", "45", "--s-cone", "40", "--cone-axis", "home",
+    r = run_cli("workspace", "--voxel", "8", "--u-cone", "45", "--s-cone", "40", "--cone-axis", "home",
             "--leg-diameter", "6", "--json")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
@@ -136,10 +143,10 @@ def test_cli_joint_flags_echo_and_one_message():
                              "clearance": 0.0}
     for flag, value, text in (("--u-cone", "0", "theta_u"), ("--s-cone", "x", "theta_s"),
                               ("--leg-diameter", "-1", "leg_diameter")):
-        r = run("ik", "--pose", "0,0,130,0,0,0", flag, value)
+        r = run_cli("ik", "--pose", "0,0,130,0,0,0", flag, value)
         assert r.returncode == 2 and text in r.stderr and "valid range" in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
-    r = run("orientation", "--json", "--u-cone", "30", "--s-cone", "30")
+    r = run_cli("orientation", "--json", "--u-cone", "30", "--s-cone", "30")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert "saturated" in out and out["settings"]["joints"]["theta_u"] == 30.0

@@ -117,11 +117,9 @@ def test_nonzero_base_orientation_is_refused():
 
 
 def cli(*args: str):
-    import subprocess
-    import sys
+    from cli_inprocess import run_cli  # the command line through main(), in this process
 
-    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
-                          timeout=300)
+    return run_cli(*args)
 
 
 def test_cli_workspace_total_orientation_json(plain):

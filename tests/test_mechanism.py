@@ -12,10 +12,10 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_inprocess import run_cli  # tests/ (pytest's prepend import mode)
 
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.geometry import base_points, platform_points
@@ -192,8 +192,7 @@ def test_cones_restrict_the_brute_force() -> None:
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", "mechanism", *args], capture_output=True,
-                          text=True, timeout=120)
+    return run_cli("mechanism", *args)  # through main(), in this process (tests/cli_inprocess.py)
 
 
 def test_cli_exports_a_preset_that_show_reads_back(tmp_path) -> None:

@@ -9,11 +9,10 @@ voxels and its forward model for the IK's carriage values. Refusals name the fla
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_inprocess import run_cli  # tests/ (pytest's prepend import mode)
 
 from paraspace.app.cli import main
 from paraspace.kinematics.design import Design
@@ -22,10 +21,7 @@ from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
 from paraspace.kinematics.presets import six_pups
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
-
-def run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
-                          timeout=300)
+run = run_cli  # the command line through main(), in this process (tests/cli_inprocess.py)
 
 
 def test_workspace_of_a_preset_file_is_its_brute_force(tmp_path) -> None:

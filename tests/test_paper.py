@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_inprocess import run_cli  # the command line through main(), in this process (tests/)
 
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
@@ -212,9 +211,8 @@ def test_fit_ranks_models_and_slices_the_scan_exactly():
 
 
 def test_cli_paper_json():
-    r = subprocess.run([sys.executable, "-m", "paraspace.app.cli", "paper", "--voxel", "10", "--assumptions", "paper",
-                        "--angle-step", "3", "--position-step", "6", "--json"], capture_output=True, text=True,
-                       timeout=300)
+    r = run_cli("paper", "--voxel", "10", "--assumptions", "paper", "--angle-step", "3", "--position-step", "6",
+                "--json")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert out["reported"]["TI_1"] == 2789.17 and len(out["claims"]) >= 40 and out["voxel"] == 10.0
@@ -222,6 +220,5 @@ def test_cli_paper_json():
     assert out["scan"] == {"angle_range": 90.0, "angle_step": 3.0, "position_step": 6.0}
     for args, field in ((["--voxel", "0"], "voxel"), (["--assumptions", "nope"], "assumptions"),
                         (["--angle-range", "400"], "angle_range")):
-        r = subprocess.run([sys.executable, "-m", "paraspace.app.cli", "paper", *args], capture_output=True,
-                           text=True, timeout=60)
+        r = run_cli("paper", *args)
         assert r.returncode == 2 and field in r.stderr, (args, r.stderr)

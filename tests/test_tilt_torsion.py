@@ -111,11 +111,9 @@ def test_settings_are_validated(field, value):
 
 
 def cli(*args: str):
-    import subprocess
-    import sys
+    from cli_inprocess import run_cli  # the command line through main(), in this process
 
-    return subprocess.run([sys.executable, "-m", "paraspace.app.cli", *args], capture_output=True, text=True,
-                          timeout=300)
+    return run_cli(*args)
 
 
 def test_cli_orientation_at_json():
