@@ -55,15 +55,27 @@ LAUNCH = 16
 
 @njit(cache=True, nogil=True)
 def _excluded(px, py, pz, delta, eps, first, us, jcs, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
-              lmax, hints, win):
+              lmax, hints, win, done):
     """Whether one of the samples ``0 .. first - 1`` excludes the whole block (centre ``P``,
     half-diagonal ``delta``): the excluded test of the module docstring, stopped at the first
-    sample that passes relaxed (``hints[m, i]``: chain ``i``'s last passing sample at sample ``m``)."""
+    sample that passes relaxed (``hints[m, i]``: chain ``i``'s last passing sample at sample ``m``).
+    A chain that passes at its hint with the limits tightened by ``delta + eps`` passes at every
+    voxel of the block (the blocks engine's all-succeed test): ``done[m, i]`` is set, and neither
+    the block's children nor its voxels test it again."""
     e = delta + eps
     n_eta = cos_t.shape[1]
+    lo_t, hi_t = lmin + e, lmax - e
     for m in range(first):
         for i in range(3):
-            win[0] = hints[m, i]
+            if done[m, i]:
+                continue
+            k = hints[m, i]
+            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, us[m], i)
+            if lo_t <= hi_t and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                             rho_hi, lo_t * lo_t, hi_t * hi_t, jcs[m][i], 0.0):
+                done[m, i] = True
+                continue
+            win[0] = k
             win[1] = 0
             win[2] = n_eta - 1
             if decide_chain(px, py, pz, us[m], i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
@@ -75,16 +87,17 @@ def _excluded(px, py, pz, delta, eps, first, us, jcs, cos_t, sin_t, arc, seg_k, 
 
 @njit(cache=True, nogil=True)
 def _voxel(px, py, pz, first, us, jcs, left, right, parent, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
-           rho_hi, lmin2, lmax2, hints, cut, n_cut, new_cut, stack):
+           rho_hi, lmin2, lmax2, hints, cut, n_cut, new_cut, stack, done):
     """Whether the voxel centre ``P`` passes the exact test at every sample: the samples ``0 ..
     first - 1`` one by one, then per chain the tree from the cut its neighbour left (``cut[i,
     :n_cut[i]]``, updated when the voxel passes; a pair of sibling nodes is tried as their parent
-    first). ``hints`` (nodes, 3): each chain's last passing sample per node."""
+    first). ``hints`` (nodes, 3): each chain's last passing sample per node; ``done`` (first, 3):
+    the pairs its blocks already certified."""
     for m in range(first):
         nd = left.shape[0] - first + m
         for i in range(3):
-            if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m],
-                          hints[nd]):
+            if not done[m, i] and not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2,
+                                             lmax2, jcs[m], hints[nd]):
                 return False
     if left.shape[0] == first:
         return True
@@ -164,6 +177,7 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
         cap = 8 * levels + 8
         b0 = np.empty((cap, 3), np.int64)
         bn = np.empty((cap, 3), np.int64)
+        done = np.zeros((cap, max(first, 1), 3), np.bool_)  # per block: the first samples' chains certified
         sp = 0
         for a in range(3):
             b0[0, a] = t0[t, a]
@@ -171,6 +185,7 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
         while sp >= 0:
             x0, y0, z0 = b0[sp, 0], b0[sp, 1], b0[sp, 2]
             nx, ny, nz = bn[sp, 0], bn[sp, 1], bn[sp, 2]
+            mine = done[sp].copy()
             sp -= 1
             if _count(cum, x0, y0, z0, x0 + nx, y0 + ny, z0 + nz) == 0:
                 continue
@@ -180,11 +195,11 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
             if nx == 1 and ny == 1 and nz == 1:
                 out[x0, y0, z0] = _voxel(px, py, pz, first, us, jcs, left, right, parent, leaf, centre, lo2, hi2,
                                          cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin * lmin, lmax * lmax,
-                                         hints, cut, n_cut, new_cut, stack)
+                                         hints, cut, n_cut, new_cut, stack, mine)
                 continue
             delta = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2)
             if _excluded(px, py, pz, delta, eps, first, us, jcs, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo,
-                         rho_hi, lmin, lmax, hints[n_nodes - first:], win):
+                         rho_hi, lmin, lmax, hints[n_nodes - first:], win, mine):
                 continue
             # children (first half gets the extra voxel)
             hx, hy, hz = (nx + 1) // 2, (ny + 1) // 2, (nz + 1) // 2
@@ -199,6 +214,7 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
                 bn[sp, 0] = (nx - hx if dx else hx) if nx > 1 else 1
                 bn[sp, 1] = (ny - hy if dy else hy) if ny > 1 else 1
                 bn[sp, 2] = (nz - hz if dz else hz) if nz > 1 else 1
+                done[sp] = mine
 
 
 def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
