@@ -39,9 +39,10 @@ at its first unreachable orientation: about ``N_plain x (orientations until the 
 plus ``N_result x |S|`` single-point tests. ``method="tree"`` tests each voxel's :data:`FIRST`
 hardest orientations one by one, then certifies the others by groups
 (:mod:`kinematics.orientation_tree`), so a voxel of the result costs far fewer than ``|S|`` tests.
-``method="blocks"`` (the default for the plain model) decides blocks of voxels x groups of
-orientations at once (:mod:`kinematics.orientation_blocks`): a block excluded by one orientation
-is never tested again, a block certified for a group needs no voxel test. The voxels are the same.
+``method="blocks"`` (the default for the plain model) drops whole blocks of voxels that one of the
+:data:`FIRST` hardest orientations excludes, skips the hardest orientations a block passes with a
+margin, and starts each voxel's tree walk from the cut its neighbour left
+(:mod:`kinematics.orientation_blocks`). The voxels are the same.
 """
 
 from __future__ import annotations

@@ -16,7 +16,10 @@ a carriage pose that keeps both legs of chain ``i`` in the limits tightened by `
 Algorithm. The candidate voxels (those of the position workspace) are covered by top blocks of
 :data:`TOP_BLOCK` voxels per edge, one parallel iteration each, visited depth first: a block
 without candidates is skipped; a block that one of the ``first`` hardest samples excludes (first
-lemma) is dropped whole; any other block is split in eight (halving each edge of more than one
+lemma) is dropped whole; a hardest sample at which a chain passes at the block's centre with the
+leg limits tightened by ``delta + eps`` (at its last passing carriage sample: the blocks engine's
+all-succeed test) is certified for the whole block, and neither its children nor its voxels test
+that chain there again; any other block is split in eight (halving each edge of more than one
 voxel, as the blocks engine does). A single voxel is tested exactly at the ``first`` samples, then
 chain by chain over the tree: instead of walking down from the root, it starts from the **cut**
 (the set of nodes whose certificates covered every sample) that the previously decided voxel of
