@@ -36,10 +36,13 @@ orientation between them (the error is one-sided towards a larger set, and shrin
 Cost: the candidates are the plain workspace's voxels. ``method="pairs"`` tests the orientations
 in batches of :data:`BATCH`, hardest first (largest tilt, then largest torsion), and drops a voxel
 at its first unreachable orientation: about ``N_plain x (orientations until the first failure)``
-plus ``N_result x |S|`` single-point tests. ``method="tree"`` (the default for the plain model)
-tests each voxel's :data:`FIRST` hardest orientations one by one, then certifies the others by
-groups (:mod:`kinematics.orientation_tree`), so a voxel of the result costs far fewer than ``|S|``
-tests; the voxels are the same.
+plus ``N_result x |S|`` single-point tests. ``method="tree"`` tests each voxel's :data:`FIRST`
+hardest orientations one by one, then certifies the others by groups
+(:mod:`kinematics.orientation_tree`), so a voxel of the result costs far fewer than ``|S|`` tests.
+``method="blocks"`` (the default for the plain model) drops whole blocks of voxels that one of the
+:data:`FIRST` hardest orientations excludes, skips the hardest orientations a block passes with a
+margin, and starts each voxel's tree walk from the cut its neighbour left
+(:mod:`kinematics.orientation_blocks`). The voxels are the same.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ import numpy as np
 
 from .design import Design, ParameterError
 from .feasibility import default_n_eta
+from .orientation_blocks import reachable_on_grid
 from .orientation_tree import reachable_at_all
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .settings import TOTAL_ORIENTATION
@@ -60,11 +64,11 @@ from .workspace import WorkspaceResult, WorkspaceSettings, compute_workspace, re
 
 #: Orientations per launch of the pair kernel.
 BATCH = 16
-#: Hardest samples tested one by one before the tree (``method="tree"``): most voxels that fail,
-#: fail one of them.
+#: Hardest samples tested one by one before the tree (``method="tree"``), or leading the blocks'
+#: frontier (``method="blocks"``): most voxels that fail, fail one of them.
 FIRST = 32
 #: How the orientations are tested (:func:`total_orientation_workspace`).
-METHODS: tuple[str, ...] = ("tree", "pairs")
+METHODS: tuple[str, ...] = ("blocks", "tree", "pairs")
 
 
 def _angle(field: str, value, hi: float | None = None) -> float:
@@ -148,17 +152,18 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
                                 settings: WorkspaceSettings = WorkspaceSettings(),
                                 position: WorkspaceResult | None = None,
                                 progress: ProgressFn | None = None,
-                                cancel: CancelToken = None, *, method: str = "tree") -> DexterousResult:
+                                cancel: CancelToken = None, *, method: str = "blocks") -> DexterousResult:
     """The total-orientation workspace for ``tilt`` (degrees, ``[0, 90]``) and ``torsion``
     (``[0, 180]``) with the sample set of :func:`orientation_samples` (module docstring).
 
     Args:
         settings: of the position workspace (its grid is reused); the orientation must be zero.
         position: an already computed position workspace with those settings (else computed).
-        method: ``"tree"`` (default) decides the orientations by groups
-            (:mod:`kinematics.orientation_tree`) for the plain model, and falls back to ``"pairs"``
-            with joint cones or leg interference; ``"pairs"`` tests every orientation of every
-            candidate in batches (the module docstring's cost). Both give the same voxels.
+        method: ``"blocks"`` (default) decides blocks of positions x groups of orientations
+            (:mod:`kinematics.orientation_blocks`), ``"tree"`` each voxel by groups of orientations
+            (:mod:`kinematics.orientation_tree`), both for the plain model only (with joint cones or
+            leg interference they fall back to ``"pairs"``); ``"pairs"`` tests every orientation of
+            every candidate in batches (the module docstring's cost). All give the same voxels.
     """
     if method not in METHODS:
         raise ParameterError("method", method, " or ".join(METHODS))
@@ -180,7 +185,14 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     eta_step = position.settings.eta_step
     joints = position.settings.joints
     n = samples.shape[0]
-    if method == "tree" and not joints.has_cones and joints.min_distance == 0.0:
+    plain = not joints.has_cones and joints.min_distance == 0.0
+    if method == "blocks" and plain:
+        grid = position.grid
+        inside = reachable_on_grid(design, occ, grid.axes(), grid.h, samples, rots,
+                                   default_n_eta(design, eta_step), FIRST, rep.sub(0.3, 1.0), cancel)
+        alive = inside.ravel()[idx]
+        n = 0
+    elif method == "tree" and plain:
         alive = reachable_at_all(design, pts, samples, rots, default_n_eta(design, eta_step), FIRST,
                                  rep.sub(0.3, 1.0), cancel)
         n = 0

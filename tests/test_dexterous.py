@@ -147,24 +147,31 @@ def test_cli_total_orientation_bad_input(args, field, rng):
     assert len(lines) == 1 and lines[0].startswith(f"paraspace: error: {field} = ") and rng in lines[0]
 
 
-@pytest.mark.parametrize("design,tilt,torsion,step,first", [
-    (DESIGN, 15.0, 15.0, 5.0, None),  # the issue's 657 orientations, the hardest 32 by the per-pair test
-    (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0),  # the tree decides every sample
+@pytest.mark.parametrize("design,tilt,torsion,step,first,top", [
+    (DESIGN, 15.0, 15.0, 5.0, None, None),  # the issue's 657 orientations, the hardest 32 by the per-pair test
+    (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0, 4),  # the tree decides every sample; small top blocks
+    (Design(a=60, b=10, d_s=70, l_s=70, eta_range="from-zero"), 10.0, 20.0, 5.0, 8, 2),
 ])
-def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, torsion, step, first, monkeypatch):
-    """Issue 24 target 5: orientations certified by groups (kinematics/orientation_tree.py) give the
-    voxels of the exact per-pair test at every sample (method="pairs", the former path)."""
-    from paraspace.kinematics import dexterous
+def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, torsion, step, first, top, monkeypatch):
+    """Issue 24 target 5: blocks of positions excluded by one orientation and voxels certified by
+    groups of orientations (kinematics/orientation_blocks.py, the default), and the per-voxel tree
+    (kinematics/orientation_tree.py), give the voxels of the exact per-pair test at every sample
+    (method="pairs", the former path)."""
+    from paraspace.kinematics import dexterous, orientation_blocks
 
     if first is not None:
         monkeypatch.setattr(dexterous, "FIRST", first)
+    if top is not None:
+        monkeypatch.setattr(orientation_blocks, "TOP_BLOCK", top)
     ws = WorkspaceSettings(voxel=10.0)
     pos = compute_workspace(design, ws)
-    tree = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos)
+    blocks = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos)
+    tree = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos, method="tree")
     pairs = total_orientation_workspace(design, tilt, torsion, step, ws, position=pos, method="pairs")
-    assert tree.samples.shape[0] > 100
+    assert blocks.samples.shape[0] > 100
+    assert np.array_equal(blocks.occupancy, pairs.occupancy)
     assert np.array_equal(tree.occupancy, pairs.occupancy)
-    assert 0 < tree.voxels < pos.voxels
+    assert 0 < blocks.voxels < pos.voxels
 
 
 def test_unknown_method_is_refused(plain):

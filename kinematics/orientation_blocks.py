@@ -1,0 +1,287 @@
+"""Reachability at EVERY orientation of a sample set, on a grid: blocks of positions excluded by
+one orientation, voxels certified by groups of orientations from their neighbour's cut of the tree.
+
+Lemma (block exclusion, :mod:`kinematics.blocks`). Let a block be a box of voxel centres with
+centre ``Pc`` and half-diagonal ``delta``. At a fixed carriage pose every leg length moves by at
+most ``|P - Pc| <= delta`` over the block, so if at a sample rotation ``R`` chain ``i`` fails at
+``Pc`` with the leg limits relaxed by ``delta + eps`` (the blocks engine's all-fail test, ``eps``
+of :func:`kinematics.blocks.rounding_margin`), it fails with the exact limits at every ``P`` of the
+block at ``R``: no position of the block is in the result, and none is tested again.
+
+Lemma (group certificate, :mod:`kinematics.orientation_tree`). For a node of the orientation tree
+(a group ``G`` of samples with centre ``R0`` and chain slack ``e_i = max_{R in G, u} |R u - R0 u|``),
+a carriage pose that keeps both legs of chain ``i`` in the limits tightened by ``e_i + eps`` at
+``(P, R0)`` serves chain ``i`` at every ``(P, R)``, ``R in G``.
+
+Algorithm. The candidate voxels (those of the position workspace) are covered by top blocks of
+:data:`TOP_BLOCK` voxels per edge, one parallel iteration each, visited depth first: a block
+without candidates is skipped; a block that one of the ``first`` hardest samples excludes (first
+lemma) is dropped whole; a hardest sample at which a chain passes at the block's centre with the
+leg limits tightened by ``delta + eps`` (at its last passing carriage sample: the blocks engine's
+all-succeed test) is certified for the whole block, and neither its children nor its voxels test
+that chain there again; any other block is split in eight (halving each edge of more than one
+voxel, as the blocks engine does). A single voxel is tested exactly at the ``first`` samples, then
+chain by chain over the tree: instead of walking down from the root, it starts from the **cut**
+(the set of nodes whose certificates covered every sample) that the previously decided voxel of
+the same top block left -- a neighbour, so mostly the same cut certifies -- opening a node whose
+certificate fails down to exact single-sample tests; a pair of sibling nodes of the cut is first
+tried as their parent (at the parent's last passing carriage sample only), so the cut can also
+grow coarser again. Any cut covers every sample, so a voxel passes exactly when every sample's
+exact test passes: each decision is either an exact test or certified by a lemma, and the voxels
+are those of testing every sample at every candidate (the tests compare them with the per-pair
+path). Each tree node keeps, per chain, the carriage sample that last passed there (the hint its
+certificate and exact test try first). Plain model only (no joint cones, no leg interference),
+like the orientation tree.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .blocks import FAIL, _top_blocks, decide_chain, rounding_margin, sub_arcs
+from .design import Design
+from .feasibility import _feasible_at, chain_points
+from .kernel_args import kernel_args
+from .orientation_tree import _certified, _exact, build_tree
+from .parallel import kernel_launch
+from .progress import CancelToken, Reporter, check
+from .workspace import rotation_tables
+
+#: Edge (in voxels) of the coarsest position blocks.
+TOP_BLOCK = 32
+#: Top blocks per kernel launch (cancellation and progress are checked between launches).
+LAUNCH = 16
+
+
+@njit(cache=True, nogil=True)
+def _excluded(px, py, pz, delta, eps, first, us, jcs, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
+              lmax, hints, win, done):
+    """Whether one of the samples ``0 .. first - 1`` excludes the whole block (centre ``P``,
+    half-diagonal ``delta``): the excluded test of the module docstring, stopped at the first
+    sample that passes relaxed (``hints[m, i]``: chain ``i``'s last passing sample at sample ``m``).
+    A chain that passes at its hint with the limits tightened by ``delta + eps`` passes at every
+    voxel of the block (the blocks engine's all-succeed test): ``done[m, i]`` is set, and neither
+    the block's children nor its voxels test it again."""
+    e = delta + eps
+    n_eta = cos_t.shape[1]
+    lo_t, hi_t = lmin + e, lmax - e
+    for m in range(first):
+        for i in range(3):
+            if done[m, i]:
+                continue
+            k = hints[m, i]
+            b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, us[m], i)
+            if lo_t <= hi_t and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                             rho_hi, lo_t * lo_t, hi_t * hi_t, jcs[m][i], 0.0):
+                done[m, i] = True
+                continue
+            win[0] = k
+            win[1] = 0
+            win[2] = n_eta - 1
+            if decide_chain(px, py, pz, us[m], i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
+                            jcs[m], e + eps, e, e, e, False, win) == FAIL:
+                return True
+            hints[m, i] = win[0]
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _voxel(px, py, pz, first, us, jcs, left, right, parent, leaf, centre, lo2, hi2, cos_t, sin_t, arc, hb, rho_lo,
+           rho_hi, lmin2, lmax2, hints, cut, n_cut, new_cut, stack, done):
+    """Whether the voxel centre ``P`` passes the exact test at every sample: the samples ``0 ..
+    first - 1`` one by one, then per chain the tree from the cut its neighbour left (``cut[i,
+    :n_cut[i]]``, updated when the voxel passes; a pair of sibling nodes is tried as their parent
+    first). ``hints`` (nodes, 3): each chain's last passing sample per node; ``done`` (first, 3):
+    the pairs its blocks already certified."""
+    for m in range(first):
+        nd = left.shape[0] - first + m
+        for i in range(3):
+            if not done[m, i] and not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2,
+                                             lmax2, jcs[m], hints[nd]):
+                return False
+    if left.shape[0] == first:
+        return True
+    for i in range(3):
+        top = -1
+        j = n_cut[i] - 1
+        while j >= 0:
+            nd = cut[i, j]
+            p = parent[nd]
+            top += 1
+            if p >= 0 and j >= 1 and right[p] == nd and cut[i, j - 1] == left[p]:
+                stack[top] = -1 - p  # the parent, at its last passing sample only
+                j -= 2
+            else:
+                stack[top] = nd
+                j -= 1
+        nn = 0
+        while top >= 0:
+            nd = stack[top]
+            top -= 1
+            if nd < 0:
+                nd = -1 - nd
+                c = centre[nd]
+                b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, us[c], i)
+                k = hints[nd, i]
+                if hi2[nd, i] >= 0.0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                                      rho_lo, rho_hi, lo2[nd, i], hi2[nd, i], jcs[c][i], 0.0):
+                    new_cut[nn] = nd
+                    nn += 1
+                else:
+                    top += 1
+                    stack[top] = right[nd]
+                    top += 1
+                    stack[top] = left[nd]
+                continue
+            m = leaf[nd]
+            if m >= 0:
+                if not _exact(px, py, pz, us[m], i, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jcs[m],
+                              hints[nd]):
+                    return False
+            elif not (hi2[nd, i] >= 0.0 and _certified(px, py, pz, us[centre[nd]], i, cos_t, sin_t, arc, hb, rho_lo,
+                                                       rho_hi, lo2[nd, i], hi2[nd, i], jcs[centre[nd]], hints[nd])):
+                top += 1
+                stack[top] = right[nd]
+                top += 1
+                stack[top] = left[nd]
+                continue
+            new_cut[nn] = nd
+            nn += 1
+        n_cut[i] = nn
+        cut[i, :nn] = new_cut[:nn]
+    return True
+
+
+@njit(cache=True, inline="always")
+def _count(cum, x0, y0, z0, x1, y1, z1):
+    """Candidates in the voxels ``[x0, x1) x [y0, y1) x [z0, z1)`` (``cum``: summed-volume table)."""
+    return (cum[x1, y1, z1] - cum[x0, y1, z1] - cum[x1, y0, z1] - cum[x1, y1, z0]
+            + cum[x0, y0, z1] + cum[x0, y1, z0] + cum[x1, y0, z0] - cum[x0, y0, z0])
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs, left, right, parent, leaf, centre,
+                   lo2, hi2, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, out):
+    """The algorithm of the module docstring for each top block ``t0[t]`` (``tn[t]`` voxels per
+    axis), depth first; ``out`` (grid shape) is set where a candidate passes every sample. The tree's
+    nodes come first, the ``first`` single-sample nodes last."""
+    n_nodes = left.shape[0]
+    n_eta = cos_t.shape[1]
+    for t in prange(t0.shape[0]):
+        hints = np.full((n_nodes, 3), n_eta // 2, np.int64)
+        cut = np.zeros((3, n_nodes), np.int64)  # the tree's root
+        n_cut = np.ones(3, np.int64)
+        new_cut = np.empty(n_nodes, np.int64)
+        stack = np.empty(n_nodes + 64, np.int64)
+        win = np.empty(3, np.int64)
+        cap = 8 * levels + 8
+        b0 = np.empty((cap, 3), np.int64)
+        bn = np.empty((cap, 3), np.int64)
+        done = np.zeros((cap, max(first, 1), 3), np.bool_)  # per block: the first samples' chains certified
+        sp = 0
+        for a in range(3):
+            b0[0, a] = t0[t, a]
+            bn[0, a] = tn[t, a]
+        while sp >= 0:
+            x0, y0, z0 = b0[sp, 0], b0[sp, 1], b0[sp, 2]
+            nx, ny, nz = bn[sp, 0], bn[sp, 1], bn[sp, 2]
+            mine = done[sp].copy()
+            sp -= 1
+            if _count(cum, x0, y0, z0, x0 + nx, y0 + ny, z0 + nz) == 0:
+                continue
+            px = 0.5 * (xs[x0] + xs[x0 + nx - 1])
+            py = 0.5 * (ys[y0] + ys[y0 + ny - 1])
+            pz = 0.5 * (zs[z0] + zs[z0 + nz - 1])
+            if nx == 1 and ny == 1 and nz == 1:
+                out[x0, y0, z0] = _voxel(px, py, pz, first, us, jcs, left, right, parent, leaf, centre, lo2, hi2,
+                                         cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin * lmin, lmax * lmax,
+                                         hints, cut, n_cut, new_cut, stack, mine)
+                continue
+            delta = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2)
+            if _excluded(px, py, pz, delta, eps, first, us, jcs, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo,
+                         rho_hi, lmin, lmax, hints[n_nodes - first:], win, mine):
+                continue
+            # children (first half gets the extra voxel)
+            hx, hy, hz = (nx + 1) // 2, (ny + 1) // 2, (nz + 1) // 2
+            for d in range(7, -1, -1):
+                dx, dy, dz = (d >> 2) & 1, (d >> 1) & 1, d & 1
+                if (dx and nx == 1) or (dy and ny == 1) or (dz and nz == 1):
+                    continue
+                sp += 1
+                b0[sp, 0] = x0 + dx * hx
+                b0[sp, 1] = y0 + dy * hy
+                b0[sp, 2] = z0 + dz * hz
+                bn[sp, 0] = (nx - hx if dx else hx) if nx > 1 else 1
+                bn[sp, 1] = (ny - hy if dy else hy) if ny > 1 else 1
+                bn[sp, 2] = (nz - hz if dz else hz) if nz > 1 else 1
+                done[sp] = mine
+
+
+def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
+                      h: float, samples: np.ndarray, rotations: np.ndarray, n_eta: int, first: int = 0,
+                      progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
+    """Whether each candidate voxel (``candidates``: bool grid; ``axes``: its voxel-centre
+    coordinates, edge ``h``) passes the exact per-pair test at every rotation of ``rotations``
+    (M, 3, 3; ``samples`` their (azimuth, tilt, torsion) rows), plain model only: bool grid, False
+    off the candidates. The first ``first`` samples exclude blocks and are tested first (module
+    docstring)."""
+    from .joints import Joints
+
+    cand = np.ascontiguousarray(np.asarray(candidates, dtype=np.bool_))
+    out = np.zeros(cand.shape, np.bool_)
+    rots = np.ascontiguousarray(np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3))
+    if not cand.any():
+        return out
+    if not rots.shape[0]:
+        return cand.copy()
+    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
+    _u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
+    us, jcs = rotation_tables(design, rots, Joints())
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    eps = rounding_margin(lmax, (xs, ys, zs))
+    first = min(int(first), rots.shape[0])
+    if first < rots.shape[0]:
+        left, right, leaf, centre, members = build_tree(samples[first:], rots[first:])
+        leaf = np.where(leaf >= 0, leaf + first, -1)
+        centre = centre + first
+        members = [m + first for m in members]
+    else:
+        left = right = leaf = centre = np.zeros(0, np.int64)
+        members = []
+    # the first samples as single-sample nodes after the tree's
+    left = np.concatenate([left, np.full(first, -1, np.int64)])
+    right = np.concatenate([right, np.full(first, -1, np.int64)])
+    leaf = np.concatenate([leaf, np.arange(first, dtype=np.int64)])
+    centre = np.concatenate([centre, np.arange(first, dtype=np.int64)])
+    members = members + [np.array([m]) for m in range(first)]
+    slack = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
+                      for m, c in zip(members, centre)]).reshape(-1, 3) + eps
+    lo2 = (lmin + slack) ** 2
+    hi2 = np.where((lmin + slack <= lmax - slack) & (leaf < 0)[:, None], (lmax - slack) ** 2, -1.0)
+    parent = np.full(left.size, -1, np.int64)
+    inner = np.flatnonzero(left >= 0)
+    parent[left[inner]] = inner
+    parent[right[inner]] = inner
+    cum = np.zeros(tuple(n + 1 for n in cand.shape), np.int64)
+    cum[1:, 1:, 1:] = cand.cumsum(0).cumsum(1).cumsum(2)
+    t0, tn = _top_blocks(cand.shape, TOP_BLOCK)
+    x0, y0, z0 = t0.T
+    x1, y1, z1 = (t0 + tn).T
+    counts = (cum[x1, y1, z1] - cum[x0, y1, z1] - cum[x1, y0, z1] - cum[x1, y1, z0]
+              + cum[x0, y0, z1] + cum[x0, y1, z0] + cum[x1, y0, z0] - cum[x0, y0, z0])
+    t0, tn = t0[counts > 0], tn[counts > 0]
+    levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
+    seg_k, seg_arc = sub_arcs(cos_t, sin_t)
+    for s in range(0, t0.shape[0], LAUNCH):
+        check(cancel)
+        sl = slice(s, min(t0.shape[0], s + LAUNCH))
+        with kernel_launch(sl.stop - sl.start):
+            _blocks_kernel(t0[sl], tn[sl], cand, cum, xs, ys, zs, float(h), eps, first, levels, us, jcs, left, right,
+                           parent, leaf, centre, lo2, hi2, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
+                           lmax, out)
+        if progress is not None:
+            progress(sl.stop / t0.shape[0], "total-orientation workspace")
+    return out
