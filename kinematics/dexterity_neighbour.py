@@ -63,7 +63,17 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design
-from .dexterity_sweep import _NE, _NR, PLANES, _constants, _inverse_condition, _lin, _margin_cs, _pruned_carriage
+from .dexterity_sweep import (
+    _NE,
+    _NR,
+    _SLACK,
+    PLANES,
+    _constants,
+    _inverse_condition,
+    _lin,
+    _margin_cs,
+    _pruned_carriage,
+)
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
 from .settings import DEXTERITY
@@ -180,12 +190,51 @@ def _coarse_best(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb
     return be, br, best
 
 
+@njit(cache=True)
+def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, RM, ST,
+                         D, thr):
+    """:func:`_coarse_best` with its scan points pruned by the Lipschitz bounds ``W + D`` of
+    :mod:`kinematics.dexterity_sweep` (``W[k]``: the margin when last computed less the path length
+    ``D`` walked then; ``RM``: per-row largest ``W``; ``ST[0] == 1``: the bounds are set): a point
+    whose bound is below ``thr - 1e-7`` has a margin below ``thr`` and is skipped. The caller climbs
+    again only when the result's margin exceeds ``thr``: then the skipped points are below the
+    maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
+    margin returned is a value ``<= thr`` (``-inf`` when every point was skipped)."""
+    n_e = 1 if e_hi <= e_lo else _CE
+    n_r = 1 if r_hi <= r_lo else _CR
+    valid = ST[0] == 1.0
+    t = thr - _SLACK - D
+    best, be, br = -np.inf, e_lo, r_lo
+    for a in range(n_e):
+        if valid and RM[a] < t:
+            continue
+        e = _lin(e_lo, e_hi, n_e, a)
+        c, s = math.cos(gamma + e), math.sin(gamma + e)
+        rm = -np.inf
+        for b in range(n_r):
+            k = a * n_r + b
+            if valid and W[k] < t:
+                rm = max(rm, W[k])
+                continue
+            r = _lin(r_lo, r_hi, n_r, b)
+            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
+            W[k] = m - D
+            rm = max(rm, W[k])
+            if m > best:
+                best, be, br = m, e, r
+        RM[a] = rm
+    ST[0] = 1.0
+    return be, br, best
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
-                      out, rho_out, eta_out, margin_out):
+                      out, rho_out, eta_out, margin_out, bounded):
     """The neighbour search (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
     ``1/kappa``, ``rho_out``/``eta_out``/``margin_out`` (N, 3; ``rho = r - d``, ``eta`` in radians)
-    the chosen carriage and its chain margins, for the reachable voxels in C order."""
+    the chosen carriage and its chain margins, for the reachable voxels in C order. ``bounded``: the
+    restart scan pruned by the Lipschitz bounds (:func:`_coarse_best_bounded`; the same poses), else
+    every scan point computed (:func:`_coarse_best`, the reference the tests compare with)."""
     ny, nz = occ.shape[1], occ.shape[2]
     for i in prange(i0, i1):
         W = np.empty((3, _NE * _NR))
@@ -194,6 +243,9 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         eta = np.zeros(3)
         A = np.empty((6, 18))
         G = np.empty((6, 6))
+        CW = np.empty((3, _CE * _CR))
+        CRM = np.empty((3, _CE))
+        CST = np.zeros((3, 1))
         index = np.empty((ny, nz), np.int64)
         n = offset[i]
         for j in range(ny):
@@ -203,6 +255,8 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                     n += 1
         px = xs[i]
         first = True
+        D = 0.0  # path length walked in the plane (the Lipschitz bounds' running sum)
+        qy, qz = 0.0, 0.0
         for j in range(ny):
             py = ys[j]
             for kk in range(nz):
@@ -210,6 +264,9 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                 if not occ[i, j, k]:
                     continue
                 pz = zs[k]
+                if not first:
+                    D += math.sqrt((py - qy) ** 2 + (pz - qz) ** 2)
+                qy, qz = py, pz
                 m = index[j, k]
                 for c in range(3):
                     g = 2.0 * math.pi * c / 3.0
@@ -226,8 +283,13 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                                           eta[c], rho[c])
                         # a second start at the best of a coarse scan of the strokes: another local
                         # maximum may have overtaken the one followed from the neighbour
-                        ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
-                                                  lmin, lmax)
+                        if bounded:
+                            ce, cr, cm = _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo,
+                                                              r_hi, hb, lmin, lmax, CW[c], CRM[c], CST[c], D,
+                                                              mg - _RESTART_SLACK)
+                        else:
+                            ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
+                                                      lmin, lmax)
                         if cm > mg - _RESTART_SLACK:
                             r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
                                                 lmax, ce, cr)
@@ -271,9 +333,12 @@ def chain_margins(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np
 
 def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
                     orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
-                    cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                    cancel: CancelToken = None, bounded: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``1/kappa`` at the neighbour search's carriage pose (module docstring) of every reachable voxel
-    of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3))."""
+    of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3)).
+    ``bounded=False`` computes every point of the restart scan (the same result, slower: the
+    reference of the tests)."""
     occ = np.ascontiguousarray(np.asarray(occupancy, bool))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
     u, R2, hb, inv_L = _constants(design, orientation)
@@ -292,7 +357,7 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
         i1 = min(nx, i0 + PLANES)
         with kernel_launch(i1 - i0):
             _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, float(r_lo), float(r_hi), hb,
-                              inv_L, float(design.l_min), float(design.l_max), out, rho, eta, margin)
+                              inv_L, float(design.l_min), float(design.l_max), out, rho, eta, margin, bool(bounded))
         if progress is not None:
             progress(i1 / nx, "dexterity")
     return out, design.r - rho, np.degrees(eta) + 0.0, margin

@@ -128,3 +128,15 @@ def test_cli_reports_the_check_and_a_broken_tolerance():
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and proc.stdout == "" and len(lines) == 1
     assert lines[0].startswith("paraspace: error: dexterity_search = ") and "neighbour or sweep or full" in lines[0]
+
+
+@pytest.mark.parametrize("design,voxel,orientation", CASES + [(Design(), 5.0, (0.0, 0.0, 0.0))])
+def test_the_bounded_restart_scan_gives_the_same_field_as_the_full_scan(design, voxel, orientation):
+    # the restart scan pruned by the Lipschitz bounds must take the same restart decisions from the
+    # same scan points as the scan of every point: identical arrays, bit for bit
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    fast = neighbour_field(design, res.occupancy, res.grid.axes(), orientation)
+    ref = neighbour_field(design, res.occupancy, res.grid.axes(), orientation, bounded=False)
+    assert res.voxels > 0
+    for a, b in zip(fast, ref, strict=True):
+        assert np.array_equal(a, b)
