@@ -21,7 +21,10 @@ a local maximum of ``m_i`` on the full search's finest spacing. The margin can h
 maxima, and the one followed from the neighbour can be overtaken by another: so a second climb
 starts from the best point of a 13 x 11 scan of the strokes when that point's margin is within
 2 length units of the first climb's, and the larger of the two maxima is kept (the neighbour's on a
-tie). ``1/kappa`` of
+tie). The scan skips the points whose Lipschitz bound (:mod:`kinematics.dexterity_sweep`: the margin
+where last computed plus the path length walked since) is below that trigger: they can neither
+trigger the second climb nor be its start, so the decisions and the poses are those of the scan of
+every point (``bounded=False``, checked bit for bit by the tests). ``1/kappa`` of
 eq. (26) is then computed at that pose as :mod:`kinematics.dexterity_sweep` does.
 
 **Tolerance** (stated; checked at run time and by the tests). With ``m_i^full`` the full search's
@@ -47,10 +50,13 @@ size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI differ
 and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
 prints. A check that passes on the sample does not prove the bound at every voxel.
 
-Cost: a few hundred margins per chain and voxel (the 13 x 11 scan is 143 of them) instead of the
-full search's 5,300, plus ``1/kappa`` (about 4 us per voxel and core, a quarter of the time) and the
-sample check (1 % of the voxels at about 80 us each); at ``h = 2`` 102x the engine against the exact
-sweep's 713x (``benchmarks/bench_workspace.py --throughput``, target 3; a loaded 2-core machine).
+Cost: a few hundred margins per chain and voxel (the 13 x 11 scan is at most 143 of them; the
+Lipschitz bounds skip part of it) instead of the full search's 5,300, plus ``1/kappa`` (about 4 us per
+voxel and core, a quarter of the time) and the sample check (1 % of the voxels at about 80 us each).
+At ``h = 2`` (640,014 voxels, 2 loaded cores, load average 2.5-2.9, medians of 5 alternating runs
+with the engine in one process): the neighbour search 15.3 -> 13.2 us per voxel with the bounded
+scan (93x -> 80x the engine), the whole field with its check 94x the engine; the exact sweep was
+713x (``benchmarks/bench_workspace.py --throughput``, target 3).
 """
 
 from __future__ import annotations
