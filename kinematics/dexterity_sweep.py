@@ -27,7 +27,8 @@ bound of its margin at the current voxel:
 
 ``1/kappa = sigma_min(J) / sigma_max(J)`` of ``J = J_h^{-1} J_q`` (eq. (26)) is computed in the same
 kernel, as ``sqrt(lambda_min / lambda_max)`` of ``J J^T`` (Gauss-Jordan elimination with partial
-pivoting, then cyclic Jacobi rotations; 0 where a pivot of ``J_h`` is exactly zero).
+pivoting, then cyclic Jacobi rotations, each applied to the two rows and columns it changes of the
+symmetric matrix; 0 where a pivot of ``J_h`` is exactly zero).
 
 **Tolerance** (checked by the tests against the full search, the slow path
 ``dexterity_field(..., search="full")``): the carriage poses are identical to the full search's,
@@ -233,14 +234,23 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
                 t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
                 cs = 1.0 / math.sqrt(t * t + 1.0)
                 sn = t * cs
+                tau = sn / (1.0 + cs)
+                # the rotation G <- R^T G R on the symmetric matrix: only rows/columns a and b
+                # change, (a, b) becomes zero and the diagonal moves by t g_ab (Rutishauser's form)
+                G[a, a] -= t * gab
+                G[b, b] += t * gab
+                G[a, b] = 0.0
+                G[b, a] = 0.0
                 for k in range(6):
+                    if k == a or k == b:
+                        continue
                     gka, gkb = G[k, a], G[k, b]
-                    G[k, a] = cs * gka - sn * gkb
-                    G[k, b] = sn * gka + cs * gkb
-                for k in range(6):
-                    gak, gbk = G[a, k], G[b, k]
-                    G[a, k] = cs * gak - sn * gbk
-                    G[b, k] = sn * gak + cs * gbk
+                    nka = gka - sn * (gkb + tau * gka)
+                    nkb = gkb + sn * (gka - tau * gkb)
+                    G[k, a] = nka
+                    G[a, k] = nka
+                    G[k, b] = nkb
+                    G[b, k] = nkb
     lo = G[0, 0]
     hi = G[0, 0]
     for a in range(1, 6):
