@@ -225,10 +225,14 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
                 off += G[a, b] * G[a, b]
         if off <= 1e-36 * diag:
             break
+        # a pair whose square is below the stopping bound's share (1e-36 diag over the 15 pairs) is
+        # not rotated: were every pair so, the sweep would have stopped, and the bound on the final
+        # off-diagonal sum is the same
+        small = 1e-36 * diag / 15.0
         for a in range(5):
             for b in range(a + 1, 6):
                 gab = G[a, b]
-                if gab == 0.0:
+                if gab * gab <= small:
                     continue
                 theta = 0.5 * (G[b, b] - G[a, a]) / gab
                 t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
