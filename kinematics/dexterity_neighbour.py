@@ -51,12 +51,15 @@ and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a
 prints. A check that passes on the sample does not prove the bound at every voxel.
 
 Cost: a few hundred margins per chain and voxel (the 13 x 11 scan is at most 143 of them; the
-Lipschitz bounds skip part of it) instead of the full search's 5,300, plus ``1/kappa`` (about 4 us per
-voxel and core, a quarter of the time) and the sample check (1 % of the voxels at about 80 us each).
-At ``h = 2`` (640,014 voxels, 2 loaded cores, load average 2.5-2.9, medians of 5 alternating runs
-with the engine in one process): the neighbour search 15.3 -> 13.2 us per voxel with the bounded
-scan (93x -> 80x the engine), the whole field with its check 94x the engine; the exact sweep was
-713x (``benchmarks/bench_workspace.py --throughput``, target 3).
+Lipschitz bounds skip part of it) instead of the full search's 5,300, plus ``1/kappa`` and the sample
+check (1 % of the voxels at about 80 us each). At ``h = 2`` (640,014 voxels; 2 cores shared with a
+CI run, load average 2.4-4.9; medians of 5 alternating runs in one process, engine beside): the
+bounded scan takes 0.86-0.96x the time of the scan of every point in four runs (13.2-14.5 against
+15.1-15.7 us per voxel); ``1/kappa`` alone 4.2 -> 3.6 us per voxel (0.85x, 7 alternating runs
+against the kernel before, load 2.4-2.6). The whole field with its check was 93-94x the engine
+(15.5 us per voxel, load 2.5-2.9) before and is 73x after (16.1 us per voxel at load 2.4-3.1, the
+engine itself 35 % slower in that run, so the ratio flatters): the 20x target is not met. The exact
+sweep was 713x (``benchmarks/bench_workspace.py --throughput``, target 3).
 """
 
 from __future__ import annotations
