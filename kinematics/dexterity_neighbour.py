@@ -56,9 +56,10 @@ check (1 % of the voxels at about 80 us each). At ``h = 2`` (640,014 voxels; 2 c
 CI run, load average 2.4-4.9; medians of 5 alternating runs in one process, engine beside): the
 bounded scan takes 0.86-0.96x the time of the scan of every point in four runs (13.2-14.5 against
 15.1-15.7 us per voxel); ``1/kappa`` alone 4.2 -> 3.6 us per voxel (0.85x, 7 alternating runs
-against the kernel before, load 2.4-2.6). The whole field with its check was 93-94x the engine
-(15.5 us per voxel, load 2.5-2.9) before and is 73x after (16.1 us per voxel at load 2.4-3.1, the
-engine itself 35 % slower in that run, so the ratio flatters): the 20x target is not met. The exact
+against the kernel before, load 2.4-2.6). The search as it was (every scan point, the Jacobi
+before) was 93x the engine (15.3 us per voxel, load 2.5-2.9); the whole field with its check is
+73-102x after, the spread being the engine's (91-147 ms across the runs): the 20x target is not met.
+The exact
 sweep was 713x (``benchmarks/bench_workspace.py --throughput``, target 3).
 """
 
