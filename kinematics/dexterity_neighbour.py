@@ -59,8 +59,7 @@ bounded scan takes 0.86-0.96x the time of the scan of every point in four runs (
 against the kernel before, load 2.4-2.6). The search as it was (every scan point, the Jacobi
 before) was 93x the engine (15.3 us per voxel, load 2.5-2.9); the whole field with its check is
 73-102x after, the spread being the engine's (91-147 ms across the runs): the 20x target is not met.
-The exact
-sweep was 713x (``benchmarks/bench_workspace.py --throughput``, target 3).
+The exact sweep was 713x (``benchmarks/bench_workspace.py --throughput``, target 3).
 """
 
 from __future__ import annotations
