@@ -57,8 +57,14 @@ def test_closed_sessions_give_their_memory_back(tmp_path) -> None:
     script.write_text(SCRIPT)
     tests = pathlib.Path(__file__).resolve().parent
     n = 12
+    # the same paraspace as this process (a source checkout or the installed copy), so that the child
+    # loads the kernels this session compiled from numba's cache beside them instead of compiling
+    # every kernel again (a script's own folder, not the checkout, heads its sys.path)
+    import paraspace
+
+    env = {**os.environ, "PYTHONPATH": str(pathlib.Path(paraspace.__file__).resolve().parents[1])}
     out = subprocess.run([sys.executable, str(script), str(tests), str(n)], capture_output=True, text=True,
-                         timeout=600, cwd=tests.parent)
+                         timeout=600, cwd=tests.parent, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     r = json.loads(next(line for line in out.stdout.splitlines() if line.startswith('{"before"')))
     assert r["alive"] <= 1, f"closed sessions still referenced: {r}"  # the last one may sit in a frame
