@@ -76,15 +76,16 @@ from .dexterity_sweep import (
     _NE,
     _NR,
     _SLACK,
-    PLANES,
     _constants,
     _inverse_condition,
     _lin,
     _margin_cs,
     _pruned_carriage,
+    by_planes,
+    field_inputs,
 )
 from .parallel import kernel_launch
-from .progress import CancelToken, Reporter, check
+from .progress import CancelToken, Reporter
 from .settings import DEXTERITY
 
 #: Default ``epsilon`` of the stated tolerance on the margin gap (length units, module docstring;
@@ -348,27 +349,14 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3)).
     ``bounded=False`` computes every point of the restart scan (the same result, slower: the
     reference of the tests)."""
-    occ = np.ascontiguousarray(np.asarray(occupancy, bool))
-    xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
-    u, R2, hb, inv_L = _constants(design, orientation)
-    e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
-    r_lo, r_hi = design.rho_limits
-    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
-    offset = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-    n = int(counts.sum())
-    out = np.zeros(n)
-    rho = np.zeros((n, 3))
-    eta = np.zeros((n, 3))
-    margin = np.zeros((n, 3))
-    nx = occ.shape[0]
-    for i0 in range(0, nx, PLANES):
-        check(cancel)
-        i1 = min(nx, i0 + PLANES)
-        with kernel_launch(i1 - i0):
-            _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, float(r_lo), float(r_hi), hb,
-                              inv_L, float(design.l_min), float(design.l_max), out, rho, eta, margin, bool(bounded))
-        if progress is not None:
-            progress(i1 / nx, "dexterity")
+    f = field_inputs(design, occupancy, axes, orientation)
+    out = np.zeros(f.n)
+    rho = np.zeros((f.n, 3))
+    eta = np.zeros((f.n, 3))
+    margin = np.zeros((f.n, 3))
+    by_planes(f.occ.shape[0], lambda i0, i1: _neighbour_kernel(
+        f.occ, i0, i1, f.offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
+        float(design.l_min), float(design.l_max), out, rho, eta, margin, bool(bounded)), progress, cancel)
     return out, design.r - rho, np.degrees(eta) + 0.0, margin
 
 

@@ -43,8 +43,9 @@ this module, not the other way round).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numba import njit, prange
@@ -317,12 +318,31 @@ def _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi
                 out[m] = _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G)
 
 
-def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
-                       orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
-                       cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``1/kappa`` at the resolved carriage pose (module docstring) of every reachable voxel of
-    ``occupancy`` (a grid of ``axes = (xs, ys, zs)``) in C order, with the carriage pose: returns
-    ``(inverse_condition, d, eta_deg)`` as :func:`kinematics.dexterity.resolved_carriages` does."""
+@dataclasses.dataclass(frozen=True)
+class FieldInputs:
+    """What a per-voxel dexterity driver hands its kernel: the occupancy and axes as contiguous
+    arrays, the kernel constants of :func:`_constants`, the carriage limits (eta in radians), and
+    each x plane's offset into the C-ordered list of the ``n`` reachable voxels."""
+
+    occ: np.ndarray
+    xs: np.ndarray
+    ys: np.ndarray
+    zs: np.ndarray
+    u: np.ndarray
+    R2: np.ndarray
+    hb: float
+    inv_L: float
+    e_lo: float
+    e_hi: float
+    r_lo: float
+    r_hi: float
+    offset: np.ndarray
+    n: int
+
+
+def field_inputs(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                 orientation: Sequence[float]) -> FieldInputs:
+    """The :class:`FieldInputs` of ``occupancy`` (a grid of ``axes = (xs, ys, zs)``)."""
     occ = np.ascontiguousarray(np.asarray(occupancy, bool))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
     u, R2, hb, inv_L = _constants(design, orientation)
@@ -330,17 +350,34 @@ def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.
     r_lo, r_hi = design.rho_limits
     counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
     offset = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-    n = int(counts.sum())
-    out = np.zeros(n)
-    rho = np.zeros((n, 3))
-    eta = np.zeros((n, 3))
-    nx = occ.shape[0]
+    return FieldInputs(occ, xs, ys, zs, u, R2, float(hb), float(inv_L), e_lo, e_hi, float(r_lo), float(r_hi),
+                       offset, int(counts.sum()))
+
+
+def by_planes(nx: int, launch: Callable[[int, int], None], progress: Reporter | None,
+              cancel: CancelToken) -> None:
+    """Call ``launch(i0, i1)`` on the x planes ``[i0, i1)`` in runs of ``PLANES``, checking
+    ``cancel`` before each run and reporting the share done after it."""
     for i0 in range(0, nx, PLANES):
         check(cancel)
         i1 = min(nx, i0 + PLANES)
         with kernel_launch(i1 - i0):
-            _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, float(r_lo), float(r_hi), hb, inv_L,
-                          float(design.l_min), float(design.l_max), out, rho, eta)
+            launch(i0, i1)
         if progress is not None:
             progress(i1 / nx, "dexterity")
+
+
+def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                       orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
+                       cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``1/kappa`` at the resolved carriage pose (module docstring) of every reachable voxel of
+    ``occupancy`` (a grid of ``axes = (xs, ys, zs)``) in C order, with the carriage pose: returns
+    ``(inverse_condition, d, eta_deg)`` as :func:`kinematics.dexterity.resolved_carriages` does."""
+    f = field_inputs(design, occupancy, axes, orientation)
+    out = np.zeros(f.n)
+    rho = np.zeros((f.n, 3))
+    eta = np.zeros((f.n, 3))
+    by_planes(f.occ.shape[0], lambda i0, i1: _sweep_kernel(
+        f.occ, i0, i1, f.offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
+        float(design.l_min), float(design.l_max), out, rho, eta), progress, cancel)
     return out, design.r - rho, np.degrees(eta) + 0.0
