@@ -41,7 +41,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open
-from .feasibility import _feasible_at, _leg_intervals, _overlap, chain_points
+from .feasibility import _feasible_at, _leg_intervals, chain_points, sets_meet
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -69,16 +69,7 @@ def _passes(p1, q1, p2, q2, lo, hi, rho_lo, rho_hi):
     n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
     if n2 == 0:
         return False
-    if _overlap(a0, a1, c0, c1, rho_lo, rho_hi):
-        return True
-    if n2 == 2 and _overlap(a0, a1, c2, c3, rho_lo, rho_hi):
-        return True
-    if n1 == 2:
-        if _overlap(a2, a3, c0, c1, rho_lo, rho_hi):
-            return True
-        if n2 == 2 and _overlap(a2, a3, c2, c3, rho_lo, rho_hi):
-            return True
-    return False
+    return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
 
 
 @njit(cache=True, nogil=True)

@@ -72,6 +72,22 @@ def _overlap(lo_a, hi_a, lo_b, hi_b, rho_lo, rho_hi):
 
 
 @njit(cache=True, inline="always")
+def sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi):
+    """Whether some rho in ``[rho_lo, rho_hi]`` lies in both legs' sets: leg 1's ``n1`` intervals
+    ``[a0, a1]`` (and ``[a2, a3]``) and leg 2's ``n2`` intervals ``[c0, c1]`` (and ``[c2, c3]``)."""
+    if _overlap(a0, a1, c0, c1, rho_lo, rho_hi):
+        return True
+    if n2 == 2 and _overlap(a0, a1, c2, c3, rho_lo, rho_hi):
+        return True
+    if n1 == 2:
+        if _overlap(a2, a3, c0, c1, rho_lo, rho_hi):
+            return True
+        if n2 == 2 and _overlap(a2, a3, c2, c3, rho_lo, rho_hi):
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
 def cone_interval(alpha, beta, k, p, q):
     """The set ``{rho : alpha + beta rho >= k sqrt((rho - p)^2 + q)}`` (joint cone (J1) of
     :mod:`kinematics.joints`, ``0 <= k < 1``, ``q >= 0``) as ``(lo, hi)``; empty when ``lo > hi``.
@@ -178,16 +194,7 @@ def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
         b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
     if not ok:
         return False
-    if _overlap(a0, a1, c0, c1, rho_lo, rho_hi):
-        return True
-    if n2 == 2 and _overlap(a0, a1, c2, c3, rho_lo, rho_hi):
-        return True
-    if n1 == 2:
-        if _overlap(a2, a3, c0, c1, rho_lo, rho_hi):
-            return True
-        if n2 == 2 and _overlap(a2, a3, c2, c3, rho_lo, rho_hi):
-            return True
-    return False
+    return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
 
 
 @njit(cache=True)
