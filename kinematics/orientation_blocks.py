@@ -45,7 +45,7 @@ from .blocks import FAIL, _top_blocks, decide_chain, rounding_margin, sub_arcs
 from .design import Design
 from .feasibility import _feasible_at, chain_points
 from .kernel_args import kernel_args
-from .orientation_tree import _certified, _exact, build_tree
+from .orientation_tree import _certified, _exact, build_tree, node_slack
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
 from .workspace import rotation_tables
@@ -257,8 +257,7 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     leaf = np.concatenate([leaf, np.arange(first, dtype=np.int64)])
     centre = np.concatenate([centre, np.arange(first, dtype=np.int64)])
     members = members + [np.array([m]) for m in range(first)]
-    slack = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
-                      for m, c in zip(members, centre)]).reshape(-1, 3) + eps
+    slack = node_slack(us, members, centre) + eps
     lo2 = (lmin + slack) ** 2
     hi2 = np.where((lmin + slack <= lmax - slack) & (leaf < 0)[:, None], (lmax - slack) ** 2, -1.0)
     parent = np.full(left.size, -1, np.int64)

@@ -48,10 +48,29 @@ WINDOW = 4
 CHUNK = 16384
 
 
-def _angles(rots: np.ndarray, r0: np.ndarray) -> np.ndarray:
-    """Rotation angle of ``R r0^T`` for each ``R`` of ``rots`` (radians)."""
-    tr = np.einsum("mij,ij->m", rots, r0)
-    return np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
+def _centre(flat: np.ndarray) -> int:
+    """Index of the rotation (rows of ``flat``: the matrices flattened, (n, 9)) whose largest angle
+    to the others is smallest. The angle of ``R_a R_b^T`` is ``arccos((tr(R_a R_b^T) - 1) / 2)``,
+    decreasing in ``tr(R_a R_b^T) = flat[a] . flat[b]``, so it is the row whose smallest trace is
+    largest; the (n, n) traces are formed a few rows at a time."""
+    n = flat.shape[0]
+    worst = np.full(n, np.inf)
+    rows = max(1, (1 << 20) // n)
+    for a in range(0, n, rows):
+        np.minimum(worst, (flat[a:a + rows] @ flat.T).min(axis=0), out=worst)
+    return int(np.argmax(worst))
+
+
+def node_slack(us: np.ndarray, members: list[np.ndarray], centre: np.ndarray) -> np.ndarray:
+    """Per node and chain the slack ``e_i = max_{R in G, u} |R u - R0 u|`` of the module docstring
+    (``us``: the rotated platform points (M, 3, 2, 3); ``members``, ``centre``: of each node): (nodes, 3)."""
+    if not len(members):
+        return np.zeros((0, 3))
+    sizes = np.array([m.size for m in members])
+    mem = np.concatenate(members)
+    ctr = np.repeat(np.asarray(centre, np.int64), sizes)
+    dist = np.linalg.norm(us[mem] - us[ctr], axis=-1).max(axis=-1)
+    return np.maximum.reduceat(dist, np.concatenate([[0], np.cumsum(sizes)[:-1]]), axis=0)
 
 
 def build_tree(samples: np.ndarray, rots: np.ndarray
@@ -67,6 +86,7 @@ def build_tree(samples: np.ndarray, rots: np.ndarray
     leaf: list[int] = []
     centre: list[int] = []
     group: list[np.ndarray] = []
+    flat = np.ascontiguousarray(rots.reshape(-1, 9))
 
     def node(members: np.ndarray) -> int:
         k = len(left)
@@ -78,8 +98,7 @@ def build_tree(samples: np.ndarray, rots: np.ndarray
         if members.size == 1:
             leaf[k] = int(members[0])
             return k
-        worst = np.array([_angles(rots[members], rots[m]).max() for m in members])
-        c = int(np.argmin(worst))
+        c = _centre(flat[members])
         centre[k] = int(members[c])
         span = coords[members].max(axis=0) - coords[members].min(axis=0)
         axis = int(np.argmax(span))
@@ -218,8 +237,7 @@ def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, ro
         members = []
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (pts[:, 0], pts[:, 1], pts[:, 2]))
-    e = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
-                  for m, c in zip(members, centre)]).reshape(-1, 3) + eps
+    e = node_slack(us, members, centre) + eps
     lo2 = (lmin + e) ** 2
     hi2 = np.where(lmin + e <= lmax - e, (lmax - e) ** 2, -1.0)
     hi2[leaf >= 0] = -1.0
