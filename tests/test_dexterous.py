@@ -178,3 +178,38 @@ def test_unknown_method_is_refused(plain):
     with pytest.raises(ParameterError, match="method"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
                                     method="fast")
+
+
+@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 10.0, 5.0), (10.0, 20.0, 5.0)])
+def test_orientation_tree_groups_and_slack(tilt, torsion, step):
+    """The compiled tree build (kinematics/orientation_tree.py): each inner node's members are its two
+    children's, disjoint, split into halves; leaves are single samples; the centre is a member whose
+    largest angle to the others is the smallest (checked against every angle); and the vectorized
+    slack is, node by node and chain by chain, the largest |R u - R0 u| over the members (the same
+    value as the former per-node expression)."""
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.orientation_tree import build_tree, node_slack
+    from paraspace.kinematics.workspace import rotation_tables
+
+    samples = orientation_samples(tilt, torsion, step)
+    rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
+    left, right, leaf, centre, members = build_tree(samples, rots)
+    assert left.size == 2 * samples.shape[0] - 1 and set(members[0].tolist()) == set(range(samples.shape[0]))
+    assert sorted(leaf[leaf >= 0].tolist()) == list(range(samples.shape[0]))
+    for k in range(left.size):
+        mem = members[k]
+        assert centre[k] in mem
+        if leaf[k] >= 0:
+            assert left[k] == right[k] == -1 and mem.tolist() == [leaf[k]]
+            continue
+        a, b = members[left[k]], members[right[k]]
+        assert sorted(np.concatenate([a, b]).tolist()) == sorted(mem.tolist()) and abs(a.size - b.size) <= 1
+        assert a.min() < b.min()  # children in sample order (hardest first)
+        tr = np.einsum("aij,bij->ab", rots[mem], rots[mem])
+        worst = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0)).max(axis=0)
+        assert worst[list(mem).index(centre[k])] <= worst.min() + 1e-9
+    us, _ = rotation_tables(DESIGN, rots, Joints())
+    slack = node_slack(us, members, centre)
+    for k in range(left.size):
+        for i in range(3):
+            assert slack[k, i] == np.linalg.norm(us[members[k], i] - us[centre[k], i], axis=-1).max()  # former
