@@ -52,8 +52,9 @@ from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
 from .workspace import rotation_tables
 
-#: Edge (in voxels) of the coarsest position blocks.
-TOP_BLOCK = 32
+#: Edge (in voxels) of the coarsest position blocks (each voxel's cut and hints start afresh in a
+#: top block: at h = 4, 657 orientations, 64 cost 0.9x the CPU time of 32, 16 1.1x).
+TOP_BLOCK = 64
 #: Top blocks per kernel launch (cancellation and progress are checked between launches).
 LAUNCH = 16
 

@@ -148,7 +148,8 @@ def test_cli_total_orientation_bad_input(args, field, rng):
 
 
 @pytest.mark.parametrize("design,tilt,torsion,step,first,top", [
-    (DESIGN, 15.0, 15.0, 5.0, None, None),  # the 657 orientations, the hardest 32 by the per-pair test
+    (DESIGN, 15.0, 15.0, 5.0, None, None),  # the 657 orientations, the defaults (hardest 32 / 8 first)
+    (DESIGN, 15.0, 15.0, 5.0, 32, 8),  # the former hardest 32 leading the blocks, small top blocks
     (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0, 4),  # the tree decides every sample; small top blocks
     (Design(a=60, b=10, d_s=70, l_s=70, eta_range="from-zero"), 10.0, 20.0, 5.0, 8, 2),
 ])
@@ -161,6 +162,7 @@ def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, tors
 
     if first is not None:
         monkeypatch.setattr(dexterous, "FIRST", first)
+        monkeypatch.setattr(dexterous, "FIRST_BLOCKS", first)
     if top is not None:
         monkeypatch.setattr(orientation_blocks, "TOP_BLOCK", top)
     ws = WorkspaceSettings(voxel=10.0)
