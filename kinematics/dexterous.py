@@ -183,13 +183,14 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
     t0 = time.perf_counter()
     occ = np.asarray(position.occupancy, bool)
     idx = np.flatnonzero(occ.ravel())
-    pts = position.grid.points().reshape(-1, 3)[idx]
     rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
     alive = np.ones(idx.size, bool)
     eta_step = position.settings.eta_step
     joints = position.settings.joints
     n = samples.shape[0]
     plain = not joints.has_cones and joints.min_distance == 0.0
+    if not (method == "blocks" and plain):  # the blocks take the grid's axes, not the points
+        pts = position.grid.points().reshape(-1, 3)[idx]
     if method == "blocks" and plain:
         grid = position.grid
         inside = reachable_on_grid(design, occ, grid.axes(), grid.h, samples, rots,
