@@ -49,6 +49,7 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
                                             [--options] [--threads] [--task] [--throughput] [--presets]
+                                            [--total-orientation]
 """
 
 from __future__ import annotations
@@ -961,12 +962,18 @@ def main() -> None:
     ap.add_argument("--task", action="store_true", help="only the task rows (item 7)")
     ap.add_argument("--throughput", action="store_true", help="only the issue-24 throughput rows (item 8)")
     ap.add_argument("--presets", action="store_true", help="only the mechanism-preset rows (item 9)")
+    ap.add_argument("--total-orientation", action="store_true",
+                    help="only the total-orientation row of the throughput rows (item 8, target 5)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
     if ns.task:
         print(f"\ntask against the plain workspace, default design (load average {os.getloadavg()[0]:.2f}):")
         task_rows(design)
+    if ns.total_orientation:
+        print(f"\nissue 24 target 5 (load average {os.getloadavg()[0]:.2f}, {os.cpu_count()} CPUs):")
+        total_orientation_rows(design)
+        return
     if ns.throughput:
         throughput_rows(design)
     if ns.presets:

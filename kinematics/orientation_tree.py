@@ -48,10 +48,90 @@ WINDOW = 4
 CHUNK = 16384
 
 
-def _angles(rots: np.ndarray, r0: np.ndarray) -> np.ndarray:
-    """Rotation angle of ``R r0^T`` for each ``R`` of ``rots`` (radians)."""
-    tr = np.einsum("mij,ij->m", rots, r0)
-    return np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0))
+@njit(cache=True)
+def _build(coords, flat):
+    """The splits of :func:`build_tree`, depth first without recursion: per node (preorder)
+    ``left, right, leaf, centre`` and its members ``perm[lo:hi]`` (each node's members stay in its
+    range while its descendants reorder them). The centre is the member whose largest angle to the
+    others is smallest: the angle of ``R_a R_b^T`` is ``arccos((tr(R_a R_b^T) - 1) / 2)``, decreasing
+    in ``tr(R_a R_b^T) = flat[a] . flat[b]``, so it is the member whose smallest trace is largest."""
+    n = coords.shape[0]
+    size = 2 * n - 1
+    left = np.full(size, -1, np.int64)
+    right = np.full(size, -1, np.int64)
+    leaf = np.full(size, -1, np.int64)
+    centre = np.full(size, -1, np.int64)
+    lo = np.empty(size, np.int64)
+    hi = np.empty(size, np.int64)
+    perm = np.arange(n)
+    # stack of (lo, hi, parent, side): side 0 = the parent's left child
+    st = np.empty((size + 1, 4), np.int64)
+    st[0, 0], st[0, 1], st[0, 2], st[0, 3] = 0, n, -1, 0
+    sp = 0
+    k = 0
+    while sp >= 0:
+        a0, a1, par, side = st[sp, 0], st[sp, 1], st[sp, 2], st[sp, 3]
+        sp -= 1
+        lo[k], hi[k] = a0, a1
+        if par >= 0:
+            if side == 0:
+                left[par] = k
+            else:
+                right[par] = k
+        members = perm[a0:a1].copy()
+        m = members.size
+        if m == 1:
+            leaf[k] = members[0]
+            centre[k] = members[0]
+            k += 1
+            continue
+        best = -np.inf
+        c = 0
+        for j in range(m):
+            fj = flat[members[j]]
+            worst = np.inf
+            for q in range(m):
+                fq = flat[members[q]]
+                t = 0.0
+                for e in range(9):
+                    t += fq[e] * fj[e]
+                worst = min(worst, t)
+            if worst > best:
+                best = worst
+                c = j
+        centre[k] = members[c]
+        axis = 0
+        wide = -1.0
+        for d in range(3):
+            span = coords[members, d].max() - coords[members, d].min()
+            if span > wide:
+                wide = span
+                axis = d
+        order = members[np.argsort(coords[members, axis], kind="mergesort")]
+        half = m // 2
+        ha, hb_ = np.sort(order[:half]), np.sort(order[half:])
+        if hb_[0] < ha[0]:
+            ha, hb_ = hb_, ha
+        perm[a0:a0 + ha.size] = ha
+        perm[a0 + ha.size:a1] = hb_
+        sp += 1  # the right child below the left one on the stack: preorder, left subtree first
+        st[sp, 0], st[sp, 1], st[sp, 2], st[sp, 3] = a0 + ha.size, a1, k, 1
+        sp += 1
+        st[sp, 0], st[sp, 1], st[sp, 2], st[sp, 3] = a0, a0 + ha.size, k, 0
+        k += 1
+    return left, right, leaf, centre, perm, lo, hi
+
+
+def node_slack(us: np.ndarray, members: list[np.ndarray], centre: np.ndarray) -> np.ndarray:
+    """Per node and chain the slack ``e_i = max_{R in G, u} |R u - R0 u|`` of the module docstring
+    (``us``: the rotated platform points (M, 3, 2, 3); ``members``, ``centre``: of each node): (nodes, 3)."""
+    if not len(members):
+        return np.zeros((0, 3))
+    sizes = np.array([m.size for m in members])
+    mem = np.concatenate(members)
+    ctr = np.repeat(np.asarray(centre, np.int64), sizes)
+    dist = np.linalg.norm(us[mem] - us[ctr], axis=-1).max(axis=-1)
+    return np.maximum.reduceat(dist, np.concatenate([[0], np.cumsum(sizes)[:-1]]), axis=0)
 
 
 def build_tree(samples: np.ndarray, rots: np.ndarray
@@ -62,39 +142,12 @@ def build_tree(samples: np.ndarray, rots: np.ndarray
     the member samples; node 0 is the root. Children are ordered as the samples (hardest first)."""
     az, th = np.radians(samples[:, 0]), samples[:, 1]
     coords = np.stack([th * np.cos(az), th * np.sin(az), samples[:, 2]], axis=1)
-    left: list[int] = []
-    right: list[int] = []
-    leaf: list[int] = []
-    centre: list[int] = []
-    group: list[np.ndarray] = []
-
-    def node(members: np.ndarray) -> int:
-        k = len(left)
-        left.append(-1)
-        right.append(-1)
-        leaf.append(-1)
-        centre.append(int(members[0]))
-        group.append(members)
-        if members.size == 1:
-            leaf[k] = int(members[0])
-            return k
-        worst = np.array([_angles(rots[members], rots[m]).max() for m in members])
-        c = int(np.argmin(worst))
-        centre[k] = int(members[c])
-        span = coords[members].max(axis=0) - coords[members].min(axis=0)
-        axis = int(np.argmax(span))
-        order = members[np.argsort(coords[members, axis], kind="stable")]
-        half = order.size // 2
-        a, b = np.sort(order[:half]), np.sort(order[half:])
-        if b[0] < a[0]:
-            a, b = b, a
-        left[k] = node(a)
-        right[k] = node(b)
-        return k
-
-    node(np.arange(samples.shape[0]))
-    return (np.array(left, np.int64), np.array(right, np.int64), np.array(leaf, np.int64),
-            np.array(centre, np.int64), group)
+    if not samples.shape[0]:
+        z = np.zeros(0, np.int64)
+        return z, z, z, z, []
+    left, right, leaf, centre, perm, lo, hi = _build(np.ascontiguousarray(coords),
+                                                     np.ascontiguousarray(rots.reshape(-1, 9)))
+    return left, right, leaf, centre, [perm[a:b] for a, b in zip(lo, hi)]
 
 
 @njit(cache=True)
@@ -218,8 +271,7 @@ def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, ro
         members = []
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (pts[:, 0], pts[:, 1], pts[:, 2]))
-    e = np.array([[float(np.linalg.norm(us[m, i] - us[c, i], axis=-1).max()) for i in range(3)]
-                  for m, c in zip(members, centre)]).reshape(-1, 3) + eps
+    e = node_slack(us, members, centre) + eps
     lo2 = (lmin + e) ** 2
     hi2 = np.where(lmin + e <= lmax - e, (lmax - e) ** 2, -1.0)
     hi2[leaf >= 0] = -1.0

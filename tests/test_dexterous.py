@@ -148,7 +148,8 @@ def test_cli_total_orientation_bad_input(args, field, rng):
 
 
 @pytest.mark.parametrize("design,tilt,torsion,step,first,top", [
-    (DESIGN, 15.0, 15.0, 5.0, None, None),  # the issue's 657 orientations, the hardest 32 by the per-pair test
+    (DESIGN, 15.0, 15.0, 5.0, None, None),  # the issue's 657 orientations, the defaults (hardest 32 / 8 first)
+    (DESIGN, 15.0, 15.0, 5.0, 32, 8),  # the former hardest 32 leading the blocks, small top blocks
     (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0, 4),  # the tree decides every sample; small top blocks
     (Design(a=60, b=10, d_s=70, l_s=70, eta_range="from-zero"), 10.0, 20.0, 5.0, 8, 2),
 ])
@@ -161,6 +162,7 @@ def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, tors
 
     if first is not None:
         monkeypatch.setattr(dexterous, "FIRST", first)
+        monkeypatch.setattr(dexterous, "FIRST_BLOCKS", first)
     if top is not None:
         monkeypatch.setattr(orientation_blocks, "TOP_BLOCK", top)
     ws = WorkspaceSettings(voxel=10.0)
@@ -178,3 +180,38 @@ def test_unknown_method_is_refused(plain):
     with pytest.raises(ParameterError, match="method"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
                                     method="fast")
+
+
+@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 10.0, 5.0), (10.0, 20.0, 5.0)])
+def test_orientation_tree_groups_and_slack(tilt, torsion, step):
+    """The compiled tree build (kinematics/orientation_tree.py): each inner node's members are its two
+    children's, disjoint, split into halves; leaves are single samples; the centre is a member whose
+    largest angle to the others is the smallest (checked against every angle); and the vectorized
+    slack is, node by node and chain by chain, the largest |R u - R0 u| over the members (the same
+    value as the former per-node expression)."""
+    from paraspace.kinematics.joints import Joints
+    from paraspace.kinematics.orientation_tree import build_tree, node_slack
+    from paraspace.kinematics.workspace import rotation_tables
+
+    samples = orientation_samples(tilt, torsion, step)
+    rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
+    left, right, leaf, centre, members = build_tree(samples, rots)
+    assert left.size == 2 * samples.shape[0] - 1 and set(members[0].tolist()) == set(range(samples.shape[0]))
+    assert sorted(leaf[leaf >= 0].tolist()) == list(range(samples.shape[0]))
+    for k in range(left.size):
+        mem = members[k]
+        assert centre[k] in mem
+        if leaf[k] >= 0:
+            assert left[k] == right[k] == -1 and mem.tolist() == [leaf[k]]
+            continue
+        a, b = members[left[k]], members[right[k]]
+        assert sorted(np.concatenate([a, b]).tolist()) == sorted(mem.tolist()) and abs(a.size - b.size) <= 1
+        assert a.min() < b.min()  # children in sample order (hardest first)
+        tr = np.einsum("aij,bij->ab", rots[mem], rots[mem])
+        worst = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0)).max(axis=0)
+        assert worst[list(mem).index(centre[k])] <= worst.min() + 1e-9
+    us, _ = rotation_tables(DESIGN, rots, Joints())
+    slack = node_slack(us, members, centre)
+    for k in range(left.size):
+        for i in range(3):
+            assert slack[k, i] == np.linalg.norm(us[members[k], i] - us[centre[k], i], axis=-1).max()  # former
