@@ -227,6 +227,7 @@ from skimage.measure._regionprops_utils import EULER_COEFS3D_26 as _EULER_COEFS3
 
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
+from .run_components import RunComponents, count_components
 from .serialize import jsonable
 from .void_flood import enclosed_voids
 from .workspace import WorkspaceResult
@@ -435,14 +436,14 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
     padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
     is outside. The others, the candidates (:func:`_enclosed_kernel`), are outside exactly when they
     are joined within the candidates to one with a dual neighbour that is unreachable and not a
-    candidate (:func:`_void_set`); only the voids left are labelled, to count them (each void
-    component is one candidate component: distinct candidate components are not adjacent).
+    candidate (:func:`_void_set`); only the voids left are counted, as components of runs
+    (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
+    candidate components are not adjacent).
     """
     voids, box = _void_set(occupancy, connectivity)
     if box is None:
         return voids, 0
-    _, n = ndi.label(voids[box], structure=_structure(dual_connectivity(connectivity)))
-    return voids, int(n)
+    return voids, count_components(voids[box], dual_connectivity(connectivity))
 
 
 def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
@@ -1139,8 +1140,8 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     if not occ.any():
         return 0, 0
     filled = occ | void_mask(occ, connectivity)
-    _, b0 = ndi.label(filled, structure=_structure(connectivity))
-    return int(b0), int(b0 - euler_characteristic(filled, connectivity))
+    b0 = count_components(filled, connectivity)
+    return b0, int(b0 - euler_characteristic(filled, connectivity))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -1303,14 +1304,14 @@ class _Steps:
 
     def _labels(self):
         occ, n, conn = self.occ, self.n, self.o["connectivity"]
-        labels, components = ndi.label(occ, structure=_structure(conn))
-        sizes = np.bincount(labels.ravel())[1:]
+        comps = RunComponents(occ, conn)
+        components, sizes = comps.count, comps.sizes
         largest = float(sizes.max() / n)
         is_piece = sizes >= self.o["piece_fraction"] * n
         n_pieces = int(is_piece.sum())
         fragment_fraction = float(sizes[~is_piece].sum() / n)
-        piece_set = occ if n_pieces == components else np.concatenate([[False], is_piece])[labels]
-        return int(components), largest, n_pieces, fragment_fraction, piece_set
+        piece_set = occ if n_pieces == components else comps.mask(is_piece)
+        return components, largest, n_pieces, fragment_fraction, piece_set
 
     def _voids(self):
         voids_m, n_voids = _voids(self.occ, self.o["connectivity"])
@@ -1325,8 +1326,7 @@ class _Steps:
         voids_m, n_voids, _ = self.get("voids")
         if n_voids:
             filled = self.occ | voids_m
-            _, filled_components = ndi.label(filled, structure=_structure(conn))
-            return int(filled_components), euler_characteristic(filled, conn)
+            return count_components(filled, conn), euler_characteristic(filled, conn)
         return self.get("labels")[0], self.get("chi_w")
 
     def _hull(self):
