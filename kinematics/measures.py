@@ -463,8 +463,27 @@ def _euler_hist_kernel(occ, hist):
     gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
     window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
     previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
-    voxels, so each window reads four voxels."""
+    voxels, so each window reads four voxels; and only the windows that meet the span of their four
+    columns (from the lowest to the highest set voxel of any of them) are read: the others hold no
+    set voxel and are counted as configuration 0 without a read."""
     n0, n1, n2 = occ.shape
+    kb = np.empty((n0, n1), np.int64)  # lowest set z of each column (n2: none)
+    kt = np.empty((n0, n1), np.int64)  # highest (-1: none)
+    for i in prange(n0):
+        for j in range(n1):
+            lo = n2
+            for k in range(n2):
+                if occ[i, j, k]:
+                    lo = k
+                    break
+            hi = -1
+            if lo < n2:
+                for k in range(n2 - 1, lo - 1, -1):
+                    if occ[i, j, k]:
+                        hi = k
+                        break
+            kb[i, j] = lo
+            kt[i, j] = hi
     for ii in prange(n0 + 1):
         i = ii - 1
         x0 = i >= 0
@@ -477,8 +496,26 @@ def _euler_hist_kernel(occ, hist):
             c01 = x0 and y1
             c10 = x1 and y0
             c11 = x1 and y1
+            lo = n2
+            hi = -1
+            if c00:
+                lo = min(lo, kb[i, j])
+                hi = max(hi, kt[i, j])
+            if c01:
+                lo = min(lo, kb[i, j + 1])
+                hi = max(hi, kt[i, j + 1])
+            if c10:
+                lo = min(lo, kb[i + 1, j])
+                hi = max(hi, kt[i + 1, j])
+            if c11:
+                lo = min(lo, kb[i + 1, j + 1])
+                hi = max(hi, kt[i + 1, j + 1])
+            if hi < 0:
+                row[0] += n2 + 1
+                continue
+            row[0] += n2 + 1 - (hi - lo + 2)  # the windows below lo - 1 and above hi
             code = 0
-            for k in range(-1, n2):
+            for k in range(lo - 1, hi + 1):
                 z = k + 1
                 far = 0
                 if z < n2:
@@ -508,6 +545,40 @@ def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
     return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _axis_flags_kernel(occ, fy, fz, count):
+    """``fy[i, j]``: column ``(i, j)`` holds a set voxel; ``fz[i, k]``: row ``(i, :, k)`` does;
+    ``count[i]``: set voxels of slice ``i``."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        c = 0
+        for k in range(n2):
+            fz[i, k] = False
+        for j in range(n1):
+            hit = False
+            for k in range(n2):
+                if occ[i, j, k]:
+                    hit = True
+                    fz[i, k] = True
+                    c += 1
+            fy[i, j] = hit
+        count[i] = c
+
+
+def axis_flags(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """``(occ.any(axis=(1, 2)), occ.any(axis=(0, 2)), occ.any(axis=(0, 1)), occ.sum())`` from one
+    parallel pass over the grid instead of four."""
+    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
+    n0, n1, n2 = occ.shape
+    fy = np.zeros((n0, n1), np.bool_)
+    fz = np.zeros((n0, n2), np.bool_)
+    count = np.zeros(n0, np.int64)
+    if occ.size:
+        with KERNEL_LOCK:
+            _axis_flags_kernel(occ, fy, fz, count)
+    return fy.any(axis=1), fy.any(axis=0), fz.any(axis=0), int(count.sum())
+
+
 def touched_faces(occupancy: np.ndarray) -> list[str]:
     """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel."""
     occ = np.asarray(occupancy, dtype=bool)
@@ -527,7 +598,7 @@ def box_contact_fraction(occupancy: np.ndarray) -> float:
     inner = occ[1:-1, 1:-1, 1:-1] if min(occ.shape) > 2 else np.zeros((0,), bool)
     n_inner = int(np.prod([max(0, s - 2) for s in occ.shape]))
     n_face = occ.size - n_inner
-    return float((int(occ.sum()) - int(inner.sum())) / n_face) if n_face else 0.0
+    return float((int(np.count_nonzero(occ)) - int(np.count_nonzero(inner))) / n_face) if n_face else 0.0
 
 
 @njit(cache=True, inline="always")
@@ -1315,7 +1386,7 @@ class _Steps:
 
     def _voids(self):
         voids_m, n_voids = _voids(self.occ, self.o["connectivity"])
-        return voids_m, n_voids, int(voids_m.sum()) * self.vv
+        return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
 
     def _chi_w(self):
         return euler_characteristic(self.occ, self.o["connectivity"])
@@ -1331,16 +1402,16 @@ class _Steps:
 
     def _hull(self):
         hull = hull_mask(self.occ)
-        return hull, int(hull.sum()) * self.vv
+        return hull, int(np.count_nonzero(hull)) * self.vv
 
     def _under(self):
         under = hollow_mask(self.occ, "hull", self.get("hull")[0])
-        return under, int(under.sum())
+        return under, int(np.count_nonzero(under))
 
     def _hollow_volume(self):
         if self.o["hollowness_mode"] == "hull":
             return self.get("under")[1] * self.vv
-        return int(hollow_mask(self.occ, self.o["hollowness_mode"]).sum()) * self.vv
+        return int(np.count_nonzero(hollow_mask(self.occ, self.o["hollowness_mode"]))) * self.vv
 
     def _gap_volume(self):
         return column_gap_count(self.occ) * self.vv
@@ -1352,9 +1423,9 @@ class _Steps:
             sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None)
         else:
             sealed = self.get("voids")[0]
-        n_open = int((under & ~sealed).sum())
+        n_open = int(np.count_nonzero(under & ~sealed))
         open_ratio = n_open / (n_under + self.n) if n_under else 0.0
-        return float(open_ratio), int((under & sealed).sum()) * self.vv
+        return float(open_ratio), int(np.count_nonzero(under & sealed)) * self.vv
 
     def _pieces_filled(self):
         components, _, n_pieces, _, piece_set = self.get("labels")
@@ -1371,7 +1442,7 @@ class _Steps:
         stable = feature_filter(self.get("labels")[4], self.o["r"] / self.o["h"], self.cancel)
         check(self.cancel)
         stable_components, stable_genus = filled_genus(stable, self.o["connectivity"])
-        return stable_components, stable_genus, float(stable.sum() / self.n)
+        return stable_components, stable_genus, float(int(np.count_nonzero(stable)) / self.n)
 
     def _reasons(self):
         o = self.o
@@ -1460,8 +1531,8 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     grid = result.grid
     h = float(grid.h)
     vv = h ** 3
-    occ = np.asarray(result.occupancy, dtype=bool)
-    n = int(occ.sum())
+    occ = np.ascontiguousarray(result.occupancy, dtype=bool)
+    any_x, any_y, any_z, n = axis_flags(occ)
     volume = n * vv
 
     touched = touched_faces(occ)
@@ -1489,7 +1560,6 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         rest = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
         return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **rest}
 
-    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
     for a, m in enumerate((any_x, any_y, any_z)):
         lo_i = int(np.argmax(m))
@@ -1504,7 +1574,7 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
     lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
     hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    crop = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
+    crop = np.ascontiguousarray(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])  # one copy, not one a kernel
     extent = max(extents)
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
     steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,

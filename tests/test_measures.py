@@ -483,7 +483,8 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
     the grid, every dual neighbour of every candidate tested), on several designs, both option
     sets, and on odd shapes: empty and full grids, a one-voxel grid, a thin odd-sized box, a hollow
     ball with specks beside it (fragments: the pieces' mask is painted from the runs) and a shell
-    with a void; and the seed kernel equals the former one on random fields."""
+    with a void; the seed kernel equals the former one, the Euler number read on the columns' spans
+    equals skimage's and the one-pass axis flags equal numpy's, on random fields."""
     from paraspace.kinematics import measures as mod
     from paraspace.kinematics import void_flood
 
@@ -497,6 +498,17 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
             void_flood._seed_kernel(cand, occ, full, new)
             void_flood._seed_kernel_reference(cand, occ, full, old)
             assert np.array_equal(new, old)
+    from skimage.measure import euler_number
+
+    for _ in range(40):  # the Euler kernel reads only the columns' spans: fields with empty columns and layers
+        occ = rng.random(tuple(rng.integers(1, 12, 3))) < rng.uniform(0.05, 0.95)
+        occ[rng.random(occ.shape[:2]) < 0.3] = False
+        occ[:, :, :rng.integers(0, occ.shape[2] + 1)] = False
+        for conn in (1, 3):
+            assert mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
+        flags = mod.axis_flags(occ)
+        assert all(np.array_equal(f, occ.any(axis=a)) for f, a in zip(flags, ((1, 2), (0, 2), (0, 1))))
+        assert flags[3] == int(occ.sum())
 
     specks = (R2 <= 12 ** 2) & (R2 > 7 ** 2)
     specks[2, 2, 2] = specks[5, 40, 3] = specks[40, 5, 41] = True
