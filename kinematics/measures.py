@@ -1021,15 +1021,19 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _set_blocks_kernel(m, inv, bs, blk):
+def _set_blocks_kernel(m, inv, bs, blk, b0):
     """``blk[a, b, c]``: the block of ``bs^3`` voxels at ``(a, b, c) * bs`` holds a voxel of the set
-    (``m != inv``); each block's scan stops at its first such voxel."""
+    (``m != inv``), for ``b >= b0`` (the others are set False unread); each block's scan stops at
+    its first such voxel."""
     nx, ny, nz = m.shape
     nb1, nb2 = blk.shape[1], blk.shape[2]
     for q in prange(blk.shape[0] * nb1 * nb2):
         a = q // (nb1 * nb2)
         b = (q // nb2) % nb1
         c = q % nb2
+        if b < b0:
+            blk[a, b, c] = False
+            continue
         hit = False
         for i in range(a * bs, min(nx, (a + 1) * bs)):
             for j in range(b * bs, min(ny, (b + 1) * bs)):
@@ -1149,8 +1153,11 @@ def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = Fa
         d1 = np.empty(m.shape, np.uint8)
         bs = max(w, 4)
         blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
+        # with the mirror the kernel reads the blocks of rows j >= ny // 2 only, whose 26 neighbours
+        # lie in the block rows from (ny // 2) // bs - 1 on: only those are scanned
+        b0 = max(0, (m.shape[1] // 2) // bs - 1) if symmetric else 0
         with KERNEL_LOCK:
-            _set_blocks_kernel(m, complement, bs, blk)
+            _set_blocks_kernel(m, complement, bs, blk, b0)
         near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
         with KERNEL_LOCK:
             _ball_dilate_fast_kernel(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
