@@ -1052,14 +1052,16 @@ def _set_blocks_kernel(m, inv, bs, blk, b0):
 def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
     """:func:`_ball_dilate_kernel`'s set, in fewer bytes and passes: the squared distances are kept
     in ``d1`` (uint8, capped at 255 > ``r2``: a capped distance stays beyond the ball, and the
-    searches stop at ``w`` before a cap could matter), the y and z searches are fused per x slice
-    through a slice buffer, the mask is read complemented when ``inv_in`` and written complemented
-    when ``inv_out`` (an erosion is the complement of the complement's dilation), and with ``half``
-    (a mask symmetric under ``j -> ny - 1 - j``) only the rows ``j >= ny // 2`` are computed and
-    mirrored (the result is symmetric too). A voxel whose block of ``bs >= w`` voxels has no set
-    voxel in itself or in the 26 blocks around it (``near`` false) has none within ``w`` along any
-    axis: its distances are beyond ``r2`` (the cap) without a search, and no result changes (any
-    distance beyond ``r2`` plays the part of the cap)."""
+    offsets stop at ``w`` before a cap could matter), the y and z steps are fused per z row through
+    a row buffer, each taken one offset at a time along the whole row (``d2 = min_{|dj| <= w} d1[j +
+    dj] + dj^2``, then "some ``|dk| <= w`` with ``d2[k + dk] <= r2 - dk^2``": branch-free loops over
+    contiguous z, the same minimum and the same test as a search from each voxel), the mask is read
+    complemented when ``inv_in`` and written complemented when ``inv_out`` (an erosion is the
+    complement of the complement's dilation), and with ``half`` (a mask symmetric under ``j -> ny -
+    1 - j``) only the rows ``j >= ny // 2`` are computed and mirrored (the result is symmetric too).
+    A voxel whose block of ``bs >= w`` voxels has no set voxel in itself or in the 26 blocks around
+    it (``near`` false) has none within ``w`` along any axis: a z row whose blocks are all so is
+    out without the y and z steps, and no result changes."""
     nx, ny, nz = m.shape
     j0 = ny // 2 if half else 0
     cap = 255
@@ -1088,50 +1090,59 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out)
                 v = d * d if d <= w else cap
                 o = np.int32(d1[i, j, k])
                 d1[i, j, k] = v if v < o else o
-    kb = np.empty(nz, np.int64)
-    for k in range(nz):
-        kb[k] = k // bs
+    nkb = near.shape[2]
     for i in prange(nx):
         d2 = np.empty(nz, np.int32)
+        hit = np.empty(nz, np.bool_)
         for j in range(j0, ny):
+            jr = ny - 1 - j
             row = near[i // bs, j // bs]
+            busy = False
+            for c in range(nkb):
+                if row[c]:
+                    busy = True
+                    break
+            if not busy:  # no set voxel within w of the row
+                for k in range(nz):
+                    out[i, j, k] = inv_out
+                    if half:
+                        out[i, jr, k] = inv_out
+                continue
+            # d2 = min over |dj| <= w of d1[j + dj] + dj^2, one offset at a time along the whole row
             for k in range(nz):
-                if not row[kb[k]]:
-                    d2[k] = cap
-                    continue
-                best = np.int32(d1[i, j, k])
-                for dj in range(1, w + 1):
-                    c = dj * dj
-                    if c >= best:
-                        break
-                    jp = j + dj
-                    if jp < ny:
+                d2[k] = d1[i, j, k]
+            for dj in range(1, w + 1):
+                c = dj * dj
+                jp = j + dj
+                if jp < ny:
+                    for k in range(nz):
                         v = np.int32(d1[i, jp, k]) + c
-                        if v < best:
-                            best = v
-                    jm = j - dj
-                    if jm >= 0:
-                        if jm < j0:
-                            jm = ny - 1 - jm
+                        if v < d2[k]:
+                            d2[k] = v
+                jm = j - dj
+                if jm >= 0:
+                    if jm < j0:
+                        jm = ny - 1 - jm
+                    for k in range(nz):
                         v = np.int32(d1[i, jm, k]) + c
-                        if v < best:
-                            best = v
-                d2[k] = best
+                        if v < d2[k]:
+                            d2[k] = v
+            # in the ball: some |dk| <= w with d2[k + dk] + dk^2 <= r2
             for k in range(nz):
-                best = d2[k]
-                if row[kb[k]]:
-                    for dk in range(1, w + 1):
-                        c = dk * dk
-                        if c >= best or c > r2:
-                            break
-                        if k + dk < nz and d2[k + dk] + c < best:
-                            best = d2[k + dk] + c
-                        if k - dk >= 0 and d2[k - dk] + c < best:
-                            best = d2[k - dk] + c
-                val = (best <= r2) != inv_out
+                hit[k] = d2[k] <= r2
+            for dk in range(1, w + 1):
+                lim = r2 - dk * dk
+                for k in range(nz - dk):
+                    if d2[k + dk] <= lim:
+                        hit[k] = True
+                for k in range(dk, nz):
+                    if d2[k - dk] <= lim:
+                        hit[k] = True
+            for k in range(nz):
+                val = hit[k] != inv_out
                 out[i, j, k] = val
                 if half:
-                    out[i, ny - 1 - j, k] = val
+                    out[i, jr, k] = val
 
 
 def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
