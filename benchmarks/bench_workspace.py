@@ -423,10 +423,12 @@ class _LabelledComponents:
 def _measures_before_meas2():
     """kinematics.measures as it was before the meas2 branch: components by scipy's labelled grid,
     the void flood's seeds by testing every dual neighbour, the Euler kernel reading every window,
-    the axis flags and the count by four numpy reductions. (Not restored: the counts by
+    the axis flags and the count by four numpy reductions, the dilations' y and z steps by a search
+    from each voxel over every block row. (Not restored: the counts by
     ``count_nonzero`` and the one contiguous copy of the cropped grid, a few ms at h = 1.)"""
     import numpy as np
     from numba import njit, prange
+    from scipy import ndimage as ndi
 
     from paraspace.kinematics import measures as mod
     from paraspace.kinematics import void_flood
@@ -475,7 +477,133 @@ def _measures_before_meas2():
     def flags(occ):
         return tuple(np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1))) + (int(occ.sum()),)
 
+    @njit(parallel=True, cache=True, nogil=True)
+    def set_blocks_before(m, inv, bs, blk):
+        """The former _set_blocks_kernel, verbatim (every block row scanned)."""
+        nx, ny, nz = m.shape
+        nb1, nb2 = blk.shape[1], blk.shape[2]
+        for q in prange(blk.shape[0] * nb1 * nb2):
+            a = q // (nb1 * nb2)
+            b = (q // nb2) % nb1
+            c = q % nb2
+            hit = False
+            for i in range(a * bs, min(nx, (a + 1) * bs)):
+                for j in range(b * bs, min(ny, (b + 1) * bs)):
+                    for k in range(c * bs, min(nz, (c + 1) * bs)):
+                        if m[i, j, k] != inv:
+                            hit = True
+                            break
+                    if hit:
+                        break
+                if hit:
+                    break
+            blk[a, b, c] = hit
+
+    @njit(parallel=True, cache=True, nogil=True)
+    def dilate_fast_before(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
+        """The former _ball_dilate_fast_kernel, verbatim (a search from each voxel for y and z)."""
+        nx, ny, nz = m.shape
+        j0 = ny // 2 if half else 0
+        cap = 255
+        for j in prange(j0, ny):
+            # the distance along x to the nearest set voxel, by a forward and a backward sweep
+            near_i = np.empty(nz, np.int32)
+            far = np.int32(-(1 << 30))
+            for k in range(nz):
+                near_i[k] = far
+            for i in range(nx):
+                ii = np.int32(i)
+                for k in range(nz):
+                    q = ii if m[i, j, k] != inv_in else near_i[k]
+                    near_i[k] = q
+                    d = ii - q
+                    d1[i, j, k] = d * d if d <= w else cap
+            far = np.int32(1 << 30)
+            for k in range(nz):
+                near_i[k] = far
+            for i in range(nx - 1, -1, -1):
+                ii = np.int32(i)
+                for k in range(nz):
+                    q = ii if m[i, j, k] != inv_in else near_i[k]
+                    near_i[k] = q
+                    d = q - ii
+                    v = d * d if d <= w else cap
+                    o = np.int32(d1[i, j, k])
+                    d1[i, j, k] = v if v < o else o
+        kb = np.empty(nz, np.int64)
+        for k in range(nz):
+            kb[k] = k // bs
+        for i in prange(nx):
+            d2 = np.empty(nz, np.int32)
+            for j in range(j0, ny):
+                row = near[i // bs, j // bs]
+                for k in range(nz):
+                    if not row[kb[k]]:
+                        d2[k] = cap
+                        continue
+                    best = np.int32(d1[i, j, k])
+                    for dj in range(1, w + 1):
+                        c = dj * dj
+                        if c >= best:
+                            break
+                        jp = j + dj
+                        if jp < ny:
+                            v = np.int32(d1[i, jp, k]) + c
+                            if v < best:
+                                best = v
+                        jm = j - dj
+                        if jm >= 0:
+                            if jm < j0:
+                                jm = ny - 1 - jm
+                            v = np.int32(d1[i, jm, k]) + c
+                            if v < best:
+                                best = v
+                    d2[k] = best
+                for k in range(nz):
+                    best = d2[k]
+                    if row[kb[k]]:
+                        for dk in range(1, w + 1):
+                            c = dk * dk
+                            if c >= best or c > r2:
+                                break
+                            if k + dk < nz and d2[k + dk] + c < best:
+                                best = d2[k + dk] + c
+                            if k - dk >= 0 and d2[k - dk] + c < best:
+                                best = d2[k - dk] + c
+                    val = (best <= r2) != inv_out
+                    out[i, j, k] = val
+                    if half:
+                        out[i, ny - 1 - j, k] = val
+
+
+    def dilate_before(mask, radius_voxels, *, complement=False, symmetric=False):
+        """The former ball_dilate."""
+        m = np.ascontiguousarray(mask, dtype=np.bool_)
+        w = int(np.floor(radius_voxels + 1e-9))
+        if w <= 0 or m.size == 0:
+            return m.copy()
+        r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
+        out = np.empty(m.shape, np.bool_)
+        if r2 < 255:
+            d1 = np.empty(m.shape, np.uint8)
+            bs = max(w, 4)
+            blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
+            with mod.KERNEL_LOCK:
+                set_blocks_before(m, complement, bs, blk)
+            near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
+            with mod.KERNEL_LOCK:
+                dilate_fast_before(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
+            return out
+        if complement:
+            m = ~m
+        d1i = np.empty(m.shape, np.int32)
+        d2 = np.empty(m.shape, np.int32)
+        with mod.KERNEL_LOCK:
+            mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
+        return ~out if complement else out
+
     patch = {"RunComponents": _LabelledComponents, "euler_characteristic": euler, "axis_flags": flags,
+             "ball_dilate": dilate_before,
              "count_components": lambda occ, conn=1: _LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     seed = void_flood._seed_kernel
