@@ -339,15 +339,19 @@ def _enclosed_kernel(occ, out):
                     ly[k] = j
         for j in range(n1):
             fz = n2
-            lz = -1
             for k in range(n2):
                 if occ[i, j, k]:
-                    if fz == n2:
-                        fz = k
+                    fz = k
+                    break
+            lz = -1
+            for k in range(n2 - 1, fz, -1):
+                if occ[i, j, k]:
                     lz = k
+                    break
             for k in range(n2):
-                out[i, j, k] = (not occ[i, j, k] and fz < k < lz and fy[k] < j < ly[k]
-                                and fx[j, k] < i < lx[j, k])
+                out[i, j, k] = False
+            for k in range(fz + 1, lz):  # only strictly between the column's ends
+                out[i, j, k] = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
 
 
 @njit(parallel=True, cache=True, nogil=True)
