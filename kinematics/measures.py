@@ -549,40 +549,6 @@ def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
     return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
 
-@njit(parallel=True, cache=True, nogil=True)
-def _axis_flags_kernel(occ, fy, fz, count):
-    """``fy[i, j]``: column ``(i, j)`` holds a set voxel; ``fz[i, k]``: row ``(i, :, k)`` does;
-    ``count[i]``: set voxels of slice ``i``."""
-    n0, n1, n2 = occ.shape
-    for i in prange(n0):
-        c = 0
-        for k in range(n2):
-            fz[i, k] = False
-        for j in range(n1):
-            hit = False
-            for k in range(n2):
-                if occ[i, j, k]:
-                    hit = True
-                    fz[i, k] = True
-                    c += 1
-            fy[i, j] = hit
-        count[i] = c
-
-
-def axis_flags(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """``(occ.any(axis=(1, 2)), occ.any(axis=(0, 2)), occ.any(axis=(0, 1)), occ.sum())`` from one
-    parallel pass over the grid instead of four."""
-    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
-    n0, n1, n2 = occ.shape
-    fy = np.zeros((n0, n1), np.bool_)
-    fz = np.zeros((n0, n2), np.bool_)
-    count = np.zeros(n0, np.int64)
-    if occ.size:
-        with KERNEL_LOCK:
-            _axis_flags_kernel(occ, fy, fz, count)
-    return fy.any(axis=1), fy.any(axis=0), fz.any(axis=0), int(count.sum())
-
-
 def touched_faces(occupancy: np.ndarray) -> list[str]:
     """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel."""
     occ = np.asarray(occupancy, dtype=bool)
@@ -1553,8 +1519,8 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     grid = result.grid
     h = float(grid.h)
     vv = h ** 3
-    occ = np.ascontiguousarray(result.occupancy, dtype=bool)
-    any_x, any_y, any_z, n = axis_flags(occ)
+    occ = np.asarray(result.occupancy, dtype=bool)
+    n = int(np.count_nonzero(occ))
     volume = n * vv
 
     touched = touched_faces(occ)
@@ -1582,6 +1548,7 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         rest = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
         return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **rest}
 
+    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
     bmin, bmax = [], []
     for a, m in enumerate((any_x, any_y, any_z)):
         lo_i = int(np.argmax(m))
