@@ -200,18 +200,22 @@ Computation
 -----------
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
-the Euler number counts the 2x2x2 configurations in one parallel pass with skimage's (Ohser's)
-coefficients, reading four voxels per window; the voids are the unreachable voxels that have
-reachable ones on both sides along all three axes (any other unreachable voxel sees the padding
-along a straight line) less a flood from those that leak (:mod:`kinematics.void_flood`: a sealed
-cavity is never visited, and only the voids are labelled, when their number is asked for); the
-dilations keep capped uint8 distances, compute half the rows of a mirror-symmetric solid and skip
-the voxels with no set voxel within their block's neighbourhood; the hull's columns test the facets
-their tile keeps, and qhull gets only the column ends that are vertices of their x line's and y
-line's 2-D hulls (:func:`hull_points`). :func:`measure_fields` computes only the steps the asked-for fields need. The
-whole :func:`measure_workspace` of the default design takes about 0.23 s at h = 2 and 2.4 s at
-h = 1 on the shared 2-core machine (load 3.4-3.6: 4.4x and 9.6x the engine in the same run, from
-0.52 s and 7.8 s on the former path; ``benchmarks/bench_workspace.py --throughput``).
+the components are counted from the runs along z (:mod:`kinematics.run_components`: a union-find
+over the runs, whose number grows with the surface, not the volume); the Euler number counts the
+2x2x2 configurations in one parallel pass with skimage's (Ohser's) coefficients, reading four
+voxels per window and only the windows that meet their four columns' span; the voids are the
+unreachable voxels that have reachable ones on both sides along all three axes (any other
+unreachable voxel sees the padding along a straight line) less a flood from those that leak
+(:mod:`kinematics.void_flood`, its seeds found by separable ors: a sealed cavity is never visited,
+and only the voids are counted, when their number is asked for); the dilations keep capped uint8
+distances, compute half the rows of a mirror-symmetric solid, take the y and z steps one offset at
+a time along whole z rows and skip the rows with no set voxel within their blocks' neighbourhood;
+the hull's columns test the facets their tile keeps, and qhull gets only the column ends that are
+vertices of their x line's and y line's 2-D hulls (:func:`hull_points`). :func:`measure_fields`
+computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
+default design takes about 0.10 s at h = 2 and 0.73 s at h = 1 in CPU time with one numba thread
+on the shared 2-core machine (load 3-4: 1.6x and 3.5x the engine in the same run, from 0.17 s and
+1.65 s, 2.8x and 8.0x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
 """
 
 from __future__ import annotations
