@@ -1035,7 +1035,8 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out)
     1 - j``) only the rows ``j >= ny // 2`` are computed and mirrored (the result is symmetric too).
     A voxel whose block of ``bs >= w`` voxels has no set voxel in itself or in the 26 blocks around
     it (``near`` false) has none within ``w`` along any axis: a z row whose blocks are all so is
-    out without the y and z steps, and no result changes."""
+    out without the y and z steps, and a z row whose voxels are all set (``d1`` all 0) is in
+    without them; no result changes."""
     nx, ny, nz = m.shape
     j0 = ny // 2 if half else 0
     cap = 255
@@ -1081,6 +1082,17 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out)
                     out[i, j, k] = inv_out
                     if half:
                         out[i, jr, k] = inv_out
+                continue
+            zero = True  # every voxel of the row set: all in, without the y and z steps
+            for k in range(nz):
+                if d1[i, j, k] != 0:
+                    zero = False
+                    break
+            if zero:
+                for k in range(nz):
+                    out[i, j, k] = not inv_out
+                    if half:
+                        out[i, jr, k] = not inv_out
                 continue
             # d2 = min over |dj| <= w of d1[j + dj] + dj^2, one offset at a time along the whole row
             for k in range(nz):
