@@ -213,9 +213,9 @@ a time along whole z rows and skip the rows with no set voxel within their block
 the hull's columns test the facets their tile keeps, and qhull gets only the column ends that are
 vertices of their x line's and y line's 2-D hulls (:func:`hull_points`). :func:`measure_fields`
 computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
-default design takes about 0.10 s at h = 2 and 0.73 s at h = 1 in CPU time with one numba thread
-on the shared 2-core machine (load 3-4: 1.6x and 3.5x the engine in the same run, from 0.17 s and
-1.65 s, 2.8x and 8.0x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
+default design takes about 0.10 s at h = 2 and 0.7 s at h = 1 in CPU time with one numba thread
+on the shared 2-core machine (load 3-5.5: 1.6x and 3.5x the engine in the same run, from 0.17 s and
+1.65-1.95 s, 2.8x and 8-10x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
 """
 
 from __future__ import annotations
