@@ -49,7 +49,7 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
 
 Usage: python benchmarks/bench_workspace.py [--voxel H] [--skip-converged] [--no-load] [--only-v2]
                                             [--options] [--threads] [--task] [--throughput] [--presets]
-                                            [--total-orientation]
+                                            [--total-orientation] [--measure-stages]
 """
 
 from __future__ import annotations
@@ -249,7 +249,8 @@ def evaluation_rows(design: Design, runs: int = 5) -> None:
 def _former_measures():
     """kinematics.measures on its former path (before issue 24): skimage's Euler number, voids by
     labelling the whole padded complement, int32 dilations of the whole grid, every hull facet at
-    every column, column gaps and cover by cumulative ors (the tests' slow path)."""
+    every column, column gaps and cover by cumulative ors, components by scipy's labelled grid (the
+    tests' slow path)."""
     import numpy as np
     from scipy import ndimage as ndi
     from skimage.measure import euler_number
@@ -271,7 +272,9 @@ def _former_measures():
 
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
              "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
-             "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum())}
+             "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
+             "RunComponents": _LabelledComponents,
+             "count_components": lambda occ, conn=1: _LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     for k, v in patch.items():
         setattr(mod, k, v)
@@ -398,6 +401,292 @@ def measure_meas1_rows(design: Design, runs: int = 3) -> None:
                 name = "measure_workspace" if kind == "new" else "measure_workspace, before meas1"
                 _row(f"{name}, {nt} thread{'s' if nt != '1' else ''}", med[k], med["engine"],
                      "(target <= 1x)" if kind == "new" else "")
+
+
+class _LabelledComponents:
+    """kinematics.run_components.RunComponents by scipy's labelling of the grid (the path before meas2)."""
+
+    def __init__(self, occ, conn=1):
+        import numpy as np
+        from scipy import ndimage as ndi
+
+        self._lab, self.count = ndi.label(occ, structure=ndi.generate_binary_structure(3, conn))
+        self.sizes = np.bincount(self._lab.ravel(), minlength=1)[1:]
+
+    def mask(self, keep):
+        import numpy as np
+
+        return np.concatenate([[False], keep])[self._lab]
+
+
+@contextlib.contextmanager
+def _measures_before_meas2():
+    """kinematics.measures as it was before the meas2 branch: components by scipy's labelled grid,
+    the void flood's seeds by testing every dual neighbour, the Euler kernel reading every window,
+    the dilations' y and z steps by a search from each voxel over every block row. (Not restored:
+    the counts by ``count_nonzero``, the one contiguous copy of the cropped grid and the enclosed
+    voxels' column ends found from both ends, a few ms each at h = 1.)"""
+    import numpy as np
+    from numba import njit, prange
+    from scipy import ndimage as ndi
+
+    from paraspace.kinematics import measures as mod
+    from paraspace.kinematics import void_flood
+
+    @njit(parallel=True, cache=True, nogil=True)
+    def euler_hist_all(occ, hist):  # the former _euler_hist_kernel, verbatim
+        n0, n1, n2 = occ.shape
+        for ii in prange(n0 + 1):
+            i = ii - 1
+            x0 = i >= 0
+            x1 = i + 1 < n0
+            row = np.zeros(256, np.int64)
+            for j in range(-1, n1):
+                y0 = j >= 0
+                y1 = j + 1 < n1
+                c00 = x0 and y0
+                c01 = x0 and y1
+                c10 = x1 and y0
+                c11 = x1 and y1
+                code = 0
+                for k in range(-1, n2):
+                    z = k + 1
+                    far = 0
+                    if z < n2:
+                        if c00 and occ[i, j, z]:
+                            far |= 32
+                        if c01 and occ[i, j + 1, z]:
+                            far |= 16
+                        if c10 and occ[i + 1, j, z]:
+                            far |= 2
+                        if c11 and occ[i + 1, j + 1, z]:
+                            far |= 1
+                    code = ((code & 0x33) << 2) | far
+                    row[code] += 1
+            for c in range(256):
+                hist[ii, c] = row[c]
+
+    def euler(occ, conn=1):
+        occ = np.ascontiguousarray(occ, dtype=np.bool_)
+        coefs = mod._EULER_26[::-1] if conn == 1 else mod._EULER_26
+        hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
+        with mod.KERNEL_LOCK:
+            euler_hist_all(occ, hist)
+        return int(0.125 * int(coefs @ hist.sum(axis=0)))
+
+    @njit(parallel=True, cache=True, nogil=True)
+    def set_blocks_before(m, inv, bs, blk):
+        """The former _set_blocks_kernel, verbatim (every block row scanned)."""
+        nx, ny, nz = m.shape
+        nb1, nb2 = blk.shape[1], blk.shape[2]
+        for q in prange(blk.shape[0] * nb1 * nb2):
+            a = q // (nb1 * nb2)
+            b = (q // nb2) % nb1
+            c = q % nb2
+            hit = False
+            for i in range(a * bs, min(nx, (a + 1) * bs)):
+                for j in range(b * bs, min(ny, (b + 1) * bs)):
+                    for k in range(c * bs, min(nz, (c + 1) * bs)):
+                        if m[i, j, k] != inv:
+                            hit = True
+                            break
+                    if hit:
+                        break
+                if hit:
+                    break
+            blk[a, b, c] = hit
+
+    @njit(parallel=True, cache=True, nogil=True)
+    def dilate_fast_before(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
+        """The former _ball_dilate_fast_kernel, verbatim (a search from each voxel for y and z)."""
+        nx, ny, nz = m.shape
+        j0 = ny // 2 if half else 0
+        cap = 255
+        for j in prange(j0, ny):
+            # the distance along x to the nearest set voxel, by a forward and a backward sweep
+            near_i = np.empty(nz, np.int32)
+            far = np.int32(-(1 << 30))
+            for k in range(nz):
+                near_i[k] = far
+            for i in range(nx):
+                ii = np.int32(i)
+                for k in range(nz):
+                    q = ii if m[i, j, k] != inv_in else near_i[k]
+                    near_i[k] = q
+                    d = ii - q
+                    d1[i, j, k] = d * d if d <= w else cap
+            far = np.int32(1 << 30)
+            for k in range(nz):
+                near_i[k] = far
+            for i in range(nx - 1, -1, -1):
+                ii = np.int32(i)
+                for k in range(nz):
+                    q = ii if m[i, j, k] != inv_in else near_i[k]
+                    near_i[k] = q
+                    d = q - ii
+                    v = d * d if d <= w else cap
+                    o = np.int32(d1[i, j, k])
+                    d1[i, j, k] = v if v < o else o
+        kb = np.empty(nz, np.int64)
+        for k in range(nz):
+            kb[k] = k // bs
+        for i in prange(nx):
+            d2 = np.empty(nz, np.int32)
+            for j in range(j0, ny):
+                row = near[i // bs, j // bs]
+                for k in range(nz):
+                    if not row[kb[k]]:
+                        d2[k] = cap
+                        continue
+                    best = np.int32(d1[i, j, k])
+                    for dj in range(1, w + 1):
+                        c = dj * dj
+                        if c >= best:
+                            break
+                        jp = j + dj
+                        if jp < ny:
+                            v = np.int32(d1[i, jp, k]) + c
+                            if v < best:
+                                best = v
+                        jm = j - dj
+                        if jm >= 0:
+                            if jm < j0:
+                                jm = ny - 1 - jm
+                            v = np.int32(d1[i, jm, k]) + c
+                            if v < best:
+                                best = v
+                    d2[k] = best
+                for k in range(nz):
+                    best = d2[k]
+                    if row[kb[k]]:
+                        for dk in range(1, w + 1):
+                            c = dk * dk
+                            if c >= best or c > r2:
+                                break
+                            if k + dk < nz and d2[k + dk] + c < best:
+                                best = d2[k + dk] + c
+                            if k - dk >= 0 and d2[k - dk] + c < best:
+                                best = d2[k - dk] + c
+                    val = (best <= r2) != inv_out
+                    out[i, j, k] = val
+                    if half:
+                        out[i, ny - 1 - j, k] = val
+
+
+    def dilate_before(mask, radius_voxels, *, complement=False, symmetric=False):
+        """The former ball_dilate."""
+        m = np.ascontiguousarray(mask, dtype=np.bool_)
+        w = int(np.floor(radius_voxels + 1e-9))
+        if w <= 0 or m.size == 0:
+            return m.copy()
+        r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
+        out = np.empty(m.shape, np.bool_)
+        if r2 < 255:
+            d1 = np.empty(m.shape, np.uint8)
+            bs = max(w, 4)
+            blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
+            with mod.KERNEL_LOCK:
+                set_blocks_before(m, complement, bs, blk)
+            near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
+            with mod.KERNEL_LOCK:
+                dilate_fast_before(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
+            return out
+        if complement:
+            m = ~m
+        d1i = np.empty(m.shape, np.int32)
+        d2 = np.empty(m.shape, np.int32)
+        with mod.KERNEL_LOCK:
+            mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
+        return ~out if complement else out
+
+    patch = {"RunComponents": _LabelledComponents, "euler_characteristic": euler,
+             "ball_dilate": dilate_before,
+             "count_components": lambda occ, conn=1: _LabelledComponents(occ, conn).count}
+    saved = {k: getattr(mod, k) for k in patch}
+    seed = void_flood._seed_kernel
+    for k, v in patch.items():
+        setattr(mod, k, v)
+    void_flood._seed_kernel = void_flood._seed_kernel_reference
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            setattr(mod, k, v)
+        void_flood._seed_kernel = seed
+
+
+def measure_stage_rows(design: Design, runs: int = 5) -> None:
+    """Target 1 (meas2): each step of ``measure_workspace`` (of ``_Steps``, exclusive of the steps it
+    calls) at h = 2 and h = 1 on this path and on the path before meas2 (:func:`_measures_before_meas2`),
+    with the engine, in CPU seconds of this process with 1 numba thread (less disturbed by the
+    other processes of a loaded machine than wall time), medians of ``runs`` alternating runs;
+    and whether every measure is identical."""
+    import numba
+
+    from paraspace.kinematics import measures
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    clock = time.process_time
+
+    def staged(before: bool, res) -> dict:
+        steps: dict = {}
+        get = measures._Steps.get
+        stack: list = []
+
+        def timed_get(self, name):
+            if name in self._memo:
+                return get(self, name)
+            stack.append(0.0)
+            t0 = clock()
+            out = get(self, name)
+            dt = clock() - t0
+            inner = stack.pop()
+            steps[name] = steps.get(name, 0.0) + dt - inner
+            if stack:
+                stack[-1] += dt
+            return out
+
+        measures._Steps.get = timed_get  # type: ignore[method-assign]
+        try:
+            with _measures_before_meas2() if before else contextlib.nullcontext():
+                t = clock()
+                measures.measure_workspace(res)
+                total = clock() - t
+        finally:
+            measures._Steps.get = get  # type: ignore[method-assign]
+        steps["(outside the steps)"] = total - sum(steps.values())
+        steps["measure_workspace total"] = total
+        return steps
+
+    try:
+        for h in (2.0, 1.0):
+            ws = WorkspaceSettings(voxel=h)
+            res = compute_workspace(design, ws)
+            new_d = measures.measure_workspace(res).to_dict()
+            with _measures_before_meas2():
+                same = measures.measure_workspace(res).to_dict() == new_d
+            eng: list = []
+            per: dict = {True: {}, False: {}}
+            for _ in range(runs):
+                t = clock()
+                compute_workspace(design, ws)
+                eng.append(clock() - t)
+                for before in (True, False):
+                    for k, v in staged(before, res).items():
+                        per[before].setdefault(k, []).append(v)
+            e = statistics.median(eng)
+            print(f"  target 1 (meas2), measure_workspace stages h={h:g} ({res.grid.size:,} voxels; load average "
+                  f"{os.getloadavg()[0]:.2f}; 1 thread, CPU time, medians of {runs}; engine {e * 1e3:.1f} ms; "
+                  f"identical measures: {same}):")
+            for k in per[False]:
+                b = statistics.median(per[True].get(k, [0.0]))
+                a = statistics.median(per[False][k])
+                if max(a, b) >= 5e-4:
+                    print(f"    {k:<26} before {b * 1e3:8.1f} ms  after {a * 1e3:8.1f} ms  x{b / a if a else 0:5.2f}"
+                          f"   (x{b / e:5.2f} -> x{a / e:5.2f} engine)")
+    finally:
+        numba.set_num_threads(threads)
 
 
 def feature_filter_rows(design: Design, runs: int = 3) -> None:
@@ -832,6 +1121,7 @@ def throughput_rows(design: Design) -> None:
     evaluation_rows(design)
     measure_rows(design)
     measure_meas1_rows(design)
+    measure_stage_rows(design)
     feature_filter_rows(design)
     tail_rows(design)
     display_rows(design)
@@ -964,6 +1254,8 @@ def main() -> None:
     ap.add_argument("--presets", action="store_true", help="only the mechanism-preset rows (item 9)")
     ap.add_argument("--total-orientation", action="store_true",
                     help="only the total-orientation row of the throughput rows (item 8, target 5)")
+    ap.add_argument("--measure-stages", action="store_true",
+                    help="only the measure_workspace stage rows, before/after meas2 (item 8, target 1)")
     ns = ap.parse_args()
     design = Design()
     print(f"compile/warm-up: {warm_up():.2f} s (numba cache on disk makes later starts fast)")
@@ -973,6 +1265,10 @@ def main() -> None:
     if ns.total_orientation:
         print(f"\nissue 24 target 5 (load average {os.getloadavg()[0]:.2f}, {os.cpu_count()} CPUs):")
         total_orientation_rows(design)
+        return
+    if ns.measure_stages:
+        print(f"\nissue 24 target 1, measure_workspace by stage (load average {os.getloadavg()[0]:.2f}):")
+        measure_stage_rows(design)
         return
     if ns.throughput:
         throughput_rows(design)

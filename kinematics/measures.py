@@ -200,18 +200,22 @@ Computation
 -----------
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
-the Euler number counts the 2x2x2 configurations in one parallel pass with skimage's (Ohser's)
-coefficients, reading four voxels per window; the voids are the unreachable voxels that have
-reachable ones on both sides along all three axes (any other unreachable voxel sees the padding
-along a straight line) less a flood from those that leak (:mod:`kinematics.void_flood`: a sealed
-cavity is never visited, and only the voids are labelled, when their number is asked for); the
-dilations keep capped uint8 distances, compute half the rows of a mirror-symmetric solid and skip
-the voxels with no set voxel within their block's neighbourhood; the hull's columns test the facets
-their tile keeps, and qhull gets only the column ends that are vertices of their x line's and y
-line's 2-D hulls (:func:`hull_points`). :func:`measure_fields` computes only the steps the asked-for fields need. The
-whole :func:`measure_workspace` of the default design takes about 0.23 s at h = 2 and 2.4 s at
-h = 1 on the shared 2-core machine (load 3.4-3.6: 4.4x and 9.6x the engine in the same run, from
-0.52 s and 7.8 s on the former path; ``benchmarks/bench_workspace.py --throughput``).
+the components are counted from the runs along z (:mod:`kinematics.run_components`: a union-find
+over the runs, whose number grows with the surface, not the volume); the Euler number counts the
+2x2x2 configurations in one parallel pass with skimage's (Ohser's) coefficients, reading four
+voxels per window and only the windows that meet their four columns' span; the voids are the
+unreachable voxels that have reachable ones on both sides along all three axes (any other
+unreachable voxel sees the padding along a straight line) less a flood from those that leak
+(:mod:`kinematics.void_flood`, its seeds found by separable ors: a sealed cavity is never visited,
+and only the voids are counted, when their number is asked for); the dilations keep capped uint8
+distances, compute half the rows of a mirror-symmetric solid, take the y and z steps one offset at
+a time along whole z rows and skip the rows with no set voxel within their blocks' neighbourhood;
+the hull's columns test the facets their tile keeps, and qhull gets only the column ends that are
+vertices of their x line's and y line's 2-D hulls (:func:`hull_points`). :func:`measure_fields`
+computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
+default design takes about 0.10 s at h = 2 and 0.7 s at h = 1 in CPU time with one numba thread
+on the shared 2-core machine (load 3-5.5: 1.6x and 3.5x the engine in the same run, from 0.17 s and
+1.65-1.95 s, 2.8x and 8-10x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
 """
 
 from __future__ import annotations
@@ -227,6 +231,7 @@ from skimage.measure._regionprops_utils import EULER_COEFS3D_26 as _EULER_COEFS3
 
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
+from .run_components import RunComponents, count_components
 from .serialize import jsonable
 from .void_flood import enclosed_voids
 from .workspace import WorkspaceResult
@@ -338,15 +343,19 @@ def _enclosed_kernel(occ, out):
                     ly[k] = j
         for j in range(n1):
             fz = n2
-            lz = -1
             for k in range(n2):
                 if occ[i, j, k]:
-                    if fz == n2:
-                        fz = k
+                    fz = k
+                    break
+            lz = -1
+            for k in range(n2 - 1, fz, -1):
+                if occ[i, j, k]:
                     lz = k
+                    break
             for k in range(n2):
-                out[i, j, k] = (not occ[i, j, k] and fz < k < lz and fy[k] < j < ly[k]
-                                and fx[j, k] < i < lx[j, k])
+                out[i, j, k] = False
+            for k in range(fz + 1, lz):  # only strictly between the column's ends
+                out[i, j, k] = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -435,14 +444,14 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
     padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
     is outside. The others, the candidates (:func:`_enclosed_kernel`), are outside exactly when they
     are joined within the candidates to one with a dual neighbour that is unreachable and not a
-    candidate (:func:`_void_set`); only the voids left are labelled, to count them (each void
-    component is one candidate component: distinct candidate components are not adjacent).
+    candidate (:func:`_void_set`); only the voids left are counted, as components of runs
+    (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
+    candidate components are not adjacent).
     """
     voids, box = _void_set(occupancy, connectivity)
     if box is None:
         return voids, 0
-    _, n = ndi.label(voids[box], structure=_structure(dual_connectivity(connectivity)))
-    return voids, int(n)
+    return voids, count_components(voids[box], dual_connectivity(connectivity))
 
 
 def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
@@ -462,8 +471,27 @@ def _euler_hist_kernel(occ, hist):
     gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
     window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
     previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
-    voxels, so each window reads four voxels."""
+    voxels, so each window reads four voxels; and only the windows that meet the span of their four
+    columns (from the lowest to the highest set voxel of any of them) are read: the others hold no
+    set voxel and are counted as configuration 0 without a read."""
     n0, n1, n2 = occ.shape
+    kb = np.empty((n0, n1), np.int64)  # lowest set z of each column (n2: none)
+    kt = np.empty((n0, n1), np.int64)  # highest (-1: none)
+    for i in prange(n0):
+        for j in range(n1):
+            lo = n2
+            for k in range(n2):
+                if occ[i, j, k]:
+                    lo = k
+                    break
+            hi = -1
+            if lo < n2:
+                for k in range(n2 - 1, lo - 1, -1):
+                    if occ[i, j, k]:
+                        hi = k
+                        break
+            kb[i, j] = lo
+            kt[i, j] = hi
     for ii in prange(n0 + 1):
         i = ii - 1
         x0 = i >= 0
@@ -476,8 +504,26 @@ def _euler_hist_kernel(occ, hist):
             c01 = x0 and y1
             c10 = x1 and y0
             c11 = x1 and y1
+            lo = n2
+            hi = -1
+            if c00:
+                lo = min(lo, kb[i, j])
+                hi = max(hi, kt[i, j])
+            if c01:
+                lo = min(lo, kb[i, j + 1])
+                hi = max(hi, kt[i, j + 1])
+            if c10:
+                lo = min(lo, kb[i + 1, j])
+                hi = max(hi, kt[i + 1, j])
+            if c11:
+                lo = min(lo, kb[i + 1, j + 1])
+                hi = max(hi, kt[i + 1, j + 1])
+            if hi < 0:
+                row[0] += n2 + 1
+                continue
+            row[0] += n2 + 1 - (hi - lo + 2)  # the windows below lo - 1 and above hi
             code = 0
-            for k in range(-1, n2):
+            for k in range(lo - 1, hi + 1):
                 z = k + 1
                 far = 0
                 if z < n2:
@@ -526,7 +572,7 @@ def box_contact_fraction(occupancy: np.ndarray) -> float:
     inner = occ[1:-1, 1:-1, 1:-1] if min(occ.shape) > 2 else np.zeros((0,), bool)
     n_inner = int(np.prod([max(0, s - 2) for s in occ.shape]))
     n_face = occ.size - n_inner
-    return float((int(occ.sum()) - int(inner.sum())) / n_face) if n_face else 0.0
+    return float((int(np.count_nonzero(occ)) - int(np.count_nonzero(inner))) / n_face) if n_face else 0.0
 
 
 @njit(cache=True, inline="always")
@@ -949,15 +995,19 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _set_blocks_kernel(m, inv, bs, blk):
+def _set_blocks_kernel(m, inv, bs, blk, b0):
     """``blk[a, b, c]``: the block of ``bs^3`` voxels at ``(a, b, c) * bs`` holds a voxel of the set
-    (``m != inv``); each block's scan stops at its first such voxel."""
+    (``m != inv``), for ``b >= b0`` (the others are set False unread); each block's scan stops at
+    its first such voxel."""
     nx, ny, nz = m.shape
     nb1, nb2 = blk.shape[1], blk.shape[2]
     for q in prange(blk.shape[0] * nb1 * nb2):
         a = q // (nb1 * nb2)
         b = (q // nb2) % nb1
         c = q % nb2
+        if b < b0:
+            blk[a, b, c] = False
+            continue
         hit = False
         for i in range(a * bs, min(nx, (a + 1) * bs)):
             for j in range(b * bs, min(ny, (b + 1) * bs)):
@@ -976,14 +1026,17 @@ def _set_blocks_kernel(m, inv, bs, blk):
 def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
     """:func:`_ball_dilate_kernel`'s set, in fewer bytes and passes: the squared distances are kept
     in ``d1`` (uint8, capped at 255 > ``r2``: a capped distance stays beyond the ball, and the
-    searches stop at ``w`` before a cap could matter), the y and z searches are fused per x slice
-    through a slice buffer, the mask is read complemented when ``inv_in`` and written complemented
-    when ``inv_out`` (an erosion is the complement of the complement's dilation), and with ``half``
-    (a mask symmetric under ``j -> ny - 1 - j``) only the rows ``j >= ny // 2`` are computed and
-    mirrored (the result is symmetric too). A voxel whose block of ``bs >= w`` voxels has no set
-    voxel in itself or in the 26 blocks around it (``near`` false) has none within ``w`` along any
-    axis: its distances are beyond ``r2`` (the cap) without a search, and no result changes (any
-    distance beyond ``r2`` plays the part of the cap)."""
+    offsets stop at ``w`` before a cap could matter), the y and z steps are fused per z row through
+    a row buffer, each taken one offset at a time along the whole row (``d2 = min_{|dj| <= w} d1[j +
+    dj] + dj^2``, then "some ``|dk| <= w`` with ``d2[k + dk] <= r2 - dk^2``": branch-free loops over
+    contiguous z, the same minimum and the same test as a search from each voxel), the mask is read
+    complemented when ``inv_in`` and written complemented when ``inv_out`` (an erosion is the
+    complement of the complement's dilation), and with ``half`` (a mask symmetric under ``j -> ny -
+    1 - j``) only the rows ``j >= ny // 2`` are computed and mirrored (the result is symmetric too).
+    A voxel whose block of ``bs >= w`` voxels has no set voxel in itself or in the 26 blocks around
+    it (``near`` false) has none within ``w`` along any axis: a z row whose blocks are all so is
+    out without the y and z steps, and a z row whose voxels are all set (``d1`` all 0) is in
+    without them; no result changes."""
     nx, ny, nz = m.shape
     j0 = ny // 2 if half else 0
     cap = 255
@@ -1012,50 +1065,70 @@ def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out)
                 v = d * d if d <= w else cap
                 o = np.int32(d1[i, j, k])
                 d1[i, j, k] = v if v < o else o
-    kb = np.empty(nz, np.int64)
-    for k in range(nz):
-        kb[k] = k // bs
+    nkb = near.shape[2]
     for i in prange(nx):
         d2 = np.empty(nz, np.int32)
+        hit = np.empty(nz, np.bool_)
         for j in range(j0, ny):
+            jr = ny - 1 - j
             row = near[i // bs, j // bs]
+            busy = False
+            for c in range(nkb):
+                if row[c]:
+                    busy = True
+                    break
+            if not busy:  # no set voxel within w of the row
+                for k in range(nz):
+                    out[i, j, k] = inv_out
+                    if half:
+                        out[i, jr, k] = inv_out
+                continue
+            zero = True  # every voxel of the row set: all in, without the y and z steps
             for k in range(nz):
-                if not row[kb[k]]:
-                    d2[k] = cap
-                    continue
-                best = np.int32(d1[i, j, k])
-                for dj in range(1, w + 1):
-                    c = dj * dj
-                    if c >= best:
-                        break
-                    jp = j + dj
-                    if jp < ny:
+                if d1[i, j, k] != 0:
+                    zero = False
+                    break
+            if zero:
+                for k in range(nz):
+                    out[i, j, k] = not inv_out
+                    if half:
+                        out[i, jr, k] = not inv_out
+                continue
+            # d2 = min over |dj| <= w of d1[j + dj] + dj^2, one offset at a time along the whole row
+            for k in range(nz):
+                d2[k] = d1[i, j, k]
+            for dj in range(1, w + 1):
+                c = dj * dj
+                jp = j + dj
+                if jp < ny:
+                    for k in range(nz):
                         v = np.int32(d1[i, jp, k]) + c
-                        if v < best:
-                            best = v
-                    jm = j - dj
-                    if jm >= 0:
-                        if jm < j0:
-                            jm = ny - 1 - jm
+                        if v < d2[k]:
+                            d2[k] = v
+                jm = j - dj
+                if jm >= 0:
+                    if jm < j0:
+                        jm = ny - 1 - jm
+                    for k in range(nz):
                         v = np.int32(d1[i, jm, k]) + c
-                        if v < best:
-                            best = v
-                d2[k] = best
+                        if v < d2[k]:
+                            d2[k] = v
+            # in the ball: some |dk| <= w with d2[k + dk] + dk^2 <= r2
             for k in range(nz):
-                best = d2[k]
-                if row[kb[k]]:
-                    for dk in range(1, w + 1):
-                        c = dk * dk
-                        if c >= best or c > r2:
-                            break
-                        if k + dk < nz and d2[k + dk] + c < best:
-                            best = d2[k + dk] + c
-                        if k - dk >= 0 and d2[k - dk] + c < best:
-                            best = d2[k - dk] + c
-                val = (best <= r2) != inv_out
+                hit[k] = d2[k] <= r2
+            for dk in range(1, w + 1):
+                lim = r2 - dk * dk
+                for k in range(nz - dk):
+                    if d2[k + dk] <= lim:
+                        hit[k] = True
+                for k in range(dk, nz):
+                    if d2[k - dk] <= lim:
+                        hit[k] = True
+            for k in range(nz):
+                val = hit[k] != inv_out
                 out[i, j, k] = val
                 if half:
-                    out[i, ny - 1 - j, k] = val
+                    out[i, jr, k] = val
 
 
 def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
@@ -1077,8 +1150,11 @@ def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = Fa
         d1 = np.empty(m.shape, np.uint8)
         bs = max(w, 4)
         blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
+        # with the mirror the kernel reads the blocks of rows j >= ny // 2 only, whose 26 neighbours
+        # lie in the block rows from (ny // 2) // bs - 1 on: only those are scanned
+        b0 = max(0, (m.shape[1] // 2) // bs - 1) if symmetric else 0
         with KERNEL_LOCK:
-            _set_blocks_kernel(m, complement, bs, blk)
+            _set_blocks_kernel(m, complement, bs, blk, b0)
         near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
         with KERNEL_LOCK:
             _ball_dilate_fast_kernel(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
@@ -1139,8 +1215,8 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     if not occ.any():
         return 0, 0
     filled = occ | void_mask(occ, connectivity)
-    _, b0 = ndi.label(filled, structure=_structure(connectivity))
-    return int(b0), int(b0 - euler_characteristic(filled, connectivity))
+    b0 = count_components(filled, connectivity)
+    return b0, int(b0 - euler_characteristic(filled, connectivity))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -1303,18 +1379,18 @@ class _Steps:
 
     def _labels(self):
         occ, n, conn = self.occ, self.n, self.o["connectivity"]
-        labels, components = ndi.label(occ, structure=_structure(conn))
-        sizes = np.bincount(labels.ravel())[1:]
+        comps = RunComponents(occ, conn)
+        components, sizes = comps.count, comps.sizes
         largest = float(sizes.max() / n)
         is_piece = sizes >= self.o["piece_fraction"] * n
         n_pieces = int(is_piece.sum())
         fragment_fraction = float(sizes[~is_piece].sum() / n)
-        piece_set = occ if n_pieces == components else np.concatenate([[False], is_piece])[labels]
-        return int(components), largest, n_pieces, fragment_fraction, piece_set
+        piece_set = occ if n_pieces == components else comps.mask(is_piece)
+        return components, largest, n_pieces, fragment_fraction, piece_set
 
     def _voids(self):
         voids_m, n_voids = _voids(self.occ, self.o["connectivity"])
-        return voids_m, n_voids, int(voids_m.sum()) * self.vv
+        return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
 
     def _chi_w(self):
         return euler_characteristic(self.occ, self.o["connectivity"])
@@ -1325,22 +1401,21 @@ class _Steps:
         voids_m, n_voids, _ = self.get("voids")
         if n_voids:
             filled = self.occ | voids_m
-            _, filled_components = ndi.label(filled, structure=_structure(conn))
-            return int(filled_components), euler_characteristic(filled, conn)
+            return count_components(filled, conn), euler_characteristic(filled, conn)
         return self.get("labels")[0], self.get("chi_w")
 
     def _hull(self):
         hull = hull_mask(self.occ)
-        return hull, int(hull.sum()) * self.vv
+        return hull, int(np.count_nonzero(hull)) * self.vv
 
     def _under(self):
         under = hollow_mask(self.occ, "hull", self.get("hull")[0])
-        return under, int(under.sum())
+        return under, int(np.count_nonzero(under))
 
     def _hollow_volume(self):
         if self.o["hollowness_mode"] == "hull":
             return self.get("under")[1] * self.vv
-        return int(hollow_mask(self.occ, self.o["hollowness_mode"]).sum()) * self.vv
+        return int(np.count_nonzero(hollow_mask(self.occ, self.o["hollowness_mode"]))) * self.vv
 
     def _gap_volume(self):
         return column_gap_count(self.occ) * self.vv
@@ -1352,9 +1427,9 @@ class _Steps:
             sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None)
         else:
             sealed = self.get("voids")[0]
-        n_open = int((under & ~sealed).sum())
+        n_open = int(np.count_nonzero(under & ~sealed))
         open_ratio = n_open / (n_under + self.n) if n_under else 0.0
-        return float(open_ratio), int((under & sealed).sum()) * self.vv
+        return float(open_ratio), int(np.count_nonzero(under & sealed)) * self.vv
 
     def _pieces_filled(self):
         components, _, n_pieces, _, piece_set = self.get("labels")
@@ -1371,7 +1446,7 @@ class _Steps:
         stable = feature_filter(self.get("labels")[4], self.o["r"] / self.o["h"], self.cancel)
         check(self.cancel)
         stable_components, stable_genus = filled_genus(stable, self.o["connectivity"])
-        return stable_components, stable_genus, float(stable.sum() / self.n)
+        return stable_components, stable_genus, float(int(np.count_nonzero(stable)) / self.n)
 
     def _reasons(self):
         o = self.o
@@ -1461,7 +1536,7 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     h = float(grid.h)
     vv = h ** 3
     occ = np.asarray(result.occupancy, dtype=bool)
-    n = int(occ.sum())
+    n = int(np.count_nonzero(occ))
     volume = n * vv
 
     touched = touched_faces(occ)
@@ -1504,7 +1579,7 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
     lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
     hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    crop = occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]]
+    crop = np.ascontiguousarray(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])  # one copy, not one a kernel
     extent = max(extents)
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
     steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,

@@ -75,6 +75,9 @@ def warm_up() -> float:
         for search in ("neighbour", "sweep"):  # the full search's kernels: the neighbour's run-time check
             dexterity_field(res, search=search)
         measure_workspace(res)
+        from .run_components import RunComponents
+
+        RunComponents(np.ones((2, 2, 2), bool)).mask(np.ones(1, bool))  # the pieces' mask: only with fragments
         workspace_shell(res)
         from .mechanism_workspace import warm_up_general
 

@@ -1,0 +1,188 @@
+r"""Connected components of a voxel set from its runs along z, not from a labelled grid.
+
+Definition (that of :mod:`kinematics.measures`): the components of a set ``W`` of voxels under
+6-adjacency (``connectivity=1``: voxels sharing a face) or 26-adjacency (``connectivity=3``: sharing
+a face, an edge or a corner) -- the components ``scipy.ndimage.label`` finds with
+``generate_binary_structure(3, connectivity)``; ``b0(W)`` is their number.
+
+Computation. A *run* is a maximal segment ``k = s .. e`` of set voxels in one column ``(i, j)``; two
+runs of one column are never adjacent (an unset voxel lies between them), and each run is connected.
+Two runs of columns that differ by one step along x or y (6-adjacency; and also along both,
+diagonally, for 26-adjacency) are adjacent exactly when their z ranges overlap (6) or overlap once
+each is grown by one voxel (26: ``s_1 <= e_2 + 1`` and ``s_2 <= e_1 + 1``). The components of ``W``
+are thus the components of the run graph: a union-find over the runs, each column merged with its
+earlier neighbours ``(i, j - 1)``, ``(i - 1, j)`` (and ``(i - 1, j +- 1)`` for 26) by one sweep of
+both sorted run lists. The grid is read once (in parallel, per x slice); the serial part works on
+the runs, whose number grows with the surface of ``W``, not its volume.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .parallel import KERNEL_LOCK
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _count_runs_kernel(occ, counts):
+    """``counts[i * n1 + j + 1]``: the number of runs of column ``(i, j)``."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        for j in range(n1):
+            c = 0
+            prev = False
+            for k in range(n2):
+                v = occ[i, j, k]
+                if v and not prev:
+                    c += 1
+                prev = v
+            counts[i * n1 + j + 1] = c
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _fill_runs_kernel(occ, offs, rs, re):
+    """``rs[q]``, ``re[q]``: first and last z of run ``q``; column ``(i, j)`` holds the runs
+    ``offs[i * n1 + j] .. offs[i * n1 + j + 1] - 1``, in increasing z."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        for j in range(n1):
+            q = offs[i * n1 + j]
+            prev = False
+            for k in range(n2):
+                v = occ[i, j, k]
+                if v and not prev:
+                    rs[q] = k
+                elif prev and not v:
+                    re[q] = k - 1
+                    q += 1
+                prev = v
+            if prev:
+                re[q] = n2 - 1
+
+
+@njit(cache=True, inline="always")
+def _find(parent, p):
+    while parent[p] != p:
+        parent[p] = parent[parent[p]]
+        p = parent[p]
+    return p
+
+
+@njit(cache=True, nogil=True)
+def _union_runs_kernel(offs, rs, re, n0, n1, full, parent):
+    """Union-find over the runs: ``parent`` (every run its own root on entry) joins adjacent runs."""
+    g = 1 if full else 0
+    for i in range(n0):
+        for j in range(n1):
+            a0 = offs[i * n1 + j]
+            a1 = offs[i * n1 + j + 1]
+            if a0 == a1:
+                continue
+            for nb in range(4):
+                if nb >= 2 and not full:
+                    break
+                if nb == 0:
+                    ii, jj = i, j - 1
+                elif nb == 1:
+                    ii, jj = i - 1, j
+                elif nb == 2:
+                    ii, jj = i - 1, j - 1
+                else:
+                    ii, jj = i - 1, j + 1
+                if ii < 0 or jj < 0 or jj >= n1:
+                    continue
+                b0 = offs[ii * n1 + jj]
+                b1 = offs[ii * n1 + jj + 1]
+                p = a0
+                q = b0
+                while p < a1 and q < b1:
+                    if rs[p] <= re[q] + g and rs[q] <= re[p] + g:
+                        x = _find(parent, p)
+                        y = _find(parent, q)
+                        if x != y:
+                            if x < y:
+                                parent[y] = x
+                            else:
+                                parent[x] = y
+                    # the run that ends first meets no later run of the other column (runs of a
+                    # column are at least two apart: start >= previous end + 2 > its end + g)
+                    if re[p] < re[q]:
+                        p += 1
+                    else:
+                        q += 1
+
+
+@njit(cache=True, nogil=True)
+def _root_sizes_kernel(rs, re, parent, root, size):
+    """``root[q]``: the root of run ``q``; ``size[r]``: the voxels of the component of root ``r``."""
+    for q in range(rs.shape[0]):
+        r = _find(parent, q)
+        root[q] = r
+        size[r] += re[q] - rs[q] + 1
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _paint_runs_kernel(offs, rs, re, keep_run, n1, out):
+    """``out``: the voxels of the runs with ``keep_run`` set (``out`` all False on entry)."""
+    n0 = out.shape[0]
+    for i in prange(n0):
+        for j in range(n1):
+            for q in range(offs[i * n1 + j], offs[i * n1 + j + 1]):
+                if keep_run[q]:
+                    for k in range(rs[q], re[q] + 1):
+                        out[i, j, k] = True
+
+
+class RunComponents:
+    """The components of ``occupancy`` (module docstring): ``sizes`` (voxels per component, in no
+    particular order; ``len(sizes)`` is ``b0``) and :meth:`mask` (the union of chosen components)."""
+
+    def __init__(self, occupancy: np.ndarray, connectivity: int = 1) -> None:
+        if connectivity not in (1, 3):
+            raise ValueError(f"connectivity = {connectivity!r} is invalid: valid values 1 or 3")
+        occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
+        if occ.ndim != 3:
+            raise ValueError(f"occupancy has {occ.ndim} dimensions: valid values 3")
+        self.shape = occ.shape
+        n0, n1, _ = occ.shape
+        offs = np.zeros(n0 * n1 + 1, np.int64)
+        with KERNEL_LOCK:
+            if occ.size:
+                _count_runs_kernel(occ, offs)
+            np.cumsum(offs, out=offs)
+            n_runs = int(offs[-1])
+            rs = np.empty(n_runs, np.int64)
+            re = np.empty(n_runs, np.int64)
+            if n_runs:
+                _fill_runs_kernel(occ, offs, rs, re)
+            parent = np.arange(n_runs, dtype=np.int64)
+            _union_runs_kernel(offs, rs, re, n0, n1, connectivity == 3, parent)
+            root = np.empty(n_runs, np.int64)
+            size = np.zeros(n_runs, np.int64)
+            _root_sizes_kernel(rs, re, parent, root, size)
+        is_root = root == np.arange(n_runs)
+        self._offs, self._rs, self._re, self._root = offs, rs, re, root
+        self._roots = np.nonzero(is_root)[0]
+        #: voxels of each component (``len(sizes)`` components)
+        self.sizes = size[self._roots]
+
+    @property
+    def count(self) -> int:
+        """``b0``: the number of components."""
+        return int(len(self.sizes))
+
+    def mask(self, keep: np.ndarray) -> np.ndarray:
+        """The voxels of the components ``c`` with ``keep[c]`` (``keep`` indexed like ``sizes``)."""
+        keep_root = np.zeros(len(self._root), np.bool_)
+        keep_root[self._roots] = np.asarray(keep, dtype=np.bool_)
+        keep_run = keep_root[self._root]
+        out = np.zeros(self.shape, np.bool_)
+        with KERNEL_LOCK:
+            _paint_runs_kernel(self._offs, self._rs, self._re, keep_run, self.shape[1], out)
+        return out
+
+
+def count_components(occupancy: np.ndarray, connectivity: int = 1) -> int:
+    """``b0``: ``scipy.ndimage.label(occupancy, generate_binary_structure(3, connectivity))[1]``."""
+    return RunComponents(occupancy, connectivity).count
