@@ -23,6 +23,16 @@ decimated to 12 000); ``decimated`` the path before it (the 50 000-face block re
 50 000-face re-mesh, not decimated). The load average is printed before and after: the machine
 is shared, so compare runs taken side by side.
 
+``--glb`` selects how the shell goes on the wire: ``quantised`` (default) is what the explorer
+sends (:func:`app.explorer.wire_glb.quantised_glb`: int16 positions, uint8 colours, uint16
+indices, normals declared without data); ``float`` the GLB before it (trimesh's float32 export with
+float normals and uint32 indices, the material patched in); ``ab`` alternates the two in one run
+(connects, mechanism presses and design presses in the order ABBA ABBA ..., after one connect that
+is not counted: the first page compiles the shaders and evaluates plotly.js) and prints both tables
+side by side with their ratio (quantised / float), so that the load of the shared machine falls on
+both alike. The forced redraws are then timed after each design press, with that press's shell on
+screen.
+
 ``--trace DIR`` also records a Chrome trace and a JS CPU profile of the connect and of one more
 press, and prints where the renderer's main thread and the GPU process spend that time.
 ``--no-plots`` is a what-if: the explorer's plotly plots are replaced by stand-ins (plotly.js is
@@ -31,7 +41,7 @@ then never sent), to measure what lazily created plots would save. Numbers only,
 Usage::
 
     python benchmarks/explorer_latency.py [--reps 5] [--connects 3] [--voxel 2] [--trace DIR] [--no-plots]
-                                          [--display light|decimated|full]
+                                          [--display light|decimated|full] [--glb quantised|float|ab]
 """
 
 from __future__ import annotations
@@ -172,6 +182,27 @@ def _before_display(decimate: bool) -> None:
         return display_mesh(remesh, display_faces) if decimate and display_faces is not None else remesh
 
     workspace_job.make_shell = before  # type: ignore[assignment]
+
+
+#: The wire encoding in use (``--glb``): read by the patched encoder of :func:`_wire_encodings` at each send.
+WIRE = {"glb": "quantised"}
+
+
+def _wire_encodings() -> None:
+    """Make the shell's GLB encoder follow ``WIRE["glb"]``: ``float`` is the encoding before the
+    quantised one (trimesh's float32 GLB with normals, the material patched in)."""
+    from typing import cast
+
+    from paraspace.app.explorer import scene
+
+    quantised = scene.quantised_glb
+
+    def encode(mesh: Any, opacity: float) -> bytes:
+        if WIRE["glb"] == "float":
+            return scene.glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), opacity)
+        return quantised(mesh, opacity)
+
+    scene.quantised_glb = encode  # type: ignore[assignment]
 
 
 def _time_server_steps() -> None:
@@ -319,7 +350,11 @@ def main() -> None:
     ap.add_argument("--no-plots", action="store_true", help="what-if: no plotly plots (stand-ins)")
     ap.add_argument("--display", choices=("light", "decimated", "full"), default="light",
                     help="decimated / full: the shell on screen as before issue 24 target 10 (module docstring)")
+    ap.add_argument("--glb", choices=("quantised", "float", "ab"), default="quantised",
+                    help="the shell's GLB on the wire; ab: float and quantised in turn (module docstring)")
     args = ap.parse_args()
+    variants = ["float", "quantised"] if args.glb == "ab" else [args.glb]
+    _wire_encodings()
     if args.no_plots:
         _no_plots()
     if args.display != "light":
@@ -331,7 +366,7 @@ def main() -> None:
 
     exp = Explorer("127.0.0.1", 0).start()
     exp.warm.wait(120)
-    rows: dict[str, list[float]] = {k: [] for k in (
+    row_names = (
         "connect -> first full shell drawn (s)", "  connect: page load event (s)", "  connect: plotly.js evaluated (s)",
         "  connect: server: read the page's location (s)", "  connect: server: build the GUI (s)",
         "  connect: server submits the first job (s)", "  connect: server sends the first full shell (s)",
@@ -343,9 +378,26 @@ def main() -> None:
         "    server: measures + bracket in it (s)", "    server: GLB export + send in it (s)",
         "  browser: full shell sent -> drawn (s)",
         "server: preview compute+mesh (s)", "server: full compute (s)", "server: full mesh (s)",
-        "browser: forced redraw -> 2nd frame (s)")}
-    sizes: dict[str, list[float]] = {"connect: websocket bytes received (MB)": [],
-                                     "preview GLB (MB)": [], "full GLB (MB)": [], "full faces": []}
+        "browser: forced redraw -> 2nd frame (s)")
+    size_names = ("connect: websocket bytes received (MB)", "preview GLB (MB)", "full GLB (MB)", "full faces")
+    tables = {v: ({k: [] for k in row_names}, {k: [] for k in size_names}) for v in variants}
+    skipped_by = dict.fromkeys(variants, 0)
+
+    def turn(i: int) -> str:
+        """The variant of the ``i``-th run of a loop: ABBA ABBA ... (no order favours either)."""
+        return variants[(i + i // 2) % len(variants)] if len(variants) == 2 else variants[0]
+
+    def use(variant: str) -> None:
+        """Send the shells with ``variant``'s GLB from now on and record into its table."""
+        nonlocal rows, sizes, skipped_previews
+        if rows is not None:
+            skipped_by[WIRE["glb"]] = skipped_previews
+        WIRE["glb"] = variant
+        rows, sizes = tables[variant]
+        skipped_previews = skipped_by[variant]
+
+    rows: dict[str, list[float]] = None  # type: ignore[assignment]
+    sizes: dict[str, list[float]] = None  # type: ignore[assignment]
     skipped_previews = 0
     wall_minus_perf = time.time() - time.perf_counter()  # server perf_counter -> epoch seconds
     try:
@@ -398,12 +450,21 @@ def main() -> None:
                 return page, session
 
             page = None
-            for i in range(max(1, args.connects)):
+            if len(variants) == 2:  # one page not counted: the first compiles the shaders, evaluates plotly.js
+                use(variants[0])
+                kept_rows = {k: list(v) for k, v in (*rows.items(), *sizes.items())}
+                page, session = connect(-1)
+                for k, v in (*rows.items(), *sizes.items()):
+                    v[:] = kept_rows[k]
+            for i in range(max(1, args.connects) * len(variants)):
+                use(turn(i))
                 if page is not None:
                     page.close()
                     _wait(lambda: len(exp.sessions) == 0, 30, "the closed page's session to end")
                 page, session = connect(i)
-            for _ in range(8):  # cost of one frame: software WebGL redraws are the floor of every latency
+            # cost of one frame: software WebGL redraws are the floor of every latency (with two
+            # variants: timed after each design press instead, with that variant's shell on screen)
+            for _ in range(8 if len(variants) == 1 else 0):
                 rows["browser: forced redraw -> 2nd frame (s)"].append(page.evaluate(REDRAW) / 1e3)
             page.evaluate(PROBE)
             time_origin = page.evaluate("() => performance.timeOrigin") / 1e3  # epoch seconds of page t = 0
@@ -418,7 +479,8 @@ def main() -> None:
             thumb_a = page.locator(f'[id="{uuid_a}"] [role=slider]')
 
             page.get_by_role("tab", name="Pose").click()
-            for _ in range(args.reps):
+            for i in range(args.reps * len(variants)):
+                use(turn(i))
                 n = page.evaluate("() => window.__probe.platform.length")
                 thumb_x.press("ArrowRight")
                 page.wait_for_function(f"() => window.__probe.platform.length > {n} && "
@@ -489,9 +551,12 @@ def main() -> None:
                     press_splits["_faces"] = faces
 
             press_splits: dict[str, float] = {}
-            for _ in range(args.reps):
+            for i in range(args.reps * len(variants)):
+                use(turn(i))
                 press_a()
                 _idle(exp, session)  # measures + orientation maps of this design finish before the next press
+                for _ in range(3 if len(variants) == 2 else 0):
+                    rows["browser: forced redraw -> 2nd frame (s)"].append(page.evaluate(REDRAW) / 1e3)
             if args.trace:  # one more press, traced and profiled (not in the table)
                 kept = {id(v): len(v) for v in (*rows.values(), *sizes.values())}
                 kept_skipped = skipped_previews
@@ -511,21 +576,33 @@ def main() -> None:
             browser.close()
     finally:
         exp.stop()
+    use(variants[-1])
 
     print(f"\nexplorer latency, headless Chromium (SwiftShader), viewport {args.width}x{args.height}, "
           f"voxel h = {args.voxel:g}, reps = {args.reps}{', NO PLOTS (what-if)' if args.no_plots else ''}, "
-          f"display shell {args.display}; load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after "
+          f"display shell {args.display}, GLB {args.glb}; "
+          f"load average {load_before[0]:.2f} before, {os.getloadavg()[0]:.2f} after "
           f"({os.cpu_count()} CPUs)")
-    print(f"{'':44s} {'median':>8s} {'min':>8s} {'max':>8s}")
-    for name, vals in rows.items():
-        print(f"{name:44s} {_stats(vals)}")
-    for name, svals in sizes.items():
-        print(f"{name:44s} {_stats(svals)}")
-    mesh, comp = rows["server: full mesh (s)"], rows["server: full compute (s)"]
-    if mesh and comp:
-        ratios = [m / c for m, c in zip(mesh, comp)]
-        print(f"{'server: full mesh / full compute (ratio)':44s} {_stats(ratios)}")
-    print(f"{'presses whose preview was never drawn':44s} {skipped_previews:8d}")
+    for variant in variants:
+        rows, sizes = tables[variant]
+        mesh, comp = rows["server: full mesh (s)"], rows["server: full compute (s)"]
+        rows["server: full mesh / full compute (ratio)"] = [m / c for m, c in zip(mesh, comp)]
+        sizes["presses whose preview was never drawn"] = [float(skipped_by[variant])]
+    if len(variants) == 1:
+        rows, sizes = tables[variants[0]]
+        print(f"{'':44s} {'median':>8s} {'min':>8s} {'max':>8s}")
+        for name, vals in (*rows.items(), *sizes.items()):
+            print(f"{name:44s} {_stats(vals)}")
+        return
+    print(f"medians (n per variant: connects {args.connects}, presses {args.reps}); ratio = quantised / float")
+    print(f"{'':44s} {'float':>9s} {'quantised':>9s} {'ratio':>7s}")
+    for name in (*tables["float"][0], *tables["float"][1]):
+        a_vals = tables["float"][0].get(name, tables["float"][1].get(name, []))
+        b_vals = tables["quantised"][0].get(name, tables["quantised"][1].get(name, []))
+        ma = statistics.median(a_vals) if a_vals else float("nan")
+        mb = statistics.median(b_vals) if b_vals else float("nan")
+        ratio = f"{mb / ma:7.2f}" if a_vals and b_vals and ma else "    n/a"
+        print(f"{name:44s} {ma:9.3f} {mb:9.3f} {ratio}")
 
 
 if __name__ == "__main__":

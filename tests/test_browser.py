@@ -154,6 +154,18 @@ def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> No
     scene = img[:, : int(img.shape[1] * 0.6)]
     colored = (np.abs(scene[:, :, 0] - scene[:, :, 2]) > 40).mean()  # the z-colored shell
     assert colored > 0.02, "the workspace shell is not visible in the 3-D view"
+    # the shell arrives quantised (app.explorer.wire_glb) and is drawn smoothly shaded: viser's client
+    # filled the declared float normals with unit vectors (not flat shading, not a black shell)
+    shading = page.evaluate("""() => { let r = null;
+      window.__viserMutable.nodeRefFromName['/workspace/shell'].traverse(o => { if (o.isMesh) {
+        const n = o.geometry.attributes.normal, p = o.geometry.attributes.position;
+        let lo = Infinity, hi = 0;
+        for (let i = 0; i < n.count; i++) { const l = Math.hypot(n.getX(i), n.getY(i), n.getZ(i));
+                                            lo = Math.min(lo, l); hi = Math.max(hi, l); }
+        r = [p.array.constructor.name, p.normalized, n.array.constructor.name, o.material.flatShading, lo, hi]; } });
+      return r; }""")
+    assert shading is not None and shading[:4] == ["Int16Array", True, "Float32Array", False], shading
+    assert 0.99 < shading[4] <= shading[5] < 1.01, shading
 
     # move the design slider 'a' with the mouse: click its track at 80 %  (a = 10 + 0.8 * 90 = 82)
     uuid = session.panels.design["a"]._impl.uuid

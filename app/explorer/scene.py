@@ -10,7 +10,8 @@ optionally cut by a horizontal plane). The platform plate is green when the pose
 workspace and red otherwise, with a label above it; legs outside their stroke carry a label naming
 their state; the x, y, z axes are drawn from the origin with labelled tips. Labels are screen
 overlays: the translucent shell and the drag gizmo never hide them.
-The shell is sent as a GLB (vertex colors survive; a material with alpha is patched in).
+The shell is sent as a GLB with quantised attributes (:func:`app.explorer.wire_glb.quantised_glb`:
+int16 positions, int8 normals, uint8 vertex colours, uint16 indices, and its material with alpha).
 
 Coordinates are the paper's base frame ``O-xyz`` (z up), in the paper's dimensionless lengths.
 """
@@ -20,7 +21,7 @@ from __future__ import annotations
 import json
 import struct
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -30,6 +31,8 @@ import viser.transforms as vtf
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.geometry import GAMMA, base_points, carriage_rails, platform_points_local
 from paraspace.kinematics.pose import Pose
+
+from .wire_glb import quantised_glb
 
 #: Leg colors by state (:func:`kinematics.inverse.leg_states`).
 LEG_COLORS: dict[str, tuple[int, int, int]] = {
@@ -418,7 +421,7 @@ class ShellScene:
         if len(shown.faces) == 0:
             glb = b""
         else:
-            glb = glb_with_material(cast(bytes, shown.export(file_type="glb", include_normals=True)), opacity)
+            glb = quantised_glb(shown, opacity)
         if not glb:
             if self.handle is not None:
                 self.handle.visible = False
