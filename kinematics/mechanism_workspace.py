@@ -1017,10 +1017,10 @@ def _bracket_thresholds(delta: float, slack: np.ndarray, tables: KernelTables, l
     e_leg = e_out[legs_chain]
     lmin2r = np.where(lmin - e_leg > 0.0, lmin - e_leg, 0.0) ** 2
     lmax2r = (lmax + e_leg) ** 2
-    # per chain rows: the kernel reads row c (the legs of other chains are never read)
+    # per chain rows: the kernel reads row c (the legs of other chains are never read); writable copies
+    # (a broadcast view stays read-only for one chain, and numba would compile the kernel once more)
     n = len(slack)
-    return (delta_t, e_out, lmin2t, lmax2t, np.ascontiguousarray(np.broadcast_to(lmin2r, (n, len(lmin)))),
-            np.ascontiguousarray(np.broadcast_to(lmax2r, (n, len(lmin)))))
+    return (delta_t, e_out, lmin2t, lmax2t, np.repeat(lmin2r[None], n, axis=0), np.repeat(lmax2r[None], n, axis=0))
 
 
 def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_step: float, length_step: float,

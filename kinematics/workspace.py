@@ -313,7 +313,9 @@ def rotation_tables(design: Design, rotations: np.ndarray, joints: Joints) -> tu
         jcs = np.ascontiguousarray(np.stack([cone_table(design, joints, r) for r in rots])) if rots.shape[0] else \
             np.zeros((0, 3, 2, 8))
     else:
-        jcs = np.ascontiguousarray(np.broadcast_to(cone_table(design, joints, np.eye(3)), (rots.shape[0], 3, 2, 8)))
+        # a writable copy for every M (a broadcast view of one rotation would stay read-only, and numba
+        # compiles every kernel that takes the table once more for a read-only array)
+        jcs = np.repeat(cone_table(design, joints, np.eye(3))[None], rots.shape[0], axis=0)
     return us, jcs
 
 

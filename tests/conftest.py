@@ -4,7 +4,8 @@ machine is (the kernels' on-disk cache then serves the CLI subprocesses too).
 
 On a cold cache (a fresh clone, as CI runs it) that compile is a minute or more of one core: numba
 compiles one kernel at a time. A helper process compiles, meanwhile, the kernels that warm_up()
-reaches last (the general mechanism engine, the measures, the shell and the dexterity field), into
+reaches last (the general mechanism engine, the measures, the shell, the dexterity field, the task
+answers and the orientation scan: about half of the compile, so that both cores finish together), into
 the same on-disk cache, so that this process loads them instead of compiling them: the two cores
 share the compile. The kernels and the results are the same either way (the helper only fills the
 cache; warm_up() below still calls every kernel). With a warm cache no helper is started."""
@@ -37,6 +38,14 @@ from paraspace.kinematics.shell import workspace_shell
 workspace_shell(res)
 from paraspace.kinematics.dexterity import dexterity_field
 dexterity_field(res)
+from paraspace.kinematics.task import OrientationSet, PoseList, Region, TaskSettings, pose_list_task, region_task
+coarse = TaskSettings(voxel=8.0, margin_range=8.0)
+region_task(Design(), Region("sphere", (0.0, 0.0, 130.0), (4.0,)), OrientationSet(tilt=5.0), coarse)
+region_task(Design(), Region("box", (0.0, 0.0, 165.0), (10.0, 10.0, 10.0)), OrientationSet(), coarse)
+pose_list_task(Design(), PoseList(np.array([[0.0, 0.0, 130.0, 0.0, 0.0, 0.0], [0.0, 0.0, 400.0, 0.0, 0.0, 0.0]])),
+               coarse)
+from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
+orientation_workspace(Design(), OrientationSettings(angle_step=30.0, position_step=40.0))
 """
 
 
