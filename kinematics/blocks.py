@@ -46,7 +46,7 @@ import numpy as np
 from numba import njit, prange
 
 from .feasibility import _chain_excluded, _feasible_at, chain_points
-from .parallel import KERNEL_LOCK
+from .parallel import KERNEL_LOCK, kernel_launch
 from .progress import CancelToken, Reporter, check
 
 __all__ = ["decide_chain", "initial_windows", "run_blocks", "rounding_margin", "sub_arcs", "TOP_BLOCK"]
@@ -253,9 +253,87 @@ def _split(b0: np.ndarray, bn: np.ndarray, *inherited: np.ndarray) -> tuple[np.n
     return (np.concatenate(kids0), np.concatenate(kidsn), *(np.concatenate(lst) for lst in kids))
 
 
-@njit(cache=True, nogil=True)
+@njit(parallel=True, cache=True, nogil=True)
 def _advance(b0, bn, state, win, all_chains, out):
     """One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
+    undecided ones split in eight (as :func:`_split` does; each block's children consecutive, in
+    block order), with the chain states and sample windows they inherit.
+
+    Parallel over the blocks, in two passes: the first writes each decided block's voxels (the
+    blocks of a level are disjoint boxes, so no two iterations write the same voxel of ``out``)
+    and counts each undecided block's children; a prefix sum of the counts gives each block the
+    offset of its children, which the second pass writes. The arrays returned are those of the
+    serial loop (the children in the same order), for any thread count or chunking."""
+    nb = b0.shape[0]
+    counts = np.zeros(nb, np.int64)
+    for b in prange(nb):
+        unknown = False
+        fail = False
+        bits = 0
+        for i in range(3):
+            st = state[b, i]
+            if st == UNKNOWN:
+                unknown = True
+            elif st == FAIL:
+                fail = True
+            else:
+                bits |= 1 << i
+        single = bn[b, 0] == 1 and bn[b, 1] == 1 and bn[b, 2] == 1
+        if single or not unknown or (fail and not all_chains):
+            for x in range(b0[b, 0], b0[b, 0] + bn[b, 0]):
+                for y in range(b0[b, 1], b0[b, 1] + bn[b, 1]):
+                    for z in range(b0[b, 2], b0[b, 2] + bn[b, 2]):
+                        out[x, y, z] = bits
+        else:
+            c = 1
+            for a in range(3):
+                if bn[b, a] > 1:
+                    c *= 2
+            counts[b] = c  # >= 2: a kept block is never a single voxel
+    offs = np.empty(nb + 1, np.int64)
+    offs[0] = 0
+    for b in range(nb):
+        offs[b + 1] = offs[b] + counts[b]
+    n_kids = offs[nb]
+    k0 = np.empty((n_kids, 3), np.int64)
+    kn = np.empty((n_kids, 3), np.int64)
+    ks = np.empty((n_kids, 3), np.int8)
+    kw = np.empty((n_kids, 3, 3), np.int64)
+    for b in prange(nb):
+        if counts[b] == 0:
+            continue
+        m = offs[b]
+        for d in range(8):
+            ok = True
+            for a in range(3):
+                if (d >> (2 - a)) & 1 and bn[b, a] == 1:
+                    ok = False
+            if not ok:
+                continue
+            for a in range(3):
+                half = (bn[b, a] + 1) // 2
+                if bn[b, a] == 1:
+                    k0[m, a] = b0[b, a]
+                    kn[m, a] = 1
+                elif (d >> (2 - a)) & 1:
+                    k0[m, a] = b0[b, a] + half
+                    kn[m, a] = bn[b, a] - half
+                else:
+                    k0[m, a] = b0[b, a]
+                    kn[m, a] = half
+            for i in range(3):
+                ks[m, i] = state[b, i]
+                for j in range(3):
+                    kw[m, i, j] = win[b, i, j]
+            m += 1
+    return k0, kn, ks, kw
+
+
+@njit(cache=True, nogil=True)
+def _advance_serial(b0, bn, state, win, all_chains, out):
+    """The former serial :func:`_advance`, kept as its reference (tests, benchmark): the same arrays.
+
+    One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
     undecided ones split in eight (as :func:`_split` does; each block's children consecutive), with the chain
     states and sample windows they inherit."""
     nb = b0.shape[0]
@@ -357,7 +435,8 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
                                  float(h), eps, bool(all_chains), u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo,
                                  rho_hi, lmin, lmax, jc)
         n_before = b0.shape[0]
-        b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
+        with kernel_launch(n_before):
+            b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
         level += 1
         if progress is not None:
             frac = min(1.0, level / n_levels)

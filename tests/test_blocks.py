@@ -85,3 +85,39 @@ def test_fused_finish_equals_the_numpy_mirror_fill_and_completion_test():
         occ = np.empty(half.shape, bool)
         workspace._finish_kernel(half, ny_eval, mirror, workspace._MIRROR_BITS, occ)
         assert np.array_equal(half, ref) and np.array_equal(occ, ref == 7) and np.array_equal(occ, res.occupancy)
+
+
+def test_parallel_advance_equals_the_serial_one():
+    """Issue 24 target 7: the parallel ``_advance`` (counts, prefix sum, children at their offsets)
+    returns exactly the arrays of the former serial loop (``_advance_serial``) and writes the same
+    voxels, level after level on random chain states and windows (so later levels see mixed block
+    sizes), both modes, with 1 and 2 threads and the chunked launches of the engine."""
+    import numba
+
+    from paraspace.kinematics import blocks
+    from paraspace.kinematics.parallel import kernel_launch
+
+    rng = np.random.default_rng(24)
+    threads = numba.get_num_threads()
+    try:
+        for n_threads in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+            numba.set_num_threads(n_threads)
+            for shape, all_chains in (((37, 29, 21), False), ((33, 18, 40), True), ((16, 16, 16), False)):
+                b0, bn = blocks._top_blocks(shape, 8)
+                out_ref = np.full(shape, 255, np.uint8)
+                out_new = out_ref.copy()
+                levels = 0
+                while b0.shape[0]:
+                    state = rng.choice(np.array([0, 1, 2], np.int8), size=(b0.shape[0], 3), p=[0.5, 0.3, 0.2])
+                    win = rng.integers(-5, 1000, size=(b0.shape[0], 3, 3), dtype=np.int64)
+                    ref = blocks._advance_serial(b0, bn, state, win, all_chains, out_ref)
+                    with kernel_launch(b0.shape[0]):
+                        new = blocks._advance(b0, bn, state.copy(), win.copy(), all_chains, out_new)
+                    for r, n in zip(ref, new):
+                        assert r.dtype == n.dtype and np.array_equal(r, n), (n_threads, shape, levels)
+                    assert np.array_equal(out_ref, out_new), (n_threads, shape, levels)
+                    b0, bn = ref[0], ref[1]
+                    levels += 1
+                assert levels >= 4 and not (out_new == 255).any()  # every voxel decided, each once
+    finally:
+        numba.set_num_threads(threads)
