@@ -418,6 +418,22 @@ def _enclosed_ext_kernel(occ, out, ext):
 
 
 @njit(parallel=True, cache=True, nogil=True)
+def _paste_kernel(sub, lo0, lo1, lo2, out):
+    """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
+    slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
+    n0, n1, n2 = out.shape
+    m0, m1, m2 = sub.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                out[i, j, k] = False
+        if lo0 <= i < lo0 + m0:
+            for j in range(m1):
+                for k in range(m2):
+                    out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
 def _floored_kernel(occ, out):
     """``out = concatenate([ones(n0, n1, 1), occ], axis=2)`` (the grid on its base layer), over x
     slices in parallel."""
@@ -523,10 +539,11 @@ def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tup
     occ, cand, box = found
     with KERNEL_LOCK:
         sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
-    voids = np.zeros(occ.shape, np.bool_)
     if not n_void:
-        return voids, None
-    voids[box] = sub
+        return np.zeros(occ.shape, np.bool_), None
+    voids = np.empty(occ.shape, np.bool_)
+    with KERNEL_LOCK:
+        _paste_kernel(sub, box[0].start, box[1].start, box[2].start, voids)
     return voids, box
 
 

@@ -178,11 +178,32 @@ def _unreached_kernel(cand, reached, out):
     return counts.sum()
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _copy_kernel(src, dst):
+    """``dst[...] = src`` (``src`` any layout, e.g. a box cut from a grid), over x slices in parallel."""
+    n0, n1, n2 = src.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                dst[i, j, k] = src[i, j, k]
+
+
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    """``np.ascontiguousarray(a, bool)``, the copy (of a non-contiguous box) made in parallel."""
+    a = np.asarray(a, dtype=np.bool_)
+    if a.flags.c_contiguous:
+        return a
+    out = np.empty(a.shape, np.bool_)
+    if a.size:
+        _copy_kernel(a, out)
+    return out
+
+
 def enclosed_voids(cand: np.ndarray, occ: np.ndarray, full: bool) -> tuple[np.ndarray, int]:
     """``(voids, |voids|)`` of the module docstring for the candidates ``cand`` of ``occ`` (both on a
     box whose outer layer holds no candidate); ``full``: the dual adjacency is 26 (else 6)."""
-    cand = np.ascontiguousarray(cand, dtype=np.bool_)
-    occ = np.ascontiguousarray(occ, dtype=np.bool_)
+    cand = _contiguous(cand)
+    occ = _contiguous(occ)
     reached = np.empty(cand.shape, np.bool_)
     _seed_kernel(cand, occ, full, reached)
     n_seed = int(_count_kernel(reached)) if reached.size else 0

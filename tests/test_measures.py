@@ -543,14 +543,16 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
 
 def test_parallel_cavities_kernels_equal_the_former_passes():
     """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
-    their per-slice extents, the grid on its base layer, the seed count that skips an empty flood and
-    the open/sealed counts -- give exactly the former serial passes (``_enclosed_kernel`` and numpy's
-    ``any`` box, ``concatenate``, ``count_nonzero``) and the voids of the labelled definition, on
+    their per-slice extents, the grid on its base layer, the seed count that skips an empty flood,
+    the box's copy and paste and the open/sealed counts -- give exactly the former serial passes
+    (``_enclosed_kernel`` and numpy's ``any`` box, ``concatenate``, ``ascontiguousarray``, slice
+    assignment, ``count_nonzero``) and the voids of the labelled definition, on
     designs and odd shapes (empty, full, one voxel, a shell with a sealed void, a box open at one
     side, random fields), with 1 and 2 numba threads."""
     import numba
 
     from paraspace.kinematics import measures as mod
+    from paraspace.kinematics import void_flood
 
     rng = np.random.default_rng(2711)
     shell = np.zeros((11, 9, 7), bool)
@@ -595,6 +597,13 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     out = np.zeros(floored.shape, bool)
                     mod._floored_kernel(occ, out)
                     assert np.array_equal(out, floored)
+                    cut = tuple(slice(a // 3, a - a // 4) for a in occ.shape)
+                    sub = occ[cut]
+                    assert np.array_equal(void_flood._contiguous(sub), np.ascontiguousarray(sub))
+                    pasted, ref = np.ones(occ.shape, bool), np.zeros(occ.shape, bool)
+                    ref[cut] = sub
+                    mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
+                    assert np.array_equal(pasted, ref)
                 for conn in (1, 3):
                     for floor in (False, True):
                         sealed = mod.sealed_mask(occ, conn, floor=floor)
