@@ -233,7 +233,7 @@ from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
 from .run_components import RunComponents, count_components
 from .serialize import jsonable
-from .void_flood import enclosed_voids
+from .void_flood import _contiguous, enclosed_voids
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -431,6 +431,33 @@ def _paste_kernel(sub, lo0, lo1, lo2, out):
             for j in range(m1):
                 for k in range(m2):
                     out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _occ_extent_kernel(occ, ext):
+    """Per x slice ``i`` of ``occ``: ``ext[i] = (count, j_lo, j_hi, k_lo, k_hi)`` of its set voxels
+    (inclusive; ``j_hi = k_hi = -1`` when none), over x slices in parallel: the number of voxels and
+    the bounding box without serial passes over the grid."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        c = 0
+        jlo, jhi, klo, khi = n1, -1, n2, -1
+        for j in range(n1):
+            for k in range(n2):
+                if occ[i, j, k]:
+                    c += 1
+                    if jlo == n1:
+                        jlo = j
+                    jhi = j
+                    if k < klo:
+                        klo = k
+                    if k > khi:
+                        khi = k
+        ext[i, 0] = c
+        ext[i, 1] = jlo
+        ext[i, 2] = jhi
+        ext[i, 3] = klo
+        ext[i, 4] = khi
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -1653,7 +1680,11 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     h = float(grid.h)
     vv = h ** 3
     occ = np.asarray(result.occupancy, dtype=bool)
-    n = int(np.count_nonzero(occ))
+    ext = np.zeros((occ.shape[0] if occ.size else 0, 5), np.int64)
+    if occ.size:
+        with KERNEL_LOCK:
+            _occ_extent_kernel(occ, ext)
+    n = int(ext[:, 0].sum())
     volume = n * vv
 
     touched = touched_faces(occ)
@@ -1681,22 +1712,23 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         rest = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
         return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **rest}
 
-    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
+    rows = np.flatnonzero(ext[:, 0])  # the first and last set voxel along each axis (n > 0)
+    lo_v = [int(rows[0]), int(ext[rows, 1].min()), int(ext[rows, 3].min())]
+    hi_v = [int(rows[-1]), int(ext[rows, 2].max()), int(ext[rows, 4].max())]
     bmin, bmax = [], []
-    for a, m in enumerate((any_x, any_y, any_z)):
-        lo_i = int(np.argmax(m))
-        hi_i = len(m) - 1 - int(np.argmax(m[::-1]))
-        bmin.append(float(grid.origin[a] + h * lo_i - 0.5 * h))
-        bmax.append(float(grid.origin[a] + h * hi_i + 0.5 * h))
+    for a in range(3):
+        bmin.append(float(grid.origin[a] + h * lo_v[a] - 0.5 * h))
+        bmax.append(float(grid.origin[a] + h * hi_v[a] + 0.5 * h))
     extents = [b - a for a, b in zip(bmin, bmax)]
     always.update(bounds={"min": bmin, "max": bmax}, extents=extents)
 
     # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
     # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
-    lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
-    hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    crop = np.ascontiguousarray(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])  # one copy, not one a kernel
+    lo_b = [max(0, lo_v[a] - 1) for a in range(2)]
+    hi_b = [min(occ.shape[a], hi_v[a] + 2) for a in range(3)]
+    with KERNEL_LOCK:  # one parallel copy, not one a kernel
+        crop = _contiguous(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])
     extent = max(extents)
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
     steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,

@@ -544,11 +544,12 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
 def test_parallel_cavities_kernels_equal_the_former_passes():
     """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
     their per-slice extents, the grid on its base layer, the seed count that skips an empty flood,
-    the box's copy and paste and the open/sealed counts -- give exactly the former serial passes
-    (``_enclosed_kernel`` and numpy's ``any`` box, ``concatenate``, ``ascontiguousarray``, slice
-    assignment, ``count_nonzero``) and the voids of the labelled definition, on
-    designs and odd shapes (empty, full, one voxel, a shell with a sealed void, a box open at one
-    side, random fields), with 1 and 2 numba threads."""
+    the box's copy and paste, the open/sealed counts -- and the per-slice count and extent of the
+    grid (the measures' bounds and crop) give exactly the former serial passes (``_enclosed_kernel``
+    and numpy's ``any`` box, ``concatenate``, ``ascontiguousarray``, slice assignment,
+    ``count_nonzero``) and the voids of the labelled definition, on designs and odd shapes (empty,
+    full, one voxel, a shell with a sealed void, a box open at one side, a box open at its bottom,
+    random fields), with 1 and 2 numba threads."""
     import numba
 
     from paraspace.kinematics import measures as mod
@@ -604,6 +605,14 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     ref[cut] = sub
                     mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
                     assert np.array_equal(pasted, ref)
+                    ext = np.empty((occ.shape[0], 5), np.int64)
+                    mod._occ_extent_kernel(occ, ext)
+                    assert int(ext[:, 0].sum()) == int(np.count_nonzero(occ))
+                    assert np.array_equal(ext[:, 0], occ.sum(axis=(1, 2)))
+                    for i in range(occ.shape[0]):
+                        js, ks = np.nonzero(occ[i])
+                        assert list(ext[i, 1:]) == ([js.min(), js.max(), ks.min(), ks.max()] if js.size
+                                                    else [occ.shape[1], -1, occ.shape[2], -1])
                 for conn in (1, 3):
                     for floor in (False, True):
                         sealed = mod.sealed_mask(occ, conn, floor=floor)
