@@ -443,16 +443,23 @@ def _occ_extent_kernel(occ, ext):
         c = 0
         jlo, jhi, klo, khi = n1, -1, n2, -1
         for j in range(n1):
-            for k in range(n2):
+            cr = 0
+            for k in range(n2):  # branch-free count of the row
+                cr += occ[i, j, k]
+            if cr == 0:
+                continue
+            c += cr
+            if jlo == n1:
+                jlo = j
+            jhi = j
+            for k in range(klo):  # only a set voxel below the lowest so far can lower it
                 if occ[i, j, k]:
-                    c += 1
-                    if jlo == n1:
-                        jlo = j
-                    jhi = j
-                    if k < klo:
-                        klo = k
-                    if k > khi:
-                        khi = k
+                    klo = k
+                    break
+            for k in range(n2 - 1, khi, -1):
+                if occ[i, j, k]:
+                    khi = k
+                    break
         ext[i, 0] = c
         ext[i, 1] = jlo
         ext[i, 2] = jhi
