@@ -233,7 +233,7 @@ from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
 from .run_components import RunComponents, count_components
 from .serialize import jsonable
-from .void_flood import enclosed_voids
+from .void_flood import _contiguous, enclosed_voids
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -359,6 +359,146 @@ def _enclosed_kernel(occ, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
+def _enclosed_ext_kernel(occ, out, ext):
+    """:func:`_enclosed_kernel` (the same ``out``) that also writes each x slice's extent of the
+    candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)`` (inclusive; ``j_hi = -1``: none in slice
+    ``i``), so their bounding box needs no serial pass over the grid. Both passes are parallel: the
+    x ends per ``(j, k)`` over y slices, the rest over x slices."""
+    n0, n1, n2 = occ.shape
+    fx = np.empty((n1, n2), np.int64)
+    lx = np.empty((n1, n2), np.int64)
+    for j in prange(n1):
+        for k in range(n2):
+            fx[j, k] = n0
+            lx[j, k] = -1
+        for i in range(n0):
+            for k in range(n2):
+                if occ[i, j, k]:
+                    if fx[j, k] == n0:
+                        fx[j, k] = i
+                    lx[j, k] = i
+    for i in prange(n0):
+        fy = np.full(n2, n1, np.int64)
+        ly = np.full(n2, -1, np.int64)
+        for j in range(n1):
+            for k in range(n2):
+                if occ[i, j, k]:
+                    if fy[k] == n1:
+                        fy[k] = j
+                    ly[k] = j
+        jlo, jhi, klo, khi = n1, -1, n2, -1
+        for j in range(n1):
+            fz = n2
+            for k in range(n2):
+                if occ[i, j, k]:
+                    fz = k
+                    break
+            lz = -1
+            for k in range(n2 - 1, fz, -1):
+                if occ[i, j, k]:
+                    lz = k
+                    break
+            for k in range(n2):
+                out[i, j, k] = False
+            for k in range(fz + 1, lz):  # only strictly between the column's ends
+                v = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
+                out[i, j, k] = v
+                if v:
+                    if jlo == n1:
+                        jlo = j
+                    jhi = j
+                    if k < klo:
+                        klo = k
+                    if k > khi:
+                        khi = k
+        ext[i, 0] = jlo
+        ext[i, 1] = jhi
+        ext[i, 2] = klo
+        ext[i, 3] = khi
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _paste_kernel(sub, lo0, lo1, lo2, out):
+    """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
+    slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
+    n0, n1, n2 = out.shape
+    m0, m1, m2 = sub.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                out[i, j, k] = False
+        if lo0 <= i < lo0 + m0:
+            for j in range(m1):
+                for k in range(m2):
+                    out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _occ_extent_kernel(occ, ext):
+    """Per x slice ``i`` of ``occ``: ``ext[i] = (count, j_lo, j_hi, k_lo, k_hi)`` of its set voxels
+    (inclusive; ``j_hi = k_hi = -1`` when none), over x slices in parallel: the number of voxels and
+    the bounding box without serial passes over the grid."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        c = 0
+        jlo, jhi, klo, khi = n1, -1, n2, -1
+        for j in range(n1):
+            cr = 0
+            for k in range(n2):  # branch-free count of the row
+                cr += occ[i, j, k]
+            if cr == 0:
+                continue
+            c += cr
+            if jlo == n1:
+                jlo = j
+            jhi = j
+            for k in range(klo):  # only a set voxel below the lowest so far can lower it
+                if occ[i, j, k]:
+                    klo = k
+                    break
+            for k in range(n2 - 1, khi, -1):
+                if occ[i, j, k]:
+                    khi = k
+                    break
+        ext[i, 0] = c
+        ext[i, 1] = jlo
+        ext[i, 2] = jhi
+        ext[i, 3] = klo
+        ext[i, 4] = khi
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _floored_kernel(occ, out):
+    """``out = concatenate([ones(n0, n1, 1), occ], axis=2)`` (the grid on its base layer), over x
+    slices in parallel."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        for j in range(n1):
+            out[i, j, 0] = True
+            for k in range(n2):
+                out[i, j, k + 1] = occ[i, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _open_sealed_counts_kernel(under, sealed):
+    """``(|under & ~sealed|, |under & sealed|)`` in one parallel pass over x slices."""
+    n0, n1, n2 = under.shape
+    n_open = np.zeros(n0, np.int64)
+    n_sealed = np.zeros(n0, np.int64)
+    for i in prange(n0):
+        c_under = 0
+        c_sealed = 0
+        for j in range(n1):
+            for k in range(n2):
+                u = under[i, j, k]
+                c_under += u
+                c_sealed += u & sealed[i, j, k]
+        n_open[i] = c_under - c_sealed
+        n_sealed[i] = c_sealed
+    return n_open.sum(), n_sealed.sum()
+
+
+@njit(parallel=True, cache=True, nogil=True)
 def _open_labels_kernel(cand, lab, occ, full, n_labels):
     """Labels of ``cand`` (the candidates' components) with a dual neighbour that is unreachable and
     not a candidate: those components reach the outside (``full``: 26 neighbours, else 6). Threads
@@ -389,15 +529,18 @@ def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tupl
     (:func:`_enclosed_kernel`) and their bounding box grown by one voxel (the neighbours the tests
     look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
     occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
-    cand = np.zeros(occ.shape, np.bool_)
-    if occ.size:
-        with KERNEL_LOCK:
-            _enclosed_kernel(occ, cand)
-    if not cand.any():
+    if not occ.size:
         return None
-    flags = [np.asarray(cand.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1))]
-    lo = [int(np.argmax(m)) for m in flags]
-    hi = [len(m) - int(np.argmax(m[::-1])) for m in flags]
+    cand = np.empty(occ.shape, np.bool_)
+    ext = np.empty((occ.shape[0], 4), np.int64)
+    with KERNEL_LOCK:
+        _enclosed_ext_kernel(occ, cand, ext)
+    rows = np.flatnonzero(ext[:, 1] >= 0)
+    if not rows.size:
+        return None
+    e = ext[rows]
+    lo = [int(rows[0]), int(e[:, 0].min()), int(e[:, 2].min())]
+    hi = [int(rows[-1]) + 1, int(e[:, 1].max()) + 1, int(e[:, 3].max()) + 1]
     box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
     return occ, cand, box
 
@@ -430,10 +573,11 @@ def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tup
     occ, cand, box = found
     with KERNEL_LOCK:
         sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
-    voids = np.zeros(occ.shape, np.bool_)
     if not n_void:
-        return voids, None
-    voids[box] = sub
+        return np.zeros(occ.shape, np.bool_), None
+    voids = np.empty(occ.shape, np.bool_)
+    with KERNEL_LOCK:
+        _paste_kernel(sub, box[0].start, box[1].start, box[2].start, voids)
     return voids, box
 
 
@@ -1290,8 +1434,11 @@ def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True
     occ = np.asarray(occupancy, dtype=bool)
     if not floor:
         return void_mask(occ, connectivity)
-    base = np.ones(occ.shape[:2] + (1,), dtype=bool)
-    return void_mask(np.concatenate([base, occ], axis=2), connectivity)[:, :, 1:]
+    floored = np.empty(occ.shape[:2] + (occ.shape[2] + 1,), np.bool_)
+    if floored.size:
+        with KERNEL_LOCK:
+            _floored_kernel(np.ascontiguousarray(occ), floored)
+    return void_mask(floored, connectivity)[:, :, 1:]
 
 
 def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollowness: str = "hull",
@@ -1427,9 +1574,13 @@ class _Steps:
             sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None)
         else:
             sealed = self.get("voids")[0]
-        n_open = int(np.count_nonzero(under & ~sealed))
+        if under.size:
+            with KERNEL_LOCK:
+                n_open, n_sealed = (int(c) for c in _open_sealed_counts_kernel(under, sealed))
+        else:
+            n_open = n_sealed = 0
         open_ratio = n_open / (n_under + self.n) if n_under else 0.0
-        return float(open_ratio), int(np.count_nonzero(under & sealed)) * self.vv
+        return float(open_ratio), n_sealed * self.vv
 
     def _pieces_filled(self):
         components, _, n_pieces, _, piece_set = self.get("labels")
@@ -1536,7 +1687,11 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     h = float(grid.h)
     vv = h ** 3
     occ = np.asarray(result.occupancy, dtype=bool)
-    n = int(np.count_nonzero(occ))
+    ext = np.zeros((occ.shape[0] if occ.size else 0, 5), np.int64)
+    if occ.size:
+        with KERNEL_LOCK:
+            _occ_extent_kernel(occ, ext)
+    n = int(ext[:, 0].sum())
     volume = n * vv
 
     touched = touched_faces(occ)
@@ -1564,22 +1719,23 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         rest = {k: empty[k] if k in empty else defaults[k] for k in wanted if k not in always}
         return {**always, "bounds": None, "extents": [0.0, 0.0, 0.0], **rest}
 
-    any_x, any_y, any_z = (np.asarray(occ.any(axis=a)) for a in ((1, 2), (0, 2), (0, 1)))
+    rows = np.flatnonzero(ext[:, 0])  # the first and last set voxel along each axis (n > 0)
+    lo_v = [int(rows[0]), int(ext[rows, 1].min()), int(ext[rows, 3].min())]
+    hi_v = [int(rows[-1]), int(ext[rows, 2].max()), int(ext[rows, 4].max())]
     bmin, bmax = [], []
-    for a, m in enumerate((any_x, any_y, any_z)):
-        lo_i = int(np.argmax(m))
-        hi_i = len(m) - 1 - int(np.argmax(m[::-1]))
-        bmin.append(float(grid.origin[a] + h * lo_i - 0.5 * h))
-        bmax.append(float(grid.origin[a] + h * hi_i + 0.5 * h))
+    for a in range(3):
+        bmin.append(float(grid.origin[a] + h * lo_v[a] - 0.5 * h))
+        bmax.append(float(grid.origin[a] + h * hi_v[a] + 0.5 * h))
     extents = [b - a for a, b in zip(bmin, bmax)]
     always.update(bounds={"min": bmin, "max": bmax}, extents=extents)
 
     # Everything below works on the box of W grown by one voxel (x, y and the top; the bottom stays at
     # the grid's floor, where the base layer of sealed_mask lies): outside it there is no reachable
     # voxel, no void, no hull and no cover, so every count is the same as on the whole grid.
-    lo_b = [max(0, int(np.argmax(m)) - 1) for m in (any_x, any_y)]
-    hi_b = [min(len(m), len(m) - int(np.argmax(m[::-1])) + 1) for m in (any_x, any_y, any_z)]
-    crop = np.ascontiguousarray(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])  # one copy, not one a kernel
+    lo_b = [max(0, lo_v[a] - 1) for a in range(2)]
+    hi_b = [min(occ.shape[a], hi_v[a] + 2) for a in range(3)]
+    with KERNEL_LOCK:  # one parallel copy, not one a kernel
+        crop = _contiguous(occ[lo_b[0]:hi_b[0], lo_b[1]:hi_b[1], 0:hi_b[2]])
     extent = max(extents)
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
     steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,

@@ -104,16 +104,10 @@ def _seed_kernel(cand, occ, full, out):
 
 
 @njit(cache=True, nogil=True)
-def _flood_kernel(cand, reached, full):
-    """Grow ``reached`` (the seeds on entry) to every candidate joined to it within ``cand`` by the
-    dual adjacency (breadth first; each candidate enters the queue once)."""
+def _flood_kernel(cand, reached, full, n_seed):
+    """Grow ``reached`` (the ``n_seed`` seeds on entry) to every candidate joined to it within
+    ``cand`` by the dual adjacency (breadth first; each candidate enters the queue once)."""
     n0, n1, n2 = cand.shape
-    n_seed = 0
-    for i in range(n0):
-        for j in range(n1):
-            for k in range(n2):
-                if reached[i, j, k]:
-                    n_seed += 1
     size = n_seed + 1
     queue = np.empty((size, 3), np.int64)
     head = 0
@@ -153,6 +147,21 @@ def _flood_kernel(cand, reached, full):
 
 
 @njit(parallel=True, cache=True, nogil=True)
+def _count_kernel(mask):
+    """The number of True voxels of ``mask``, over x slices in parallel."""
+    n0, n1, n2 = mask.shape
+    counts = np.zeros(n0, np.int64)
+    for i in prange(n0):
+        c = 0
+        for j in range(n1):
+            for k in range(n2):
+                if mask[i, j, k]:
+                    c += 1
+        counts[i] = c
+    return counts.sum()
+
+
+@njit(parallel=True, cache=True, nogil=True)
 def _unreached_kernel(cand, reached, out):
     """``out = cand & ~reached`` in one parallel pass; returns the number of such voxels."""
     n0, n1, n2 = cand.shape
@@ -169,14 +178,37 @@ def _unreached_kernel(cand, reached, out):
     return counts.sum()
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _copy_kernel(src, dst):
+    """``dst[...] = src`` (``src`` any layout, e.g. a box cut from a grid), over x slices in parallel."""
+    n0, n1, n2 = src.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                dst[i, j, k] = src[i, j, k]
+
+
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    """``np.ascontiguousarray(a, bool)``, the copy (of a non-contiguous box) made in parallel."""
+    a = np.asarray(a, dtype=np.bool_)
+    if a.flags.c_contiguous:
+        return a
+    out = np.empty(a.shape, np.bool_)
+    if a.size:
+        _copy_kernel(a, out)
+    return out
+
+
 def enclosed_voids(cand: np.ndarray, occ: np.ndarray, full: bool) -> tuple[np.ndarray, int]:
     """``(voids, |voids|)`` of the module docstring for the candidates ``cand`` of ``occ`` (both on a
     box whose outer layer holds no candidate); ``full``: the dual adjacency is 26 (else 6)."""
-    cand = np.ascontiguousarray(cand, dtype=np.bool_)
-    occ = np.ascontiguousarray(occ, dtype=np.bool_)
+    cand = _contiguous(cand)
+    occ = _contiguous(occ)
     reached = np.empty(cand.shape, np.bool_)
     _seed_kernel(cand, occ, full, reached)
-    _flood_kernel(cand, reached, full)
+    n_seed = int(_count_kernel(reached)) if reached.size else 0
+    if n_seed:  # no seed: no candidate leaks, and the serial flood has nothing to visit
+        _flood_kernel(cand, reached, full, n_seed)
     out = np.empty(cand.shape, np.bool_)
     n = int(_unreached_kernel(cand, reached, out))
     return out, n

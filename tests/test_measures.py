@@ -539,3 +539,92 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
     monkeypatch.setattr(void_flood, "_seed_kernel", void_flood._seed_kernel_reference)
     slow = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast == slow
+
+
+def test_parallel_cavities_kernels_equal_the_former_passes():
+    """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
+    their per-slice extents, the grid on its base layer, the seed count that skips an empty flood,
+    the box's copy and paste, the open/sealed counts -- and the per-slice count and extent of the
+    grid (the measures' bounds and crop) give exactly the former serial passes (``_enclosed_kernel``
+    and numpy's ``any`` box, ``concatenate``, ``ascontiguousarray``, slice assignment,
+    ``count_nonzero``) and the voids of the labelled definition, on designs and odd shapes (empty,
+    full, one voxel, a shell with a sealed void, a box open at one side, a box open at its bottom,
+    random fields), with 1 and 2 numba threads."""
+    import numba
+
+    from paraspace.kinematics import measures as mod
+    from paraspace.kinematics import void_flood
+
+    rng = np.random.default_rng(2711)
+    shell = np.zeros((11, 9, 7), bool)
+    shell[1:10, 1:8, 1:6] = True
+    shell[4:7, 3:6, 3] = False
+    cup = np.zeros((10, 9, 8), bool)  # a box open at its top: nothing sealed without the floor
+    cup[1:9, 1:8, 1:7] = True
+    cup[3:7, 3:6, 3:] = False
+    bowl = np.zeros((10, 9, 8), bool)  # a box open at its bottom face: sealed only by the base layer
+    bowl[1:9, 1:8, :7] = True
+    bowl[3:7, 3:6, :5] = False
+    shapes = [np.zeros((5, 6, 7), bool), np.ones((5, 6, 7), bool), np.ones((1, 1, 1), bool),
+              np.zeros((1, 1, 1), bool), np.zeros((0, 3, 4), bool), shell, cup, bowl]
+    shapes += [rng.random(tuple(rng.integers(1, 14, 3))) < rng.uniform(0.3, 0.95) for _ in range(25)]
+    shapes += [np.asarray(compute_workspace(d, WorkspaceSettings(voxel=6.0)).occupancy, bool)
+               for d in (Design(), Design(a=10), Design(l_s=20))]
+    threads = [n for n in (1, 2) if n <= numba.config.NUMBA_NUM_THREADS]
+    before = numba.get_num_threads()
+    try:
+        for n in threads:
+            numba.set_num_threads(n)
+            for occ in shapes:
+                occ = np.ascontiguousarray(occ)
+                floored = np.concatenate([np.ones(occ.shape[:2] + (1,), bool), occ], axis=2)
+                for grid in (occ, floored):
+                    if not grid.size:
+                        assert mod._candidates_box(grid) is None
+                        continue
+                    old, new = np.zeros(grid.shape, bool), np.ones(grid.shape, bool)
+                    ext = np.empty((grid.shape[0], 4), np.int64)
+                    mod._enclosed_kernel(grid, old)
+                    mod._enclosed_ext_kernel(grid, new, ext)
+                    assert np.array_equal(new, old)
+                    found = mod._candidates_box(grid)
+                    if not old.any():
+                        assert found is None
+                        continue
+                    flags = [old.any(axis=a) for a in ((1, 2), (0, 2), (0, 1))]
+                    box = tuple(slice(int(np.argmax(f)) - 1, len(f) - int(np.argmax(f[::-1])) + 1) for f in flags)
+                    assert found[2] == box and np.array_equal(found[1], old)
+                if occ.size:
+                    out = np.zeros(floored.shape, bool)
+                    mod._floored_kernel(occ, out)
+                    assert np.array_equal(out, floored)
+                    cut = tuple(slice(a // 3, a - a // 4) for a in occ.shape)
+                    sub = occ[cut]
+                    assert np.array_equal(void_flood._contiguous(sub), np.ascontiguousarray(sub))
+                    pasted, ref = np.ones(occ.shape, bool), np.zeros(occ.shape, bool)
+                    ref[cut] = sub
+                    mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
+                    assert np.array_equal(pasted, ref)
+                    ext = np.empty((occ.shape[0], 5), np.int64)
+                    mod._occ_extent_kernel(occ, ext)
+                    assert int(ext[:, 0].sum()) == int(np.count_nonzero(occ))
+                    assert np.array_equal(ext[:, 0], occ.sum(axis=(1, 2)))
+                    for i in range(occ.shape[0]):
+                        js, ks = np.nonzero(occ[i])
+                        assert list(ext[i, 1:]) == ([js.min(), js.max(), ks.min(), ks.max()] if js.size
+                                                    else [occ.shape[1], -1, occ.shape[2], -1])
+                for conn in (1, 3):
+                    for floor in (False, True):
+                        sealed = mod.sealed_mask(occ, conn, floor=floor)
+                        ref = (mod.void_mask_labelled(floored, conn)[:, :, 1:] if floor
+                               else mod.void_mask_labelled(occ, conn))
+                        assert np.array_equal(sealed, ref)
+                        under = rng.random(occ.shape) < 0.5
+                        if occ.size:
+                            counts = mod._open_sealed_counts_kernel(under, sealed)
+                            assert (int(counts[0]), int(counts[1])) == (
+                                int(np.count_nonzero(under & ~sealed)), int(np.count_nonzero(under & sealed)))
+            assert mod.sealed_mask(bowl, 1, floor=True).any() and not mod.sealed_mask(bowl, 1, floor=False).any()
+            assert mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not mod.sealed_mask(cup, 1).any()
+    finally:
+        numba.set_num_threads(before)
