@@ -239,7 +239,8 @@ class JobManager:
                supersede: bool = False, on_done: Callable[[Job], None] | None = None,
                on_progress: Callable[[Job], None] | None = None,
                max_seconds: float | None = None,
-               summarize: Callable[[Any], Any] | None = None) -> Job:
+               summarize: Callable[[Any], Any] | None = None,
+               client_limit: int | None = None) -> Job:
         """Queue ``fn(progress, cancel)`` and return its :class:`Job` at once.
 
         Args:
@@ -254,6 +255,9 @@ class JobManager:
             max_seconds: run-time limit of this job (default: the manager's; never above it).
             summarize: what the history keeps of the result once the results of finished jobs
                 exceed ``history_bytes`` (default: nothing).
+            client_limit: the client's limit of unfinished jobs for this submission (default
+                ``max_jobs_per_client``). The explorer's sessions, whose jobs are bounded by
+                construction (one per kind, superseded, plus the pins), pass their own bound.
 
         Raises:
             LimitExceeded: the client or the manager is at its limit of unfinished jobs.
@@ -288,11 +292,12 @@ class JobManager:
                 to_finish = self._supersede_locked(kind, client, keep=None)
             live = [j for j in self._unfinished.values() if not j._cancel_requested]
             n_client = sum(1 for j in live if j.client == client)
-            if n_client >= self.max_jobs_per_client:
+            per_client = self.max_jobs_per_client if client_limit is None else int(client_limit)
+            if n_client >= per_client:
                 exc = LimitExceeded(
-                    "max_jobs_per_client", self.max_jobs_per_client,
+                    "max_jobs_per_client", per_client,
                     f"too many jobs for client {client!r}: limit max_jobs_per_client = "
-                    f"{self.max_jobs_per_client} unfinished jobs; wait for one to finish or cancel it")
+                    f"{per_client} unfinished jobs; wait for one to finish or cancel it")
             elif len(live) >= self.max_jobs_total:
                 exc = LimitExceeded(
                     "max_jobs_total", self.max_jobs_total,

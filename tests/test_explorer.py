@@ -690,6 +690,38 @@ def test_several_pins_each_in_its_colour_with_one_table_and_undo(explorer, brows
     assert not s.compare.undo_button.visible
 
 
+def test_pins_never_crowd_out_the_bracket_and_a_refused_bracket_is_named():
+    """A link with four pins opens four pin jobs before the workspace finishes; the orientation maps
+    and the certified bracket that follow the result still run although the server's per-client
+    limit (for REST clients) is 2. Where the server's total limit does refuse the bracket, the
+    numbers say so and why, instead of leaving it out without a word."""
+    from paraspace.app.jobs import JobManager
+
+    pins = ";".join(f"{a},14,50,100,114.5,50,30,centered" for a in (20, 40, 60, 70))
+    for total, search in ((64, f"voxel=8&angle_step=10&pin={pins}"), (1, "voxel=8&angle_step=10")):
+        jobs = JobManager(max_workers=2, max_jobs_total=total, max_jobs_per_client=2)
+        exp = Explorer("127.0.0.1", 0, jobs=jobs).start()
+        try:
+            assert exp.warm.wait(120)
+            b = FakeBrowser(exp, search)
+            s = b.session
+            if total > 1:
+                wait_idle(exp, s)  # a full result with its measures and its bracket
+                wait_for(lambda: len(s.compare.pins) == 4 and all(p.indices is not None for p in s.compare.pins)
+                         and "TI₁" in s.compare.table.content, 60.0, "four pins with their indices")
+                assert s.ctx.ws_info is not None and s.ctx.ws_info.bracket_note is None
+                assert "(continuous workspace, units³)" in s.panels.numbers.content
+            else:
+                wait_for(lambda: "bracket not started" in s.panels.numbers.content.replace("\\", ""), 60.0,
+                         "the refused bracket named")
+                text = s.panels.numbers.content.replace("\\", "")
+                assert "max_jobs_total = 1" in text and "(continuous workspace, units³)" not in text
+            b.close()
+        finally:
+            exp.stop()
+            jobs.shutdown(wait=True)
+
+
 def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
     """Issue 22's Task tab: a region task restored from the link is checked on the design on screen
     (the same answer as the core's, its sample points drawn in two colours, the worst pose marked);

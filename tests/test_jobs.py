@@ -132,10 +132,11 @@ def test_limit_per_client_and_total():
         with pytest.raises(LimitExceeded) as e:
             m.submit(fn, kind="k", client="C")
         assert "max_jobs_total" in str(e.value) and "3" in str(e.value)
-        # cancelling frees the slot immediately (a queued job is final at once)
+        # cancelling frees the slot immediately: B's job may be queued or already running on the
+        # reserve worker (A holds the only normal one), and either way C may submit at once
         assert m.cancel(j[2].id)
-        assert j[2].status == "cancelled"
         j.append(m.submit(fn, kind="k", client="C"))
+        assert j[2].wait(5) and j[2].status == "cancelled"
         block.set()
         for x in j:
             assert x.wait(5)
@@ -321,4 +322,48 @@ def test_another_clients_job_starts_whatever_kinds_one_client_runs():
         assert not a3.wait(0.3) and a3.status == "queued"
     finally:
         release.set()
+        m.shutdown(wait=True)
+
+
+def test_a_session_holds_a_job_of_every_kind_and_every_pin_at_once():
+    """The explorer's sessions run one job per kind (each superseding its last) and one per pin; the
+    session's own limit lets all of them be unfinished at once even where the manager's per-client
+    limit for REST clients is 2, so the jobs that follow a result (orientation maps, the bracket)
+    are never refused because of the pins. A kind outside the list, or one that does not
+    supersede, is refused by name."""
+    from paraspace.app.explorer.session import SESSION_JOB_KINDS, SESSION_JOB_LIMIT, SessionJobs
+    from paraspace.app.urlstate import MAX_PINS
+
+    m = JobManager(max_workers=1, max_jobs_total=64, max_jobs_per_client=2)
+    block = threading.Event()
+
+    def fn(progress, cancel):
+        while not block.is_set():
+            if cancel.is_set():
+                raise Cancelled()
+            time.sleep(0.005)
+        return 1
+
+    try:
+        sj = SessionJobs(m, lambda: False)
+        jobs = [sj.submit(fn, kind="pin", client="viser-1") for _ in range(MAX_PINS)]
+        jobs += [sj.submit(fn, kind=k, client="viser-1", supersede=True) for k in sorted(SESSION_JOB_KINDS)]
+        assert len(jobs) == SESSION_JOB_LIMIT
+        assert len(m.active("viser-1")) == SESSION_JOB_LIMIT
+        # one more is refused with the session's limit in the message
+        with pytest.raises(LimitExceeded, match=f"max_jobs_per_client = {SESSION_JOB_LIMIT}"):
+            sj.submit(fn, kind="pin", client="viser-1")
+        # a REST client keeps the manager's limit
+        m.submit(fn, kind="k", client="rest")
+        m.submit(fn, kind="k", client="rest")
+        with pytest.raises(LimitExceeded, match="max_jobs_per_client = 2"):
+            m.submit(fn, kind="k", client="rest")
+        with pytest.raises(ValueError, match="'novel'"):
+            sj.submit(fn, kind="novel", client="viser-1", supersede=True)
+        with pytest.raises(ValueError, match="supersede"):
+            sj.submit(fn, kind="task", client="viser-1")
+        block.set()
+        assert all(j.wait(5) for j in jobs)
+    finally:
+        block.set()
         m.shutdown(wait=True)

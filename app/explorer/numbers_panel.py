@@ -86,6 +86,8 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
         if br is not None and info.volume > 0:
             lines.append(f"{hover('certified', 'bracket')}: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
                          "(continuous workspace, units³)  ")
+        elif br is None and info.bracket_note is not None and info.volume > 0:
+            lines.append(f"{hover('certified', 'bracket')} bracket {md_text(info.bracket_note)}  ")
         if info.volume == 0:
             lines.append("**Empty workspace:** no platform position is reachable at this orientation "
                          f"(psi, theta, phi) with this {'design' if s.mechanism is None else 'mechanism'}.")

@@ -28,7 +28,7 @@ from paraspace.kinematics.redundancy import Resolution
 
 from ..jobs import Job, JobManager
 from ..textsafe import plain_text
-from ..urlstate import ExplorerState
+from ..urlstate import MAX_PINS, ExplorerState
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from paraspace.kinematics.bracket import VolumeBracket
@@ -73,6 +73,7 @@ class ShellInfo:
         measures: its measures, ``None`` until they are computed.
         bracket: its certified volume bracket, ``None`` unless asked for and computed.
         stopped: the user stopped the job before its measures were computed (they are not coming).
+        bracket_note: why the certified bracket is not coming (its job was refused), or ``None``.
     """
 
     volume: float
@@ -85,23 +86,46 @@ class ShellInfo:
     measures: WorkspaceMeasures | None = None
     bracket: VolumeBracket | None = None
     stopped: bool = False
+    bracket_note: str | None = None
+
+
+#: The kinds of job a browser's session runs, each superseding its predecessor (at most one
+#: unfinished job per kind), and ``"pin"``, one job per pinned design (at most ``MAX_PINS``).
+SESSION_JOB_KINDS = frozenset({
+    "workspace", "bracket", "orientation", "views", "dexterous", "optimize", "paper", "report",
+    "task", "tilt", "usage", "dexterity", "sweep", "surface"})
+
+#: A session's limit of unfinished jobs: what its own controls can have running at once, so the
+#: jobs that follow a result (orientation maps, the certified bracket, the pins) are never refused
+#: because of each other. The manager's total limit still bounds all browsers together.
+SESSION_JOB_LIMIT = len(SESSION_JOB_KINDS) + MAX_PINS
 
 
 class SessionJobs:
     """The job manager as one browser's session sees it: the same jobs, but progress and completion
-    callbacks are dropped once the browser has left (no GUI writes to a closed connection)."""
+    callbacks are dropped once the browser has left (no GUI writes to a closed connection), and
+    the client's limit is :data:`SESSION_JOB_LIMIT` (each kind of :data:`SESSION_JOB_KINDS`
+    supersedes its last job; pins are bounded by ``MAX_PINS``)."""
 
     def __init__(self, jobs: JobManager, is_closed: Callable[[], bool]) -> None:
         self._jobs = jobs
         self._closed = is_closed
 
-    def submit(self, fn: Any, *, on_done: Callable[[Job], None] | None = None,
+    def submit(self, fn: Any, *, kind: str, supersede: bool = False, on_done: Callable[[Job], None] | None = None,
                on_progress: Callable[[Job], None] | None = None, **kw: Any) -> Job:
+        if kind == "pin":
+            if supersede:
+                raise ValueError("pin jobs never supersede each other (one per pinned design)")
+        elif kind not in SESSION_JOB_KINDS or not supersede:
+            raise ValueError(f"session job kind {kind!r} must be one of SESSION_JOB_KINDS and supersede "
+                             "its last job, so that SESSION_JOB_LIMIT bounds the session's jobs")
+
         def alive(cb: Callable[[Job], None] | None) -> Callable[[Job], None] | None:
             if cb is None:
                 return None
             return lambda job: None if self._closed() else cb(job)
-        return self._jobs.submit(fn, on_done=alive(on_done), on_progress=alive(on_progress), **kw)
+        return self._jobs.submit(fn, kind=kind, supersede=supersede, on_done=alive(on_done),
+                                 on_progress=alive(on_progress), client_limit=SESSION_JOB_LIMIT, **kw)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._jobs, name)

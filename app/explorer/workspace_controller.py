@@ -127,7 +127,12 @@ class WorkspaceController:
         try:
             job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel), kind="bracket",
                                   client=ctx.job_client, supersede=True, on_done=done)
-        except (LimitExceeded, RuntimeError):  # a quota or shut down: the panel simply shows no bracket
+        except (LimitExceeded, RuntimeError) as exc:  # the server's total limit, or shut down: say so
+            with ctx.lock:
+                if gen != self.gen or ctx.closed or ctx.ws_info is None:
+                    return
+                ctx.ws_info = dataclasses.replace(ctx.ws_info, bracket_note=f"not started: {exc}")
+            self.numbers.render()
             return
         with ctx.lock:
             if gen == self.gen:
