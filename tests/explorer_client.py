@@ -150,16 +150,32 @@ def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
 
 def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> None:
     """Wait until the session has no unfinished jobs and a full, measured and bracketed result for its
-    current state."""
-    def idle() -> bool:
-        if exp.jobs.active(session.job_client):
-            return False
+    current state; on a time-out the message says which of these is still missing."""
+    def missing() -> str:
+        active = exp.jobs.active(session.job_client)
+        if active:
+            return "unfinished jobs: " + ", ".join(f"{j.kind} ({j.status}: {j.message})" for j in active)
         b = session.bundle
         s = session.state
-        return (b is not None and b.measures is not None and b.result.design == s.design
-                and b.result.settings.orientation == (s.pose.psi, s.pose.theta, s.pose.phi)
-                and b.result.settings.voxel == s.voxel
-                and (info := session.ctx.ws_info) is not None and info.preview is False and info.measures is not None
-                # the certified bracket (its own job, after the shell; none with leg interference)
-                and (b.bracket is not None or b.result.settings.joints.min_distance > 0.0))
-    wait_for(idle, timeout, "the session to become idle")
+        if b is None:
+            return "no result yet"
+        if b.measures is None:
+            return "the result has no measures"
+        if b.result.design != s.design:
+            return f"the result is for another design ({b.result.design} against {s.design})"
+        if b.result.settings.orientation != (s.pose.psi, s.pose.theta, s.pose.phi):
+            return "the result is for another orientation"
+        if b.result.settings.voxel != s.voxel:
+            return f"the result is for voxel {b.result.settings.voxel}, not {s.voxel}"
+        info = session.ctx.ws_info
+        if info is None or info.preview is not False or info.measures is None:
+            return "the numbers shown are a preview or have no measures"
+        if b.bracket is None and b.result.settings.joints.min_distance <= 0.0:
+            return "no certified bracket yet"
+        return ""
+
+    deadline = time.monotonic() + timeout
+    while (why := missing()) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    if why:
+        raise AssertionError(f"timed out after {timeout} s waiting for the session to become idle: {why}")

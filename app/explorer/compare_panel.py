@@ -188,6 +188,8 @@ class Pin:
     job: Job | None = None
     handle: Any | None = None
     cage: Any | None = None
+    #: what the ghost on screen shows: (node name, colour, bundle), so the same ghost is not sent twice
+    shown: tuple[str, tuple[int, int, int, int], Any] | None = None
 
 
 class ComparePanel:
@@ -204,6 +206,8 @@ class ComparePanel:
         self.hooks = hooks
         self.pins: list[Pin] = []
         self.lock = threading.Lock()
+        #: one ghost drawn at a time (the GUI thread and a pin's job may both redraw)
+        self.ghost_lock = threading.RLock()
         self.undo_state: tuple[Design, tuple[Design, ...]] | None = None
         self.views_job: Job | None = None
         self.view_images: list[Any] = []
@@ -397,9 +401,11 @@ class ComparePanel:
             for k, d in enumerate(designs))
 
     def _remove_ghost(self, pin: Pin) -> None:
-        remove_node(pin.handle)
-        remove_node(pin.cage)
-        pin.handle = pin.cage = None
+        with self.ghost_lock:
+            remove_node(pin.handle)
+            remove_node(pin.cage)
+            pin.handle = pin.cage = None
+            pin.shown = None
 
     def _show_ghosts(self) -> None:
         with self.lock:
@@ -408,20 +414,34 @@ class ComparePanel:
             self._show_ghost(p)
 
     def _show_ghost(self, pin: Pin) -> None:
-        self._remove_ghost(pin)
-        with self.lock:
-            if pin not in self.pins:
+        """Draw ``pin``'s ghost (or take it away when it is hidden or has nothing to show). A ghost
+        already on screen for the same node, colour and workspace is kept as it is; a changed one is
+        replaced in place (a node added under the same name replaces the old one), so it never blinks."""
+        with self.ghost_lock:
+            with self.lock:
+                k = self.pins.index(pin) if pin in self.pins else None
+            mesh = None if pin.bundle is None else pin.bundle.mesh
+            if (k is None or self.other_mechanism is not None or not self.show_ghost.value or mesh is None
+                    or len(mesh.faces) == 0):
+                self._remove_ghost(pin)
                 return
-            k = self.pins.index(pin)
-        mesh = None if pin.bundle is None else pin.bundle.mesh
-        if self.other_mechanism is not None or not self.show_ghost.value or mesh is None or len(mesh.faces) == 0:
-            return
-        node = self.NODE if k == 0 else f"{self.NODE}_{k + 1}"
-        pin.handle = self.scene.add_glb(node, ghost_glb(mesh, pin.colour), cast_shadow=False, receive_shadow=False)
-        cage = ghost_contours(mesh)
-        if len(cage):
-            pin.cage = self.scene.add_line_segments(node + "_cage", cage.astype(np.float32), pin.colour[:3],
-                                                    thickness=GHOST_LINE_PX, thickness_units="screen")
+            node = self.NODE if k == 0 else f"{self.NODE}_{k + 1}"
+            want = (node, pin.colour, pin.bundle)
+            if pin.shown is not None and pin.shown[0] == node and pin.shown[1] == pin.colour \
+                    and pin.shown[2] is pin.bundle and pin.handle is not None:
+                return
+            if pin.shown is not None and pin.shown[0] != node:
+                self._remove_ghost(pin)  # another place: its old nodes have other names
+            pin.handle = self.scene.add_glb(node, ghost_glb(mesh, pin.colour), cast_shadow=False,
+                                            receive_shadow=False)
+            cage = ghost_contours(mesh)
+            if len(cage):
+                pin.cage = self.scene.add_line_segments(node + "_cage", cage.astype(np.float32), pin.colour[:3],
+                                                        thickness=GHOST_LINE_PX, thickness_units="screen")
+            else:
+                remove_node(pin.cage)
+                pin.cage = None
+            pin.shown = want
 
     def set_mechanism(self, label: str | None) -> None:
         """The selected mechanism (its label, ``None`` for the paper's): the ghosts hide or show again."""
