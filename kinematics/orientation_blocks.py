@@ -43,7 +43,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .blocks import FAIL, _top_blocks, decide_chain, rounding_margin, sub_arcs
+from .blocks import FAIL, decide_chain, rounding_margin, sub_arcs
 from .design import Design
 from .feasibility import _feasible_at, chain_points
 from .kernel_args import kernel_args
@@ -233,6 +233,24 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
                 done[sp] = mine
 
 
+def _even_top_blocks(shape: tuple[int, int, int], size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Top blocks of at most ``size`` voxels per edge. Along x and y each axis is cut into
+    ``ceil(n / size)`` equal parts (within one voxel): a grid of 98 gives two blocks of 49, not 64 and
+    34, so the threads that take the blocks get even shares of a workspace centred on the z axis
+    (h = 4: 0.79x the time of the plain cut, with 2 threads). Along z the plain cut of
+    :func:`kinematics.blocks._top_blocks` is kept (equal parts there were slower at h = 2)."""
+    per_axis = []
+    for k, n in enumerate(shape):
+        p = max(1, -(-n // size))
+        edges = (np.arange(p + 1) * n) // p if k < 2 else np.minimum(np.arange(p + 1) * size, n)
+        per_axis.append((edges[:-1], np.diff(edges)))
+    g0 = np.meshgrid(*(e for e, _ in per_axis), indexing="ij")
+    gn = np.meshgrid(*(w for _, w in per_axis), indexing="ij")
+    b0 = np.stack([g.ravel() for g in g0], axis=1).astype(np.int64)
+    bn = np.stack([g.ravel() for g in gn], axis=1).astype(np.int64)
+    return b0, bn
+
+
 def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
                       h: float, samples: np.ndarray, rotations: np.ndarray, n_eta: int, first: int = 0,
                       progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
@@ -279,7 +297,7 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     parent[right[inner]] = inner
     cum = np.zeros(tuple(n + 1 for n in cand.shape), np.int64)
     cum[1:, 1:, 1:] = cand.cumsum(0).cumsum(1).cumsum(2)
-    t0, tn = _top_blocks(cand.shape, TOP_BLOCK)
+    t0, tn = _even_top_blocks(cand.shape, TOP_BLOCK)
     x0, y0, z0 = t0.T
     x1, y1, z1 = (t0 + tn).T
     counts = (cum[x1, y1, z1] - cum[x0, y1, z1] - cum[x1, y0, z1] - cum[x1, y1, z0]

@@ -176,6 +176,25 @@ def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, tors
     assert 0 < blocks.voxels < pos.voxels
 
 
+@pytest.mark.parametrize("shape,size", [((98, 98, 43), 64), ((178, 178, 84), 64), ((5, 7, 3), 2), ((65, 1, 130), 64),
+                                        ((1, 1, 1), 64)])
+def test_top_blocks_tile_the_grid_once_with_even_parts_in_x_and_y(shape, size):
+    """The total-orientation blocks' top blocks (kinematics/orientation_blocks._even_top_blocks): every
+    voxel in exactly one block, no edge above ``size``, x and y cut into ceil(n / size) parts that
+    differ by at most one voxel, z cut as the engine cuts it (``size`` from the bottom)."""
+    from paraspace.kinematics.orientation_blocks import _even_top_blocks
+
+    b0, bn = _even_top_blocks(shape, size)
+    cover = np.zeros(shape, int)
+    for o, n in zip(b0, bn):
+        cover[o[0]:o[0] + n[0], o[1]:o[1] + n[1], o[2]:o[2] + n[2]] += 1
+    assert (cover == 1).all() and (bn >= 1).all() and (bn <= size).all()
+    for k in (0, 1):
+        widths = np.unique(bn[:, k])
+        assert widths.max() - widths.min() <= 1 and len(np.unique(b0[:, k])) == -(-shape[k] // size)
+    assert sorted(set(b0[:, 2].tolist())) == list(range(0, shape[2], size))
+
+
 def test_unknown_method_is_refused(plain):
     with pytest.raises(ParameterError, match="method"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
