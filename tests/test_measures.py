@@ -628,3 +628,18 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
             assert mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not mod.sealed_mask(cup, 1).any()
     finally:
         numba.set_num_threads(before)
+
+
+@pytest.mark.parametrize("tiles", [(64, 16, 8), (16,), (32, 4)])
+def test_hull_tiles_from_their_parents_give_every_facets_columns(tiles, monkeypatch):
+    """The hull's columns with facets kept per tile from the parent tile's list (coarse to fine,
+    kinematics/measures._HULL_TILES) equal the columns with every facet tested at every column, on a
+    rough blob wide enough for several tiles at every level (and tiles cut at the grid's edge)."""
+    from paraspace.kinematics import measures as mod
+
+    rng = np.random.default_rng(7)
+    x, y, z = np.ogrid[-1:1:150j, -1:1:133j, -1:1:24j]
+    occ = (x ** 2 + 1.3 * y ** 2 + (z + 0.2 * x * y) ** 2 < 0.8) & (rng.random((150, 133, 24)) < 0.97)
+    monkeypatch.setattr(mod, "_HULL_TILES", tiles)
+    tiled = mod.hull_mask(occ)
+    assert tiled.sum() > occ.sum() and np.array_equal(tiled, mod.hull_mask(occ, tiled=False))
