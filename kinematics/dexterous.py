@@ -193,8 +193,10 @@ def total_orientation_workspace(design: Design, tilt: float, torsion: float, ste
         pts = position.grid.points().reshape(-1, 3)[idx]
     if method == "blocks" and plain:
         grid = position.grid
+        mirror = position.settings.symmetry and design.eta_range == "centered"
         inside = reachable_on_grid(design, occ, grid.axes(), grid.h, samples, rots,
-                                   default_n_eta(design, eta_step), FIRST_BLOCKS, rep.sub(0.3, 1.0), cancel)
+                                   default_n_eta(design, eta_step), FIRST_BLOCKS, rep.sub(0.3, 1.0), cancel,
+                                   mirror=mirror)
         alive = inside.ravel()[idx]
         n = 0
     elif method == "tree" and plain:

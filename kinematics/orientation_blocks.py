@@ -251,17 +251,55 @@ def _even_top_blocks(shape: tuple[int, int, int], size: int) -> tuple[np.ndarray
     return b0, bn
 
 
+def mirror_closed(rotations: np.ndarray, tol: float = 1e-12) -> bool:
+    """Whether the set of ``rotations`` (M, 3, 3) is closed under the mirror ``y -> -y``, ``R -> D R D``
+    with ``D = diag(1, -1, 1)`` (for T&T angles ``(phi, theta, sigma) -> (-phi, theta, -sigma)``):
+    every mirrored rotation equals one of the set to within ``tol`` in every entry."""
+    r = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+    d = np.array([1.0, -1.0, 1.0])
+    a = r.reshape(len(r), 9)
+    b = (r * d[None, :, None] * d[None, None, :]).reshape(len(r), 9)
+    # look each mirrored rotation up by its entries rounded to 1e-9, then check it within tol (a
+    # rotation whose entries round the other way is not found: then no mirror, never a wrong one)
+    void = np.dtype((np.void, 9 * 8))
+    ka = np.ascontiguousarray(np.round(a * 1e9).astype(np.int64)).view(void).ravel()
+    kb = np.ascontiguousarray(np.round(b * 1e9).astype(np.int64)).view(void).ravel()
+    order = np.argsort(ka, kind="stable")
+    pos = np.minimum(np.searchsorted(ka[order], kb), len(ka) - 1)
+    k = order[pos]
+    return bool(np.all(ka[k] == kb) and np.abs(a[k] - b).max() <= tol)
+
+
 def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
                       h: float, samples: np.ndarray, rotations: np.ndarray, n_eta: int, first: int = 0,
-                      progress: Reporter | None = None, cancel: CancelToken = None) -> np.ndarray:
+                      progress: Reporter | None = None, cancel: CancelToken = None,
+                      mirror: bool = False) -> np.ndarray:
     """Whether each candidate voxel (``candidates``: bool grid; ``axes``: its voxel-centre
     coordinates, edge ``h``) passes the exact per-pair test at every rotation of ``rotations``
     (M, 3, 3; ``samples`` their (azimuth, tilt, torsion) rows), plain model only: bool grid, False
     off the candidates. The first ``first`` samples exclude blocks and are tested first (module
-    docstring)."""
+    docstring).
+
+    ``mirror``: the design is symmetric under ``y -> -y`` (the engine's mirror: the centered arc
+    range). Where the candidates and the y axis are symmetric too and the rotations are closed under
+    the mirror (:func:`mirror_closed`), a voxel passes every rotation exactly when its mirror image
+    does (it meets the mirrored rotation there), so only the rows ``j >= ny // 2`` are decided and
+    the others are copied from their mirror rows: half the work, as the engine does."""
     from .joints import Joints
 
     cand = np.ascontiguousarray(np.asarray(candidates, dtype=np.bool_))
+    ny = cand.shape[1]
+    ys = np.asarray(axes[1], dtype=np.float64)
+    mirror = bool(mirror and ny > 1 and np.allclose(ys, -ys[::-1], atol=1e-9 * max(1.0, h))
+                  and np.array_equal(cand, cand[:, ::-1]) and mirror_closed(rotations))
+    if mirror:
+        full = cand
+        cand = cand.copy()
+        cand[:, :ny // 2] = False
+        out = reachable_on_grid(design, cand, axes, h, samples, rotations, n_eta, first, progress, cancel)
+        out[:, :ny // 2] = out[:, ::-1][:, :ny // 2]
+        assert not (out & ~full).any()
+        return out
     out = np.zeros(cand.shape, np.bool_)
     rots = np.ascontiguousarray(np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3))
     if not cand.any():

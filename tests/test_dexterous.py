@@ -195,6 +195,51 @@ def test_top_blocks_tile_the_grid_once_with_even_parts_in_x_and_y(shape, size):
     assert sorted(set(b0[:, 2].tolist())) == list(range(0, shape[2], size))
 
 
+@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 0.0, 5.0), (0.0, 30.0, 10.0), (45.0, 60.0, 10.0)])
+def test_sample_sets_are_closed_under_the_mirror(tilt, torsion, step):
+    """(phi, theta, sigma) -> (-phi, theta, -sigma) maps the sample set onto itself (azimuths q 360 / 2^n,
+    torsions symmetric about 0), which is what lets the blocks decide half the grid; a set turned by
+    an azimuth offset, or cut to its first half, is not closed."""
+    from paraspace.kinematics.orientation_blocks import mirror_closed
+    from paraspace.kinematics.tilt_torsion import tt_rotations
+
+    s = orientation_samples(tilt, torsion, step)
+    assert mirror_closed(tt_rotations(s[:, 0], s[:, 1], s[:, 2]))
+    if tilt > 0:
+        assert not mirror_closed(tt_rotations(s[:, 0] + 3.0, s[:, 1], s[:, 2]))
+    if torsion > 0:
+        keep = s[:, 2] >= 0  # torsions >= 0 only: their mirrors are missing
+        assert not mirror_closed(tt_rotations(s[keep, 0], s[keep, 1], s[keep, 2]))
+
+
+@pytest.mark.parametrize("design", [DESIGN, Design(a=30, b=20, eta_s=60), Design(a=70, d_s=80, l_s=80)])
+def test_the_mirrored_half_gives_the_voxels_of_the_whole_grid(design):
+    """Issue 24 target 5: deciding the rows j >= ny // 2 and copying the others from their mirror
+    rows gives the voxels of deciding every row (and of every orientation per pair); where the
+    candidates are not symmetric the mirror is not used."""
+    from paraspace.kinematics.orientation_blocks import reachable_on_grid
+    from paraspace.kinematics.tilt_torsion import tt_rotations
+    from paraspace.kinematics.workspace import default_n_eta
+
+    ws = WorkspaceSettings(voxel=8.0)
+    pos = compute_workspace(design, ws)
+    s = orientation_samples(15.0, 10.0, 5.0)
+    rots = tt_rotations(s[:, 0], s[:, 1], s[:, 2])
+    n_eta = default_n_eta(design, ws.eta_step)
+    g = pos.grid
+    occ = np.asarray(pos.occupancy, bool)
+    assert np.array_equal(occ, occ[:, ::-1])
+    half = reachable_on_grid(design, occ, g.axes(), g.h, s, rots, n_eta, 8, mirror=True)
+    whole = reachable_on_grid(design, occ, g.axes(), g.h, s, rots, n_eta, 8, mirror=False)
+    assert 0 < half.sum() < occ.sum() and np.array_equal(half, whole)
+    pairs = total_orientation_workspace(design, 15.0, 10.0, 5.0, ws, position=pos, method="pairs")
+    assert np.array_equal(half, pairs.occupancy)
+    lopsided = occ.copy()
+    lopsided[:, : occ.shape[1] // 2 - 1] = False  # no longer symmetric: every row is decided
+    assert np.array_equal(reachable_on_grid(design, lopsided, g.axes(), g.h, s, rots, n_eta, 8, mirror=True),
+                          whole & lopsided)
+
+
 def test_unknown_method_is_refused(plain):
     with pytest.raises(ParameterError, match="method"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
