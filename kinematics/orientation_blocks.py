@@ -32,15 +32,15 @@ grow coarser again. Any cut covers every sample, so a voxel passes exactly when 
 exact test passes: each decision is either an exact test or certified by a lemma, and the voxels
 are those of testing every sample at every candidate (the tests compare them with the per-pair
 path). Each tree node keeps, per chain, the carriage sample that last passed there (the hint its
-certificate and exact test try first).
+certificate and exact test try first). Plain model only (no joint cones, no leg interference),
+like the orientation tree.
 
 Mirror. With the centered arc range the mechanism is symmetric under ``y -> -y`` (chain 1 onto
 itself, chains 2 and 3 swapped), and the sample sets of :func:`kinematics.dexterous.orientation_samples`
 are closed under ``R -> D R D``, ``D = diag(1, -1, 1)``: ``(phi, theta, sigma) -> (-phi, theta,
 -sigma)``. A voxel then passes every sample exactly when its mirror image does, so only the rows
 ``j >= ny // 2`` are decided and the others copied (:func:`reachable_on_grid`, ``mirror``), after
-checking the y axis, the candidates and the rotations (:func:`mirror_closed`). Plain model only (no joint cones, no leg interference),
-like the orientation tree.
+checking the y axis, the candidates and the rotations (:func:`mirror_closed`).
 """
 
 from __future__ import annotations
