@@ -11,6 +11,17 @@ from paraspace.app.jobs import FINAL_STATUSES, Job, JobManager, LimitExceeded
 from paraspace.kinematics.progress import Cancelled
 
 
+def _until(block: threading.Event):
+    """A job that runs until ``block`` is set (returning 1), or raises Cancelled once cancelled."""
+    def fn(progress, cancel):
+        while not block.is_set():
+            if cancel.is_set():
+                raise Cancelled()
+            time.sleep(0.005)
+        return 1
+    return fn
+
+
 def _sleeper(seconds: float, result="ok"):
     """A cooperative job: sleeps in small steps, reporting progress and honouring cancel."""
     def fn(progress, cancel):
@@ -115,14 +126,7 @@ def test_limit_per_client_and_total():
     m = JobManager(max_workers=1, max_jobs_total=3, max_jobs_per_client=2, max_seconds=30.0)
     try:
         block = threading.Event()
-
-        def fn(progress, cancel):
-            while not block.is_set():
-                if cancel.is_set():
-                    raise Cancelled()
-                time.sleep(0.005)
-            return 1
-
+        fn = _until(block)
         j = [m.submit(fn, kind="k", client="A"), m.submit(fn, kind="k", client="A")]
         with pytest.raises(LimitExceeded) as e:
             m.submit(fn, kind="k", client="A")
@@ -336,14 +340,7 @@ def test_a_session_holds_a_job_of_every_kind_and_every_pin_at_once():
 
     m = JobManager(max_workers=1, max_jobs_total=64, max_jobs_per_client=2)
     block = threading.Event()
-
-    def fn(progress, cancel):
-        while not block.is_set():
-            if cancel.is_set():
-                raise Cancelled()
-            time.sleep(0.005)
-        return 1
-
+    fn = _until(block)
     try:
         sj = SessionJobs(m, lambda: False)
         jobs = [sj.submit(fn, kind="pin", client="viser-1") for _ in range(MAX_PINS)]
