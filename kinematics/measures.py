@@ -319,50 +319,12 @@ def void_mask_labelled(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarr
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _enclosed_kernel(occ, out):
-    """``out``: unreachable voxels with reachable ones on both sides along x, along y and along z
-    (strictly between the first and the last reachable voxel of each of their three axis lines)."""
-    n0, n1, n2 = occ.shape
-    fx = np.full((n1, n2), n0, np.int64)
-    lx = np.full((n1, n2), -1, np.int64)
-    for j in prange(n1):
-        for i in range(n0):
-            for k in range(n2):
-                if occ[i, j, k]:
-                    if fx[j, k] == n0:
-                        fx[j, k] = i
-                    lx[j, k] = i
-    for i in prange(n0):
-        fy = np.full(n2, n1, np.int64)
-        ly = np.full(n2, -1, np.int64)
-        for j in range(n1):
-            for k in range(n2):
-                if occ[i, j, k]:
-                    if fy[k] == n1:
-                        fy[k] = j
-                    ly[k] = j
-        for j in range(n1):
-            fz = n2
-            for k in range(n2):
-                if occ[i, j, k]:
-                    fz = k
-                    break
-            lz = -1
-            for k in range(n2 - 1, fz, -1):
-                if occ[i, j, k]:
-                    lz = k
-                    break
-            for k in range(n2):
-                out[i, j, k] = False
-            for k in range(fz + 1, lz):  # only strictly between the column's ends
-                out[i, j, k] = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
-
-
-@njit(parallel=True, cache=True, nogil=True)
 def _enclosed_ext_kernel(occ, out, ext):
-    """:func:`_enclosed_kernel` (the same ``out``) that also writes each x slice's extent of the
-    candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)`` (inclusive; ``j_hi = -1``: none in slice
-    ``i``), so their bounding box needs no serial pass over the grid. Both passes are parallel: the
+    """``out``: unreachable voxels with reachable ones on both sides along x, along y and along z
+    (strictly between the first and the last reachable voxel of each of their three axis lines);
+    and each x slice's extent of these candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)``
+    (inclusive; ``j_hi = -1``: none in slice ``i``), so their bounding box needs no serial pass over
+    the grid. Both passes are parallel: the
     x ends per ``(j, k)`` over y slices, the rest over x slices."""
     n0, n1, n2 = occ.shape
     fx = np.empty((n1, n2), np.int64)
@@ -526,7 +488,7 @@ def _open_labels_kernel(cand, lab, occ, full, n_labels):
 
 def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple] | None:
     """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
-    (:func:`_enclosed_kernel`) and their bounding box grown by one voxel (the neighbours the tests
+    (:func:`_enclosed_ext_kernel`) and their bounding box grown by one voxel (the neighbours the tests
     look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
     occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
     if not occ.size:
@@ -565,7 +527,7 @@ def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tupl
 
 def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tuple | None]:
     """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
-    (:func:`_enclosed_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
+    (:func:`_enclosed_ext_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
     which never visits a sealed cavity; ``box`` bounds the voids (``None``: no void)."""
     found = _candidates_box(occupancy)
     if found is None:
@@ -586,7 +548,7 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
 
     An unreachable voxel with no reachable voxel on one side along some axis is joined to the
     padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
-    is outside. The others, the candidates (:func:`_enclosed_kernel`), are outside exactly when they
+    is outside. The others, the candidates (:func:`_enclosed_ext_kernel`), are outside exactly when they
     are joined within the candidates to one with a dual neighbour that is unreachable and not a
     candidate (:func:`_void_set`); only the voids left are counted, as components of runs
     (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
