@@ -70,6 +70,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 from paraspace.kinematics.design import Design  # noqa: E402
 from paraspace.kinematics.grid import GridSpec  # noqa: E402
 from paraspace.kinematics.reference import reference_reachable  # noqa: E402
+from paraspace.kinematics.run_components import LabelledComponents  # noqa: E402
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up  # noqa: E402
 
 BOX = ((-180.0, -180.0, 0.0), (180.0, 180.0, 165.0))
@@ -273,8 +274,8 @@ def _former_measures():
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
              "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
-             "RunComponents": _LabelledComponents,
-             "count_components": lambda occ, conn=1: _LabelledComponents(occ, conn).count}
+             "RunComponents": LabelledComponents,
+             "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     for k, v in patch.items():
         setattr(mod, k, v)
@@ -401,22 +402,6 @@ def measure_meas1_rows(design: Design, runs: int = 3) -> None:
                 name = "measure_workspace" if kind == "new" else "measure_workspace, before meas1"
                 _row(f"{name}, {nt} thread{'s' if nt != '1' else ''}", med[k], med["engine"],
                      "(target <= 1x)" if kind == "new" else "")
-
-
-class _LabelledComponents:
-    """kinematics.run_components.RunComponents by scipy's labelling of the grid (the path before meas2)."""
-
-    def __init__(self, occ, conn=1):
-        import numpy as np
-        from scipy import ndimage as ndi
-
-        self._lab, self.count = ndi.label(occ, structure=ndi.generate_binary_structure(3, conn))
-        self.sizes = np.bincount(self._lab.ravel(), minlength=1)[1:]
-
-    def mask(self, keep):
-        import numpy as np
-
-        return np.concatenate([[False], keep])[self._lab]
 
 
 @contextlib.contextmanager
@@ -599,9 +584,9 @@ def _measures_before_meas2():
             mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
         return ~out if complement else out
 
-    patch = {"RunComponents": _LabelledComponents, "euler_characteristic": euler,
+    patch = {"RunComponents": LabelledComponents, "euler_characteristic": euler,
              "ball_dilate": dilate_before,
-             "count_components": lambda occ, conn=1: _LabelledComponents(occ, conn).count}
+             "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     seed = void_flood._seed_kernel
     for k, v in patch.items():

@@ -183,6 +183,22 @@ class RunComponents:
         return out
 
 
+class LabelledComponents:
+    """:class:`RunComponents` by ``scipy.ndimage.label`` of the whole grid: the definition, and the
+    path the measures took before the runs (the tests' reference and the benchmarks' baseline)."""
+
+    def __init__(self, occupancy: np.ndarray, connectivity: int = 1) -> None:
+        from scipy import ndimage as ndi
+
+        self._lab, self.count = ndi.label(np.asarray(occupancy, dtype=bool),
+                                          structure=ndi.generate_binary_structure(3, connectivity))
+        self.sizes = np.bincount(self._lab.ravel(), minlength=1)[1:]
+
+    def mask(self, keep: np.ndarray) -> np.ndarray:
+        """The union of the components ``keep`` (bool per component) selects."""
+        return np.concatenate([[False], keep])[self._lab]
+
+
 def count_components(occupancy: np.ndarray, connectivity: int = 1) -> int:
     """``b0``: ``scipy.ndimage.label(occupancy, generate_binary_structure(3, connectivity))[1]``."""
     return RunComponents(occupancy, connectivity).count

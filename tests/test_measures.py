@@ -13,6 +13,7 @@ from skimage.measure import marching_cubes
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
 from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.run_components import LabelledComponents
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 H = 1.0
@@ -464,19 +465,6 @@ def test_void_flood_and_extreme_hull_points_equal_the_former_path():
     assert n_with_voids >= 4  # the comparison saw voids, not only empty sets
 
 
-class _LabelledComponents:
-    """kinematics.run_components.RunComponents by scipy's labelling of the grid (the former path)."""
-
-    def __init__(self, occ, conn=1):
-        from scipy import ndimage as ndi
-
-        self._lab, self.count = ndi.label(occ, structure=ndi.generate_binary_structure(3, conn))
-        self.sizes = np.bincount(self._lab.ravel(), minlength=1)[1:]
-
-    def mask(self, keep):
-        return np.concatenate([[False], keep])[self._lab]
-
-
 def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
     """Issue 24 target 1 (meas2): the components counted from runs along z and the leak seeds of the
     void flood found by separable ors give every measure of the former path (scipy's labelling of
@@ -534,8 +522,8 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
                {"piece_fraction": 0.0})
     fast = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast[-6]["fragments"] == 3 and fast[-6]["voids"] == 1  # the specks and the void were seen
-    monkeypatch.setattr(mod, "RunComponents", _LabelledComponents)
-    monkeypatch.setattr(mod, "count_components", lambda occ, conn=1: _LabelledComponents(occ, conn).count)
+    monkeypatch.setattr(mod, "RunComponents", LabelledComponents)
+    monkeypatch.setattr(mod, "count_components", lambda occ, conn=1: LabelledComponents(occ, conn).count)
     monkeypatch.setattr(void_flood, "_seed_kernel", void_flood._seed_kernel_reference)
     slow = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast == slow
