@@ -581,6 +581,40 @@ def test_joints_group_changes_the_workspace_and_travels_in_the_link(explorer, br
     assert s.state.joints.leg_diameter == 0.0
 
 
+def test_an_older_input_submitted_late_never_supersedes_a_newer_one(explorer, browsers, monkeypatch):
+    """viser runs one session's callbacks on several threads. A thread that took its generation for
+    an older state and is descheduled before it submits its job must not supersede the job of a newer
+    state (stop 28's CI failure: the newer job cancelled, the older result dropped as stale, and the
+    session left idle on a shell of the joints before the change)."""
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    jobs = s.ctx.jobs
+    real = jobs.submit
+    delayed, newer_submitted = threading.Event(), threading.Event()
+
+    def late_first(fn, **kw):
+        if kw.get("kind") != "workspace":
+            return real(fn, **kw)
+        if not delayed.is_set():  # the older state's thread is descheduled between its generation and
+            delayed.set()          # its job: until the newer job is submitted, or 2 s where that waits
+            newer_submitted.wait(2.0)
+            return real(fn, **kw)
+        job = real(fn, **kw)
+        newer_submitted.set()
+        return job
+
+    monkeypatch.setattr(jobs, "submit", late_first)
+    j = s.panels.joints
+    b.set(j.u_on, True)  # the older state: U cones at the default angle
+    wait_for(delayed.is_set, 5.0, "the first workspace submit")
+    b.set(j.u_angle, 40.0)  # the newer state, submitted while the older one sleeps
+    wait_for(lambda: s.state.joints.theta_u == 40.0, 5.0, "joints applied")
+    wait_idle(explorer, s)
+    wait_for(lambda: s.bundle.result.settings.joints == s.state.joints, 30.0, "the newest joints' workspace")
+    assert "stopped" not in s.panels.status.content
+
+
 def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, monkeypatch):
     from paraspace.app.explorer import paper_panel
 

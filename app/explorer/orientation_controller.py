@@ -48,6 +48,7 @@ class OrientationController:
         self.on_state_change = on_state_change
         self.gen = 0
         self.job: Job | None = None
+        self._submit_lock = threading.Lock()  # orders submit() and forget_stale(); taken before ``ctx.lock``
         self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
         self.on_shown: Callable[[], None] | None = None  # e.g. the Compare table's TI column
 
@@ -83,7 +84,7 @@ class OrientationController:
     def forget_stale(self, s: ExplorerState) -> None:
         """Maps of another design than ``s``'s are stale: never show them, and free the worker at once."""
         ctx = self.ctx
-        with ctx.lock:
+        with self._submit_lock, ctx.lock:
             if self.key is None or self.key == self._key(s):
                 return
             self.gen += 1
@@ -95,7 +96,13 @@ class OrientationController:
                 ctx.panels.orientation_status.content = "waiting for the new design's workspace..."
 
     def submit(self) -> None:
-        """Recompute the orientation maps and TI_1/TI_2 for the current design and z0."""
+        """Recompute the orientation maps and TI_1/TI_2 for the current design and z0 (the generation
+        and its job are taken under one lock, as in ``WorkspaceController.submit``: the job submitted
+        last is the newest generation's)."""
+        with self._submit_lock:
+            self._submit()
+
+    def _submit(self) -> None:
         ctx = self.ctx
         with ctx.lock:
             self.gen += 1

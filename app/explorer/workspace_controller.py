@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import threading
 from collections.abc import Callable
 
 from paraspace.kinematics.design import ParameterError
@@ -58,6 +59,8 @@ class WorkspaceController:
         self.gen = 0
         self.job: Job | None = None
         self.bracket_job: Job | None = None  # the certified bracket of the full result on screen
+        # orders submit() and Stop: taken after ``ctx.input_lock`` and before ``view_lock``/``lock``
+        self._submit_lock = threading.Lock()
         self._framed = False  # the camera has framed a shell once
 
     def wire(self) -> None:
@@ -66,7 +69,17 @@ class WorkspaceController:
 
     # ----- submit ---------------------------------------------------------------------------------
     def submit(self) -> None:
-        """(Re)compute the workspace for the current design/orientation/voxel; the last call wins."""
+        """(Re)compute the workspace for the current design/orientation/voxel; the last call wins.
+
+        viser runs a session's callbacks on several threads at once. The generation number and the
+        job it names are taken under one lock (``_submit_lock``), so the job submitted last is always
+        the one of the newest generation: without it, a thread holding an older state could submit
+        after a newer one and supersede it (the newer job cancelled, the older one's result dropped
+        as stale, and the session left idle on a shell of an older state)."""
+        with self._submit_lock:
+            self._submit()
+
+    def _submit(self) -> None:
         ctx = self.ctx
         with ctx.lock:
             self.gen += 1
@@ -252,14 +265,14 @@ class WorkspaceController:
         screen (design, orientation, voxel, joints), so the controls, the numbers and the link all
         describe a result that exists (issue 8 defect 10)."""
         ctx = self.ctx
-        ctx.cancel_job(self.job)
-        ctx.cancel_job(self.bracket_job)
-        shown = ctx.bundle
-        if shown is None:
-            return
-        r = shown.result
-        psi, theta, phi = r.settings.orientation
-        with ctx.input_lock:
+        with ctx.input_lock, self._submit_lock:  # no submit() between the cancel and the new generation
+            ctx.cancel_job(self.job)
+            ctx.cancel_job(self.bracket_job)
+            shown = ctx.bundle
+            if shown is None:
+                return
+            r = shown.result
+            psi, theta, phi = r.settings.orientation
             with ctx.lock:
                 s = ctx.state
                 back = s.replace(design=r.design or s.design, voxel=float(r.settings.voxel),
