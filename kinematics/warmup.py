@@ -6,19 +6,26 @@ about a second. A server therefore calls :func:`warm_up` at start-up (in a backg
 a line on the console when it is done), so that no request waits on a compile; the test suite's
 fixtures call it before they send a request.
 
-"Every kernel a request can reach" is every entry point of the core on a tiny problem: the
-workspace engines (blocks and dense, with diagnostics, the certified bracket and the mirror), the
-per-point test with and without joint cones about both axes and with leg interference, the
-redundancy resolution with joints (the explorer's pose panel and ``/ik``), the orientation line
-scan, the task answers (region and pose list: the certification and pose kernels), the dexterity
-field, the measures and shell of a result, and the general engine of a mechanism description
-(:mod:`kinematics.mechanism_workspace`).
+"Every kernel a request can reach" is every entry point of the core on a tiny problem, one
+:data:`STEPS` entry each: the workspace engines (blocks and dense, with diagnostics, the certified
+bracket, refined as the explorer and the API refine it, and the mirror), the per-point test with
+and without joint cones about both axes and with leg interference, the redundancy resolution with
+joints (the explorer's pose panel and ``/ik``), the orientation line scan, the total-orientation
+workspace (blocks and tree methods), the task answers (region and pose list: the certification and
+pose kernels), the dexterity field, the measures, the shell and the display shell of a result, and
+the general engine of a mechanism description (:mod:`kinematics.mechanism_workspace`) with its
+orientation scan.
+
+The steps are independent (each builds its own tiny problem), so that a second process can warm
+the last ones into the same on-disk cache while this one warms the first ones (the test suite does:
+``tests/conftest.py``); :func:`run_steps` runs any of them.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -26,15 +33,142 @@ from .design import Design
 from .joints import Joints
 from .pose import Pose
 
-__all__ = ["warm_up", "is_warm"]
+__all__ = ["STEPS", "warm_up", "is_warm", "run_steps"]
 
 _lock = threading.Lock()
 _warm = False
+_BOX = ((-100.0, -100.0, 0.0), (100.0, 100.0, 160.0))
+
+
+def _tiny_result():  # noqa: ANN202 - a WorkspaceResult (imported lazily)
+    """A small result built by hand (a 5 x 5 x 5 block of voxels with voids), so that a step that
+    needs a result does not compile the engine: a helper process warming the last steps leaves that
+    to this one."""
+    from .feasibility import default_n_eta
+    from .grid import GridSpec
+    from .workspace import WorkspaceResult, WorkspaceSettings
+
+    h, lo, shape = 40.0, _BOX[0], (7, 7, 6)
+    settings = WorkspaceSettings(voxel=h, bounds=(lo, (100.0, 100.0, 160.0)))
+    grid = GridSpec(origin=tuple(a + 0.5 * h for a in lo), h=h, shape=shape)
+    occ = np.zeros(shape, bool)
+    occ[1:6, 1:6, 0:5] = True  # on the floor, with the measures' void paths:
+    occ[4, 4, 1] = False  # a sealed void,
+    occ[2, 2, 3:5] = False  # a bent tunnel from the top, whose end (3, 2, 3) is enclosed along every axis
+    occ[3, 2, 3] = False  # but leaks (the flood from the candidates that leak),
+    occ[5, 1:3, 4] = False  # and an open notch
+    return WorkspaceResult(design=Design(), settings=settings, grid=grid, occupancy=occ, chain_mask=None,
+                           compute_seconds=0.0, n_eta=default_n_eta(Design(), settings.eta_step))
+
+
+def _engines() -> None:
+    from .workspace import WorkspaceSettings, compute_workspace
+
+    d = Design()
+    compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=_BOX))
+    compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=_BOX, diagnostics=True, bracket=True))
+    compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=_BOX, method="dense"))
+
+
+def _joints() -> None:
+    from .redundancy import resolve_redundancy
+    from .workspace import WorkspaceSettings, compute_workspace, reachable
+
+    d = Design()
+    pts = np.array([[0.0, 0.0, 130.0], [10.0, 5.0, 120.0]])
+    for joints in (Joints(), Joints(theta_u=45.0, theta_s=45.0), Joints(theta_u=30.0, cone_axis="home"),
+                   Joints(leg_diameter=10.0, clearance=1.0)):
+        reachable(d, pts, (0.0, 0.0, 0.0), joints=joints)
+        reachable(d, pts, (5.0, 3.0, 2.0), joints=joints)
+        resolve_redundancy(d, Pose(z=130.0), joints)
+        compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=_BOX, joints=joints))
+
+
+def _bracket() -> None:
+    from .bracket import bracket_of
+
+    res = _tiny_result()
+    for refine in (1, 2):  # the explorer's and the API's refinements
+        bracket_of(res, refine=refine)
+
+
+def _orientation() -> None:
+    from .orientation import OrientationSettings, orientation_workspace
+
+    orientation_workspace(Design(), OrientationSettings(angle_step=30.0, position_step=40.0))
+
+
+def _total_orientation() -> None:
+    from .dexterous import total_orientation_workspace
+    from .workspace import WorkspaceSettings
+
+    d, ws = Design(), WorkspaceSettings(voxel=40.0, bounds=_BOX)
+    for method in ("blocks", "tree"):
+        total_orientation_workspace(d, 15.0, 15.0, step=15.0, settings=ws, method=method)
+
+
+def _task() -> None:
+    from .task import OrientationSet, PoseList, Region, TaskSettings, pose_list_task, region_task
+
+    d, coarse = Design(), TaskSettings(voxel=8.0, margin_range=8.0)
+    region_task(d, Region("sphere", (0.0, 0.0, 130.0), (4.0,)), OrientationSet(tilt=5.0), coarse)
+    region_task(d, Region("box", (0.0, 0.0, 165.0), (10.0, 10.0, 10.0)), OrientationSet(), coarse)
+    pose_list_task(d, PoseList(np.array([[0.0, 0.0, 130.0, 0.0, 0.0, 0.0], [0.0, 0.0, 400.0, 0.0, 0.0, 0.0]])),
+                   coarse)
+
+
+def _dexterity() -> None:
+    from .dexterity import dexterity_field
+
+    res = _tiny_result()
+    for search in ("neighbour", "sweep"):  # the full search's kernels: the neighbour's run-time check
+        dexterity_field(res, search=search)
+
+
+def _measures_and_shells() -> None:
+    from .display_mesh import display_shell
+    from .measures import measure_workspace
+    from .run_components import RunComponents
+    from .shell import workspace_shell
+
+    res = _tiny_result()
+    measure_workspace(res)
+    RunComponents(np.ones((2, 2, 2), bool)).mask(np.ones(1, bool))  # the pieces' mask: only with fragments
+    workspace_shell(res)
+    display_shell(res)
+
+
+def _general() -> None:
+    from .mechanism_orientation import mechanism_orientation_workspace
+    from .mechanism_workspace import warm_up_general
+    from .orientation import OrientationSettings
+    from .presets import six_pups
+
+    warm_up_general()
+    mechanism_orientation_workspace(six_pups(), OrientationSettings(angle_step=30.0, position_step=40.0))
+
+
+#: The warm-up, in the order :func:`warm_up` runs it: ``(name, step)``. On a cold cache the first
+#: three compile for about as long as the rest (two idle cores: 68 s and 70 s), so that a helper
+#: process warming from the last step backwards meets :func:`warm_up` at the cheap task step.
+STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
+    ("engines", _engines), ("joints", _joints), ("orientation", _orientation), ("bracket", _bracket),
+    ("task", _task), ("total orientation", _total_orientation), ("dexterity", _dexterity),
+    ("measures and shells", _measures_and_shells), ("general mechanism", _general),
+)
 
 
 def is_warm() -> bool:
     """Whether :func:`warm_up` has run to its end in this process."""
     return _warm
+
+
+def run_steps(names: Sequence[str]) -> None:
+    """Run the :data:`STEPS` named ``names``, in that order (a helper process warming a part of the
+    on-disk cache); an unknown name raises ``KeyError``."""
+    table = dict(STEPS)
+    for name in names:
+        table[name]()
 
 
 def warm_up() -> float:
@@ -45,42 +179,7 @@ def warm_up() -> float:
     with _lock:
         if _warm:
             return 0.0
-        from .dexterity import dexterity_field
-        from .measures import measure_workspace
-        from .orientation import OrientationSettings, orientation_workspace
-        from .redundancy import resolve_redundancy
-        from .shell import workspace_shell
-        from .workspace import WorkspaceSettings, compute_workspace, reachable
-
-        d = Design()
-        box = ((-100.0, -100.0, 0.0), (100.0, 100.0, 160.0))
-        res = compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=box))
-        compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=box, diagnostics=True, bracket=True))
-        compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=box, method="dense"))
-        pts = np.array([[0.0, 0.0, 130.0], [10.0, 5.0, 120.0]])
-        for joints in (Joints(), Joints(theta_u=45.0, theta_s=45.0), Joints(theta_u=30.0, cone_axis="home"),
-                       Joints(leg_diameter=10.0, clearance=1.0)):
-            reachable(d, pts, (0.0, 0.0, 0.0), joints=joints)
-            reachable(d, pts, (5.0, 3.0, 2.0), joints=joints)
-            resolve_redundancy(d, Pose(z=130.0), joints)
-            compute_workspace(d, WorkspaceSettings(voxel=40.0, bounds=box, joints=joints))
-        orientation_workspace(d, OrientationSettings(angle_step=30.0, position_step=40.0))
-        from .task import OrientationSet, PoseList, Region, TaskSettings, pose_list_task, region_task
-
-        coarse = TaskSettings(voxel=8.0, margin_range=8.0)
-        region_task(d, Region("sphere", (0.0, 0.0, 130.0), (4.0,)), OrientationSet(tilt=5.0), coarse)
-        region_task(d, Region("box", (0.0, 0.0, 165.0), (10.0, 10.0, 10.0)), OrientationSet(), coarse)
-        pose_list_task(d, PoseList(np.array([[0.0, 0.0, 130.0, 0.0, 0.0, 0.0], [0.0, 0.0, 400.0, 0.0, 0.0, 0.0]])),
-                       coarse)
-        for search in ("neighbour", "sweep"):  # the full search's kernels: the neighbour's run-time check
-            dexterity_field(res, search=search)
-        measure_workspace(res)
-        from .run_components import RunComponents
-
-        RunComponents(np.ones((2, 2, 2), bool)).mask(np.ones(1, bool))  # the pieces' mask: only with fragments
-        workspace_shell(res)
-        from .mechanism_workspace import warm_up_general
-
-        warm_up_general()
+        for _name, step in STEPS:
+            step()
         _warm = True
     return time.perf_counter() - t0

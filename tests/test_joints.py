@@ -117,18 +117,32 @@ def _rot_z(angle_deg):
     return np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+_BASE_TABLES: dict = {}
+
+
+def _base_table(design, eta_samples, n_d):
+    """The base joints at every (eta sample, d of the fine grid): (eta, d, chain, leg, xyz), built once
+    per design and grid from eq. (11) (``geometry.base_points``)."""
+    key = (design, eta_samples, n_d)
+    if key not in _BASE_TABLES:
+        ds = np.linspace(0.0, design.d_s, n_d)
+        _BASE_TABLES[key] = np.array([[base_points(design, np.full(3, d), np.full(3, eta)) for d in ds]
+                                      for eta in eta_samples])
+    return _BASE_TABLES[key]
+
+
 def _brute_chain_ok(design, joints, rot, pos, eta_samples, n_d=801):
     """Per chain: does some (eta sample, d on a fine grid) satisfy the strokes and both cones? The
     mount axes are built here from their definition: z and R z, or the home leg direction turned
     with the carriage about z (U) and with the platform (S); angles by arccos."""
     b = platform_points(design, pos, rot)
-    ds = np.linspace(0.0, design.d_s, n_d)
+    table = _base_table(design, tuple(eta_samples), n_d)
     home = home_leg_directions(design)
     lo, hi = design.eta_limits
     ok = np.zeros(3, bool)
     for i in range(3):
-        for eta in eta_samples:
-            dp = np.stack([base_points(design, np.full(3, d), np.full(3, eta))[i] for d in ds])  # (n_d, 2, 3)
+        for e, eta in enumerate(eta_samples):
+            dp = table[e][:, i]  # (n_d, 2, 3)
             leg = b[i][None] - dp
             length = np.linalg.norm(leg, axis=2)
             good = np.all((length >= design.l_min) & (length <= design.l_max), axis=1)
@@ -179,21 +193,16 @@ def test_cone_with_normal_axes_at_zero_orientation_is_an_upper_leg_length_bound(
     tab = ChainTables(design, 7)
     ds = np.linspace(0.0, design.d_s, 301)
     cap = 1.0 / math.cos(math.radians(theta))
+    # every (eta, d) of the fine grid at once: the base joints (eta, d, chain, leg, xyz)
+    table = np.array([[base_points(design, np.full(3, d), np.full(3, eta)) for d in ds] for eta in tab.eta_deg])
     brute = np.ones(len(pts), bool)
     for n, p in enumerate(pts):
         b = platform_points(design, p, np.eye(3))
         for i in range(3):
-            found = False
-            for eta in tab.eta_deg:
-                for d in ds:
-                    dp = base_points(design, np.full(3, d), np.full(3, eta))[i]
-                    lengths = np.linalg.norm(b[i] - dp, axis=1)
-                    if lengths.min() >= design.l_min and np.all(lengths <= np.minimum(design.l_max, b[i, :, 2] * cap)):
-                        found = True
-                        break
-                if found:
-                    break
-            brute[n] &= found
+            lengths = np.linalg.norm(b[i] - table[:, :, i], axis=-1)  # (eta, d, leg)
+            ok = (lengths.min(axis=-1) >= design.l_min) & \
+                np.all(lengths <= np.minimum(design.l_max, b[i, :, 2] * cap), axis=-1)
+            brute[n] &= bool(ok.any())
     assert np.all(with_cone[brute])  # exact in d: the fine grid never finds more
     assert with_cone.sum() - brute.sum() <= 2  # nor much less
     assert 0 < with_cone.sum() < reachable(design, pts, eta_step=design.eta_s / 6).sum()

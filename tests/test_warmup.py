@@ -53,13 +53,13 @@ def test_requests_after_warm_up_compile_nothing() -> None:
                 bracket = "leg_diameter" not in joints  # the bracket does not model interference
                 r = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 12, "joints": joints,
                                                                              "bracket": bracket, "bracket_refine": 0}})
-                assert r.status_code == 202, r.text
+                assert r.status_code in (200, 202), r.text  # 200: done before the answer
                 assert _wait(http, r.json()["job_id"])["status"] == "done"
             r = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 12, "method": "dense",
                                                                          "orientation": {"psi": 10}}})
             assert _wait(http, r.json()["job_id"])["status"] == "done"
             r = http.post(f"{API_PREFIX}/orientation", json={"settings": {"angle_step": 15, "position_step": 20}})
-            assert r.status_code == 202, r.text
+            assert r.status_code in (200, 202), r.text  # 200: done before the answer
             assert _wait(http, r.json()["job_id"])["status"] == "done"
             for body in ({"region": {"shape": "box", "center": [0, 0, 140], "sizes": [10, 10, 6]}, "tilt": 5,
                           "settings": {"voxel": 5, "margin_range": 5, "joints": {"theta_u": 45}}},
@@ -67,7 +67,7 @@ def test_requests_after_warm_up_compile_nothing() -> None:
                           "settings": {"voxel": 8, "margin_range": 0}},
                          {"csv": "x,y,z,psi,theta,phi\n0,0,130,0,0,0\n5,0,132,3,0,0\n0,0,400,0,0,0\n"}):
                 r = http.post(f"{API_PREFIX}/task", json=body)
-                assert r.status_code == 202, r.text
+                assert r.status_code in (200, 202), r.text  # 200: done before the answer
                 assert _wait(http, r.json()["job_id"])["status"] == "done"
     finally:
         jobs.shutdown(wait=False)

@@ -96,7 +96,7 @@ def create_api(jobs: JobManager, *, explorer_url: str | None = None,
     app.state.explorer_url = explorer_url
     app.state.caches = ctx.caches
     install_error_handlers(app)
-    app.add_middleware(BodyLimit, max_bytes=limits.max_body_bytes)
+    app.add_middleware(BodyLimit, max_bytes=limits.max_body_bytes, seconds=limits.max_body_seconds)
     app.add_middleware(HostGuard, policy=hosts or HostPolicy())  # added last: runs first
     for router in ROUTERS:
         app.include_router(router)

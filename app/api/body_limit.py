@@ -36,7 +36,7 @@ class BodyLimit:
             try:
                 msg = await asyncio.wait_for(receive(), timeout=max(0.01, deadline - time.monotonic()))
             except asyncio.TimeoutError:
-                resp = error_json(408, f"request body not received within {self.seconds:g} s")
+                resp = error_json(408, f"request body not received within {self.seconds:g} s (limit max_body_seconds)")
                 await resp(scope, receive, send)
                 return
             if msg["type"] == "http.disconnect":

@@ -30,6 +30,8 @@ class ApiLimits:
         max_body_bytes: size of a request body. Over it: 413. The default holds the largest pose
             list a task takes (:data:`kinematics.task.MAX_CSV_BYTES`) with 64 KiB to spare, so the
             REST API takes the same pose lists as the CLI.
+        max_body_seconds: seconds a request body may take to arrive in full (a body dripped more
+            slowly holds a worker): after it, 408.
         max_shell_faces: largest ``max_faces`` accepted for shell downloads.
         client_header: take the client identity from this request header (set it only behind a
             proxy you control that overwrites the header); ``None``: the connection's peer address
@@ -51,6 +53,7 @@ class ApiLimits:
     max_jobs_total: int = 16
     max_job_seconds: float = 300.0
     max_body_bytes: int = MAX_CSV_BYTES + 65_536
+    max_body_seconds: float = 10.0
     max_shell_faces: int = 2_000_000
     client_header: str | None = None
     cache_bytes: int = 256 << 20
