@@ -1,6 +1,7 @@
 """Memory comes back (trust items 8 and 10): a closed explorer session is garbage, its job results
-are dropped, and the server's resident memory stays within a bound per closed session (measured in
-a fresh process: 8.3 MB per session before the fix, under 1 MB after)."""
+are dropped, and the server's resident memory stays within a bound per closed session once it has
+reached its steady size (measured in a fresh process: 8.3 MB per session before the fix, under 1 MB
+after)."""
 
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ def rss_mb():
 exp = Explorer("127.0.0.1", 0).start()
 exp.warm.wait(300)
 refs, clients = [], []
-def cycle(n):
+def cycle(n, samples=None):
     for _ in range(n):
         b = FakeBrowser(exp, "voxel=6", build_timeout=120)
         s = b.session
@@ -37,14 +38,15 @@ def cycle(n):
         b.close()
         wait_for(lambda: s.ctx.closed, 30, "the session closed")
         del s, b
-cycle(3)
-time.sleep(2); memory.trim(force=True)
-before = rss_mb()
-cycle(int(sys.argv[2]))
-time.sleep(3); memory.trim(force=True)
-after = rss_mb()
+        if samples is not None:
+            time.sleep(0.3); memory.trim(force=True)
+            samples.append(rss_mb())
+cycle(6)  # most of the way to the steady size (see the test)
+first, second = [], []
+cycle(int(sys.argv[2]), first)
+cycle(int(sys.argv[2]), second)
 kept = [j.id for j in exp.jobs.jobs() if j.client in clients and j.result is not None]
-print(json.dumps({"before": before, "after": after, "alive": sum(r() is not None for r in refs),
+print(json.dumps({"first": first, "second": second, "alive": sum(r() is not None for r in refs),
                   "sessions": int(sys.argv[2]), "kept_results": len(kept)}))
 exp.stop()
 '''
@@ -56,7 +58,7 @@ def test_closed_sessions_give_their_memory_back(tmp_path) -> None:
     script = tmp_path / "sessions.py"
     script.write_text(SCRIPT)
     tests = pathlib.Path(__file__).resolve().parent
-    n = 12
+    n = 10
     # the same paraspace as this process (a source checkout or the installed copy), so that the child
     # loads the kernels this session compiled from numba's cache beside them instead of compiling
     # every kernel again (a script's own folder, not the checkout, heads its sys.path)
@@ -66,10 +68,16 @@ def test_closed_sessions_give_their_memory_back(tmp_path) -> None:
     out = subprocess.run([sys.executable, str(script), str(tests), str(n)], capture_output=True, text=True,
                          timeout=600, cwd=tests.parent, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
-    r = json.loads(next(line for line in out.stdout.splitlines() if line.startswith('{"before"')))
+    r = json.loads(next(line for line in out.stdout.splitlines() if line.startswith('{"first"')))
     assert r["alive"] <= 1, f"closed sessions still referenced: {r}"  # the last one may sit in a frame
     assert r["kept_results"] == 0, f"job results of departed pages kept: {r}"
-    per_session = (r["after"] - r["before"]) / n
+    # The first sessions after the warm-up grow the process once, to a steady size (viser's callback
+    # thread pool, up to 32 threads, and the caches' byte budgets: about 50 MB in steps of 13-20 MB,
+    # reached by about the 12th session, then flat to the 33rd); the script opens 6 sessions before
+    # it measures. A trim leaves the RSS up to 20 MB under that size at times, so the cost of a closed
+    # session is the growth of the highest RSS from one run of n = 10 sessions to the next (a leak of
+    # 8 MB a session raises it by 80 MB; one late step of the steady size by at most 2 MB a session).
+    per_session = (max(r["second"]) - max(r["first"])) / n
     assert per_session < 3.0, f"RSS kept per closed session {per_session:.1f} MB (bound 3 MB): {r}"
 
 
