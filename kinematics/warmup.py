@@ -49,7 +49,7 @@ def _tiny_result():  # noqa: ANN202 - a WorkspaceResult (imported lazily)
     from .workspace import WorkspaceResult, WorkspaceSettings
 
     h, lo, shape = 40.0, _BOX[0], (7, 7, 6)
-    settings = WorkspaceSettings(voxel=h, bounds=(lo, (100.0, 100.0, 160.0)))
+    settings = WorkspaceSettings(voxel=h, bounds=_BOX)
     grid = GridSpec(origin=tuple(a + 0.5 * h for a in lo), h=h, shape=shape)
     occ = np.zeros(shape, bool)
     occ[1:6, 1:6, 0:5] = True  # on the floor, with the measures' void paths:

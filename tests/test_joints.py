@@ -193,8 +193,7 @@ def test_cone_with_normal_axes_at_zero_orientation_is_an_upper_leg_length_bound(
     tab = ChainTables(design, 7)
     ds = np.linspace(0.0, design.d_s, 301)
     cap = 1.0 / math.cos(math.radians(theta))
-    # every (eta, d) of the fine grid at once: the base joints (eta, d, chain, leg, xyz)
-    table = np.array([[base_points(design, np.full(3, d), np.full(3, eta)) for d in ds] for eta in tab.eta_deg])
+    table = _base_table(design, tuple(tab.eta_deg), len(ds))  # every (eta, d) of the fine grid at once
     brute = np.ones(len(pts), bool)
     for n, p in enumerate(pts):
         b = platform_points(design, p, np.eye(3))
