@@ -18,7 +18,9 @@ tested ONCE per sample ``k`` with three limits, flags:
 
 The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
 the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
-sample of it has ``R1``.
+sample of it has ``R1``. The samples of the other sub-arcs get all three tests, in a loop without
+branches (SIMD lanes; :func:`_passes` answers exactly as the per-sample test, and only the
+soundness of the flags, not their values, enters the children's decisions).
 
 A child then evaluates (exactly as :func:`kinematics.blocks.decide_chain` does: the same
 functions, limits and samples) only the samples these flags leave open: the relaxed test where
@@ -41,7 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open
-from .feasibility import _feasible_at, _leg_intervals, chain_points, sets_meet
+from .feasibility import _feasible_at, chain_points
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -56,20 +58,60 @@ def has_cones(jc: np.ndarray) -> bool:
 
 
 @njit(cache=True, inline="always")
-def _passes(p1, q1, p2, q2, lo, hi, rho_lo, rho_hi):
+def _mx(a, b):
+    return a if a > b else b
+
+
+@njit(cache=True, inline="always")
+def _mn(a, b):
+    return a if a < b else b
+
+
+@njit(cache=True, inline="always")
+def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
     """The test of :func:`kinematics.feasibility._feasible_at` without cones, from both legs'
-    ``p``, ``q`` (F1) and the leg limits ``[lo, hi]`` (clipped at 0 below)."""
+    ``p``, ``q`` (F1) and the squared leg limits ``lo2 <= hi2``, without branches (so that a loop
+    over samples runs in SIMD lanes). The same answer as ``_leg_intervals`` + ``sets_meet``: a leg
+    with ``q <= lo2`` has the one interval ``[p - ro, p + ro]``, here its two halves ``[p - ro, p]``
+    and ``[p, p + ro]`` (``ri = 0``), which meet an interval iff it does (min and max are exact)."""
+    ro1 = math.sqrt(_mx(hi2 - q1, 0.0))
+    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
+    ro2 = math.sqrt(_mx(hi2 - q2, 0.0))
+    ri2 = math.sqrt(_mx(lo2 - q2, 0.0))
+    a0, a1, a2, a3 = p1 - ro1, p1 - ri1, p1 + ri1, p1 + ro1
+    c0, c1, c2, c3 = p2 - ro2, p2 - ri2, p2 + ri2, p2 + ro2
+    meet = ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
+            | (_mx(_mx(a0, c2), rho_lo) <= _mn(_mn(a1, c3), rho_hi))
+            | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
+            | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
+    return meet & (q1 <= hi2) & (q2 <= hi2)
+
+
+@njit(cache=True, inline="always")
+def _limits2(lo, hi):
+    """Squared leg limits ``[lo, hi]`` clipped at 0 below (``lo2 > hi2`` when empty)."""
     lo = max(lo, 0.0)
     if lo > hi:
-        return False
-    lo2, hi2 = lo * lo, hi * hi
-    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
-    if n1 == 0:
-        return False
-    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
-    if n2 == 0:
-        return False
-    return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
+        return 1.0, 0.0
+    return lo * lo, hi * hi
+
+
+@njit(cache=True, inline="always")
+def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b, klo, flags):
+    """The three tests of every sample ``a..b`` (no branch: SIMD lanes); an empty limit pair
+    (``lo2 > hi2``) never passes."""
+    for k in range(a, b + 1):
+        c, s = ci[k], si[k]
+        p1 = b1x * c + b1y * s
+        m1 = -b1x * s + b1y * c - hb
+        q1 = b1z * b1z + m1 * m1
+        p2 = b2x * c + b2y * s
+        m2 = -b2x * s + b2y * c + hb
+        q2 = b2z * b2z + m2 * m2
+        f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
+        f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
+        fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
+        flags[k - klo] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
 
 
 @njit(cache=True, nogil=True)
@@ -77,34 +119,26 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
                   flags):
     """``flags[k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
     (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
-    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there."""
+    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there;
+    the samples of the other sub-arcs are tested in runs, all three tests each."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    for k in range(klo, khi + 1):
-        flags[k - klo] = 255
+    ci, si = cos_t[i], sin_t[i]
+    l1, h1 = _limits2(lmin - r1, lmax + r1)
+    l0, h0 = _limits2(lmin - r0, lmax + r0)
+    lx, hx = _limits2(lmin + x, lmax - x)
     lo1, hi1 = max(lmin - r1, 0.0), lmax + r1
+    done = klo - 1  # samples up to here have their flags
     for g in range(seg_k.shape[0]):
         a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
+        if b < a or b <= done:
+            continue
         if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo1, hi1):
             for k in range(a, b + 1):
                 flags[k - klo] = 0
-    for k in range(klo, khi + 1):
-        if flags[k - klo] != 255:
-            continue
-        c, s = cos_t[i, k], sin_t[i, k]
-        p1 = b1x * c + b1y * s
-        m1 = -b1x * s + b1y * c - hb
-        q1 = b1z * b1z + m1 * m1
-        p2 = b2x * c + b2y * s
-        m2 = -b2x * s + b2y * c + hb
-        q2 = b2z * b2z + m2 * m2
-        f = 0
-        if _passes(p1, q1, p2, q2, lmin - r1, lmax + r1, rho_lo, rho_hi):
-            f = _R1
-            if _passes(p1, q1, p2, q2, lmin - r0, lmax + r0, rho_lo, rho_hi):
-                f |= _R0
-            if _passes(p1, q1, p2, q2, lmin + x, lmax - x, rho_lo, rho_hi):
-                f |= _X
-        flags[k - klo] = f
+        else:
+            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx,
+                      max(a, done + 1), b, klo, flags)
+        done = b
 
 
 @njit(cache=True, inline="always")
