@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open
-from .feasibility import _feasible_at, chain_points
+from .feasibility import chain_points
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -85,6 +85,19 @@ def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
             | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
             | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
     return meet & (q1 <= hi2) & (q2 <= hi2)
+
+
+@njit(cache=True, inline="always")
+def _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
+    """:func:`kinematics.feasibility._feasible_at` without cones (the same answer: :func:`_passes`),
+    for the squared leg limits ``lo2 <= hi2``, inlined."""
+    p1 = b1x * c + b1y * s
+    m1 = -b1x * s + b1y * c - hb
+    q1 = b1z * b1z + m1 * m1
+    p2 = b2x * c + b2y * s
+    m2 = -b2x * s + b2y * c + hb
+    q2 = b2z * b2z + m2 * m2
+    return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
 
 
 @njit(cache=True, inline="always")
@@ -168,7 +181,9 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
     reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
-    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test."""
+    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test.
+    Without joint cones (``jc`` and ``cone_relax`` unused): each test is :func:`_test`, which answers
+    as :func:`kinematics.feasibility._feasible_at` there."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     klo = max(win[1], 0)
@@ -193,18 +208,18 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if not any_r1:  # no sample can pass the relaxed test, and the tight one implies it
         return FAIL
     if can_ok:
-        if flags[hint - flo] & _X and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
-                                                   rho_lo, rho_hi, lo_t2, hi_t2, jc[i], -e_tight):
+        if flags[hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
+                                            rho_lo, rho_hi, lo_t2, hi_t2):
             win[0] = hint
             return OK
         for k in range(klo, khi + 1):
             f = flags[k - flo]
             if k == hint or not (f & _X):
                 continue
-            if f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                       lo_r2, hi_r2, jc[i], cone_relax):
-                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_t2, hi_t2, jc[i], -e_tight):
+            # both tests must pass (as in decide_chain): the tight one first, it fails more often
+            if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2, hi_t2):
+                if f & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
+                                    lo_r2, hi_r2):
                     win[0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
@@ -228,8 +243,8 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     p_lo = r0_lo
     for k in range(klo, r0_lo if r0_lo >= 0 else khi + 1):
         f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+        if f & _R1 and not f & _R0 and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                             rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
@@ -250,8 +265,8 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     p_hi = max(p_lo, r0_hi)
     for k in range(khi, p_hi, -1):
         f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+        if f & _R1 and not f & _R0 and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
+                                             rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k
