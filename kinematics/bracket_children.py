@@ -175,15 +175,20 @@ def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_
 
 
 @njit(cache=True, inline="always")
-def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
-                 e_bound, e_relax, cone_relax, e_tight, can_ok, win, flags, flo, seg_state, need_window):
+def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
+                 e_bound, e_relax, e_tight, can_ok, win, flags, flo, lists, counts, seg_state, need_window):
     """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
     its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
     reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
     and the bounds are computed only for the sub-arcs of samples that pass the relaxed test.
-    Without joint cones (``jc`` and ``cone_relax`` unused): each test is :func:`_test`, which answers
-    as :func:`kinematics.feasibility._feasible_at` there."""
+    Without joint cones: each test is :func:`_test`, which answers as
+    :func:`kinematics.feasibility._feasible_at` there.
+
+    The samples are visited from the parent's lists (:func:`_sample_lists`: ``lists[0]`` those with
+    ``X``, ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending;
+    ``counts``: their lengths), in the order a scan of the window visits them: the same tests in
+    the same order as a scan that skips the samples without the flag."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     klo = max(win[1], 0)
@@ -200,26 +205,22 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     if klo > khi:
         return FAIL
-    any_r1 = False
-    for k in range(klo, khi + 1):
-        if flags[k - flo] & _R1:
-            any_r1 = True
-            break
-    if not any_r1:  # no sample can pass the relaxed test, and the tight one implies it
+    n_x, n_r0, n_r1 = counts[0], counts[1], counts[2]
+    if n_r0 + n_r1 == 0:  # no sample can pass the relaxed test (R0 and X imply R1), nor the tight one
         return FAIL
     if can_ok:
         if flags[hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
                                             rho_lo, rho_hi, lo_t2, hi_t2):
             win[0] = hint
             return OK
-        for k in range(klo, khi + 1):
-            f = flags[k - flo]
-            if k == hint or not (f & _X):
+        for t in range(n_x):
+            k = lists[0, t]
+            if k == hint:
                 continue
             # both tests must pass (as in decide_chain): the tight one first, it fails more often
             if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2, hi_t2):
-                if f & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                    lo_r2, hi_r2):
+                if flags[k - flo] & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                                 rho_hi, lo_r2, hi_r2):
                     win[0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
@@ -231,9 +232,10 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         seg_state[g] = 0
     # visited samples with R0 pass the relaxed test untested: the lowest and highest of them first
     r0_lo = -1
-    for k in range(klo, khi + 1):
-        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
-                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    for t in range(n_r0):
+        k = lists[1, t]
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                    lo_b, hi_b):
             r0_lo = k
             break
     if r0_lo >= 0 and (not can_ok or not need_window):
@@ -241,10 +243,11 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return UNKNOWN
     # the first visited sample (from below) that passes the relaxed test: only below r0_lo
     p_lo = r0_lo
-    for k in range(klo, r0_lo if r0_lo >= 0 else khi + 1):
-        f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                             rho_lo, rho_hi, lo_r2, hi_r2):
+    for t in range(n_r1):
+        k = lists[2, t]
+        if r0_lo >= 0 and k >= r0_lo:
+            break
+        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
@@ -257,16 +260,20 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if not need_window:
         return UNKNOWN
     r0_hi = -1
-    for k in range(khi, p_lo, -1):
-        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
-                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    for t in range(n_r0 - 1, -1, -1):
+        k = lists[1, t]
+        if k <= p_lo:
+            break
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                    lo_b, hi_b):
             r0_hi = k
             break
     p_hi = max(p_lo, r0_hi)
-    for k in range(khi, p_hi, -1):
-        f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                             rho_lo, rho_hi, lo_r2, hi_r2):
+    for t in range(n_r1 - 1, -1, -1):
+        k = lists[2, t]
+        if k <= p_hi:
+            break
+        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k
@@ -275,6 +282,27 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     win[1] = p_lo
     win[2] = p_hi
     return UNKNOWN
+
+
+@njit(cache=True, inline="always")
+def _sample_lists(flags, klo, khi, lists, counts):
+    """The samples ``klo..khi`` by their flags (:func:`_child_chain`): ``lists[0]`` those with ``X``,
+    ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending."""
+    n_x = n_r0 = n_r1 = 0
+    for k in range(klo, khi + 1):
+        f = flags[k - klo]
+        if f & _X:
+            lists[0, n_x] = k
+            n_x += 1
+        if f & _R0:
+            lists[1, n_r0] = k
+            n_r0 += 1
+        elif f & _R1:
+            lists[2, n_r1] = k
+            n_r1 += 1
+    counts[0] = n_x
+    counts[1] = n_r0
+    counts[2] = n_r1
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -286,7 +314,7 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
     proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
     ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
     :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
-    (module docstring)."""
+    (module docstring). Without joint cones only (``jc`` and ``cone_slack`` are not read)."""
     delta = 0.5 * size * math.sqrt(3.0)
     e_relax = delta + arc_slack + eps
     e_tight = delta + eps
@@ -296,7 +324,9 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
     x = e_tight - delta - s
     n = cos_t.shape[1]
     for p in prange(parents.shape[0]):
-        flags = np.zeros((3, n), np.uint8)
+        flags = np.empty((3, n), np.uint8)
+        lists = np.empty((3, 3, n), np.int64)
+        counts = np.zeros((3, 3), np.int64)
         flo = np.zeros(3, np.int64)
         done = np.zeros(3, np.bool_)
         seg_state = np.zeros(seg_k.shape[0], np.int8)
@@ -321,10 +351,11 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
                     if klo <= khi:
                         _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
                                       seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
+                        _sample_lists(flags[i], klo, khi, lists[i], counts[i])
                     done[i] = True
                 st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
-                                  lmax, jc, delta + eps, e_relax, delta + cone_slack + eps, e_tight, not below,
-                                  kwin[c, i], flags[i], flo[i], seg_state, need_window)
+                                  lmax, delta + eps, e_relax, e_tight, not below, kwin[c, i], flags[i], flo[i],
+                                  lists[i], counts[i], seg_state, need_window)
                 if st == FAIL:
                     cls = OUTSIDE
                     break
