@@ -20,7 +20,9 @@ The parent skips whole sub-arcs of samples: where the whole-stroke bound of the 
 the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
 sample of it has ``R1``. The samples of the other sub-arcs get all three tests, in a loop without
 branches (SIMD lanes; :func:`_passes` answers exactly as the per-sample test, and only the
-soundness of the flags, not their values, enters the children's decisions).
+soundness of the flags, not their values, enters the children's decisions). The parent then lists
+its samples by flag once (``X``; ``R0``; ``R1`` without ``R0``), and a child's searches walk these
+lists in the window's order: the samples, tests and order of a scan that skips unflagged samples.
 
 A child then evaluates (exactly as :func:`kinematics.blocks.decide_chain` does: the same
 functions, limits and samples) only the samples these flags leave open: the relaxed test where
