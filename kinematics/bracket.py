@@ -304,14 +304,18 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
         fa = _arc(design, grid, args, n_eta, 0.5 * size * math.sqrt(3.0))
         parent_win = _rescale_windows(parent_win, fa.fine // fine_before, fa.cos_t.shape[1])
         fine_before = fa.fine
+        last = level == levels - 1  # the last level's boundary children are only counted
         left, left_bits, left_win = [], [], []
+        n_left = 0
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
-            kids = np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
-            out = np.empty(kids.shape[0], np.uint8)
+            n_kids = 8 * min(chunk // 8, centres.shape[0] - s)
+            kids = (np.empty((0, 3)) if per_parent and last else
+                    np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3)))
+            out = np.empty(n_kids, np.uint8)
             if per_parent:
-                bits = np.empty(kids.shape[0], np.uint8)
-                win = np.empty((kids.shape[0], 3, 3), np.int64)
+                bits = np.empty(n_kids, np.uint8)
+                win = np.empty((n_kids, 3, 3), np.int64)
                 with kernel_launch(min(chunk // 8, centres.shape[0] - s)):
                     children_kernel(np.ascontiguousarray(centres[s:s + chunk // 8]),
                                     np.ascontiguousarray(parent_bits[s:s + chunk // 8]),
@@ -326,16 +330,22 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                     _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
                                     fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
                                     out)
-            inside += float(np.count_nonzero(out == INSIDE)) * size ** 3
-            outside += float(np.count_nonzero(out == OUTSIDE)) * size ** 3
-            left.append(kids[out == BOUNDARY])
-            left_bits.append(bits[out == BOUNDARY])
-            left_win.append(win[out == BOUNDARY])
+            counts = np.bincount(out, minlength=3)
+            inside += float(counts[INSIDE]) * size ** 3
+            outside += float(counts[OUTSIDE]) * size ** 3
+            n_left += int(counts[BOUNDARY])
+            if not last:
+                keep = out == BOUNDARY
+                left.append(kids[keep])
+                left_bits.append(bits[keep])
+                left_win.append(win[keep])
+        if progress is not None:
+            progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
+        if last:
+            return inside, outside, n_left
         centres = np.concatenate(left) if left else np.zeros((0, 3))
         parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
         parent_win = np.concatenate(left_win) if left_win else np.zeros((0, 3, 3), np.int64)
-        if progress is not None:
-            progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
     return inside, outside, int(centres.shape[0])
 
 

@@ -18,7 +18,11 @@ tested ONCE per sample ``k`` with three limits, flags:
 
 The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
 the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
-sample of it has ``R1``.
+sample of it has ``R1``. The samples of the other sub-arcs get all three tests, in a loop without
+branches (SIMD lanes; :func:`_passes` answers exactly as the per-sample test, and only the
+soundness of the flags, not their values, enters the children's decisions). The parent then lists
+its samples by flag once (``X``; ``R0``; ``R1`` without ``R0``), and a child's searches walk these
+lists in the window's order: the samples, tests and order of a scan that skips unflagged samples.
 
 A child then evaluates (exactly as :func:`kinematics.blocks.decide_chain` does: the same
 functions, limits and samples) only the samples these flags leave open: the relaxed test where
@@ -41,7 +45,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open
-from .feasibility import _feasible_at, _leg_intervals, chain_points, sets_meet
+from .feasibility import chain_points
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -56,20 +60,73 @@ def has_cones(jc: np.ndarray) -> bool:
 
 
 @njit(cache=True, inline="always")
-def _passes(p1, q1, p2, q2, lo, hi, rho_lo, rho_hi):
+def _mx(a, b):
+    return a if a > b else b
+
+
+@njit(cache=True, inline="always")
+def _mn(a, b):
+    return a if a < b else b
+
+
+@njit(cache=True, inline="always")
+def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
     """The test of :func:`kinematics.feasibility._feasible_at` without cones, from both legs'
-    ``p``, ``q`` (F1) and the leg limits ``[lo, hi]`` (clipped at 0 below)."""
+    ``p``, ``q`` (F1) and the squared leg limits ``lo2 <= hi2``, without branches (so that a loop
+    over samples runs in SIMD lanes). The same answer as ``_leg_intervals`` + ``sets_meet``: a leg
+    with ``q <= lo2`` has the one interval ``[p - ro, p + ro]``, here its two halves ``[p - ro, p]``
+    and ``[p, p + ro]`` (``ri = 0``), which meet an interval iff it does (min and max are exact)."""
+    ro1 = math.sqrt(_mx(hi2 - q1, 0.0))
+    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
+    ro2 = math.sqrt(_mx(hi2 - q2, 0.0))
+    ri2 = math.sqrt(_mx(lo2 - q2, 0.0))
+    a0, a1, a2, a3 = p1 - ro1, p1 - ri1, p1 + ri1, p1 + ro1
+    c0, c1, c2, c3 = p2 - ro2, p2 - ri2, p2 + ri2, p2 + ro2
+    meet = ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
+            | (_mx(_mx(a0, c2), rho_lo) <= _mn(_mn(a1, c3), rho_hi))
+            | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
+            | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
+    return meet & (q1 <= hi2) & (q2 <= hi2)
+
+
+@njit(cache=True, inline="always")
+def _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
+    """:func:`kinematics.feasibility._feasible_at` without cones (the same answer: :func:`_passes`),
+    for the squared leg limits ``lo2 <= hi2``, inlined."""
+    p1 = b1x * c + b1y * s
+    m1 = -b1x * s + b1y * c - hb
+    q1 = b1z * b1z + m1 * m1
+    p2 = b2x * c + b2y * s
+    m2 = -b2x * s + b2y * c + hb
+    q2 = b2z * b2z + m2 * m2
+    return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
+
+
+@njit(cache=True, inline="always")
+def _limits2(lo, hi):
+    """Squared leg limits ``[lo, hi]`` clipped at 0 below (``lo2 > hi2`` when empty)."""
     lo = max(lo, 0.0)
     if lo > hi:
-        return False
-    lo2, hi2 = lo * lo, hi * hi
-    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
-    if n1 == 0:
-        return False
-    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
-    if n2 == 0:
-        return False
-    return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
+        return 1.0, 0.0
+    return lo * lo, hi * hi
+
+
+@njit(cache=True, inline="always")
+def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b, klo, flags):
+    """The three tests of every sample ``a..b`` (no branch: SIMD lanes); an empty limit pair
+    (``lo2 > hi2``) never passes."""
+    for k in range(a, b + 1):
+        c, s = ci[k], si[k]
+        p1 = b1x * c + b1y * s
+        m1 = -b1x * s + b1y * c - hb
+        q1 = b1z * b1z + m1 * m1
+        p2 = b2x * c + b2y * s
+        m2 = -b2x * s + b2y * c + hb
+        q2 = b2z * b2z + m2 * m2
+        f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
+        f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
+        fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
+        flags[k - klo] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
 
 
 @njit(cache=True, nogil=True)
@@ -77,34 +134,26 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
                   flags):
     """``flags[k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
     (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
-    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there."""
+    (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there;
+    the samples of the other sub-arcs are tested in runs, all three tests each."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    for k in range(klo, khi + 1):
-        flags[k - klo] = 255
+    ci, si = cos_t[i], sin_t[i]
+    l1, h1 = _limits2(lmin - r1, lmax + r1)
+    l0, h0 = _limits2(lmin - r0, lmax + r0)
+    lx, hx = _limits2(lmin + x, lmax - x)
     lo1, hi1 = max(lmin - r1, 0.0), lmax + r1
+    done = klo - 1  # samples up to here have their flags
     for g in range(seg_k.shape[0]):
         a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
+        if b < a or b <= done:
+            continue
         if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo1, hi1):
             for k in range(a, b + 1):
                 flags[k - klo] = 0
-    for k in range(klo, khi + 1):
-        if flags[k - klo] != 255:
-            continue
-        c, s = cos_t[i, k], sin_t[i, k]
-        p1 = b1x * c + b1y * s
-        m1 = -b1x * s + b1y * c - hb
-        q1 = b1z * b1z + m1 * m1
-        p2 = b2x * c + b2y * s
-        m2 = -b2x * s + b2y * c + hb
-        q2 = b2z * b2z + m2 * m2
-        f = 0
-        if _passes(p1, q1, p2, q2, lmin - r1, lmax + r1, rho_lo, rho_hi):
-            f = _R1
-            if _passes(p1, q1, p2, q2, lmin - r0, lmax + r0, rho_lo, rho_hi):
-                f |= _R0
-            if _passes(p1, q1, p2, q2, lmin + x, lmax - x, rho_lo, rho_hi):
-                f |= _X
-        flags[k - klo] = f
+        else:
+            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx,
+                      max(a, done + 1), b, klo, flags)
+        done = b
 
 
 @njit(cache=True, inline="always")
@@ -128,13 +177,20 @@ def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_
 
 
 @njit(cache=True, inline="always")
-def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
-                 e_bound, e_relax, cone_relax, e_tight, can_ok, win, flags, flo, seg_state, need_window):
+def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
+                 e_bound, e_relax, e_tight, can_ok, win, flags, flo, lists, counts, seg_state, need_window):
     """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
     its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
     reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
-    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test."""
+    and the bounds are computed only for the sub-arcs of samples that pass the relaxed test.
+    Without joint cones: each test is :func:`_test`, which answers as
+    :func:`kinematics.feasibility._feasible_at` there.
+
+    The samples are visited from the parent's lists (:func:`_sample_lists`: ``lists[0]`` those with
+    ``X``, ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending;
+    ``counts``: their lengths), in the order a scan of the window visits them: the same tests in
+    the same order as a scan that skips the samples without the flag."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
     klo = max(win[1], 0)
@@ -151,26 +207,22 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     if klo > khi:
         return FAIL
-    any_r1 = False
-    for k in range(klo, khi + 1):
-        if flags[k - flo] & _R1:
-            any_r1 = True
-            break
-    if not any_r1:  # no sample can pass the relaxed test, and the tight one implies it
+    n_x, n_r0, n_r1 = counts[0], counts[1], counts[2]
+    if n_r0 + n_r1 == 0:  # no sample can pass the relaxed test (R0 and X imply R1), nor the tight one
         return FAIL
     if can_ok:
-        if flags[hint - flo] & _X and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
-                                                   rho_lo, rho_hi, lo_t2, hi_t2, jc[i], -e_tight):
+        if flags[hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
+                                            rho_lo, rho_hi, lo_t2, hi_t2):
             win[0] = hint
             return OK
-        for k in range(klo, khi + 1):
-            f = flags[k - flo]
-            if k == hint or not (f & _X):
+        for t in range(n_x):
+            k = lists[0, t]
+            if k == hint:
                 continue
-            if f & _R0 or _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                       lo_r2, hi_r2, jc[i], cone_relax):
-                if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_t2, hi_t2, jc[i], -e_tight):
+            # both tests must pass (as in decide_chain): the tight one first, it fails more often
+            if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2, hi_t2):
+                if flags[k - flo] & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                                                 rho_hi, lo_r2, hi_r2):
                     win[0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
@@ -182,9 +234,10 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         seg_state[g] = 0
     # visited samples with R0 pass the relaxed test untested: the lowest and highest of them first
     r0_lo = -1
-    for k in range(klo, khi + 1):
-        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
-                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    for t in range(n_r0):
+        k = lists[1, t]
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                    lo_b, hi_b):
             r0_lo = k
             break
     if r0_lo >= 0 and (not can_ok or not need_window):
@@ -192,10 +245,11 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return UNKNOWN
     # the first visited sample (from below) that passes the relaxed test: only below r0_lo
     p_lo = r0_lo
-    for k in range(klo, r0_lo if r0_lo >= 0 else khi + 1):
-        f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+    for t in range(n_r1):
+        k = lists[2, t]
+        if r0_lo >= 0 and k >= r0_lo:
+            break
+        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
@@ -208,16 +262,20 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if not need_window:
         return UNKNOWN
     r0_hi = -1
-    for k in range(khi, p_lo, -1):
-        if flags[k - flo] & _R0 and _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb,
-                                             seg_arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    for t in range(n_r0 - 1, -1, -1):
+        k = lists[1, t]
+        if k <= p_lo:
+            break
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+                    lo_b, hi_b):
             r0_hi = k
             break
     p_hi = max(p_lo, r0_hi)
-    for k in range(khi, p_hi, -1):
-        f = flags[k - flo]
-        if f & _R1 and not f & _R0 and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb,
-                                                    rho_lo, rho_hi, lo_r2, hi_r2, jc[i], cone_relax):
+    for t in range(n_r1 - 1, -1, -1):
+        k = lists[2, t]
+        if k <= p_hi:
+            break
+        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k
@@ -226,6 +284,27 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     win[1] = p_lo
     win[2] = p_hi
     return UNKNOWN
+
+
+@njit(cache=True, inline="always")
+def _sample_lists(flags, klo, khi, lists, counts):
+    """The samples ``klo..khi`` by their flags (:func:`_child_chain`): ``lists[0]`` those with ``X``,
+    ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending."""
+    n_x = n_r0 = n_r1 = 0
+    for k in range(klo, khi + 1):
+        f = flags[k - klo]
+        if f & _X:
+            lists[0, n_x] = k
+            n_x += 1
+        if f & _R0:
+            lists[1, n_r0] = k
+            n_r0 += 1
+        elif f & _R1:
+            lists[2, n_r1] = k
+            n_r1 += 1
+    counts[0] = n_x
+    counts[1] = n_r0
+    counts[2] = n_r1
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -237,7 +316,7 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
     proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
     ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
     :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
-    (module docstring)."""
+    (module docstring). Without joint cones only (``jc`` and ``cone_slack`` are not read)."""
     delta = 0.5 * size * math.sqrt(3.0)
     e_relax = delta + arc_slack + eps
     e_tight = delta + eps
@@ -247,7 +326,9 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
     x = e_tight - delta - s
     n = cos_t.shape[1]
     for p in prange(parents.shape[0]):
-        flags = np.zeros((3, n), np.uint8)
+        flags = np.empty((3, n), np.uint8)
+        lists = np.empty((3, 3, n), np.int64)
+        counts = np.zeros((3, 3), np.int64)
         flo = np.zeros(3, np.int64)
         done = np.zeros(3, np.bool_)
         seg_state = np.zeros(seg_k.shape[0], np.int8)
@@ -272,10 +353,11 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zflo
                     if klo <= khi:
                         _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
                                       seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
+                        _sample_lists(flags[i], klo, khi, lists[i], counts[i])
                     done[i] = True
                 st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
-                                  lmax, jc, delta + eps, e_relax, delta + cone_slack + eps, e_tight, not below,
-                                  kwin[c, i], flags[i], flo[i], seg_state, need_window)
+                                  lmax, delta + eps, e_relax, e_tight, not below, kwin[c, i], flags[i], flo[i],
+                                  lists[i], counts[i], seg_state, need_window)
                 if st == FAIL:
                     cls = OUTSIDE
                     break

@@ -98,3 +98,25 @@ def test_joint_cones_take_the_per_child_path_and_a_bad_method_is_refused():
     assert a == volume_bracket(design, res.grid, args, res.n_eta, refine=1, method="cubes")
     with pytest.raises(ParameterError, match="method"):
         volume_bracket(design, res.grid, args, res.n_eta, refine=1, method="children")
+
+
+def test_branch_free_parent_test_as_the_interval_test():
+    """The parents' branch-free test (bracket_children._passes, SIMD) answers as the per-sample
+    interval test (_leg_intervals + sets_meet), also at the exact edges of its cases."""
+    from paraspace.kinematics.bracket_children import _passes
+    from paraspace.kinematics.feasibility import _leg_intervals, sets_meet
+
+    rng = np.random.default_rng(7)
+    lo2, hi2, rho_lo, rho_hi = 90.0 ** 2, 130.0 ** 2, -40.0, 0.0
+    n = 40000
+    p = rng.uniform(-200.0, 200.0, (n, 2))
+    q = rng.uniform(0.0, 1.3 * hi2, (n, 2))
+    q[::7, 0] = lo2  # the edges: one interval or two, empty or not
+    q[::11, 1] = hi2
+    q[::13, 0] = 0.0
+    for k in range(n):
+        p1, p2, q1, q2 = p[k, 0], p[k, 1], q[k, 0], q[k, 1]
+        n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
+        n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
+        ref = n1 > 0 and n2 > 0 and sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
+        assert bool(_passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)) == ref, (p1, q1, p2, q2)
