@@ -153,3 +153,23 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
                                       tab.lmax2, jc[i], joints.min_distance, 1, w, solo) == 0
                     marked += 1
     assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
+
+
+def test_blocks_decide_only_the_voxels_asked_about():
+    """On a sparse ``where`` (every third voxel the chains reach, so most blocks, down to two voxels
+    across, hold voxels left out) the answer is the per-voxel search's at the voxels asked about and
+    False elsewhere: a block decided clear writes ``where``, not True, and a block with nothing to test
+    is skipped."""
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 4.0
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h))
+    xs, ys, zs = plain.grid.axes()
+    where = plain.occupancy.copy()
+    idx = np.argwhere(where)
+    where[tuple(idx[np.arange(len(idx)) % 3 != 0].T)] = False
+    idx = np.argwhere(where)
+    pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+    old = interference_free(design, joints, pts, np.eye(3)[None], plain.n_eta)[:, 0]
+    new = interference_free_grid(design, joints, (xs, ys, zs), h, np.eye(3), plain.n_eta, where)
+    assert not np.any(new & ~where)
+    assert np.array_equal(new[idx[:, 0], idx[:, 1], idx[:, 2]], old)
+    assert 0 < old.sum() < old.size
