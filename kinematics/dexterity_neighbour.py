@@ -27,6 +27,17 @@ trigger the second climb nor be its start, so the decisions and the poses are th
 every point (``bounded=False``, checked bit for bit by the tests). ``1/kappa`` of
 eq. (26) is then computed at that pose as :mod:`kinematics.dexterity_sweep` does.
 
+**Mirror.** Where the design, the orientation and the grid are symmetric under ``y -> -y``
+(:func:`mirror_rows`: zero orientation, centred arc range, symmetric y centres and occupancy, and
+platform joints that are mirror images: chain 1 onto itself with its legs swapped, chain 2 onto
+chain 3), the search runs on the rows up to ``y = 0`` only (the same arrays there as the search of
+the whole grid) and every other voxel takes its mirror voxel's pose, mirrored: the same ``d``, ``eta``
+negated, chains 2 and 3 swapped. The mirrored pose has the same chain margins and the same
+``1/kappa`` at the mirrored voxel (a reflection maps the legs onto the legs, so the leg lengths and
+the singular values of ``J`` are those of the mirror voxel; both checked independently by the tests),
+so the tolerance below holds for it exactly when it holds for the mirror voxel. This halves the
+work, as the engine's mirror does.
+
 **Tolerance** (stated; checked at run time and by the tests). With ``m_i^full`` the full search's
 margin and ``m_i^nb`` the neighbour search's at the same voxel, the *margin gap* of a voxel is
 ``g = max_i (m_i^full - m_i^nb)`` (length units; negative where the climb found more margin than the
@@ -341,14 +352,68 @@ def chain_margins(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np
     return out
 
 
+#: The mirror ``y -> -y``: chain 1 onto itself, chains 2 and 3 swapped (indices 0, 2, 1).
+_MIRROR_CHAINS = np.array([0, 2, 1])
+
+
+def mirror_rows(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                orientation: Sequence[float]) -> int | None:
+    """The rows ``j < ny_eval`` of ``occupancy`` that determine the field by the mirror ``y -> -y``
+    (module docstring, "Mirror"), or None where the mirror does not hold exactly: the orientation is
+    zero, the arc range centred, the y centres and the occupancy symmetric, and the platform joints
+    mirror images of each other (leg 1 of chain 1 onto its leg 2, chain 2's legs onto chain 3's)."""
+    occ = np.asarray(occupancy, bool)
+    ys = np.asarray(axes[1], float)
+    h = float(ys[1] - ys[0]) if ys.size > 1 else 1.0
+    if (design.eta_range != "centered" or any(float(a) != 0.0 for a in orientation) or ys.size < 2
+            or not np.allclose(ys, -ys[::-1], rtol=0.0, atol=1e-9 * max(1.0, abs(h)))
+            or not np.array_equal(occ, occ[:, ::-1, :])):
+        return None
+    u = _constants(design, orientation)[0]
+    flip = np.array([1.0, -1.0, 1.0])
+    scale = 1e-12 * max(1.0, float(np.abs(u).max()))
+    if not np.allclose(u[_MIRROR_CHAINS][:, ::-1] * flip, u, rtol=0.0, atol=scale):
+        return None
+    return (ys.size + 1) // 2
+
+
+def _mirror_fill(occ: np.ndarray, ny_eval: int, half: tuple[np.ndarray, ...]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The neighbour search's arrays over every reachable voxel of ``occ`` (C order) from ``half``,
+    those of the rows ``j < ny_eval``: a voxel of row ``j >= ny_eval`` takes its mirror voxel's
+    ``1/kappa``, its chains' ``d`` and margins with chains 2 and 3 swapped, and their ``eta`` negated."""
+    vals, d, eta, margin = half
+    nx, ny, nz = occ.shape
+    src = np.full(occ.shape, -1, np.int64)
+    src[:, :ny_eval, :][occ[:, :ny_eval, :]] = np.arange(vals.size)
+    rows = np.arange(ny)
+    mirrored = rows >= ny_eval
+    src = src[:, np.where(mirrored, ny - 1 - rows, rows), :]
+    pick = src[occ]
+    flipped = np.broadcast_to(mirrored[None, :, None], occ.shape)[occ]
+    m = flipped[:, None]
+    perm = _MIRROR_CHAINS
+    return (vals[pick], np.where(m, d[pick][:, perm], d[pick]), np.where(m, -eta[pick][:, perm], eta[pick]),
+            np.where(m, margin[pick][:, perm], margin[pick]))
+
+
 def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
                     orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
-                    cancel: CancelToken = None, bounded: bool = True
+                    cancel: CancelToken = None, bounded: bool = True, mirror: bool = True
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``1/kappa`` at the neighbour search's carriage pose (module docstring) of every reachable voxel
     of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3)).
     ``bounded=False`` computes every point of the restart scan (the same result, slower: the
-    reference of the tests)."""
+    reference of the tests). ``mirror``: where :func:`mirror_rows` holds, search the rows up to
+    ``y = 0`` only and give every other voxel its mirror voxel's pose, mirrored (the same arrays on
+    those rows as ``mirror=False``)."""
+    ny_eval = mirror_rows(design, occupancy, axes, orientation) if mirror else None
+    if ny_eval is not None:
+        occ = np.ascontiguousarray(np.asarray(occupancy, bool))
+        vals, d, eta_deg, margin = neighbour_field(design, occ[:, :ny_eval, :], (axes[0], axes[1][:ny_eval], axes[2]),
+                                                   orientation, progress, cancel, bounded, mirror=False)
+        vals, d, eta_deg, margin = _mirror_fill(occ, ny_eval, (vals, d, eta_deg, margin))
+        return vals, d, eta_deg + 0.0, margin
     f = field_inputs(design, occupancy, axes, orientation)
     out = np.zeros(f.n)
     rho = np.zeros((f.n, 3))

@@ -19,6 +19,7 @@ from paraspace.kinematics.dexterity_neighbour import (
     SAMPLE_MIN,
     chain_margins,
     compare,
+    mirror_rows,
     neighbour_field,
     sample_indices,
 )
@@ -140,3 +141,44 @@ def test_the_bounded_restart_scan_gives_the_same_field_as_the_full_scan(design, 
     assert res.voxels > 0
     for a, b in zip(fast, ref, strict=True):
         assert np.array_equal(a, b)
+
+
+def test_the_mirror_searches_the_rows_up_to_y0_and_mirrors_the_poses_of_the_others():
+    # the default design at zero orientation is symmetric under y -> -y: the rows up to y = 0 are the
+    # search's own (the same arrays as without the mirror), every other voxel gets its mirror voxel's
+    # pose mirrored, which the IK and numpy's SVD confirm independently
+    design = Design()
+    res = compute_workspace(design, WorkspaceSettings(voxel=6.0))
+    occ, axes = res.occupancy, res.grid.axes()
+    ny_eval = mirror_rows(design, occ, axes, (0.0, 0.0, 0.0))
+    assert ny_eval == (occ.shape[1] + 1) // 2
+    vals, d, eta, margins = neighbour_field(design, occ, axes)
+    plain = neighbour_field(design, occ, axes, mirror=False)
+    pts = res.grid.points()[occ]
+    j = np.nonzero(occ)[1]
+    own = j < ny_eval
+    for a, b in zip((vals, d, eta, margins), plain, strict=True):
+        assert np.array_equal(a[own], b[own])
+    # each mirrored voxel against its mirror image: chains 2 and 3 swapped, eta negated
+    index = {tuple(np.round(p, 9)): k for k, p in enumerate(pts)}
+    img = np.array([index[tuple(np.round(p * [1.0, -1.0, 1.0], 9))] for p in pts[~own]])
+    assert np.array_equal(vals[~own], vals[img])
+    assert np.array_equal(d[~own], d[img][:, [0, 2, 1]]) and np.array_equal(eta[~own], -eta[img][:, [0, 2, 1]])
+    rng = np.random.default_rng(5)
+    for k in rng.choice(np.flatnonzero(~own), 8, replace=False):
+        np.testing.assert_allclose(margins[k], _margins_from_ik(design, pts[k], (0.0, 0.0, 0.0), d[k], eta[k]),
+                                   atol=1e-9)
+    slow = inverse_condition_batch(design, pts[~own], d[~own], eta[~own], (0.0, 0.0, 0.0))
+    assert np.all(np.abs(vals[~own] - slow) <= TOL_REL * slow + TOL_ABS + 1e-16 / np.maximum(slow, 1e-12))
+
+
+@pytest.mark.parametrize("design,orientation,flip", [(Design(eta_range="from-zero"), (0.0, 0.0, 0.0), False),
+                                                     (Design(), (0.0, 5.0, 0.0), False),
+                                                     (Design(), (0.0, 0.0, 0.0), True)])
+def test_no_mirror_where_it_does_not_hold(design, orientation, flip):
+    res = compute_workspace(design, WorkspaceSettings(voxel=12.0, orientation=orientation))
+    occ = res.occupancy.copy()
+    if flip:  # one voxel without its mirror image
+        i, j, k = next(v for v in np.argwhere(occ) if v[1] != occ.shape[1] - 1 - v[1])
+        occ[i, j, k] = False
+    assert mirror_rows(design, occ, res.grid.axes(), orientation) is None
