@@ -16,6 +16,7 @@ from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.dexterity import dexterity_field, inverse_condition_batch, resolved_carriages
 from paraspace.kinematics.dexterity_neighbour import (
     MARGIN_TOLERANCE,
+    SAMPLE_MAX,
     SAMPLE_MIN,
     chain_margins,
     compare,
@@ -73,7 +74,9 @@ def test_the_field_reports_its_sample_check_against_the_full_search():
     assert f.search == "neighbour" and f.check is not None
     n = res.voxels
     idx = sample_indices(n)
-    assert f.check.sample_size == len(idx) == min(n, max(SAMPLE_MIN, math.ceil(0.01 * n)))
+    assert f.check.sample_size == len(idx) == min(n, max(SAMPLE_MIN, min(SAMPLE_MAX, math.ceil(0.01 * n))))
+    # at most SAMPLE_MAX voxels on a large grid, at least SAMPLE_MIN on a small one
+    assert len(sample_indices(10**6)) == SAMPLE_MAX == 2000 and len(sample_indices(1000)) == SAMPLE_MIN == 50
     assert len(np.unique(idx)) == len(idx) and np.array_equal(idx, sample_indices(n))  # fixed seed
     # recompute the check's numbers from the full search on the same voxels
     pts = res.grid.points()[res.occupancy][idx]
