@@ -235,22 +235,23 @@ def _tridiagonal_eigen_range(G, A):
             if it > 30:
                 return 0.0, 0.0, False
             g = (A[lv + 1, 8] - A[lv, 8]) / (2.0 * A[lv, 9])
-            r = math.hypot(g, 1.0)
+            r = math.sqrt(g * g + 1.0)
             g = A[m, 8] - A[lv, 8] + A[lv, 9] / (g + (r if g >= 0.0 else -r))
             sn, cs, p = 1.0, 1.0, 0.0
             early = False
             for i in range(m - 1, lv - 1, -1):
                 f = sn * A[i, 9]
                 b = cs * A[i, 9]
-                r = math.hypot(f, g)
+                r = math.sqrt(f * f + g * g)  # no overflow: the entries are those of a 6 x 6 Gram matrix
                 A[i + 1, 9] = r
                 if r == 0.0:
                     A[i + 1, 8] -= p
                     A[m, 9] = 0.0
                     early = True
                     break
-                sn = f / r
-                cs = g / r
+                ir = 1.0 / r
+                sn = f * ir
+                cs = g * ir
                 g = A[i + 1, 8] - p
                 r = (A[i, 8] - g) * sn + 2.0 * cs * b
                 p = sn * r
@@ -307,9 +308,10 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
         l00 = math.sqrt(m00)
         l10 = m10 / l00
         l11 = math.sqrt(m11 - l10 * l10)
+        i00, i11 = 1.0 / l00, 1.0 / l11
         for k in range(6):
-            A[r0, k] /= l00
-            A[r1, k] = (A[r1, k] - l10 * A[r0, k]) / l11
+            A[r0, k] *= i00
+            A[r1, k] = (A[r1, k] - l10 * A[r0, k]) * i11
     for a in range(6):
         for b in range(a, 6):
             acc = 0.0
