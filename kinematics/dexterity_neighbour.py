@@ -158,10 +158,9 @@ def _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m,
 
 
 @njit(cache=True, inline="always")
-def _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
-    """The best ``rho`` at the arc angle ``e`` by 1-D ascent from ``r``, ``levels`` steps from ``sr``
-    down by :data:`_ZOOM`. Returns ``(r, m)``."""
-    c, s = math.cos(gamma + e), math.sin(gamma + e)
+def _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
+    """The best ``rho`` at the arc angle whose ``gamma + eta`` has cosine ``c`` and sine ``s``, by 1-D
+    ascent from ``r``, ``levels`` steps from ``sr`` down by :data:`_ZOOM`. Returns ``(r, m)``."""
     m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
     for _lev in range(levels):
         r, m = _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m, sr)
@@ -173,28 +172,38 @@ def _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi,
 def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r):
     """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
     in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
-    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``."""
+    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``. The cosine and sine of
+    ``gamma + eta`` at a step of ``eta`` come from those at the current ``eta`` by the angle-addition
+    formulas (one sine and cosine of the step per level instead of one per profile; computed
+    directly where the step is cut at a stroke end)."""
     se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
     sr = (r_hi - r_lo) / (_NR - 1) if r_hi > r_lo else 0.0
     e = _clamp(e, e_lo, e_hi)
     r = _clamp(r, r_lo, r_hi)
-    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
+    c, s = math.cos(gamma + e), math.sin(gamma + e)
+    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
     for lev in range(_LEVELS):
         if se > 0.0:
+            cd, sd = math.cos(se), math.sin(se)
             direction = 0.0
             for _ in range(_MAX_MOVES):
-                best, be, br = m, e, r
+                best, be, br, bc, bs = m, e, r, c, s
                 for sg in (-1.0, 1.0):
                     if direction != 0.0 and sg != direction:
                         continue
-                    ee = _clamp(e + sg * se, e_lo, e_hi)
-                    rr, mm = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, ee, hb, lmin, lmax, r_lo, r_hi, r, sr,
+                    ee = e + sg * se
+                    if e_lo <= ee <= e_hi:
+                        cc, ss = c * cd - sg * s * sd, s * cd + sg * c * sd
+                    else:
+                        ee = _clamp(ee, e_lo, e_hi)
+                        cc, ss = math.cos(gamma + ee), math.sin(gamma + ee)
+                    rr, mm = _profile(bx0, by0, bz0, bx1, by1, bz1, cc, ss, hb, lmin, lmax, r_lo, r_hi, r, sr,
                                       _LEVELS - lev)
                     if mm > best:
-                        best, be, br = mm, ee, rr
+                        best, be, br, bc, bs = mm, ee, rr, cc, ss
                         direction = sg
                 if best > m:
-                    m, e, r = best, be, br
+                    m, e, r, c, s = best, be, br, bc, bs
                 else:
                     break
         se /= _ZOOM
@@ -221,38 +230,89 @@ def _coarse_best(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb
 
 
 @njit(cache=True)
-def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, RM, ST,
-                         D, thr):
-    """:func:`_coarse_best` with its scan points pruned by the Lipschitz bounds ``W + D`` of
-    :mod:`kinematics.dexterity_sweep` (``W[k]``: the margin when last computed less the path length
-    ``D`` walked then; ``RM``: per-row largest ``W``; ``ST[0] == 1``: the bounds are set): a point
-    whose bound is below ``thr - 1e-7`` has a margin below ``thr`` and is skipped. The caller climbs
-    again only when the result's margin exceeds ``thr``: then the skipped points are below the
-    maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
-    margin returned is a value ``<= thr`` (``-inf`` when every point was skipped)."""
+def _scan_rows(gamma, e_lo, e_hi, CS):
+    """``CS[a] = (cos, sin)`` of ``gamma + eta`` at row ``a`` of the restart scan (as
+    :func:`_coarse_best` computes them)."""
+    n_e = 1 if e_hi <= e_lo else _CE
+    for a in range(n_e):
+        e = _lin(e_lo, e_hi, n_e, a)
+        CS[a, 0], CS[a, 1] = math.cos(gamma + e), math.sin(gamma + e)
+
+
+@njit(cache=True, inline="always")
+def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
+    """:func:`kinematics.dexterity_sweep._margin_cs` (the same value, bit for bit) with the active
+    term's gradient in the platform's ``y`` and ``z`` and its leg length: ``(m, gy, gz, l, convex)``;
+    ``convex`` when the active term is ``l - l_min`` (convex in the position), not ``l_max - l``."""
+    dx0 = bx0 - (c * rho - s * hb)
+    dy0 = by0 - (s * rho + c * hb)
+    l0 = math.sqrt(dx0 * dx0 + dy0 * dy0 + bz0 * bz0)
+    dx1 = bx1 - (c * rho + s * hb)
+    dy1 = by1 - (s * rho - c * hb)
+    l1 = math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1)
+    m = min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
+    if m == l0 - lmin:
+        return m, dy0 / l0, bz0 / l0, l0, True
+    if m == lmax - l0:
+        return m, -dy0 / l0, -bz0 / l0, l0, False
+    if m == l1 - lmin:
+        return m, dy1 / l1, bz1 / l1, l1, True
+    return m, -dy1 / l1, -bz1 / l1, l1, False
+
+
+@njit(cache=True)
+def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, ST, D,
+                         thr, CS, T, py, pz, need):
+    """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the
+    voxel ``(py, pz)`` of the plane: the Lipschitz bound ``W + D`` of :mod:`kinematics.dexterity_sweep`
+    (``W[k]``: the margin when last computed less the path length ``D`` walked then; ``ST[0] == 1``:
+    the bounds are set) and the first-order bound of the term that was the margin then (``T[:, k]``:
+    that margin, the term's gradient in ``y`` and ``z``, its leg's length ``l``, 1 when it is ``l -
+    l_min`` else 0, and ``y``, ``z``, ``D`` then): with ``Delta`` the move since, the term is at most
+    its value plus ``grad . Delta``, plus ``|Delta|^2 / (2 (l - |Delta|))`` for ``l - l_min`` (the leg
+    length is convex with Hessian ``(I - n n^T) / l``, and ``|Delta|`` is at most the path walked),
+    and the margin, the least term, is at most any term. A point whose bound is below ``thr - 1e-7``
+    has a margin below ``thr`` and is skipped. The bounds are taken for every point in one pass
+    without branches (``need``: scratch), then the points left are computed in scan order. The caller
+    climbs again only when the result's margin exceeds ``thr``: then the skipped points are below
+    the maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
+    margin returned is a value ``<= thr`` (``-inf`` when every point was skipped). ``CS[a]``: the
+    cosine and sine of ``gamma + eta`` of row ``a`` (:func:`_scan_rows`)."""
     n_e = 1 if e_hi <= e_lo else _CE
     n_r = 1 if r_hi <= r_lo else _CR
+    n = n_e * n_r
     valid = ST[0] == 1.0
     t = thr - _SLACK - D
+    t1 = thr - _SLACK
+    left = n
+    if valid:
+        left = 0
+        for k in range(n):
+            room = T[3, k] - (D - T[7, k])
+            ddy = py - T[5, k]
+            ddz = pz - T[6, k]
+            # bound >= t1 with the curvature term's division multiplied out (room > 0)
+            below = (t1 - T[0, k] - T[1, k] * ddy - T[2, k] * ddz) * (2.0 * room)
+            need[k] = (W[k] >= t) & ((room <= 0.0) | (below <= T[4, k] * (ddy * ddy + ddz * ddz)))
+            left += need[k]
     best, be, br = -np.inf, e_lo, r_lo
-    for a in range(n_e):
-        if valid and RM[a] < t:
+    for k in range(n):
+        if left == 0:
+            break
+        if valid and not need[k]:
             continue
+        left -= 1
+        a = k // n_r
+        b = k - a * n_r
         e = _lin(e_lo, e_hi, n_e, a)
-        c, s = math.cos(gamma + e), math.sin(gamma + e)
-        rm = -np.inf
-        for b in range(n_r):
-            k = a * n_r + b
-            if valid and W[k] < t:
-                rm = max(rm, W[k])
-                continue
-            r = _lin(r_lo, r_hi, n_r, b)
-            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
-            W[k] = m - D
-            rm = max(rm, W[k])
-            if m > best:
-                best, be, br = m, e, r
-        RM[a] = rm
+        r = _lin(r_lo, r_hi, n_r, b)
+        m, gy, gz, ll, convex = _margin_grad(bx0, by0, bz0, bx1, by1, bz1, CS[a, 0], CS[a, 1], r, hb, lmin, lmax)
+        W[k] = m - D
+        T[0, k], T[1, k], T[2, k], T[3, k] = m, gy, gz, ll
+        T[4, k] = 1.0 if convex else 0.0
+        T[5, k], T[6, k], T[7, k] = py, pz, D
+        if m > best:
+            best, be, br = m, e, r
     ST[0] = 1.0
     return be, br, best
 
@@ -274,8 +334,12 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         A = np.empty((6, 18))
         G = np.empty((6, 6))
         CW = np.empty((3, _CE * _CR))
-        CRM = np.empty((3, _CE))
         CST = np.zeros((3, 1))
+        CCS = np.empty((3, _CE, 2))
+        CT = np.empty((3, 8, _CE * _CR))
+        CNEED = np.empty(_CE * _CR, np.bool_)
+        for c in range(3):
+            _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
         index = np.empty((ny, nz), np.int64)
         n = offset[i]
         for j in range(ny):
@@ -315,8 +379,8 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
                             ce, cr, cm = _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo,
-                                                              r_hi, hb, lmin, lmax, CW[c], CRM[c], CST[c], D,
-                                                              mg)
+                                                              r_hi, hb, lmin, lmax, CW[c], CST[c], D, mg,
+                                                              CCS[c], CT[c], py, pz, CNEED)
                         else:
                             ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                                       lmin, lmax)
