@@ -19,13 +19,28 @@ profile value found by the same 1-D ascent in ``rho`` from the current ``rho`` (
 margin in any direction is followed, which an ascent over the 8 grid neighbours is not); it stops at
 a local maximum of ``m_i`` on the full search's finest spacing. The margin can have several local
 maxima, and the one followed from the neighbour can be overtaken by another: so a second climb
-starts from the best point of a 13 x 11 scan of the strokes when that point's margin is within
-2 length units of the first climb's, and the larger of the two maxima is kept (the neighbour's on a
-tie). The scan skips the points whose Lipschitz bound (:mod:`kinematics.dexterity_sweep`: the margin
-where last computed plus the path length walked since) is below that trigger: they can neither
-trigger the second climb nor be its start, so the decisions and the poses are those of the scan of
-every point (``bounded=False``, checked bit for bit by the tests). ``1/kappa`` of
-eq. (26) is then computed at that pose as :mod:`kinematics.dexterity_sweep` does.
+starts from the best point of a 13 x 11 scan of the strokes when that point's margin exceeds the
+first climb's maximum, and the larger of the two maxima is kept (the neighbour's on a tie). (Until
+issue 24's last round it started whenever that point came within 2 length units of the first
+climb's maximum: 99.8 % of the chains at the default design's voxels climbed twice, and 88 % of the
+second climbs started within one scan cell of the first's maximum and ended at it; the margin given
+up by the stricter trigger is within the tolerance below, as measured there.) The scan skips the
+points whose Lipschitz bound (:mod:`kinematics.dexterity_sweep`: the margin where last computed plus
+the path length walked since) is below that trigger: they can neither trigger the second climb nor
+be its start, so the decisions and the poses are those of the scan of every point
+(``bounded=False``, checked bit for bit by the tests). ``1/kappa`` of eq. (26) is then computed at
+that pose as :mod:`kinematics.dexterity_sweep` does.
+
+**Mirror.** Where the design, the orientation and the grid are symmetric under ``y -> -y``
+(:func:`mirror_rows`: zero orientation, centred arc range, symmetric y centres and occupancy, and
+platform joints that are mirror images: chain 1 onto itself with its legs swapped, chain 2 onto
+chain 3), the search runs on the rows up to ``y = 0`` only (the same arrays there as the search of
+the whole grid) and every other voxel takes its mirror voxel's pose, mirrored: the same ``d``, ``eta``
+negated, chains 2 and 3 swapped. The mirrored pose has the same chain margins and the same
+``1/kappa`` at the mirrored voxel (a reflection maps the legs onto the legs, so the leg lengths and
+the singular values of ``J`` are those of the mirror voxel; both checked independently by the tests),
+so the tolerance below holds for it exactly when it holds for the mirror voxel. This halves the
+work, as the engine's mirror does.
 
 **Tolerance** (stated; checked at run time and by the tests). With ``m_i^full`` the full search's
 margin and ``m_i^nb`` the neighbour search's at the same voxel, the *margin gap* of a voxel is
@@ -39,12 +54,16 @@ flat ridges (about a quarter of the carriage grid within 2 mm of the maximum) al
 changes. The run-time check therefore reports, on its sample, the largest ``|1/kappa - 1/kappa_full|``
 and the difference of the sample's GCI as well. Measured at ``h = 4`` against the full search at
 every voxel (three designs: the default, ``a=30, b=20, eta_s=60`` at orientation (8, -5, 3) and
-``d_s=80, eta_s=45``): margin gap median <= 0.001, 99 % <= 0.09, largest 0.58 / 1.72 / 1.25;
-``|delta 1/kappa|`` median <= 3.4e-6, 99 % <= 5.2e-4, largest 3.9e-3 / 1.2e-2 / 6.6e-3 (1/kappa
-itself is up to about 0.012); GCI -5.0e-6 / -4.0e-7 / -1.3e-5 (0.2 %, 0.02 %, 0.5 %).
+``d_s=80, eta_s=45``; 80,018 / 83,850 / 141,086 voxels): margin gap median <= 0.002, 99 % <= 0.27,
+largest 0.86 / 1.13 / 1.11; ``|delta 1/kappa|`` median <= 4.8e-6, 99 % <= 1.2e-3, largest 3.9e-3 /
+1.1e-2 / 6.6e-3 (1/kappa itself is up to about 0.012); GCI -4.7e-6 / 8.2e-6 / -1.2e-5 (0.16 %,
+0.41 %, 0.47 %). (With the former trigger of the second climb: gap 99 % <= 0.09, largest 0.58 /
+1.72 / 1.25; GCI 0.2 %, 0.02 %, 0.5 %.)
 
 **Run-time check**: a fixed, seeded sample of the reachable voxels (:data:`SAMPLE_FRACTION` of them,
-at least :data:`SAMPLE_MIN`, all when fewer) is run through the full search
+at least :data:`SAMPLE_MIN` and at most :data:`SAMPLE_MAX`, all when fewer; a sample of 2,000 misses
+a share ``p`` of voxels out of tolerance with probability ``(1 - p)^2000``, 13 % for ``p`` = 0.1 %)
+is run through the full search
 (:func:`kinematics.dexterity.resolved_carriages` and numpy's SVD); the result reports the sample
 size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI difference on the sample,
 and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
@@ -91,8 +110,9 @@ from .settings import DEXTERITY
 #: Default ``epsilon`` of the stated tolerance on the margin gap (length units, module docstring;
 #: its range: :data:`kinematics.settings.DEXTERITY`).
 MARGIN_TOLERANCE = float(DEXTERITY["margin_tolerance"].default)
-#: Share of the reachable voxels run through the full search at run time, and the least number.
-SAMPLE_FRACTION, SAMPLE_MIN = 0.01, 50
+#: Share of the reachable voxels run through the full search at run time, the least number and the
+#: most (about 0.1 s of the full search on 2 cores).
+SAMPLE_FRACTION, SAMPLE_MIN, SAMPLE_MAX = 0.01, 50, 2000
 #: Seed of the run-time sample (fixed: the same voxels for the same workspace).
 SAMPLE_SEED = 24
 #: Refinement factor between the climb's steps (the full search's zoom factor: 4 cells -> 20).
@@ -100,8 +120,8 @@ _ZOOM = 5.0
 #: Climb levels: s0, s0/5, s0/25.
 _LEVELS = 3
 #: The coarse scan of the second start: _CE x _CR points on the strokes; it is climbed from when its
-#: best margin is within _RESTART_SLACK of the neighbour's climb's.
-_CE, _CR, _RESTART_SLACK = 13, 11, 2.0
+#: best margin exceeds the neighbour's climb's maximum.
+_CE, _CR = 13, 11
 #: Moves allowed per level (a safeguard; a climb on a stroke grid never needs this many).
 _MAX_MOVES = 100000
 
@@ -138,10 +158,9 @@ def _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m,
 
 
 @njit(cache=True, inline="always")
-def _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
-    """The best ``rho`` at the arc angle ``e`` by 1-D ascent from ``r``, ``levels`` steps from ``sr``
-    down by :data:`_ZOOM`. Returns ``(r, m)``."""
-    c, s = math.cos(gamma + e), math.sin(gamma + e)
+def _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
+    """The best ``rho`` at the arc angle whose ``gamma + eta`` has cosine ``c`` and sine ``s``, by 1-D
+    ascent from ``r``, ``levels`` steps from ``sr`` down by :data:`_ZOOM`. Returns ``(r, m)``."""
     m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
     for _lev in range(levels):
         r, m = _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m, sr)
@@ -153,28 +172,38 @@ def _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi,
 def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r):
     """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
     in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
-    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``."""
+    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``. The cosine and sine of
+    ``gamma + eta`` at a step of ``eta`` come from those at the current ``eta`` by the angle-addition
+    formulas (one sine and cosine of the step per level instead of one per profile; computed
+    directly where the step is cut at a stroke end)."""
     se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
     sr = (r_hi - r_lo) / (_NR - 1) if r_hi > r_lo else 0.0
     e = _clamp(e, e_lo, e_hi)
     r = _clamp(r, r_lo, r_hi)
-    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, e, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
+    c, s = math.cos(gamma + e), math.sin(gamma + e)
+    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
     for lev in range(_LEVELS):
         if se > 0.0:
+            cd, sd = math.cos(se), math.sin(se)
             direction = 0.0
             for _ in range(_MAX_MOVES):
-                best, be, br = m, e, r
+                best, be, br, bc, bs = m, e, r, c, s
                 for sg in (-1.0, 1.0):
                     if direction != 0.0 and sg != direction:
                         continue
-                    ee = _clamp(e + sg * se, e_lo, e_hi)
-                    rr, mm = _profile(bx0, by0, bz0, bx1, by1, bz1, gamma, ee, hb, lmin, lmax, r_lo, r_hi, r, sr,
+                    ee = e + sg * se
+                    if e_lo <= ee <= e_hi:
+                        cc, ss = c * cd - sg * s * sd, s * cd + sg * c * sd
+                    else:
+                        ee = _clamp(ee, e_lo, e_hi)
+                        cc, ss = math.cos(gamma + ee), math.sin(gamma + ee)
+                    rr, mm = _profile(bx0, by0, bz0, bx1, by1, bz1, cc, ss, hb, lmin, lmax, r_lo, r_hi, r, sr,
                                       _LEVELS - lev)
                     if mm > best:
-                        best, be, br = mm, ee, rr
+                        best, be, br, bc, bs = mm, ee, rr, cc, ss
                         direction = sg
                 if best > m:
-                    m, e, r = best, be, br
+                    m, e, r, c, s = best, be, br, bc, bs
                 else:
                     break
         se /= _ZOOM
@@ -201,38 +230,89 @@ def _coarse_best(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb
 
 
 @njit(cache=True)
-def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, RM, ST,
-                         D, thr):
-    """:func:`_coarse_best` with its scan points pruned by the Lipschitz bounds ``W + D`` of
-    :mod:`kinematics.dexterity_sweep` (``W[k]``: the margin when last computed less the path length
-    ``D`` walked then; ``RM``: per-row largest ``W``; ``ST[0] == 1``: the bounds are set): a point
-    whose bound is below ``thr - 1e-7`` has a margin below ``thr`` and is skipped. The caller climbs
-    again only when the result's margin exceeds ``thr``: then the skipped points are below the
-    maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
-    margin returned is a value ``<= thr`` (``-inf`` when every point was skipped)."""
+def _scan_rows(gamma, e_lo, e_hi, CS):
+    """``CS[a] = (cos, sin)`` of ``gamma + eta`` at row ``a`` of the restart scan (as
+    :func:`_coarse_best` computes them)."""
+    n_e = 1 if e_hi <= e_lo else _CE
+    for a in range(n_e):
+        e = _lin(e_lo, e_hi, n_e, a)
+        CS[a, 0], CS[a, 1] = math.cos(gamma + e), math.sin(gamma + e)
+
+
+@njit(cache=True, inline="always")
+def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
+    """:func:`kinematics.dexterity_sweep._margin_cs` (the same value, bit for bit) with the active
+    term's gradient in the platform's ``y`` and ``z`` and its leg length: ``(m, gy, gz, l, convex)``;
+    ``convex`` when the active term is ``l - l_min`` (convex in the position), not ``l_max - l``."""
+    dx0 = bx0 - (c * rho - s * hb)
+    dy0 = by0 - (s * rho + c * hb)
+    l0 = math.sqrt(dx0 * dx0 + dy0 * dy0 + bz0 * bz0)
+    dx1 = bx1 - (c * rho + s * hb)
+    dy1 = by1 - (s * rho - c * hb)
+    l1 = math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1)
+    m = min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
+    if m == l0 - lmin:
+        return m, dy0 / l0, bz0 / l0, l0, True
+    if m == lmax - l0:
+        return m, -dy0 / l0, -bz0 / l0, l0, False
+    if m == l1 - lmin:
+        return m, dy1 / l1, bz1 / l1, l1, True
+    return m, -dy1 / l1, -bz1 / l1, l1, False
+
+
+@njit(cache=True)
+def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, ST, D,
+                         thr, CS, T, py, pz, need):
+    """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the
+    voxel ``(py, pz)`` of the plane: the Lipschitz bound ``W + D`` of :mod:`kinematics.dexterity_sweep`
+    (``W[k]``: the margin when last computed less the path length ``D`` walked then; ``ST[0] == 1``:
+    the bounds are set) and the first-order bound of the term that was the margin then (``T[:, k]``:
+    that margin, the term's gradient in ``y`` and ``z``, its leg's length ``l``, 1 when it is ``l -
+    l_min`` else 0, and ``y``, ``z``, ``D`` then): with ``Delta`` the move since, the term is at most
+    its value plus ``grad . Delta``, plus ``|Delta|^2 / (2 (l - |Delta|))`` for ``l - l_min`` (the leg
+    length is convex with Hessian ``(I - n n^T) / l``, and ``|Delta|`` is at most the path walked),
+    and the margin, the least term, is at most any term. A point whose bound is below ``thr - 1e-7``
+    has a margin below ``thr`` and is skipped. The bounds are taken for every point in one pass
+    without branches (``need``: scratch), then the points left are computed in scan order. The caller
+    climbs again only when the result's margin exceeds ``thr``: then the skipped points are below
+    the maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
+    margin returned is a value ``<= thr`` (``-inf`` when every point was skipped). ``CS[a]``: the
+    cosine and sine of ``gamma + eta`` of row ``a`` (:func:`_scan_rows`)."""
     n_e = 1 if e_hi <= e_lo else _CE
     n_r = 1 if r_hi <= r_lo else _CR
+    n = n_e * n_r
     valid = ST[0] == 1.0
     t = thr - _SLACK - D
+    t1 = thr - _SLACK
+    left = n
+    if valid:
+        left = 0
+        for k in range(n):
+            room = T[3, k] - (D - T[7, k])
+            ddy = py - T[5, k]
+            ddz = pz - T[6, k]
+            # bound >= t1 with the curvature term's division multiplied out (room > 0)
+            below = (t1 - T[0, k] - T[1, k] * ddy - T[2, k] * ddz) * (2.0 * room)
+            need[k] = (W[k] >= t) & ((room <= 0.0) | (below <= T[4, k] * (ddy * ddy + ddz * ddz)))
+            left += need[k]
     best, be, br = -np.inf, e_lo, r_lo
-    for a in range(n_e):
-        if valid and RM[a] < t:
+    for k in range(n):
+        if left == 0:
+            break
+        if valid and not need[k]:
             continue
+        left -= 1
+        a = k // n_r
+        b = k - a * n_r
         e = _lin(e_lo, e_hi, n_e, a)
-        c, s = math.cos(gamma + e), math.sin(gamma + e)
-        rm = -np.inf
-        for b in range(n_r):
-            k = a * n_r + b
-            if valid and W[k] < t:
-                rm = max(rm, W[k])
-                continue
-            r = _lin(r_lo, r_hi, n_r, b)
-            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, r, hb, lmin, lmax)
-            W[k] = m - D
-            rm = max(rm, W[k])
-            if m > best:
-                best, be, br = m, e, r
-        RM[a] = rm
+        r = _lin(r_lo, r_hi, n_r, b)
+        m, gy, gz, ll, convex = _margin_grad(bx0, by0, bz0, bx1, by1, bz1, CS[a, 0], CS[a, 1], r, hb, lmin, lmax)
+        W[k] = m - D
+        T[0, k], T[1, k], T[2, k], T[3, k] = m, gy, gz, ll
+        T[4, k] = 1.0 if convex else 0.0
+        T[5, k], T[6, k], T[7, k] = py, pz, D
+        if m > best:
+            best, be, br = m, e, r
     ST[0] = 1.0
     return be, br, best
 
@@ -254,8 +334,12 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         A = np.empty((6, 18))
         G = np.empty((6, 6))
         CW = np.empty((3, _CE * _CR))
-        CRM = np.empty((3, _CE))
         CST = np.zeros((3, 1))
+        CCS = np.empty((3, _CE, 2))
+        CT = np.empty((3, 8, _CE * _CR))
+        CNEED = np.empty(_CE * _CR, np.bool_)
+        for c in range(3):
+            _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
         index = np.empty((ny, nz), np.int64)
         n = offset[i]
         for j in range(ny):
@@ -295,12 +379,12 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
                             ce, cr, cm = _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo,
-                                                              r_hi, hb, lmin, lmax, CW[c], CRM[c], CST[c], D,
-                                                              mg - _RESTART_SLACK)
+                                                              r_hi, hb, lmin, lmax, CW[c], CST[c], D, mg,
+                                                              CCS[c], CT[c], py, pz, CNEED)
                         else:
                             ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                                       lmin, lmax)
-                        if cm > mg - _RESTART_SLACK:
+                        if cm > mg:
                             r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
                                                 lmax, ce, cr)
                             if m2 > mg:
@@ -341,14 +425,68 @@ def chain_margins(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np
     return out
 
 
+#: The mirror ``y -> -y``: chain 1 onto itself, chains 2 and 3 swapped (indices 0, 2, 1).
+_MIRROR_CHAINS = np.array([0, 2, 1])
+
+
+def mirror_rows(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                orientation: Sequence[float]) -> int | None:
+    """The rows ``j < ny_eval`` of ``occupancy`` that determine the field by the mirror ``y -> -y``
+    (module docstring, "Mirror"), or None where the mirror does not hold exactly: the orientation is
+    zero, the arc range centred, the y centres and the occupancy symmetric, and the platform joints
+    mirror images of each other (leg 1 of chain 1 onto its leg 2, chain 2's legs onto chain 3's)."""
+    occ = np.asarray(occupancy, bool)
+    ys = np.asarray(axes[1], float)
+    h = float(ys[1] - ys[0]) if ys.size > 1 else 1.0
+    if (design.eta_range != "centered" or any(float(a) != 0.0 for a in orientation) or ys.size < 2
+            or not np.allclose(ys, -ys[::-1], rtol=0.0, atol=1e-9 * max(1.0, abs(h)))
+            or not np.array_equal(occ, occ[:, ::-1, :])):
+        return None
+    u = _constants(design, orientation)[0]
+    flip = np.array([1.0, -1.0, 1.0])
+    scale = 1e-12 * max(1.0, float(np.abs(u).max()))
+    if not np.allclose(u[_MIRROR_CHAINS][:, ::-1] * flip, u, rtol=0.0, atol=scale):
+        return None
+    return (ys.size + 1) // 2
+
+
+def _mirror_fill(occ: np.ndarray, ny_eval: int, half: tuple[np.ndarray, ...]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The neighbour search's arrays over every reachable voxel of ``occ`` (C order) from ``half``,
+    those of the rows ``j < ny_eval``: a voxel of row ``j >= ny_eval`` takes its mirror voxel's
+    ``1/kappa``, its chains' ``d`` and margins with chains 2 and 3 swapped, and their ``eta`` negated."""
+    vals, d, eta, margin = half
+    nx, ny, nz = occ.shape
+    src = np.full(occ.shape, -1, np.int64)
+    src[:, :ny_eval, :][occ[:, :ny_eval, :]] = np.arange(vals.size)
+    rows = np.arange(ny)
+    mirrored = rows >= ny_eval
+    src = src[:, np.where(mirrored, ny - 1 - rows, rows), :]
+    pick = src[occ]
+    flipped = np.broadcast_to(mirrored[None, :, None], occ.shape)[occ]
+    m = flipped[:, None]
+    perm = _MIRROR_CHAINS
+    return (vals[pick], np.where(m, d[pick][:, perm], d[pick]), np.where(m, -eta[pick][:, perm], eta[pick]),
+            np.where(m, margin[pick][:, perm], margin[pick]))
+
+
 def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
                     orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
-                    cancel: CancelToken = None, bounded: bool = True
+                    cancel: CancelToken = None, bounded: bool = True, mirror: bool = True
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``1/kappa`` at the neighbour search's carriage pose (module docstring) of every reachable voxel
     of ``occupancy`` in C order: ``(inverse_condition, d, eta_deg, margins)`` (margins: (N, 3)).
     ``bounded=False`` computes every point of the restart scan (the same result, slower: the
-    reference of the tests)."""
+    reference of the tests). ``mirror``: where :func:`mirror_rows` holds, search the rows up to
+    ``y = 0`` only and give every other voxel its mirror voxel's pose, mirrored (the same arrays on
+    those rows as ``mirror=False``)."""
+    ny_eval = mirror_rows(design, occupancy, axes, orientation) if mirror else None
+    if ny_eval is not None:
+        occ = np.ascontiguousarray(np.asarray(occupancy, bool))
+        vals, d, eta_deg, margin = neighbour_field(design, occ[:, :ny_eval, :], (axes[0], axes[1][:ny_eval], axes[2]),
+                                                   orientation, progress, cancel, bounded, mirror=False)
+        vals, d, eta_deg, margin = _mirror_fill(occ, ny_eval, (vals, d, eta_deg, margin))
+        return vals, d, eta_deg + 0.0, margin
     f = field_inputs(design, occupancy, axes, orientation)
     out = np.zeros(f.n)
     rho = np.zeros((f.n, 3))
@@ -361,10 +499,11 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
 
 
 def sample_indices(n: int, fraction: float = SAMPLE_FRACTION, minimum: int = SAMPLE_MIN,
-                   seed: int = SAMPLE_SEED) -> np.ndarray:
-    """The run-time check's sample of ``range(n)``: ``max(minimum, ceil(fraction n))`` indices (all
-    when ``n`` is smaller), drawn without replacement with a fixed seed, sorted."""
-    k = min(n, max(int(minimum), math.ceil(fraction * n)))
+                   maximum: int = SAMPLE_MAX, seed: int = SAMPLE_SEED) -> np.ndarray:
+    """The run-time check's sample of ``range(n)``: ``ceil(fraction n)`` indices, at least
+    ``minimum`` and at most ``maximum`` (all when ``n`` is smaller), drawn without replacement with
+    a fixed seed, sorted."""
+    k = min(n, max(int(minimum), min(int(maximum), math.ceil(fraction * n))))
     return np.sort(np.random.default_rng(seed).choice(n, k, replace=False)) if k < n else np.arange(n)
 
 

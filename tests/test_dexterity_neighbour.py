@@ -16,9 +16,11 @@ from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.dexterity import dexterity_field, inverse_condition_batch, resolved_carriages
 from paraspace.kinematics.dexterity_neighbour import (
     MARGIN_TOLERANCE,
+    SAMPLE_MAX,
     SAMPLE_MIN,
     chain_margins,
     compare,
+    mirror_rows,
     neighbour_field,
     sample_indices,
 )
@@ -72,7 +74,9 @@ def test_the_field_reports_its_sample_check_against_the_full_search():
     assert f.search == "neighbour" and f.check is not None
     n = res.voxels
     idx = sample_indices(n)
-    assert f.check.sample_size == len(idx) == min(n, max(SAMPLE_MIN, math.ceil(0.01 * n)))
+    assert f.check.sample_size == len(idx) == min(n, max(SAMPLE_MIN, min(SAMPLE_MAX, math.ceil(0.01 * n))))
+    # at most SAMPLE_MAX voxels on a large grid, at least SAMPLE_MIN on a small one
+    assert len(sample_indices(10**6)) == SAMPLE_MAX == 2000 and len(sample_indices(1000)) == SAMPLE_MIN == 50
     assert len(np.unique(idx)) == len(idx) and np.array_equal(idx, sample_indices(n))  # fixed seed
     # recompute the check's numbers from the full search on the same voxels
     pts = res.grid.points()[res.occupancy][idx]
@@ -140,3 +144,44 @@ def test_the_bounded_restart_scan_gives_the_same_field_as_the_full_scan(design, 
     assert res.voxels > 0
     for a, b in zip(fast, ref, strict=True):
         assert np.array_equal(a, b)
+
+
+def test_the_mirror_searches_the_rows_up_to_y0_and_mirrors_the_poses_of_the_others():
+    # the default design at zero orientation is symmetric under y -> -y: the rows up to y = 0 are the
+    # search's own (the same arrays as without the mirror), every other voxel gets its mirror voxel's
+    # pose mirrored, which the IK and numpy's SVD confirm independently
+    design = Design()
+    res = compute_workspace(design, WorkspaceSettings(voxel=6.0))
+    occ, axes = res.occupancy, res.grid.axes()
+    ny_eval = mirror_rows(design, occ, axes, (0.0, 0.0, 0.0))
+    assert ny_eval == (occ.shape[1] + 1) // 2
+    vals, d, eta, margins = neighbour_field(design, occ, axes)
+    plain = neighbour_field(design, occ, axes, mirror=False)
+    pts = res.grid.points()[occ]
+    j = np.nonzero(occ)[1]
+    own = j < ny_eval
+    for a, b in zip((vals, d, eta, margins), plain, strict=True):
+        assert np.array_equal(a[own], b[own])
+    # each mirrored voxel against its mirror image: chains 2 and 3 swapped, eta negated
+    index = {tuple(np.round(p, 9)): k for k, p in enumerate(pts)}
+    img = np.array([index[tuple(np.round(p * [1.0, -1.0, 1.0], 9))] for p in pts[~own]])
+    assert np.array_equal(vals[~own], vals[img])
+    assert np.array_equal(d[~own], d[img][:, [0, 2, 1]]) and np.array_equal(eta[~own], -eta[img][:, [0, 2, 1]])
+    rng = np.random.default_rng(5)
+    for k in rng.choice(np.flatnonzero(~own), 8, replace=False):
+        np.testing.assert_allclose(margins[k], _margins_from_ik(design, pts[k], (0.0, 0.0, 0.0), d[k], eta[k]),
+                                   atol=1e-9)
+    slow = inverse_condition_batch(design, pts[~own], d[~own], eta[~own], (0.0, 0.0, 0.0))
+    assert np.all(np.abs(vals[~own] - slow) <= TOL_REL * slow + TOL_ABS + 1e-16 / np.maximum(slow, 1e-12))
+
+
+@pytest.mark.parametrize("design,orientation,flip", [(Design(eta_range="from-zero"), (0.0, 0.0, 0.0), False),
+                                                     (Design(), (0.0, 5.0, 0.0), False),
+                                                     (Design(), (0.0, 0.0, 0.0), True)])
+def test_no_mirror_where_it_does_not_hold(design, orientation, flip):
+    res = compute_workspace(design, WorkspaceSettings(voxel=12.0, orientation=orientation))
+    occ = res.occupancy.copy()
+    if flip:  # one voxel without its mirror image
+        i, j, k = next(v for v in np.argwhere(occ) if v[1] != occ.shape[1] - 1 - v[1])
+        occ[i, j, k] = False
+    assert mirror_rows(design, occ, res.grid.axes(), orientation) is None
