@@ -415,15 +415,17 @@ def check_margin_tolerance(margin_tolerance: float) -> float:
     return float(DEXTERITY["margin_tolerance"].check(margin_tolerance))
 
 
-def _sample_check(design: Design, pts: np.ndarray, vals: np.ndarray, margins: np.ndarray,
-                  orientation: Sequence[float], margin_tolerance: float) -> SampleCheck:
+def _sample_check(design: Design, occ: np.ndarray, axes: Sequence[np.ndarray], vals: np.ndarray,
+                  margins: np.ndarray, orientation: Sequence[float], margin_tolerance: float) -> SampleCheck:
     """The neighbour search's run-time check (:mod:`kinematics.dexterity_neighbour`): a seeded sample
-    of the voxels through the full search (:func:`resolved_carriages`, numpy's SVD)."""
-    idx = sample_indices(pts.shape[0])
-    p = pts[idx]
+    of the reachable voxels of ``occ`` (C order; a grid of ``axes``) through the full search
+    (:func:`resolved_carriages`, numpy's SVD)."""
+    idx = sample_indices(vals.shape[0])
+    ii, jj, kk = np.unravel_index(np.flatnonzero(occ)[idx], occ.shape)
+    p = np.stack([np.asarray(axes[0])[ii], np.asarray(axes[1])[jj], np.asarray(axes[2])[kk]], axis=1)
     d, eta = resolved_carriages(design, p, orientation)
     full = inverse_condition_batch(design, p, d, eta, orientation)
-    return compare(vals[idx], margins[idx], full, chain_margins(design, p, d, eta, orientation), pts.shape[0],
+    return compare(vals[idx], margins[idx], full, chain_margins(design, p, d, eta, orientation), vals.shape[0],
                    margin_tolerance)
 
 
@@ -448,16 +450,16 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     t0 = time.perf_counter()
     design = result.design
     occ = np.asarray(result.occupancy, bool)
-    pts = result.grid.points()[occ]
     orientation = result.settings.orientation
     sample = None
     if mode == "resolved" and search == "neighbour":
         vals, _d, _eta, margins = neighbour_field(design, occ, result.grid.axes(), orientation, rep, cancel)
         check(cancel)
-        sample = _sample_check(design, pts, vals, margins, orientation, margin_tolerance)
+        sample = _sample_check(design, occ, result.grid.axes(), vals, margins, orientation, margin_tolerance)
     elif mode == "resolved" and search == "sweep":
         vals = continuation_field(design, occ, result.grid.axes(), orientation, rep, cancel)[0]
     else:
+        pts = result.grid.points()[occ]
         vals = np.zeros(pts.shape[0])
         step = 8 * CHUNK
         for s in range(0, pts.shape[0], step):

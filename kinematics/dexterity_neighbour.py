@@ -450,24 +450,52 @@ def mirror_rows(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray
     return (ys.size + 1) // 2
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, out_v, out_d, out_e, out_m):
+    """:func:`_mirror_fill` per ``x`` plane (``base[i]``, ``full_base[i]``: the index of plane ``i``'s
+    first voxel in the half's and in the whole grid's C order)."""
+    nx, ny, nz = occ.shape
+    for i in prange(nx):
+        hidx = np.empty((ny_eval, nz), np.int64)
+        n = base[i]
+        for j in range(ny_eval):
+            for k in range(nz):
+                if occ[i, j, k]:
+                    hidx[j, k] = n
+                    n += 1
+        m = full_base[i]
+        for j in range(ny):
+            flip = j >= ny_eval
+            jj = ny - 1 - j if flip else j
+            for k in range(nz):
+                if not occ[i, j, k]:
+                    continue
+                h = hidx[jj, k]
+                out_v[m] = vals[h]
+                for c in range(3):
+                    src = c if not flip else (0 if c == 0 else 3 - c)
+                    out_d[m, c] = d[h, src]
+                    out_e[m, c] = -eta[h, src] if flip else eta[h, src]
+                    out_m[m, c] = margin[h, src]
+                m += 1
+
+
 def _mirror_fill(occ: np.ndarray, ny_eval: int, half: tuple[np.ndarray, ...]
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The neighbour search's arrays over every reachable voxel of ``occ`` (C order) from ``half``,
     those of the rows ``j < ny_eval``: a voxel of row ``j >= ny_eval`` takes its mirror voxel's
     ``1/kappa``, its chains' ``d`` and margins with chains 2 and 3 swapped, and their ``eta`` negated."""
-    vals, d, eta, margin = half
-    nx, ny, nz = occ.shape
-    src = np.full(occ.shape, -1, np.int64)
-    src[:, :ny_eval, :][occ[:, :ny_eval, :]] = np.arange(vals.size)
-    rows = np.arange(ny)
-    mirrored = rows >= ny_eval
-    src = src[:, np.where(mirrored, ny - 1 - rows, rows), :]
-    pick = src[occ]
-    flipped = np.broadcast_to(mirrored[None, :, None], occ.shape)[occ]
-    m = flipped[:, None]
-    perm = _MIRROR_CHAINS
-    return (vals[pick], np.where(m, d[pick][:, perm], d[pick]), np.where(m, -eta[pick][:, perm], eta[pick]),
-            np.where(m, margin[pick][:, perm], margin[pick]))
+    vals, d, eta, margin = (np.ascontiguousarray(a) for a in half)
+    occ = np.ascontiguousarray(occ, dtype=np.bool_)
+    counts_half = occ[:, :ny_eval, :].reshape(occ.shape[0], -1).sum(axis=1)
+    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
+    base = np.concatenate([[0], np.cumsum(counts_half)[:-1]]).astype(np.int64)
+    full_base = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    n = int(counts.sum())
+    out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)))
+    with kernel_launch(occ.shape[0]):
+        _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, *out)
+    return out
 
 
 def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
