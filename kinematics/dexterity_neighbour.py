@@ -69,16 +69,17 @@ size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI differ
 and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
 prints. A check that passes on the sample does not prove the bound at every voxel.
 
-Cost: a few hundred margins per chain and voxel (the 13 x 11 scan is at most 143 of them; the
-Lipschitz bounds skip part of it) instead of the full search's 5,300, plus ``1/kappa`` and the sample
-check (1 % of the voxels at about 80 us each). At ``h = 2`` (640,014 voxels; 2 cores shared with a
-CI run, load average 2.4-4.9; medians of 5 alternating runs in one process, engine beside): the
-bounded scan takes 0.86-0.96x the time of the scan of every point in four runs (13.2-14.5 against
-15.1-15.7 us per voxel); ``1/kappa`` alone 4.2 -> 3.6 us per voxel (0.85x, 7 alternating runs
-against the kernel before, load 2.4-2.6). The search as it was (every scan point, the Jacobi
-before) was 93x the engine (15.3 us per voxel, load 2.5-2.9); the whole field with its check is
-73-102x after, the spread being the engine's (91-147 ms across the runs): the 20x target is not met.
-The exact sweep was 713x (``benchmarks/bench_workspace.py --throughput``, target 3).
+Cost: per chain and voxel, a climb of about 44 margins and a restart scan of about 4.4 (the 13 x 11
+scan's points are skipped when either of two upper bounds of their margin is below the trigger: the
+Lipschitz bound above, and the first-order bound of the term that was the margin when last computed,
+its gradient times the move since plus the leg's curvature bound; both are taken for all 143 points
+in one branch-free pass) instead of the full search's 5,300, then ``1/kappa``
+(:mod:`kinematics.dexterity_sweep`), on half the grid where the mirror holds, and the sample check
+(at most 2,000 full searches of about 80 us). At ``h = 2`` (640,014 voxels, 2 cores, load 1.6): the
+whole field with its check takes 785 ms, 24x the engine's 32 ms (``benchmarks/bench_workspace.py
+--throughput``, target 3; the 20x target is not met); it was 73-102x before the mirror, the 6 x 6
+``1/kappa``, the stricter restart trigger and the scan's first-order bounds (measured one by one in
+issue 24's closing notes). The exact sweep is 679x and the full search 970x in the same run.
 """
 
 from __future__ import annotations
