@@ -90,15 +90,21 @@ def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
 
 
 @njit(cache=True, inline="always")
+def _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
+    """Each leg's S joint in the rail's frame: ``(p1, q1, p2, q2)``, ``p`` the position along the rail
+    of direction ``(c, s)`` and ``q`` the squared distance from the leg's line of U joints."""
+    p1 = b1x * c + b1y * s
+    m1 = -b1x * s + b1y * c - hb
+    p2 = b2x * c + b2y * s
+    m2 = -b2x * s + b2y * c + hb
+    return p1, b1z * b1z + m1 * m1, p2, b2z * b2z + m2 * m2
+
+
+@njit(cache=True, inline="always")
 def _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
     """:func:`kinematics.feasibility._feasible_at` without cones (the same answer: :func:`_passes`),
     for the squared leg limits ``lo2 <= hi2``, inlined."""
-    p1 = b1x * c + b1y * s
-    m1 = -b1x * s + b1y * c - hb
-    q1 = b1z * b1z + m1 * m1
-    p2 = b2x * c + b2y * s
-    m2 = -b2x * s + b2y * c + hb
-    q2 = b2z * b2z + m2 * m2
+    p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
     return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
 
 
@@ -116,13 +122,7 @@ def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, 
     """The three tests of every sample ``a..b`` (no branch: SIMD lanes); an empty limit pair
     (``lo2 > hi2``) never passes."""
     for k in range(a, b + 1):
-        c, s = ci[k], si[k]
-        p1 = b1x * c + b1y * s
-        m1 = -b1x * s + b1y * c - hb
-        q1 = b1z * b1z + m1 * m1
-        p2 = b2x * c + b2y * s
-        m2 = -b2x * s + b2y * c + hb
-        q2 = b2z * b2z + m2 * m2
+        p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, ci[k], si[k], hb)
         f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
         f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
         fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)

@@ -103,6 +103,7 @@ from .dexterity_sweep import (
     _pruned_carriage,
     by_planes,
     field_inputs,
+    plane_index,
 )
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter
@@ -341,13 +342,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         CNEED = np.empty(_CE * _CR, np.bool_)
         for c in range(3):
             _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
-        index = np.empty((ny, nz), np.int64)
-        n = offset[i]
-        for j in range(ny):
-            for k in range(nz):
-                if occ[i, j, k]:
-                    index[j, k] = n
-                    n += 1
+        index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
         first = True
         D = 0.0  # path length walked in the plane (the Lipschitz bounds' running sum)
@@ -457,13 +452,7 @@ def _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, out
     first voxel in the half's and in the whole grid's C order)."""
     nx, ny, nz = occ.shape
     for i in prange(nx):
-        hidx = np.empty((ny_eval, nz), np.int64)
-        n = base[i]
-        for j in range(ny_eval):
-            for k in range(nz):
-                if occ[i, j, k]:
-                    hidx[j, k] = n
-                    n += 1
+        hidx = plane_index(occ, i, ny_eval, base[i])
         m = full_base[i]
         for j in range(ny):
             flip = j >= ny_eval

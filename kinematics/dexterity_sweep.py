@@ -269,6 +269,20 @@ def _tridiagonal_eigen_range(G, A):
     return lo, hi, True
 
 
+@njit(cache=True, inline="always")
+def plane_index(occ, i, ny, first):
+    """The index of each reachable voxel ``(i, j, k)``, ``j < ny``, of plane ``i`` of ``occ`` in the C
+    order of the reachable voxels (``first``: that of the plane's first one); (ny, nz) array."""
+    index = np.empty((ny, occ.shape[2]), np.int64)
+    n = first
+    for j in range(ny):
+        for k in range(occ.shape[2]):
+            if occ[i, j, k]:
+                index[j, k] = n
+                n += 1
+    return index
+
+
 @njit(cache=True)
 def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
     """``1/kappa`` of ``J_h^{-1} J_q`` at one position and carriage pose (module docstring; the
@@ -395,14 +409,7 @@ def _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi
         eta = np.zeros(3)
         A = np.empty((6, 18))
         G = np.empty((6, 6))
-        # C-order index of each reachable voxel of the plane
-        index = np.empty((ny, nz), np.int64)
-        n = offset[i]
-        for j in range(ny):
-            for k in range(nz):
-                if occ[i, j, k]:
-                    index[j, k] = n
-                    n += 1
+        index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
         D = 0.0
         qy, qz = 0.0, 0.0
