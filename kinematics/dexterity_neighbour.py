@@ -102,6 +102,7 @@ from .dexterity_sweep import (
     _margin_cs,
     _pruned_carriage,
     by_planes,
+    chain_legs,
     field_inputs,
     plane_index,
 )
@@ -246,12 +247,7 @@ def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     """:func:`kinematics.dexterity_sweep._margin_cs` (the same value, bit for bit) with the active
     term's gradient in the platform's ``y`` and ``z`` and its leg length: ``(m, gy, gz, l, convex)``;
     ``convex`` when the active term is ``l - l_min`` (convex in the position), not ``l_max - l``."""
-    dx0 = bx0 - (c * rho - s * hb)
-    dy0 = by0 - (s * rho + c * hb)
-    l0 = math.sqrt(dx0 * dx0 + dy0 * dy0 + bz0 * bz0)
-    dx1 = bx1 - (c * rho + s * hb)
-    dy1 = by1 - (s * rho - c * hb)
-    l1 = math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1)
+    dy0, l0, dy1, l1 = chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb)
     m = min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
     if m == l0 - lmin:
         return m, dy0 / l0, bz0 / l0, l0, True

@@ -79,16 +79,24 @@ _NE, _NR, _NZ = 73, 61, 21
 
 
 @njit(cache=True, inline="always")
+def chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb):
+    """The ``y`` components ``dy`` of a chain's two leg vectors (S joint less U joint) and their
+    lengths: ``(dy0, l0, dy1, l1)`` at one carriage pose (``c, s = cos, sin`` of the carriage angle
+    ``varpi``; ``rho = r - d``; the U joints lie in the base plane)."""
+    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
+    dx0 = bx0 - (c * rho - s * hb)
+    dy0 = by0 - (s * rho + c * hb)
+    dx1 = bx1 - (c * rho + s * hb)
+    dy1 = by1 - (s * rho - c * hb)
+    return (dy0, math.sqrt(dx0 * dx0 + dy0 * dy0 + bz0 * bz0), dy1,
+            math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1))
+
+
+@njit(cache=True, inline="always")
 def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
     (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
-    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
-    dx = bx0 - (c * rho - s * hb)
-    dy = by0 - (s * rho + c * hb)
-    l0 = math.sqrt(dx * dx + dy * dy + bz0 * bz0)
-    dx = bx1 - (c * rho + s * hb)
-    dy = by1 - (s * rho - c * hb)
-    l1 = math.sqrt(dx * dx + dy * dy + bz1 * bz1)
+    _dy0, l0, _dy1, l1 = chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb)
     return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
 
 
