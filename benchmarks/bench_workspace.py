@@ -936,6 +936,7 @@ def total_orientation_rows(design: Design, runs: int = 3) -> None:
                                                                                       if k == "blocks" else ""))
 
 
+@contextlib.contextmanager
 def _per_voxel_interference():
     """The engine's leg interference on its former path (before issue 24): the witness search of
     kinematics/interference.py at every voxel the chains reach."""
