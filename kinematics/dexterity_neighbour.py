@@ -105,6 +105,7 @@ from .dexterity_sweep import (
     chain_legs,
     field_inputs,
     plane_index,
+    plane_offsets,
 )
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter
@@ -259,14 +260,15 @@ def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
 
 
 @njit(cache=True)
-def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, ST, D,
+def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, ST, D,
                          thr, CS, T, py, pz, need):
     """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the
-    voxel ``(py, pz)`` of the plane: the Lipschitz bound ``W + D`` of :mod:`kinematics.dexterity_sweep`
-    (``W[k]``: the margin when last computed less the path length ``D`` walked then; ``ST[0] == 1``:
-    the bounds are set) and the first-order bound of the term that was the margin then (``T[:, k]``:
-    that margin, the term's gradient in ``y`` and ``z``, its leg's length ``l``, 1 when it is ``l -
-    l_min`` else 0, and ``y``, ``z``, ``D`` then): with ``Delta`` the move since, the term is at most
+    voxel ``(py, pz)`` of the plane, from what ``T[:, k]`` keeps of point ``k``'s last computation
+    (its margin ``m``, the gradient in ``y`` and ``z`` of the term that was the margin, that term's
+    leg length ``l``, 1 when the term is ``l - l_min`` else 0, and ``y``, ``z`` and the path length
+    ``D`` walked then; ``ST[0] == 1``: the bounds are set): the Lipschitz bound of
+    :mod:`kinematics.dexterity_sweep`, ``m`` plus the path walked since, and the first-order bound of
+    the term that was the margin: with ``Delta`` the move since, the term is at most
     its value plus ``grad . Delta``, plus ``|Delta|^2 / (2 (l - |Delta|))`` for ``l - l_min`` (the leg
     length is convex with Hessian ``(I - n n^T) / l``, and ``|Delta|`` is at most the path walked),
     and the margin, the least term, is at most any term. A point whose bound is below ``thr - 1e-7``
@@ -291,7 +293,7 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
             ddz = pz - T[6, k]
             # bound >= t1 with the curvature term's division multiplied out (room > 0)
             below = (t1 - T[0, k] - T[1, k] * ddy - T[2, k] * ddz) * (2.0 * room)
-            need[k] = (W[k] >= t) & ((room <= 0.0) | (below <= T[4, k] * (ddy * ddy + ddz * ddz)))
+            need[k] = (T[0, k] - T[7, k] >= t) & ((room <= 0.0) | (below <= T[4, k] * (ddy * ddy + ddz * ddz)))
             left += need[k]
     best, be, br = -np.inf, e_lo, r_lo
     for k in range(n):
@@ -305,7 +307,6 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
         e = _lin(e_lo, e_hi, n_e, a)
         r = _lin(r_lo, r_hi, n_r, b)
         m, gy, gz, ll, convex = _margin_grad(bx0, by0, bz0, bx1, by1, bz1, CS[a, 0], CS[a, 1], r, hb, lmin, lmax)
-        W[k] = m - D
         T[0, k], T[1, k], T[2, k], T[3, k] = m, gy, gz, ll
         T[4, k] = 1.0 if convex else 0.0
         T[5, k], T[6, k], T[7, k] = py, pz, D
@@ -331,7 +332,6 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         eta = np.zeros(3)
         A = np.empty((6, 18))
         G = np.empty((6, 6))
-        CW = np.empty((3, _CE * _CR))
         CST = np.zeros((3, 1))
         CCS = np.empty((3, _CE, 2))
         CT = np.empty((3, 8, _CE * _CR))
@@ -371,7 +371,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
                             ce, cr, cm = _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo,
-                                                              r_hi, hb, lmin, lmax, CW[c], CST[c], D, mg,
+                                                              r_hi, hb, lmin, lmax, CST[c], D, mg,
                                                               CCS[c], CT[c], py, pz, CNEED)
                         else:
                             ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
@@ -443,9 +443,9 @@ def mirror_rows(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, out_v, out_d, out_e, out_m):
+def _mirror_fill_kernel(occ, ny_eval, base, full_base, perm, vals, d, eta, margin, out_v, out_d, out_e, out_m):
     """:func:`_mirror_fill` per ``x`` plane (``base[i]``, ``full_base[i]``: the index of plane ``i``'s
-    first voxel in the half's and in the whole grid's C order)."""
+    first voxel in the half's and in the whole grid's C order; ``perm``: :data:`_MIRROR_CHAINS`)."""
     nx, ny, nz = occ.shape
     for i in prange(nx):
         hidx = plane_index(occ, i, ny_eval, base[i])
@@ -459,7 +459,7 @@ def _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, out
                 h = hidx[jj, k]
                 out_v[m] = vals[h]
                 for c in range(3):
-                    src = c if not flip else (0 if c == 0 else 3 - c)
+                    src = perm[c] if flip else c
                     out_d[m, c] = d[h, src]
                     out_e[m, c] = -eta[h, src] if flip else eta[h, src]
                     out_m[m, c] = margin[h, src]
@@ -473,14 +473,11 @@ def _mirror_fill(occ: np.ndarray, ny_eval: int, half: tuple[np.ndarray, ...]
     ``1/kappa``, its chains' ``d`` and margins with chains 2 and 3 swapped, and their ``eta`` negated."""
     vals, d, eta, margin = (np.ascontiguousarray(a) for a in half)
     occ = np.ascontiguousarray(occ, dtype=np.bool_)
-    counts_half = occ[:, :ny_eval, :].reshape(occ.shape[0], -1).sum(axis=1)
-    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
-    base = np.concatenate([[0], np.cumsum(counts_half)[:-1]]).astype(np.int64)
-    full_base = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-    n = int(counts.sum())
+    base = plane_offsets(occ[:, :ny_eval, :])[0]
+    full_base, n = plane_offsets(occ)
     out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)))
     with kernel_launch(occ.shape[0]):
-        _mirror_fill_kernel(occ, ny_eval, base, full_base, vals, d, eta, margin, *out)
+        _mirror_fill_kernel(occ, ny_eval, base, full_base, _MIRROR_CHAINS, vals, d, eta, margin, *out)
     return out
 
 

@@ -477,10 +477,16 @@ def field_inputs(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarra
     u, R2, hb, inv_L = _constants(design, orientation)
     e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
     r_lo, r_hi = design.rho_limits
-    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
-    offset = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    offset, n = plane_offsets(occ)
     return FieldInputs(occ, xs, ys, zs, u, R2, float(hb), float(inv_L), e_lo, e_hi, float(r_lo), float(r_hi),
-                       offset, int(counts.sum()))
+                       offset, n)
+
+
+def plane_offsets(occ: np.ndarray) -> tuple[np.ndarray, int]:
+    """Each ``x`` plane's first reachable voxel's index in the C order of the reachable voxels of
+    ``occ`` (int64), and their number."""
+    counts = occ.reshape(occ.shape[0], -1).sum(axis=1)
+    return np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64), int(counts.sum())
 
 
 def by_planes(nx: int, launch: Callable[[int, int], None], progress: Reporter | None,
