@@ -320,9 +320,8 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                     children_kernel(np.ascontiguousarray(centres[s:s + chunk // 8]),
                                     np.ascontiguousarray(parent_bits[s:s + chunk // 8]),
                                     np.ascontiguousarray(parent_win[s:s + chunk // 8]), size, fa.eps, fa.arc_slack,
-                                    fa.cone_slack, float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc,
-                                    hb, rho_lo, rho_hi, lmin, lmax, jc, _CHILDREN, level < levels - 1, out, bits,
-                                    win)
+                                    float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo,
+                                    rho_hi, lmin, lmax, _CHILDREN, level < levels - 1, out, bits, win)
             else:
                 bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
                 win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))

@@ -308,15 +308,15 @@ def _sample_lists(flags, klo, khi, lists, counts):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def children_kernel(parents, pbits, pwin, size, eps, arc_slack, cone_slack, zfloor,
-                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, offsets, need_window,
+def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
+                    u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, offsets, need_window,
                     out, kbits, kwin):
     """INSIDE / OUTSIDE / BOUNDARY of the 8 children (edge ``size``, centres ``parent + size *
     offsets[j]``) of each parent cube (``parents`` (N, 3)): child ``8 p + j`` in ``out``, its chains
     proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
     ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
     :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
-    (module docstring). Without joint cones only (``jc`` and ``cone_slack`` are not read)."""
+    (module docstring). Without joint cones only (:func:`has_cones`)."""
     delta = 0.5 * size * math.sqrt(3.0)
     e_relax = delta + arc_slack + eps
     e_tight = delta + eps

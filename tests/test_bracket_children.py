@@ -67,8 +67,8 @@ def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
         kw = np.empty((kids.shape[0], 3, 3), np.int64)
         need_window = level < levels - 1
         children_kernel(np.ascontiguousarray(centres), pbits, np.ascontiguousarray(pwin), size, fa.eps, fa.arc_slack,
-                        fa.cone_slack, z_floor, u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi,
-                        lmin, lmax, jc, _CHILDREN, need_window, out, kb, kw)
+                        z_floor, u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi,
+                        lmin, lmax, _CHILDREN, need_window, out, kb, kw)
         assert {0, 1, 2} <= set(np.unique(ref).tolist())
         np.testing.assert_array_equal(out, ref)
         left = ref == BOUNDARY
