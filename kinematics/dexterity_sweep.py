@@ -291,12 +291,24 @@ def plane_index(occ, i, ny, first):
     return index
 
 
+@njit(cache=True, inline="always")
+def _gram(A, G):
+    """``G = Q^T Q`` of the 6 x 6 ``Q`` in ``A[:, :6]``."""
+    for a in range(6):
+        for b in range(a, 6):
+            acc = 0.0
+            for k in range(6):
+                acc += A[k, a] * A[k, b]
+            G[a, b] = acc
+            G[b, a] = acc
+
+
 @njit(cache=True)
 def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
     """``1/kappa`` of ``J_h^{-1} J_q`` at one position and carriage pose (module docstring; the
     matrices of :func:`kinematics.dexterity._assemble_kernel`). Work arrays: ``A`` (6, 18) (columns
-    0-5 ``J_h`` then ``Q``, 6-7 the rail and arc entries of ``J_q``, 8-9 the tridiagonal form, 10-15
-    a copy of ``G``), ``G`` (6, 6)."""
+    0-5 ``J_h`` then ``Q``, 6-7 the rail and arc entries of ``J_q``, 8-9 the tridiagonal form), ``G``
+    (6, 6)."""
     # J = J_h^{-1} J_q with J_q = [I | a | b] (a, b: the rail and arc columns, nonzero only on a
     # chain's own two rows), so J J^T = J_h^{-1} M J_h^{-T} with M = J_q J_q^T block diagonal (2 x 2
     # per chain) = L L^T (Cholesky). J's singular values are those of J_h^{-1} L, the inverses of
@@ -334,25 +346,14 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
         for k in range(6):
             A[r0, k] *= i00
             A[r1, k] = (A[r1, k] - l10 * A[r0, k]) * i11
-    for a in range(6):
-        for b in range(a, 6):
-            acc = 0.0
-            for k in range(6):
-                acc += A[k, a] * A[k, b]
-            G[a, b] = acc
-            G[b, a] = acc
-    for a in range(6):  # a copy for the Jacobi rotations, the fallback
-        for b in range(6):
-            A[a, 10 + b] = G[a, b]
+    _gram(A, G)
     # the eigenvalues by tridiagonal QL lose about eps kappa(G) of the largest, i.e. ~eps kappa in
     # 1/kappa (at most 0.9 eps kappa measured): where 1/kappa^2 < JACOBI_BELOW the Jacobi rotations
     # (relative accuracy on this positive definite G) keep 1/kappa within TOL_REL and TOL_ABS
     lo, hi, ok = _tridiagonal_eigen_range(G, A)
     if ok and hi > 0.0 and lo > JACOBI_BELOW * hi:
         return math.sqrt(lo / hi)
-    for a in range(6):
-        for b in range(6):
-            G[a, b] = A[a, 10 + b]
+    _gram(A, G)  # again: the reduction overwrote G, and Q is still in A's first columns
     for _sweep in range(50):
         off = 0.0
         diag = 0.0
