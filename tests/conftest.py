@@ -6,11 +6,17 @@ On a cold cache (a fresh clone, as CI runs it) that compile is a minute or more 
 compiles one kernel at a time. A helper process compiles, meanwhile, the kernels that warm_up()
 reaches last (its steps from the last one backwards, until this process, going forwards, has done
 the rest: both cores finish together), into the same on-disk cache, so that this process loads them
-instead of compiling them: the two cores share the compile. The kernels and the results are the same either way (the helper only fills the
-cache; warm_up() below still calls every kernel). With a warm cache no helper is started."""
+instead of compiling them: the two cores share the compile. The kernels and the results are the same
+either way (the helper only fills the cache; warm_up() below still calls every kernel). With a warm
+cache no helper is started.
+
+Under pytest-xdist (`scripts/test.sh` runs the suite on two worker processes, a file each at a time)
+the second worker is that helper: worker gw1 warms the steps from the last one backwards before its
+warm_up(), worker gw0 from the first one forwards; no helper process is started."""
 
 from __future__ import annotations
 
+import os
 import pathlib
 import subprocess
 import sys
@@ -26,8 +32,6 @@ _HELPER = ("from paraspace.kinematics.warmup import STEPS, run_steps\n"
 def _cache_is_cold() -> bool:
     """Whether numba's cache next to the core holds nothing of the general engine yet (its kernels
     are warmed last, so a cache that has them is warm)."""
-    import os
-
     if os.environ.get("NUMBA_CACHE_DIR"):
         where = pathlib.Path(os.environ["NUMBA_CACHE_DIR"])
         return not any(where.rglob("mechanism_workspace.*.nbi"))
@@ -42,7 +46,13 @@ def warm_kernels() -> None:
     from paraspace.kinematics.warmup import warm_up
 
     helper = None
-    if _cache_is_cold():
+    worker = os.environ.get("PYTEST_XDIST_WORKER")  # "gw0", "gw1", ... under pytest-xdist
+    if worker is not None:
+        if worker == "gw1" and _cache_is_cold():
+            from paraspace.kinematics.warmup import STEPS, run_steps
+
+            run_steps([name for name, _ in reversed(STEPS)][:len(STEPS) // 2 + 1])
+    elif _cache_is_cold():
         helper = subprocess.Popen([sys.executable, "-c", _HELPER], stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
     try:
