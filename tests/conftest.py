@@ -10,9 +10,13 @@ instead of compiling them: the two cores share the compile. The kernels and the 
 either way (the helper only fills the cache; warm_up() below still calls every kernel). With a warm
 cache no helper is started.
 
-Under pytest-xdist (`scripts/test.sh` runs the suite on two worker processes, a file each at a time)
-the second worker is that helper: worker gw1 warms the steps from the last one backwards before its
-warm_up(), worker gw0 from the first one forwards; no helper process is started."""
+Under pytest-xdist (`scripts/test.sh` runs the suite on worker processes, a test file each at a
+time) the workers share the compile instead: each claims the next step of kinematics/warmup.STEPS
+that no worker has claimed yet (a file created exclusively in the run's shared temporary folder),
+warms it, marks it done, and goes on until every step is claimed; it then waits for the steps the
+others claimed and runs warm_up(), which loads every kernel from the cache. A worker takes the next
+step as soon as it is free, so the compile spreads over the cores whatever each step costs. No
+helper process is started."""
 
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ import os
 import pathlib
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -41,17 +46,35 @@ def _cache_is_cold() -> bool:
     return not any(pycache.glob("mechanism_workspace.*.nbi"))
 
 
+def _share_the_warm_up(folder: pathlib.Path, timeout: float = 900.0) -> None:
+    """Claim and warm the steps no other worker has claimed (module docstring); return once every
+    step is done (or after ``timeout`` seconds: warm_up() then compiles what is left itself)."""
+    from paraspace.kinematics.warmup import STEPS, run_steps
+
+    folder.mkdir(parents=True, exist_ok=True)
+    slugs = [(name, name.replace(" ", "-")) for name, _ in STEPS]
+    for name, slug in slugs:
+        try:
+            os.close(os.open(folder / f"{slug}.claimed", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            continue
+        try:
+            run_steps([name])
+        finally:
+            (folder / f"{slug}.done").touch()
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not all((folder / f"{slug}.done").exists() for _, slug in slugs):
+        time.sleep(0.2)
+
+
 @pytest.fixture(scope="session", autouse=True)
-def warm_kernels() -> None:
+def warm_kernels(tmp_path_factory: pytest.TempPathFactory) -> None:
     from paraspace.kinematics.warmup import warm_up
 
     helper = None
-    worker = os.environ.get("PYTEST_XDIST_WORKER")  # "gw0", "gw1", ... under pytest-xdist
-    if worker is not None:
-        if worker == "gw1" and _cache_is_cold():
-            from paraspace.kinematics.warmup import STEPS, run_steps
-
-            run_steps([name for name, _ in reversed(STEPS)][:len(STEPS) // 2 + 1])
+    if os.environ.get("PYTEST_XDIST_WORKER") is not None:
+        # the workers' base temporary folders share a parent, new for each run
+        _share_the_warm_up(tmp_path_factory.getbasetemp().parent / "warm-up")
     elif _cache_is_cold():
         helper = subprocess.Popen([sys.executable, "-c", _HELPER], stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
