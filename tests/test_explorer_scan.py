@@ -39,5 +39,14 @@ def test_scan_range_and_step_from_link_and_sliders(explorer) -> None:
         wait_for(lambda: "Not applied" in s.panels.orientation_status.content, 5.0, "the message")
         assert "(0, 180] degrees" in s.panels.orientation_status.content.replace("\\", "")
         assert s.state.angle_range == 45.0
+        # maps of the state kept, published after the refusal (a late job under load; here the cache),
+        # keep the refusal on top while the refused value is on screen
+        s.orientation_controller.submit()
+        content = s.panels.orientation_status.content
+        assert content.startswith("**Not applied:**") and "TI₁ = " in content
+        b.set(s.panels.scan_range, 30.0)  # a valid value: applied, the refusal gone
+        wait_for(lambda: s.orientation is not None and s.orientation.settings.angle_range == 30.0, 60.0, "30° maps")
+        wait_for(lambda: "TI₁ = " in s.panels.orientation_status.content, 5.0, "the maps' status")
+        assert "Not applied" not in s.panels.orientation_status.content
     finally:
         b.close()

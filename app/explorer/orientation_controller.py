@@ -51,6 +51,9 @@ class OrientationController:
         self._submit_lock = threading.Lock()  # orders submit() and forget_stale(); taken before ``ctx.lock``
         self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
         self.on_shown: Callable[[], None] | None = None  # e.g. the Compare table's TI column
+        # the refusal of the value on screen ("" once a valid one is applied): it heads every status
+        # until then, so that maps or progress of the state kept never hide why the input was refused
+        self.refusal = ""
 
     def wire(self) -> None:
         """Attach z0 and the maps' download buttons."""
@@ -70,8 +73,12 @@ class OrientationController:
                                        angle_step=float(p.scan_step.value))
             s.orientation_settings()
         except ParameterError as exc:
-            p.orientation_status.content = f"**Not applied:** {md_text(str(exc))}"
+            with self.ctx.lock:
+                self.refusal = f"**Not applied:** {md_text(str(exc))}"
+                p.orientation_status.content = self.refusal
             return
+        with self.ctx.lock:
+            self.refusal = ""  # the submit below writes the status
         self.ctx.update_state(z0=s.z0, angle_range=s.angle_range, angle_step=s.angle_step)
         self.submit()
         self.on_state_change()
@@ -93,7 +100,7 @@ class OrientationController:
         ctx.cancel_job(stale_job)
         with ctx.lock:
             if not ctx.closed:
-                ctx.panels.orientation_status.content = "waiting for the new design's workspace..."
+                ctx.panels.orientation_status.content = self._headed("waiting for the new design's workspace...")
 
     def submit(self) -> None:
         """Recompute the orientation maps and TI_1/TI_2 for the current design and z0 (the generation
@@ -152,7 +159,16 @@ class OrientationController:
         with self.ctx.lock:
             if gen != self.gen or self.ctx.closed:
                 return
-            self.ctx.panels.orientation_status.content = text
+            self.ctx.panels.orientation_status.content = self._headed(text)
+
+    def _headed(self, text: str) -> str:
+        """``text`` under the refusal of the values on screen while they still differ from the state's
+        (a link or a reset may have put valid ones there since); call with ``ctx.lock`` held."""
+        p, s = self.ctx.panels, self.ctx.state
+        on_screen = (float(p.z0.value), float(p.scan_range.value), float(p.scan_step.value))
+        if self.refusal and on_screen != (s.z0, s.angle_range, s.angle_step):
+            return f"{self.refusal}  \n{text}"
+        return text
 
     def _publish(self, gen: int, res: OrientationResult, spec: figures.FigureSpec) -> None:
         fig = figures.to_plotly(spec)
@@ -166,7 +182,7 @@ class OrientationController:
             p = ctx.panels
             p.orientation_plot.aspect = spec.aspect
             p.orientation_plot.figure = fig
-            p.orientation_status.content = (
+            p.orientation_status.content = self._headed(
                 f"TI₁ = {fmt(res.ti1, 4)}, TI₂ = {fmt(res.ti2, 4)} deg·units (z0 = {res.settings.z0:g}; "
                 f"{res.compute_seconds:.2f} s). Dashed boxes: the Δ extents of eq. (28)."
                 + (f"  \n⚠ {md_text(warning, 600)}" if warning else ""))
