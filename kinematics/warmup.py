@@ -16,16 +16,19 @@ pose kernels), the dexterity field, the measures, the shell and the display shel
 the general engine of a mechanism description (:mod:`kinematics.mechanism_workspace`) with its
 orientation scan.
 
-The steps are independent (each builds its own tiny problem), so that a second process can warm
-the last ones into the same on-disk cache while this one warms the first ones (the test suite does:
-``tests/conftest.py``); :func:`run_steps` runs any of them.
+The steps are independent (each builds its own tiny problem), so that several processes can share
+the compile into the same on-disk cache: :func:`run_unclaimed` runs the steps no process has claimed
+yet in a shared folder, a step at a time, and :func:`steps_done` says when all of them are done (the
+test suite's workers and its helper process do: ``tests/conftest.py``).
 """
 
 from __future__ import annotations
 
+import os
+import pathlib
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 
@@ -33,7 +36,7 @@ from .design import Design
 from .joints import Joints
 from .pose import Pose
 
-__all__ = ["STEPS", "warm_up", "is_warm", "run_steps"]
+__all__ = ["STEPS", "warm_up", "is_warm", "run_unclaimed", "steps_done"]
 
 _lock = threading.Lock()
 _warm = False
@@ -42,8 +45,8 @@ _BOX = ((-100.0, -100.0, 0.0), (100.0, 100.0, 160.0))
 
 def _tiny_result():  # noqa: ANN202 - a WorkspaceResult (imported lazily)
     """A small result built by hand (a 5 x 5 x 5 block of voxels with voids), so that a step that
-    needs a result does not compile the engine: a helper process warming the last steps leaves that
-    to this one."""
+    needs a result does not compile the engine: a process sharing the warm-up leaves that to the one
+    that claimed the engines (:func:`run_unclaimed`)."""
     from .feasibility import default_n_eta
     from .grid import GridSpec
     from .workspace import WorkspaceResult, WorkspaceSettings
@@ -148,9 +151,9 @@ def _general() -> None:
     mechanism_orientation_workspace(six_pups(), OrientationSettings(angle_step=30.0, position_step=40.0))
 
 
-#: The warm-up, in the order :func:`warm_up` runs it: ``(name, step)``. On a cold cache the first
-#: three compile for about as long as the rest (two idle cores: 68 s and 70 s), so that a helper
-#: process warming from the last step backwards meets :func:`warm_up` at the cheap task step.
+#: The warm-up, in the order :func:`warm_up` runs it and :func:`run_unclaimed` claims it:
+#: ``(name, step)``. On a cold cache they compile for about 200 s of one core in all; the bracket's
+#: kernels (reached first by "engines") for about 57 s of it.
 STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("engines", _engines), ("joints", _joints), ("orientation", _orientation), ("bracket", _bracket),
     ("task", _task), ("total orientation", _total_orientation), ("dexterity", _dexterity),
@@ -163,12 +166,36 @@ def is_warm() -> bool:
     return _warm
 
 
-def run_steps(names: Sequence[str]) -> None:
-    """Run the :data:`STEPS` named ``names``, in that order (a helper process warming a part of the
-    on-disk cache); an unknown name raises ``KeyError``."""
-    table = dict(STEPS)
-    for name in names:
-        table[name]()
+def _slug(name: str) -> str:
+    return name.replace(" ", "-")
+
+
+def run_unclaimed(folder: pathlib.Path, backwards: bool = False) -> list[str]:
+    """Claim and run, one at a time in :data:`STEPS` order (from the last one when ``backwards``),
+    each step that no process has claimed in ``folder`` (a file ``<step>.claimed`` created
+    exclusively there), marking it done (``<step>.done``) after it; returns the names this process
+    ran. Several processes calling it on one folder share the compile, each taking the next step as
+    soon as it is free. Steps next to each other share kernels (the engines, the joints, the bracket),
+    so one process should go forwards and the others backwards: two processes compiling the same
+    kernel at once would each pay for it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    ran = []
+    for name, step in (reversed(STEPS) if backwards else STEPS):
+        try:
+            os.close(os.open(folder / f"{_slug(name)}.claimed", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            continue
+        try:
+            step()
+        finally:
+            (folder / f"{_slug(name)}.done").touch()
+        ran.append(name)
+    return ran
+
+
+def steps_done(folder: pathlib.Path) -> bool:
+    """Whether every step of :data:`STEPS` is marked done in ``folder`` (:func:`run_unclaimed`)."""
+    return all((folder / f"{_slug(name)}.done").exists() for name, _ in STEPS)
 
 
 def warm_up() -> float:
