@@ -5,7 +5,7 @@
 #  - ./.venv with the project and its test extras;
 #  - ruff and mypy (configured in pyproject.toml) on the package: zero findings, or the run stops;
 #  - the doctests of the public functions and the suite (tests/, examples/ run by tests/test_examples.py).
-#    The suite runs on three worker processes (pytest-xdist, a test file each at a time: a file's
+#    The suite runs on two worker processes (pytest-xdist, a test file each at a time: a file's
 #    module-scoped servers stay in one process); `-n 0` among the extra arguments runs it in one.
 # Extra arguments go to pytest.
 set -euo pipefail
@@ -21,4 +21,4 @@ fi
 .venv/bin/python -m pip install -q ".[test]"
 .venv/bin/python -m ruff check kinematics app paraspace examples
 .venv/bin/python -m mypy
-exec .venv/bin/python -m pytest -ra -n 3 --dist loadfile "$@"
+exec .venv/bin/python -m pytest -ra -n 2 --dist loadfile "$@"

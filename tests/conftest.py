@@ -9,7 +9,7 @@ run's shared temporary folder), compiles it into the on-disk cache and marks it 
 step is claimed (the first process from the first step forwards, the others from the last one
 backwards, so that no two compile the kernels that neighbouring steps share at once); it then
 waits for the steps the others claimed and runs warm_up(), which loads
-every kernel from the cache. Under pytest-xdist (`scripts/test.sh` runs the suite on three worker
+every kernel from the cache. Under pytest-xdist (`scripts/test.sh` runs the suite on two worker
 processes, a test file each at a time) the workers share it; in one process a helper process started
 for the purpose does, on a cold cache only. The kernels and the results are the same either way
 (warm_up() still calls every kernel)."""

@@ -30,7 +30,7 @@ __all__ = ["DEADLINE_SCALE", "FakeBrowser", "wait_for", "wait_idle"]
 
 #: Every deadline of :func:`wait_for` and :func:`wait_idle` is multiplied by this. The deadlines bound
 #: liveness only (a test fails instead of hanging); speed is never asserted in tests, it is measured
-#: by the benchmarks. The suite runs three worker processes on two cores (scripts/test.sh), where a
+#: by the benchmarks. The suite runs two worker processes on two cores (scripts/test.sh), where a
 #: callback can wait seconds for a core while another worker compiles or meshes.
 DEADLINE_SCALE = 4.0
 
