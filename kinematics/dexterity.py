@@ -37,19 +37,19 @@ quarter of the workspace). Dividing the arc columns by ``L`` as well would give 
 at the home pose ``(0, 0, 130)``; that is not the paper's definition and is not done here.
 
 Cost (``search="full"``): the resolved carriage pose is found per voxel by a compiled copy of the resolver's search
-(a 73 x 61 grid and two 21 x 21 zooms per chain, about 5,300 margin evaluations per chain), the
+(a 73 x 61 grid and two 21 x 21 zooms per chain, about 5,300 margins per chain, bounded by blocks
+so that about a fifth are computed: :mod:`kinematics.carriage_search`, the same poses), the
 Jacobians are assembled by a compiled kernel and ``J`` and its singular values are computed with
 numpy's batched ``solve``/``svd`` in chunks of :data:`CHUNK` voxels. ``mode="best"`` adds
 ``sweeps x 3 x n_eta x n_d`` Jacobians per voxel (252 with the defaults). Measured on 2 shared
-cores for the paper's design (resolved): 17 s for the 189,656 voxels at ``h = 3``, 51 s for the
-640,014 at ``h = 2`` (about 80 us per voxel and core, nearly all in the resolver's search).
-``search="sweep"`` (:mod:`kinematics.dexterity_sweep`) finds the same carriage poses with fewer
-margins (each grid pruned with the previous voxel's margins) and computes ``1/kappa`` in the same
-compiled pass (to 1e-9 relative of the SVD's). The field's default ``search="neighbour"``
-(:mod:`kinematics.dexterity_neighbour`) climbs from the neighbour voxel's carriage pose to a local
-maximum of the same margin instead: not the same poses, but within a stated tolerance of the full
-search's margin, checked at run time on a seeded sample of voxels (the result's ``check``; a broken
-tolerance is reported, never silent).
+cores for the paper's design (resolved) at ``h = 2`` (640,014 voxels): 11 s (32 s in the same run
+before the search was bounded, 51 s on a busier day; nearly all of it in the resolver's search).
+``search="sweep"`` (:mod:`kinematics.dexterity_sweep`) finds the same carriage poses by the same
+bounded search and computes ``1/kappa`` in the same compiled pass (to 1e-9 relative of the SVD's).
+The field's default ``search="neighbour"`` (:mod:`kinematics.dexterity_neighbour`) climbs from the
+neighbour voxel's carriage pose to a local maximum of the same margin instead: not the same poses,
+but within a stated tolerance of the full search's margin, checked at run time on a seeded sample of
+voxels (the result's ``check``; a broken tolerance is reported, never silent).
 """
 
 from __future__ import annotations
@@ -63,9 +63,10 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
+from .carriage_search import _margin_cs, resolve_kernel
 from .design import Design, ParameterError
 from .dexterity_neighbour import MARGIN_TOLERANCE, SampleCheck, chain_margins, compare, neighbour_field, sample_indices
-from .dexterity_sweep import _constants, _lin, _margin_cs, continuation_field
+from .dexterity_sweep import _constants, continuation_field
 from .parallel import KERNEL_LOCK
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -79,6 +80,8 @@ MODES: tuple[str, ...] = ("resolved", "best")
 SEARCHES: tuple[str, ...] = tuple(DEXTERITY_SEARCHES)
 #: Voxels per batched ``solve``/``svd`` call.
 CHUNK = 32768
+#: Grid points per side of a block of the bounded full search (module docstring).
+_BLOCK = 5
 
 
 # --------------------------------------------------------------------------------------------
@@ -89,47 +92,6 @@ CHUNK = 32768
 def _margin(bx0, by0, bz0, bx1, by1, bz1, varpi, rho, hb, lmin, lmax):
     """:func:`_margin_cs` at the carriage angle ``varpi`` (radians)."""
     return _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi), rho, hb, lmin, lmax)
-
-
-@njit(cache=True)
-def _best_carriage_one(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax):
-    """Compiled copy of :func:`kinematics.redundancy._best_carriage`: returns (rho, eta_rad)."""
-    lo_e, hi_e, lo_r, hi_r = e_lo, e_hi, r_lo, r_hi
-    n_e = 1 if hi_e <= lo_e else 73
-    n_r = 1 if hi_r <= lo_r else 61
-    be, br = 0.5 * (e_lo + e_hi), 0.5 * (r_lo + r_hi)
-    for _ in range(3):
-        best = -np.inf
-        ke, kr = 0, 0
-        for a in range(n_e):
-            varpi = gamma + _lin(lo_e, hi_e, n_e, a)
-            c, s = math.cos(varpi), math.sin(varpi)
-            for b in range(n_r):
-                m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, _lin(lo_r, hi_r, n_r, b), hb, lmin, lmax)
-                if m > best:
-                    best, ke, kr = m, a, b
-        be = _lin(lo_e, hi_e, n_e, ke)
-        br = _lin(lo_r, hi_r, n_r, kr)
-        de = (hi_e - lo_e) / max(n_e - 1, 1)
-        dr = (hi_r - lo_r) / max(n_r - 1, 1)
-        lo_e, hi_e = max(e_lo, be - 2 * de), min(e_hi, be + 2 * de)
-        lo_r, hi_r = max(r_lo, br - 2 * dr), min(r_hi, br + 2 * dr)
-        n_e = 1 if hi_e <= lo_e else 21
-        n_r = 1 if hi_r <= lo_r else 21
-    return br, be
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _resolve_kernel(points, u, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, rho_out, eta_out):
-    for p in prange(points.shape[0]):
-        for i in range(3):
-            g = 2.0 * math.pi * i / 3.0
-            rho, eta = _best_carriage_one(points[p, 0] + u[i, 0, 0], points[p, 1] + u[i, 0, 1],
-                                          points[p, 2] + u[i, 0, 2], points[p, 0] + u[i, 1, 0],
-                                          points[p, 1] + u[i, 1, 1], points[p, 2] + u[i, 1, 2],
-                                          g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax)
-            rho_out[p, i] = rho
-            eta_out[p, i] = eta
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -201,10 +163,12 @@ def _inv_kappa_batch(J_h: np.ndarray, J_q: np.ndarray) -> np.ndarray:
     return out
 
 
-def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0)
-                       ) -> tuple[np.ndarray, np.ndarray]:
+def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence[float] = (0.0, 0.0, 0.0),
+                       bounded: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The redundancy resolution's carriage pose (module docstring) at many positions of one
-    orientation ``(psi, theta, phi)`` (degrees): ``d`` (N, 3) and ``eta`` (N, 3, degrees)."""
+    orientation ``(psi, theta, phi)`` (degrees): ``d`` (N, 3) and ``eta`` (N, 3, degrees).
+    ``bounded=False`` computes every grid point of the full search (the same poses, slower: the
+    reference of the tests)."""
     pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
     u, _R2, hb, _ = _constants(design, orientation)
     e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
@@ -213,7 +177,7 @@ def resolved_carriages(design: Design, points: np.ndarray, orientation: Sequence
     eta = np.zeros((pts.shape[0], 3))
     if pts.shape[0]:
         with KERNEL_LOCK:
-            _resolve_kernel(pts, u, e_lo, e_hi, r_lo, r_hi, hb, design.l_min, design.l_max, rho, eta)
+            resolve_kernel(pts, u, e_lo, e_hi, r_lo, r_hi, hb, design.l_min, design.l_max, rho, eta, bool(bounded))
     return design.r - rho, np.degrees(eta) + 0.0
 
 
@@ -438,9 +402,9 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     mode): ``"neighbour"`` (default) climbs from the neighbour voxel's carriage pose to a local
     maximum of the resolver's margin and checks a sample against the full search with the stated
     tolerance ``margin_tolerance`` (:mod:`kinematics.dexterity_neighbour`; the result's ``check``),
-    ``"sweep"`` finds the resolver's carriage poses voxel after voxel, pruned with the previous
-    voxel's margins (:mod:`kinematics.dexterity_sweep`: the same poses), ``"full"`` runs the
-    resolver's full search at every voxel and numpy's SVD. ``mode="best"`` starts from the full
+    ``"sweep"`` finds the resolver's carriage poses and ``1/kappa`` in one compiled pass
+    (:mod:`kinematics.dexterity_sweep`: the same poses), ``"full"`` runs the resolver's full search
+    at every voxel and numpy's SVD. ``mode="best"`` starts from the full
     search's poses whatever ``search`` says."""
     _check_mode(mode)
     check_search(search)

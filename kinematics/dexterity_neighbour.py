@@ -5,7 +5,7 @@ the full search on a sample with a stated tolerance.
 Definition
 ----------
 The resolver's criterion for chain ``i`` at a position ``P`` is the chain margin
-``m_i(P; eta, rho) = min_j min(l_j - l_min, l_max - l_j)`` (:mod:`kinematics.dexterity_sweep`);
+``m_i(P; eta, rho) = min_j min(l_j - l_min, l_max - l_j)`` (:mod:`kinematics.carriage_search`);
 the **full search** (``search="full"`` / ``"sweep"``) takes its first maximiser over a 73 x 61 grid
 on the strokes and two 21 x 21 zooms (spacings ``s0 = (de, dr)`` = the coarse grid's, ``s0/5``,
 ``s0/25``).
@@ -25,7 +25,7 @@ issue 24's last round it started whenever that point came within 2 length units 
 climb's maximum: 99.8 % of the chains at the default design's voxels climbed twice, and 88 % of the
 second climbs started within one scan cell of the first's maximum and ended at it; the margin given
 up by the stricter trigger is within the tolerance below, as measured there.) The scan skips the
-points whose Lipschitz bound (:mod:`kinematics.dexterity_sweep`: the margin where last computed plus
+points whose Lipschitz bound (:mod:`kinematics.carriage_search`: the margin where last computed plus
 the path length walked since) is below that trigger: they can neither trigger the second climb nor
 be its start, so the decisions and the poses are those of the scan of every point
 (``bounded=False``, checked bit for bit by the tests). ``1/kappa`` of eq. (26) is then computed at
@@ -75,11 +75,14 @@ Lipschitz bound above, and the first-order bound of the term that was the margin
 its gradient times the move since plus the leg's curvature bound; both are taken for all 143 points
 in one branch-free pass) instead of the full search's 5,300, then ``1/kappa``
 (:mod:`kinematics.dexterity_sweep`), on half the grid where the mirror holds, and the sample check
-(at most 2,000 full searches of about 80 us). At ``h = 2`` (640,014 voxels, 2 cores, load 1.6): the
-whole field with its check takes 785 ms, 24x the engine's 32 ms (``benchmarks/bench_workspace.py
---throughput``, target 3; the 20x target is not met); it was 73-102x before the mirror, the 6 x 6
-``1/kappa``, the stricter restart trigger and the scan's first-order bounds (measured one by one in
-issue 24's closing notes). The exact sweep is 679x and the full search 970x in the same run.
+(at most 2,000 full searches, bounded by blocks: :mod:`kinematics.carriage_search`, about 22 us
+each instead of 95 us; the first voxel of a plane uses the same bounded search). At ``h = 2``
+(640,014 voxels, 2 cores, load 1.6): the whole field with its check takes 749 ms, 21.9x the
+engine's 34 ms (805 ms, 24.5x, with the unbounded full search in the same session;
+``benchmarks/bench_workspace.py --throughput``, target 3; the 20x target is not met); it was
+73-102x before the mirror, the 6 x 6 ``1/kappa``, the stricter restart trigger and the scan's
+first-order bounds (measured one by one in issue 24's closing notes). The exact sweep is 297x and
+the full search 325x in the same run.
 """
 
 from __future__ import annotations
@@ -91,18 +94,12 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
+from .carriage_search import _NE, _NR, _SLACK, _lin, _margin_cs, best_carriage, chain_legs, work_arrays
 from .design import Design
 from .dexterity_sweep import (
-    _NE,
-    _NR,
-    _SLACK,
     _constants,
     _inverse_condition,
-    _lin,
-    _margin_cs,
-    _pruned_carriage,
     by_planes,
-    chain_legs,
     field_inputs,
     plane_index,
     plane_offsets,
@@ -245,7 +242,7 @@ def _scan_rows(gamma, e_lo, e_hi, CS):
 
 @njit(cache=True, inline="always")
 def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
-    """:func:`kinematics.dexterity_sweep._margin_cs` (the same value, bit for bit) with the active
+    """:func:`kinematics.carriage_search._margin_cs` (the same value, bit for bit) with the active
     term's gradient in the platform's ``y`` and ``z`` and its leg length: ``(m, gy, gz, l, convex)``;
     ``convex`` when the active term is ``l - l_min`` (convex in the position), not ``l_max - l``."""
     dy0, l0, dy1, l1 = chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb)
@@ -267,7 +264,7 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
     (its margin ``m``, the gradient in ``y`` and ``z`` of the term that was the margin, that term's
     leg length ``l``, 1 when the term is ``l - l_min`` else 0, and ``y``, ``z`` and the path length
     ``D`` walked then; ``ST[0] == 1``: the bounds are set): the Lipschitz bound of
-    :mod:`kinematics.dexterity_sweep`, ``m`` plus the path walked since, and the first-order bound of
+    :mod:`kinematics.carriage_search`, ``m`` plus the path walked since, and the first-order bound of
     the term that was the margin: with ``Delta`` the move since, the term is at most
     its value plus ``grad . Delta``, plus ``|Delta|^2 / (2 (l - |Delta|))`` for ``l - l_min`` (the leg
     length is convex with Hessian ``(I - n n^T) / l``, and ``|Delta|`` is at most the path walked),
@@ -326,8 +323,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
     every scan point computed (:func:`_coarse_best`, the reference the tests compare with)."""
     ny, nz = occ.shape[1], occ.shape[2]
     for i in prange(i0, i1):
-        W = np.empty((3, _NE * _NR))
-        RM = np.empty((3, _NE))
+        CS, UB = work_arrays()
         rho = np.zeros(3)
         eta = np.zeros(3)
         A = np.empty((6, 18))
@@ -358,10 +354,9 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                     g = 2.0 * math.pi * c / 3.0
                     bx0, by0, bz0 = px + u[c, 0, 0], py + u[c, 0, 1], pz + u[c, 0, 2]
                     bx1, by1, bz1 = px + u[c, 1, 0], py + u[c, 1, 1], pz + u[c, 1, 2]
-                    if first:
-                        ST = np.zeros((3, 9))  # no previous grid: the full search, unpruned
-                        r, e = _pruned_carriage(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
-                                                lmin, lmax, W, RM, ST, 0.0)
+                    if first:  # no previous pose: the full search
+                        r, e = best_carriage(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
+                                             lmin, lmax, CS, UB, True)
                         mg = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(g + e), math.sin(g + e), r, hb,
                                         lmin, lmax)
                     else:
@@ -443,42 +438,25 @@ def mirror_rows(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _mirror_fill_kernel(occ, ny_eval, base, full_base, perm, vals, d, eta, margin, out_v, out_d, out_e, out_m):
-    """:func:`_mirror_fill` per ``x`` plane (``base[i]``, ``full_base[i]``: the index of plane ``i``'s
-    first voxel in the half's and in the whole grid's C order; ``perm``: :data:`_MIRROR_CHAINS`)."""
+def _mirror_fill_kernel(occ, ny_eval, offset, perm, vals, rho, eta, margin):
+    """:func:`neighbour_field`'s mirror, in place: each reachable voxel of a row ``j >= ny_eval`` of
+    ``occ`` takes its mirror voxel's (row ``ny - 1 - j``) ``1/kappa``, its chains' ``rho`` and margins
+    with chains 2 and 3 swapped (``perm``: :data:`_MIRROR_CHAINS`) and their ``eta`` negated (arrays
+    over the reachable voxels of ``occ`` in C order; ``offset[i]``: the index of plane ``i``'s first)."""
     nx, ny, nz = occ.shape
     for i in prange(nx):
-        hidx = plane_index(occ, i, ny_eval, base[i])
-        m = full_base[i]
-        for j in range(ny):
-            flip = j >= ny_eval
-            jj = ny - 1 - j if flip else j
+        idx = plane_index(occ, i, ny, offset[i])
+        for j in range(ny_eval, ny):
             for k in range(nz):
                 if not occ[i, j, k]:
                     continue
-                h = hidx[jj, k]
-                out_v[m] = vals[h]
+                m = idx[j, k]
+                h = idx[ny - 1 - j, k]
+                vals[m] = vals[h]
                 for c in range(3):
-                    src = perm[c] if flip else c
-                    out_d[m, c] = d[h, src]
-                    out_e[m, c] = -eta[h, src] if flip else eta[h, src]
-                    out_m[m, c] = margin[h, src]
-                m += 1
-
-
-def _mirror_fill(occ: np.ndarray, ny_eval: int, half: tuple[np.ndarray, ...]
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The neighbour search's arrays over every reachable voxel of ``occ`` (C order) from ``half``,
-    those of the rows ``j < ny_eval``: a voxel of row ``j >= ny_eval`` takes its mirror voxel's
-    ``1/kappa``, its chains' ``d`` and margins with chains 2 and 3 swapped, and their ``eta`` negated."""
-    vals, d, eta, margin = (np.ascontiguousarray(a) for a in half)
-    occ = np.ascontiguousarray(occ, dtype=np.bool_)
-    base = plane_offsets(occ[:, :ny_eval, :])[0]
-    full_base, n = plane_offsets(occ)
-    out = (np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)))
-    with kernel_launch(occ.shape[0]):
-        _mirror_fill_kernel(occ, ny_eval, base, full_base, _MIRROR_CHAINS, vals, d, eta, margin, *out)
-    return out
+                    rho[m, c] = rho[h, perm[c]]
+                    eta[m, c] = -eta[h, perm[c]]
+                    margin[m, c] = margin[h, perm[c]]
 
 
 def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
@@ -492,20 +470,22 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     ``y = 0`` only and give every other voxel its mirror voxel's pose, mirrored (the same arrays on
     those rows as ``mirror=False``)."""
     ny_eval = mirror_rows(design, occupancy, axes, orientation) if mirror else None
-    if ny_eval is not None:
-        occ = np.ascontiguousarray(np.asarray(occupancy, bool))
-        vals, d, eta_deg, margin = neighbour_field(design, occ[:, :ny_eval, :], (axes[0], axes[1][:ny_eval], axes[2]),
-                                                   orientation, progress, cancel, bounded, mirror=False)
-        vals, d, eta_deg, margin = _mirror_fill(occ, ny_eval, (vals, d, eta_deg, margin))
-        return vals, d, eta_deg + 0.0, margin
-    f = field_inputs(design, occupancy, axes, orientation)
-    out = np.zeros(f.n)
-    rho = np.zeros((f.n, 3))
-    eta = np.zeros((f.n, 3))
-    margin = np.zeros((f.n, 3))
+    occ = np.ascontiguousarray(np.asarray(occupancy, bool))
+    offset, n = plane_offsets(occ)
+    if ny_eval is not None:  # the search on the rows up to y = 0, written where they are in the whole grid
+        f = field_inputs(design, occ[:, :ny_eval, :], (axes[0], axes[1][:ny_eval], axes[2]), orientation)
+    else:
+        f = field_inputs(design, occ, axes, orientation)
+    out = np.zeros(n)
+    rho = np.zeros((n, 3))
+    eta = np.zeros((n, 3))
+    margin = np.zeros((n, 3))
     by_planes(f.occ.shape[0], lambda i0, i1: _neighbour_kernel(
-        f.occ, i0, i1, f.offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
+        f.occ, i0, i1, offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
         float(design.l_min), float(design.l_max), out, rho, eta, margin, bool(bounded)), progress, cancel)
+    if ny_eval is not None:
+        with kernel_launch(occ.shape[0]):
+            _mirror_fill_kernel(occ, ny_eval, offset, _MIRROR_CHAINS, out, rho, eta, margin)
     return out, design.r - rho, np.degrees(eta) + 0.0, margin
 
 

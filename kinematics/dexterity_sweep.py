@@ -1,5 +1,5 @@
-"""Dexterity field by continuation: the resolver's search at every reachable voxel, pruned with the
-margins found at the voxel before it, and ``1/kappa`` computed in the same compiled pass.
+"""Dexterity field with the resolver's exact carriage poses: the bounded full search at every
+reachable voxel, and ``1/kappa`` computed in the same compiled pass.
 
 Definition
 ----------
@@ -7,23 +7,11 @@ Definition
 as the result of the resolver's **full search** over ``(eta, rho)`` for the largest chain margin
 ``m(P; eta, rho) = min_j min(l_j - l_min, l_max - l_j)``: the first maximiser (in scan order) over a
 73 x 61 grid on the strokes, then over two 21 x 21 grids ("zooms") each centred on the previous
-maximiser; about 5,300 margins per chain and voxel.
-
-The continuation sweep finds the **same** maximisers (bit for bit) with fewer margins. The voxels
-of one ``x`` plane are visited in a serpentine ``(y, z)`` order, and each grid point keeps an upper
-bound of its margin at the current voxel:
-
-* **Lipschitz lemma**: a leg's length is 1-Lipschitz in the platform position at fixed
-  ``(eta, rho)`` (the U joint does not move, the S joint moves with ``P``), hence so is the margin:
-  ``m(Q; g) <= m(P; g) + |Q - P|`` for every grid point ``g``. A bound set when ``m(P; g)`` was
-  computed therefore stays valid at the later voxel ``Q`` after adding the length ``D`` of the
-  path walked since (kept as one running sum, so nothing is updated per grid point).
-* At each voxel and grid (coarse or zoom, when the zoom's window is the one of the voxel before),
-  the margin ``v`` at the previous voxel's maximiser is computed; a grid point whose bound is below
-  ``v - 1e-7`` cannot reach the maximum (nor tie with it) and is skipped; every other point is
-  computed, in the full search's scan order with its strict ``>``, so the first maximiser is the
-  full search's. A row is skipped at once when the largest bound of its points is below. The
-  first voxel of a plane, and a zoom whose window moved, scan the whole grid.
+maximiser; about 5,300 margins per chain and voxel. This field finds the **same** maximisers (bit
+for bit) by the bounded search of :mod:`kinematics.carriage_search` (the margin at each block's
+centre bounds its block's points; about a fifth of the margins). (Until issue 24's last round it
+pruned each grid with the margins found at the voxel before it, by the margin's 1-Lipschitz bound
+in the platform position; at ``h = 2`` that took 20 s, the bounded search about 7 s.)
 
 ``1/kappa = sigma_min(J) / sigma_max(J)`` of ``J = J_h^{-1} J_q`` (eq. (26)) is computed in the same
 kernel without forming ``J``. ``J_q = [I | a | b]`` (a leg's rate, and the rail and arc columns,
@@ -45,9 +33,9 @@ and ``|1/kappa - 1/kappa_full| <= TOL_REL x 1/kappa_full + TOL_ABS`` (:data:`TOL
 :data:`TOL_ABS` = 1e-12: the eigenvalues of ``J J^T`` against numpy's SVD of ``J``, both accurate to
 about ``kappa x 1e-16`` absolute) at every voxel.
 
-Cost: see ``benchmarks/bench_workspace.py --throughput`` (target 3). The chain margin and the
-Jacobian's constants are defined here and shared with :mod:`kinematics.dexterity` (which imports
-this module, not the other way round).
+Cost: see ``benchmarks/bench_workspace.py --throughput`` (target 3). The Jacobian's constants are
+defined here and shared with :mod:`kinematics.dexterity` (which imports this module, not the other
+way round); the chain margin with its search is :mod:`kinematics.carriage_search`'s.
 """
 
 from __future__ import annotations
@@ -59,55 +47,20 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numba import njit, prange
 
+from .carriage_search import best_carriage, work_arrays
 from .design import Design
 from .geometry import LEG_SIGN, platform_points_local
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
 from .rotation import euler_rate_matrix, euler_zyx_deg
 
+#: x planes per kernel launch (cancellation and progress are checked between launches).
+PLANES = 8
 #: Stated tolerance on 1/kappa against the full search's: relative and absolute (module docstring).
 TOL_REL, TOL_ABS = 1e-9, 1e-12
 #: ``1/kappa^2`` below which :func:`_inverse_condition` takes the Jacobi eigenvalues instead of the
 #: tridiagonal QL ones (about 6 % of the voxels of the default design: ``1/kappa < 3.2e-4``).
 JACOBI_BELOW = 1e-7
-#: Slack of the pruning test (margins are lengths; it only adds grid points to compute).
-_SLACK = 1e-7
-#: x planes per kernel launch (cancellation and progress are checked between launches).
-PLANES = 8
-#: The resolver's grids: coarse 73 x 61, zooms 21 x 21 (kinematics.dexterity._best_carriage_one).
-_NE, _NR, _NZ = 73, 61, 21
-
-
-@njit(cache=True, inline="always")
-def chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb):
-    """The ``y`` components ``dy`` of a chain's two leg vectors (S joint less U joint) and their
-    lengths: ``(dy0, l0, dy1, l1)`` at one carriage pose (``c, s = cos, sin`` of the carriage angle
-    ``varpi``; ``rho = r - d``; the U joints lie in the base plane)."""
-    # leg 1: lateral +b/2, leg 2: -b/2 (LEG_SIGN)
-    dx0 = bx0 - (c * rho - s * hb)
-    dy0 = by0 - (s * rho + c * hb)
-    dx1 = bx1 - (c * rho + s * hb)
-    dy1 = by1 - (s * rho - c * hb)
-    return (dy0, math.sqrt(dx0 * dx0 + dy0 * dy0 + bz0 * bz0), dy1,
-            math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1))
-
-
-@njit(cache=True, inline="always")
-def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
-    """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
-    (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
-    _dy0, l0, _dy1, l1 = chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb)
-    return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
-
-
-@njit(cache=True, inline="always")
-def _lin(lo, hi, n, k):
-    """``np.linspace(lo, hi, n)[k]``."""
-    if n == 1:
-        return lo
-    if k == n - 1:
-        return hi
-    return lo + k * ((hi - lo) / (n - 1))
 
 
 def _constants(design: Design, orientation_deg: Sequence[float]):
@@ -116,67 +69,6 @@ def _constants(design: Design, orientation_deg: Sequence[float]):
     u = np.ascontiguousarray(platform_points_local(design) @ rot.T)
     R2 = np.ascontiguousarray(euler_rate_matrix(math.radians(psi), math.radians(theta)))
     return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
-
-
-@njit(cache=True, inline="always")
-def _grid_argmax(bx0, by0, bz0, bx1, by1, bz1, gamma, lo_e, hi_e, n_e, lo_r, hi_r, n_r, W, RM, ST, D,
-                 hb, lmin, lmax):
-    """First maximiser ``(ke, kr)`` of the margin over the ``n_e x n_r`` grid on ``[lo_e, hi_e] x
-    [lo_r, hi_r]`` (the full search's scan), pruned by the bounds ``W + D`` when the grid is the one
-    of the previous call (``ST``: its window, maximiser and a valid flag; ``RM``: per-row largest
-    ``W``)."""
-    same = (ST[8] == 1.0 and ST[0] == lo_e and ST[1] == hi_e and ST[2] == lo_r and ST[3] == hi_r
-            and ST[4] == n_e and ST[5] == n_r)
-    thr = -np.inf
-    if same:
-        varpi = gamma + _lin(lo_e, hi_e, n_e, int(ST[6]))
-        v = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi),
-                       _lin(lo_r, hi_r, n_r, int(ST[7])), hb, lmin, lmax)
-        thr = v - _SLACK - D
-    best = -np.inf
-    ke, kr = 0, 0
-    for a in range(n_e):
-        if same and RM[a] < thr:
-            continue
-        varpi = gamma + _lin(lo_e, hi_e, n_e, a)
-        c, s = math.cos(varpi), math.sin(varpi)
-        rm = -np.inf
-        for b in range(n_r):
-            k = a * n_r + b
-            if same and W[k] < thr:
-                rm = max(rm, W[k])
-                continue
-            m = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, _lin(lo_r, hi_r, n_r, b), hb, lmin, lmax)
-            W[k] = m - D
-            rm = max(rm, W[k])
-            if m > best:
-                best, ke, kr = m, a, b
-        RM[a] = rm
-    ST[0], ST[1], ST[2], ST[3], ST[4], ST[5] = lo_e, hi_e, lo_r, hi_r, n_e, n_r
-    ST[6], ST[7], ST[8] = ke, kr, 1.0
-    return ke, kr
-
-
-@njit(cache=True)
-def _pruned_carriage(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, W, RM, ST, D):
-    """:func:`kinematics.dexterity._best_carriage_one` (same grids, same result) with each grid's
-    argmax pruned by :func:`_grid_argmax` (``W``, ``RM``, ``ST``: per level). Returns (rho, eta_rad)."""
-    lo_e, hi_e, lo_r, hi_r = e_lo, e_hi, r_lo, r_hi
-    n_e = 1 if hi_e <= lo_e else _NE
-    n_r = 1 if hi_r <= lo_r else _NR
-    be, br = 0.5 * (e_lo + e_hi), 0.5 * (r_lo + r_hi)
-    for it in range(3):
-        ke, kr = _grid_argmax(bx0, by0, bz0, bx1, by1, bz1, gamma, lo_e, hi_e, n_e, lo_r, hi_r, n_r,
-                              W[it], RM[it], ST[it], D, hb, lmin, lmax)
-        be = _lin(lo_e, hi_e, n_e, ke)
-        br = _lin(lo_r, hi_r, n_r, kr)
-        de = (hi_e - lo_e) / max(n_e - 1, 1)
-        dr = (hi_r - lo_r) / max(n_r - 1, 1)
-        lo_e, hi_e = max(e_lo, be - 2 * de), min(e_hi, be + 2 * de)
-        lo_r, hi_r = max(r_lo, br - 2 * dr), min(r_hi, br + 2 * dr)
-        n_e = 1 if hi_e <= lo_e else _NZ
-        n_r = 1 if hi_r <= lo_r else _NZ
-    return br, be
 
 
 @njit(cache=True, inline="always")
@@ -406,39 +298,29 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
 @njit(parallel=True, cache=True, nogil=True)
 def _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
                   out, rho_out, eta_out):
-    """The continuation sweep (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
+    """The exact field (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
     ``1/kappa`` and ``rho_out``/``eta_out`` (N, 3; ``rho = r - d``, ``eta`` in radians) the resolved
     carriage of the reachable voxels in C order (``offset[i]``: the index of plane ``i``'s first)."""
     ny, nz = occ.shape[1], occ.shape[2]
     for i in prange(i0, i1):
-        W = np.empty((3, 3, _NE * _NR))
-        RM = np.empty((3, 3, _NE))
-        ST = np.zeros((3, 3, 9))
+        CS, UB = work_arrays()
         rho = np.zeros(3)
         eta = np.zeros(3)
         A = np.empty((6, 18))
         G = np.empty((6, 6))
         index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
-        D = 0.0
-        qy, qz = 0.0, 0.0
-        first = True
         for j in range(ny):
             py = ys[j]
-            for kk in range(nz):
-                k = kk if j % 2 == 0 else nz - 1 - kk  # serpentine: short steps between voxels
+            for k in range(nz):
                 if not occ[i, j, k]:
                     continue
                 pz = zs[k]
-                if not first:
-                    D += math.sqrt((py - qy) ** 2 + (pz - qz) ** 2)
-                first = False
-                qy, qz = py, pz
                 for c in range(3):
-                    r, e = _pruned_carriage(px + u[c, 0, 0], py + u[c, 0, 1], pz + u[c, 0, 2],
-                                            px + u[c, 1, 0], py + u[c, 1, 1], pz + u[c, 1, 2],
-                                            2.0 * math.pi * c / 3.0, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
-                                            W[c], RM[c], ST[c], D)
+                    r, e = best_carriage(px + u[c, 0, 0], py + u[c, 0, 1], pz + u[c, 0, 2],
+                                         px + u[c, 1, 0], py + u[c, 1, 1], pz + u[c, 1, 2],
+                                         2.0 * math.pi * c / 3.0, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
+                                         CS, UB, True)
                     rho[c] = r
                     eta[c] = e
                 m = index[j, k]
