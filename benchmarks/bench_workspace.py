@@ -865,8 +865,8 @@ def dexterity_rows(design: Design, runs: int = 1, fast_runs: int = 5) -> None:
     _row("neighbour: local climb from the neighbour's pose", fast["neighbour"], engine,
          f"(target <= 20x; sample check {c.sample_size} voxels: margin gap <= {c.max_margin_gap:.3g}, "
          f"tolerance {c.margin_tolerance:g} {'held' if c.tolerance_held else 'BROKEN'})")
-    _row("sweep: the same carriage poses, pruned", slow["sweep"], engine)
-    _row("full search at every voxel + numpy SVD (before)", slow["full"], engine)
+    _row("sweep: the same carriage poses, bounded search", slow["sweep"], engine)
+    _row("full search (bounded) at every voxel + numpy SVD (before)", slow["full"], engine)
     occ = res.occupancy
     dk = np.abs(f.inverse_condition[occ] - s_.inverse_condition[occ])
     q = np.quantile(dk, [0.5, 0.9, 0.99, 1.0])
