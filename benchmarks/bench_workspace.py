@@ -272,6 +272,7 @@ def _former_measures():
         return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
 
     hull = mod.hull_mask
+    reference_filter = mod.feature_filter_reference
 
     def hollow(occ, mode="hull", hull_=None):
         u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
@@ -279,6 +280,7 @@ def _former_measures():
 
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
              "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
+             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, dilate, cancel),
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
              "RunComponents": LabelledComponents,
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
@@ -590,8 +592,10 @@ def _measures_before_meas2():
             mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
         return ~out if complement else out
 
+    reference_filter = mod.feature_filter_reference
     patch = {"RunComponents": LabelledComponents, "euler_characteristic": euler,
              "ball_dilate": dilate_before,
+             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, dilate_before, cancel),
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     seed = void_flood._seed_kernel
@@ -682,8 +686,8 @@ def measure_stage_rows(design: Design, runs: int = 5) -> None:
 
 def feature_filter_rows(design: Design, runs: int = 3) -> None:
     """Target 1, the feature filter alone (its four ball dilations of the padded solid) at h = 2 and
-    h = 1, with 1 and 2 numba threads: the capped, mirrored, block-skipping kernel against the former
-    int32 whole-grid kernel (``ball_dilate_reference``), each as a ratio to the engine (at the
+    h = 1, with 1 and 2 numba threads: the packed, mirrored kernel against the former int32
+    whole-grid kernel (``ball_dilate_reference``), each as a ratio to the engine (at the
     machine's thread count) in the same run."""
     import numba
     import numpy as np
@@ -700,19 +704,10 @@ def feature_filter_rows(design: Design, runs: int = 3) -> None:
         m = mod.measure_workspace(res)
         occ, rv = res.occupancy, m.feature_radius_voxels
         new_out = mod.feature_filter(occ, rv)
-        fast = mod.ball_dilate
-        mod.ball_dilate = former
-        try:
-            same = bool(np.array_equal(mod.feature_filter(occ, rv), new_out))
-        finally:
-            mod.ball_dilate = fast
+        same = bool(np.array_equal(mod.feature_filter_reference(occ, rv, former), new_out))
 
-        def old(occ=occ, rv=rv, fast=fast):
-            mod.ball_dilate = former
-            try:
-                return mod.feature_filter(occ, rv)
-            finally:
-                mod.ball_dilate = fast
+        def old(occ=occ, rv=rv):
+            return mod.feature_filter_reference(occ, rv, former)
 
         fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
         for nt in sorted({1, min(2, threads)}):

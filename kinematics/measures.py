@@ -194,7 +194,7 @@ the paper's nine designs has ``pieces = 1``, ``stable_genus = 0``, ``stable_comp
 for ``a = 80``, 6.4 for the default design (1.3-4.2 voxels); ``S_r`` keeps 95-96 %, 99 % and
 99.5-99.8 % of their volume. The same result holds with fixed ``r`` = 4, 6 and 8 for these three
 designs (opening alone gives it too; the closing adds the "narrow tunnels" half of the
-definition). Cost: four separable ball dilations (numba).
+definition). Cost: four ball dilations on the solid packed along z (numba; "Computation" below).
 
 Computation
 -----------
@@ -207,9 +207,12 @@ voxels per window and only the windows that meet their four columns' span; the v
 unreachable voxels that have reachable ones on both sides along all three axes (any other
 unreachable voxel sees the padding along a straight line) less a flood from those that leak
 (:mod:`kinematics.void_flood`, its seeds found by separable ors: a sealed cavity is never visited,
-and only the voids are counted, when their number is asked for); the dilations keep capped uint8
-distances, compute half the rows of a mirror-symmetric solid, take the y and z steps one offset at
-a time along whole z rows and skip the rows with no set voxel within their blocks' neighbourhood;
+and only the voids are counted, when their number is asked for); the dilations work on the solid
+packed 64 voxels to a word along z (the ball as the union over its ``(di, dj)`` offsets of z runs
+``|dk| <= floor(sqrt(r^2 - di^2 - dj^2))``: the set dilated along z by each run length, by shifts
+of whole words, moved by each offset and or-ed in), compute half the rows of a mirror-symmetric
+solid, and the filter packs the solid once for its four dilations (an erosion is the complement of
+the complement's dilation, a not of the words);
 the hull's columns test the facets their tile keeps, and qhull gets only the column ends that are
 vertices of their x line's and y line's 2-D hulls (:func:`hull_points`). :func:`measure_fields`
 computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
@@ -221,6 +224,7 @@ on the shared 2-core machine (load 3-5.5: 1.6x and 3.5x the engine in the same r
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import numpy as np
@@ -1118,170 +1122,164 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _set_blocks_kernel(m, inv, bs, blk, b0):
-    """``blk[a, b, c]``: the block of ``bs^3`` voxels at ``(a, b, c) * bs`` holds a voxel of the set
-    (``m != inv``), for ``b >= b0`` (the others are set False unread); each block's scan stops at
-    its first such voxel."""
+def _pack_kernel(m, P):
+    """``P[i, j, q]``: bit ``t`` is ``m[i, j, 64 q + t]`` (the bits past ``nz`` are 0)."""
     nx, ny, nz = m.shape
-    nb1, nb2 = blk.shape[1], blk.shape[2]
-    for q in prange(blk.shape[0] * nb1 * nb2):
-        a = q // (nb1 * nb2)
-        b = (q // nb2) % nb1
-        c = q % nb2
-        if b < b0:
-            blk[a, b, c] = False
-            continue
-        hit = False
-        for i in range(a * bs, min(nx, (a + 1) * bs)):
-            for j in range(b * bs, min(ny, (b + 1) * bs)):
-                for k in range(c * bs, min(nz, (c + 1) * bs)):
-                    if m[i, j, k] != inv:
-                        hit = True
-                        break
-                if hit:
-                    break
-            if hit:
-                break
-        blk[a, b, c] = hit
+    nw = P.shape[2]
+    for i in prange(nx):
+        for j in range(ny):
+            for q in range(nw):
+                word = np.uint64(0)
+                base = 64 * q
+                for t in range(min(64, nz - base)):
+                    word |= np.uint64(m[i, j, base + t]) << np.uint64(t)
+                P[i, j, q] = word
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _ball_dilate_fast_kernel(m, w, r2, inv_in, inv_out, half, near, bs, d1, out):
-    """:func:`_ball_dilate_kernel`'s set, in fewer bytes and passes: the squared distances are kept
-    in ``d1`` (uint8, capped at 255 > ``r2``: a capped distance stays beyond the ball, and the
-    offsets stop at ``w`` before a cap could matter), the y and z steps are fused per z row through
-    a row buffer, each taken one offset at a time along the whole row (``d2 = min_{|dj| <= w} d1[j +
-    dj] + dj^2``, then "some ``|dk| <= w`` with ``d2[k + dk] <= r2 - dk^2``": branch-free loops over
-    contiguous z, the same minimum and the same test as a search from each voxel), the mask is read
-    complemented when ``inv_in`` and written complemented when ``inv_out`` (an erosion is the
-    complement of the complement's dilation), and with ``half`` (a mask symmetric under ``j -> ny -
-    1 - j``) only the rows ``j >= ny // 2`` are computed and mirrored (the result is symmetric too).
-    A voxel whose block of ``bs >= w`` voxels has no set voxel in itself or in the 26 blocks around
-    it (``near`` false) has none within ``w`` along any axis: a z row whose blocks are all so is
-    out without the y and z steps, and a z row whose voxels are all set (``d1`` all 0) is in
-    without them; no result changes."""
-    nx, ny, nz = m.shape
-    j0 = ny // 2 if half else 0
-    cap = 255
-    for j in prange(j0, ny):
-        # the distance along x to the nearest set voxel, by a forward and a backward sweep
-        near_i = np.empty(nz, np.int32)
-        far = np.int32(-(1 << 30))
-        for k in range(nz):
-            near_i[k] = far
-        for i in range(nx):
-            ii = np.int32(i)
-            for k in range(nz):
-                q = ii if m[i, j, k] != inv_in else near_i[k]
-                near_i[k] = q
-                d = ii - q
-                d1[i, j, k] = d * d if d <= w else cap
-        far = np.int32(1 << 30)
-        for k in range(nz):
-            near_i[k] = far
-        for i in range(nx - 1, -1, -1):
-            ii = np.int32(i)
-            for k in range(nz):
-                q = ii if m[i, j, k] != inv_in else near_i[k]
-                near_i[k] = q
-                d = q - ii
-                v = d * d if d <= w else cap
-                o = np.int32(d1[i, j, k])
-                d1[i, j, k] = v if v < o else o
-    nkb = near.shape[2]
+def _unpack_kernel(P, out):
+    """The inverse of :func:`_pack_kernel`."""
+    nx, ny, nz = out.shape
+    nw = P.shape[2]
+    one = np.uint64(1)
     for i in prange(nx):
-        d2 = np.empty(nz, np.int32)
-        hit = np.empty(nz, np.bool_)
+        for j in range(ny):
+            for q in range(nw):
+                word = P[i, j, q]
+                base = 64 * q
+                for t in range(min(64, nz - base)):
+                    out[i, j, base + t] = ((word >> np.uint64(t)) & one) != np.uint64(0)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _not_kernel(P, last):
+    """The complement of a packed set, in place (``last``: the valid bits of each row's last word)."""
+    nx, ny, nw = P.shape
+    for i in prange(nx):
+        for j in range(ny):
+            for q in range(nw - 1):
+                P[i, j, q] = ~P[i, j, q]
+            P[i, j, nw - 1] = ~P[i, j, nw - 1] & last
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, Z, R):
+    """``R``: the packed set ``P`` dilated by the ball whose offsets ``(DI[e], DJ[e])`` carry the z
+    runs ``|dk| <= A[e]`` (:func:`_ball_offsets`): for ``a = 0 .. w``, ``Z`` = ``P`` dilated along
+    z by ``[-a, a]`` (that of ``a - 1`` or-ed with ``P`` moved ``a`` bits each way across the words),
+    then or-ed into ``R`` moved by every offset whose run is ``a``. With ``half`` (``P`` symmetric
+    under ``j -> ny - 1 - j``, so ``R`` is too) only the rows ``j >= ny // 2`` are or-ed, the others
+    copied. Bits past ``nz`` are cleared (``last``). ``Z``: work array shaped like ``P``."""
+    nx, ny, nw = P.shape
+    j0 = ny // 2 if half else 0
+    zero = np.uint64(0)
+    n = DI.shape[0]
+    for i in prange(nx):
+        for j in range(ny):
+            for q in range(nw):
+                R[i, j, q] = zero
+    for a in range(w + 1):
+        for i in prange(nx):
+            for j in range(ny):
+                for q in range(nw):
+                    if a == 0:
+                        v = P[i, j, q]
+                    else:
+                        up = P[i, j, q] << np.uint64(a)
+                        if q > 0:
+                            up |= P[i, j, q - 1] >> np.uint64(64 - a)
+                        dn = P[i, j, q] >> np.uint64(a)
+                        if q + 1 < nw:
+                            dn |= P[i, j, q + 1] << np.uint64(64 - a)
+                        v = Z[i, j, q] | up | dn
+                    Z[i, j, q] = v
+        for i in prange(nx):
+            for e in range(n):
+                if A[e] != a:
+                    continue
+                ii = i + DI[e]
+                if ii < 0 or ii >= nx:
+                    continue
+                dj = DJ[e]
+                for j in range(max(j0, -dj), min(ny, ny - dj)):
+                    for q in range(nw):
+                        R[i, j, q] |= Z[ii, j + dj, q]
+    for i in prange(nx):
         for j in range(j0, ny):
-            jr = ny - 1 - j
-            row = near[i // bs, j // bs]
-            busy = False
-            for c in range(nkb):
-                if row[c]:
-                    busy = True
-                    break
-            if not busy:  # no set voxel within w of the row
-                for k in range(nz):
-                    out[i, j, k] = inv_out
-                    if half:
-                        out[i, jr, k] = inv_out
-                continue
-            zero = True  # every voxel of the row set: all in, without the y and z steps
-            for k in range(nz):
-                if d1[i, j, k] != 0:
-                    zero = False
-                    break
-            if zero:
-                for k in range(nz):
-                    out[i, j, k] = not inv_out
-                    if half:
-                        out[i, jr, k] = not inv_out
-                continue
-            # d2 = min over |dj| <= w of d1[j + dj] + dj^2, one offset at a time along the whole row
-            for k in range(nz):
-                d2[k] = d1[i, j, k]
-            for dj in range(1, w + 1):
-                c = dj * dj
-                jp = j + dj
-                if jp < ny:
-                    for k in range(nz):
-                        v = np.int32(d1[i, jp, k]) + c
-                        if v < d2[k]:
-                            d2[k] = v
-                jm = j - dj
-                if jm >= 0:
-                    if jm < j0:
-                        jm = ny - 1 - jm
-                    for k in range(nz):
-                        v = np.int32(d1[i, jm, k]) + c
-                        if v < d2[k]:
-                            d2[k] = v
-            # in the ball: some |dk| <= w with d2[k + dk] + dk^2 <= r2
-            for k in range(nz):
-                hit[k] = d2[k] <= r2
-            for dk in range(1, w + 1):
-                lim = r2 - dk * dk
-                for k in range(nz - dk):
-                    if d2[k + dk] <= lim:
-                        hit[k] = True
-                for k in range(dk, nz):
-                    if d2[k - dk] <= lim:
-                        hit[k] = True
-            for k in range(nz):
-                val = hit[k] != inv_out
-                out[i, j, k] = val
-                if half:
-                    out[i, jr, k] = val
+            R[i, j, nw - 1] &= last
+        if half:
+            for j in range(j0):
+                for q in range(nw):
+                    R[i, j, q] = R[i, ny - 1 - j, q]
+
+
+def _ball_offsets(r2: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The digital ball ``{d in Z^3 : |d|^2 <= r2}`` as z runs: its ``(di, dj)`` offsets and each
+    one's half-length ``floor(sqrt(r2 - di^2 - dj^2))`` (int64 arrays)."""
+    d = np.arange(-w, w + 1)
+    di, dj = (a.ravel() for a in np.meshgrid(d, d, indexing="ij"))
+    rest = r2 - di * di - dj * dj
+    keep = rest >= 0
+    runs = np.array([math.isqrt(int(v)) for v in rest[keep]], np.int64)
+    return di[keep].astype(np.int64), dj[keep].astype(np.int64), np.minimum(runs, w)
+
+
+class _Packed:
+    """A boolean grid packed along z for :func:`_dilate_packed_kernel` (its two work arrays and the
+    ball's offsets), dilated and complemented in place of the arrays it holds."""
+
+    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool) -> None:
+        self.shape = m.shape
+        nx, ny, nz = m.shape
+        nw = -(-nz // 64)
+        rem = nz - 64 * (nw - 1)
+        self.last = np.uint64((1 << rem) - 1) if rem < 64 else np.uint64(0xFFFFFFFFFFFFFFFF)
+        self.w = int(np.floor(radius_voxels + 1e-9))
+        self.offsets = _ball_offsets(int(np.floor(radius_voxels * radius_voxels + 1e-9)), self.w)
+        self.symmetric = bool(symmetric)
+        self.P = np.empty((nx, ny, nw), np.uint64)
+        self.Z = np.empty_like(self.P)
+        self.R = np.empty_like(self.P)
+        with KERNEL_LOCK:
+            _pack_kernel(m, self.P)
+
+    def dilate(self, complement: bool = False) -> None:
+        """The set becomes its dilation by the ball (its erosion with ``complement``)."""
+        with KERNEL_LOCK:
+            if complement:
+                _not_kernel(self.P, self.last)
+            _dilate_packed_kernel(self.P, *self.offsets, self.w, self.symmetric, self.last, self.Z, self.R)
+            if complement:
+                _not_kernel(self.R, self.last)
+        self.P, self.R = self.R, self.P
+
+    def unpack(self) -> np.ndarray:
+        out = np.empty(self.shape, np.bool_)
+        with KERNEL_LOCK:
+            _unpack_kernel(self.P, out)
+        return out
 
 
 def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
                 symmetric: bool = False) -> np.ndarray:
     """Dilation of ``mask`` by the digital Euclidean ball ``{d in Z^3 : |d| <= radius_voxels}``.
 
-    Exact (tested against ``scipy.ndimage.distance_transform_edt``); voxels outside the array are
-    taken as not in ``mask``. ``complement=True`` gives ``~ball_dilate(~mask)`` (the erosion of
-    ``mask``; voxels outside the array are not in ``~mask``); ``symmetric=True`` says that ``mask``
-    equals ``mask[:, ::-1]`` (half the work).
+    Exact (tested against ``scipy.ndimage``); voxels outside the array are taken as not in
+    ``mask``. ``complement=True`` gives ``~ball_dilate(~mask)`` (the erosion of ``mask``; voxels
+    outside the array are not in ``~mask``); ``symmetric=True`` says that ``mask`` equals
+    ``mask[:, ::-1]`` (half the work). Packed along z (:func:`_dilate_packed_kernel`) for radii below
+    64 voxels, by :func:`ball_dilate_reference`'s kernel above.
     """
     m = np.ascontiguousarray(mask, dtype=np.bool_)
     w = int(np.floor(radius_voxels + 1e-9))
     if w <= 0 or m.size == 0:
         return m.copy()
     r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
+    if w < 64:
+        packed = _Packed(m, radius_voxels, symmetric)
+        packed.dilate(complement)
+        return packed.unpack()
     out = np.empty(m.shape, np.bool_)
-    if r2 < 255:
-        d1 = np.empty(m.shape, np.uint8)
-        bs = max(w, 4)
-        blk = np.empty(tuple(-(-n // bs) for n in m.shape), np.bool_)
-        # with the mirror the kernel reads the blocks of rows j >= ny // 2 only, whose 26 neighbours
-        # lie in the block rows from (ny // 2) // bs - 1 on: only those are scanned
-        b0 = max(0, (m.shape[1] // 2) // bs - 1) if symmetric else 0
-        with KERNEL_LOCK:
-            _set_blocks_kernel(m, complement, bs, blk, b0)
-        near = ndi.binary_dilation(blk, structure=np.ones((3, 3, 3), bool))
-        with KERNEL_LOCK:
-            _ball_dilate_fast_kernel(m, w, r2, complement, complement, symmetric, near, bs, d1, out)
-        return out
     if complement:
         m = ~m
     d1i = np.empty(m.shape, np.int32)
@@ -1312,24 +1310,46 @@ def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelTo
 
     The opening drops material thinner than about ``2 r`` (knife-edged sheets, specks, thin
     bridges); the closing then fills gaps, slots and tunnels narrower than about ``2 r``. The grid
-    is padded with empty voxels first (the box is no obstacle to either operation). Raises
+    is padded with empty voxels first (the box is no obstacle to either operation), and packed once
+    along z for the four dilations (:func:`_dilate_packed_kernel`). Raises
     :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
     """
     occ = np.asarray(occupancy, dtype=bool)
     w = int(np.floor(radius_voxels + 1e-9))
     if w <= 0:
         return occ.copy()
+    if w >= 64:
+        return feature_filter_reference(occ, radius_voxels, ball_dilate, cancel)
     p = w + 1
     o = np.pad(occ, p)
-    sym = bool(np.array_equal(o, o[:, ::-1]))  # each step keeps the mirror symmetry
-    eroded = ball_dilate(o, radius_voxels, complement=True, symmetric=sym)
-    check(cancel)
-    opened = ball_dilate(eroded, radius_voxels, symmetric=sym)
-    check(cancel)
-    dilated = ball_dilate(opened, radius_voxels, symmetric=sym)
-    check(cancel)
-    closed = ball_dilate(dilated, radius_voxels, complement=True, symmetric=sym)
-    return closed[p:-p, p:-p, p:-p]
+    packed = _Packed(o, radius_voxels, bool(np.array_equal(o, o[:, ::-1])))  # each step keeps the mirror
+    for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
+        if step:
+            check(cancel)
+        packed.dilate(complement)
+    return packed.unpack()[p:-p, p:-p, p:-p]
+
+
+def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, dilate=None,
+                             cancel: CancelToken = None) -> np.ndarray:
+    """:func:`feature_filter` as four dilations of boolean grids, each by ``dilate(mask, r,
+    complement=, symmetric=)`` (:func:`ball_dilate`'s signature; by default the int32 kernel of
+    :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
+    if dilate is None:
+        def dilate(mask, r, complement=False, symmetric=False):
+            return ~ball_dilate_reference(~mask, r) if complement else ball_dilate_reference(mask, r)
+    occ = np.asarray(occupancy, dtype=bool)
+    w = int(np.floor(radius_voxels + 1e-9))
+    if w <= 0:
+        return occ.copy()
+    p = w + 1
+    o = np.pad(occ, p)
+    sym = bool(np.array_equal(o, o[:, ::-1]))
+    for step, complement in enumerate((True, False, False, True)):
+        if step:
+            check(cancel)
+        o = dilate(o, radius_voxels, complement=complement, symmetric=sym)
+    return o[p:-p, p:-p, p:-p]
 
 
 def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int]:

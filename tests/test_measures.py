@@ -399,6 +399,8 @@ def _slow_measures(monkeypatch):
     monkeypatch.setattr(mod, "euler_characteristic", lambda occ, conn=1: int(euler_number(occ, connectivity=conn)))
     monkeypatch.setattr(mod, "_voids", voids)
     monkeypatch.setattr(mod, "ball_dilate", dilate)
+    reference = mod.feature_filter_reference
+    monkeypatch.setattr(mod, "feature_filter", lambda occ, r, cancel=None: reference(occ, r, dilate, cancel))
     hull = mod.hull_mask
     monkeypatch.setattr(mod, "hull_mask", lambda occ, tiled=False: hull(occ, tiled=False))
     monkeypatch.setattr(mod, "hollow_mask", hollow)
