@@ -268,19 +268,16 @@ def _former_measures():
         v = mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
 
-    def dilate(mask, r, complement=False, symmetric=False):
-        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
-
     hull = mod.hull_mask
-    reference_filter = mod.feature_filter_reference
 
     def hollow(occ, mode="hull", hull_=None):
         u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
         return u & (hull(occ, tiled=False) if hull_ is None else hull_)
 
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
-             "_voids": voids, "ball_dilate": dilate, "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
-             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, dilate, cancel),
+             "_voids": voids, "ball_dilate": mod.ball_dilate_reference,
+             "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
+             "feature_filter": mod.feature_filter_reference,
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
              "RunComponents": LabelledComponents,
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
@@ -595,7 +592,7 @@ def _measures_before_meas2():
     reference_filter = mod.feature_filter_reference
     patch = {"RunComponents": LabelledComponents, "euler_characteristic": euler,
              "ball_dilate": dilate_before,
-             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, dilate_before, cancel),
+             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, cancel, dilate=dilate_before),
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
     saved = {k: getattr(mod, k) for k in patch}
     seed = void_flood._seed_kernel
@@ -696,18 +693,15 @@ def feature_filter_rows(design: Design, runs: int = 3) -> None:
 
     threads = numba.get_num_threads()
 
-    def former(mask, r, complement=False, symmetric=False):
-        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
-
     for h in (2.0, 1.0):
         res = compute_workspace(design, WorkspaceSettings(voxel=h))
         m = mod.measure_workspace(res)
         occ, rv = res.occupancy, m.feature_radius_voxels
         new_out = mod.feature_filter(occ, rv)
-        same = bool(np.array_equal(mod.feature_filter_reference(occ, rv, former), new_out))
+        same = bool(np.array_equal(mod.feature_filter_reference(occ, rv), new_out))
 
         def old(occ=occ, rv=rv):
-            return mod.feature_filter_reference(occ, rv, former)
+            return mod.feature_filter_reference(occ, rv)
 
         fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
         for nt in sorted({1, min(2, threads)}):

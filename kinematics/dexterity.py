@@ -80,8 +80,6 @@ MODES: tuple[str, ...] = ("resolved", "best")
 SEARCHES: tuple[str, ...] = tuple(DEXTERITY_SEARCHES)
 #: Voxels per batched ``solve``/``svd`` call.
 CHUNK = 32768
-#: Grid points per side of a block of the bounded full search (module docstring).
-_BLOCK = 5
 
 
 # --------------------------------------------------------------------------------------------

@@ -472,10 +472,10 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     ny_eval = mirror_rows(design, occupancy, axes, orientation) if mirror else None
     occ = np.ascontiguousarray(np.asarray(occupancy, bool))
     offset, n = plane_offsets(occ)
-    if ny_eval is not None:  # the search on the rows up to y = 0, written where they are in the whole grid
-        f = field_inputs(design, occ[:, :ny_eval, :], (axes[0], axes[1][:ny_eval], axes[2]), orientation)
-    else:
-        f = field_inputs(design, occ, axes, orientation)
+    # the search on the rows it owns (those up to y = 0 under the mirror), written where they are in
+    # the whole grid's C order (``offset``)
+    rows = occ.shape[1] if ny_eval is None else ny_eval
+    f = field_inputs(design, occ[:, :rows, :], (axes[0], axes[1][:rows], axes[2]), orientation)
     out = np.zeros(n)
     rho = np.zeros((n, 3))
     eta = np.zeros((n, 3))

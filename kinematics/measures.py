@@ -1289,13 +1289,17 @@ def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = Fa
     return ~out if complement else out
 
 
-def ball_dilate_reference(mask: np.ndarray, radius_voxels: float) -> np.ndarray:
+def ball_dilate_reference(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
+                          symmetric: bool = False) -> np.ndarray:
     """:func:`ball_dilate` with int32 distances over the whole array (the former kernel; the tests'
-    reference for the capped, fused and mirrored one)."""
+    reference for the packed and mirrored one). ``symmetric`` is accepted and ignored (the same
+    signature as :func:`ball_dilate`)."""
     m = np.ascontiguousarray(mask, dtype=np.bool_)
     w = int(np.floor(radius_voxels + 1e-9))
     if w <= 0 or m.size == 0:
         return m.copy()
+    if complement:
+        return ~ball_dilate_reference(~m, radius_voxels)
     r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
     d1 = np.empty(m.shape, np.int32)
     d2 = np.empty(m.shape, np.int32)
@@ -1303,6 +1307,36 @@ def ball_dilate_reference(mask: np.ndarray, radius_voxels: float) -> np.ndarray:
     with KERNEL_LOCK:
         _ball_dilate_kernel(m, w, r2, d1, d2, out)
     return out
+
+
+class _Grids:
+    """:class:`_Packed`'s steps on boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature)."""
+
+    def __init__(self, o: np.ndarray, radius_voxels: float, symmetric: bool, dilate) -> None:
+        self.o, self.r, self.symmetric, self._dilate = o, radius_voxels, symmetric, dilate
+
+    def dilate(self, complement: bool = False) -> None:
+        self.o = self._dilate(self.o, self.r, complement=complement, symmetric=self.symmetric)
+
+    def unpack(self) -> np.ndarray:
+        return self.o
+
+
+def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken, grids) -> np.ndarray:
+    """:func:`feature_filter`'s steps on the padded solid held by ``grids(o, r, symmetric)`` (a
+    :class:`_Packed` or a :class:`_Grids`)."""
+    occ = np.asarray(occupancy, dtype=bool)
+    w = int(np.floor(radius_voxels + 1e-9))
+    if w <= 0:
+        return occ.copy()
+    p = w + 1
+    o = np.pad(occ, p)
+    g = grids(o, radius_voxels, bool(np.array_equal(o, o[:, ::-1])))  # each step keeps the mirror
+    for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
+        if step:
+            check(cancel)
+        g.dilate(complement)
+    return g.unpack()[p:-p, p:-p, p:-p]
 
 
 def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None) -> np.ndarray:
@@ -1314,42 +1348,17 @@ def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelTo
     along z for the four dilations (:func:`_dilate_packed_kernel`). Raises
     :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
     """
-    occ = np.asarray(occupancy, dtype=bool)
-    w = int(np.floor(radius_voxels + 1e-9))
-    if w <= 0:
-        return occ.copy()
-    if w >= 64:
-        return feature_filter_reference(occ, radius_voxels, ball_dilate, cancel)
-    p = w + 1
-    o = np.pad(occ, p)
-    packed = _Packed(o, radius_voxels, bool(np.array_equal(o, o[:, ::-1])))  # each step keeps the mirror
-    for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
-        if step:
-            check(cancel)
-        packed.dilate(complement)
-    return packed.unpack()[p:-p, p:-p, p:-p]
+    if np.floor(radius_voxels + 1e-9) >= 64:
+        return feature_filter_reference(occupancy, radius_voxels, cancel, dilate=ball_dilate)
+    return _open_close(occupancy, radius_voxels, cancel, _Packed)
 
 
-def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, dilate=None,
-                             cancel: CancelToken = None) -> np.ndarray:
-    """:func:`feature_filter` as four dilations of boolean grids, each by ``dilate(mask, r,
-    complement=, symmetric=)`` (:func:`ball_dilate`'s signature; by default the int32 kernel of
+def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None, *,
+                             dilate=ball_dilate_reference) -> np.ndarray:
+    """:func:`feature_filter` (the same signature, so it can stand in for it) as four dilations of
+    boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature; by default
     :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
-    if dilate is None:
-        def dilate(mask, r, complement=False, symmetric=False):
-            return ~ball_dilate_reference(~mask, r) if complement else ball_dilate_reference(mask, r)
-    occ = np.asarray(occupancy, dtype=bool)
-    w = int(np.floor(radius_voxels + 1e-9))
-    if w <= 0:
-        return occ.copy()
-    p = w + 1
-    o = np.pad(occ, p)
-    sym = bool(np.array_equal(o, o[:, ::-1]))
-    for step, complement in enumerate((True, False, False, True)):
-        if step:
-            check(cancel)
-        o = dilate(o, radius_voxels, complement=complement, symmetric=sym)
-    return o[p:-p, p:-p, p:-p]
+    return _open_close(occupancy, radius_voxels, cancel, lambda o, r, sym: _Grids(o, r, sym, dilate))
 
 
 def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int]:

@@ -385,9 +385,6 @@ def _slow_measures(monkeypatch):
         v = mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
 
-    def dilate(mask, r, complement=False, symmetric=False):
-        return ~mod.ball_dilate_reference(~mask, r) if complement else mod.ball_dilate_reference(mask, r)
-
     def hollow(occ, mode="hull", hull=None):
         occ = np.asarray(occ, bool)
         u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
@@ -398,9 +395,8 @@ def _slow_measures(monkeypatch):
 
     monkeypatch.setattr(mod, "euler_characteristic", lambda occ, conn=1: int(euler_number(occ, connectivity=conn)))
     monkeypatch.setattr(mod, "_voids", voids)
-    monkeypatch.setattr(mod, "ball_dilate", dilate)
-    reference = mod.feature_filter_reference
-    monkeypatch.setattr(mod, "feature_filter", lambda occ, r, cancel=None: reference(occ, r, dilate, cancel))
+    monkeypatch.setattr(mod, "ball_dilate", mod.ball_dilate_reference)
+    monkeypatch.setattr(mod, "feature_filter", mod.feature_filter_reference)
     hull = mod.hull_mask
     monkeypatch.setattr(mod, "hull_mask", lambda occ, tiled=False: hull(occ, tiled=False))
     monkeypatch.setattr(mod, "hollow_mask", hollow)
