@@ -272,11 +272,11 @@ def _former_measures():
 
     def hollow(occ, mode="hull", hull_=None):
         u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
-        return u & (hull(occ, tiled=False) if hull_ is None else hull_)
+        return u & (hull(occ, raster=False) if hull_ is None else hull_)
 
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
              "_voids": voids, "ball_dilate": mod.ball_dilate_reference,
-             "hull_mask": lambda occ, tiled=False: hull(occ, tiled=False),
+             "hull_mask": lambda occ, raster=False: hull(occ, raster=False),
              "feature_filter": mod.feature_filter_reference,
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
              "RunComponents": LabelledComponents,
@@ -354,7 +354,7 @@ def _measures_before_meas1():
     hull = mod.hull_mask
     patch = {"_voids": mod._voids_labelled_candidates,
              "_void_set": lambda occ, conn: (mod._voids_labelled_candidates(occ, conn)[0], None),
-             "hull_mask": lambda occ, tiled=True: hull(occ, tiled, extreme=False),
+             "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "euler_characteristic": euler}
     saved = {k: getattr(mod, k) for k in patch}
     for k, v in patch.items():

@@ -391,14 +391,14 @@ def _slow_measures(monkeypatch):
         if mode == "shadow":
             u[:, :, :int(np.argmax(occ.any(axis=(0, 1))))] = False
             return u
-        return u & (mod.hull_mask(occ, tiled=False) if hull is None else hull)
+        return u & (mod.hull_mask(occ, raster=False) if hull is None else hull)
 
     monkeypatch.setattr(mod, "euler_characteristic", lambda occ, conn=1: int(euler_number(occ, connectivity=conn)))
     monkeypatch.setattr(mod, "_voids", voids)
     monkeypatch.setattr(mod, "ball_dilate", mod.ball_dilate_reference)
     monkeypatch.setattr(mod, "feature_filter", mod.feature_filter_reference)
     hull = mod.hull_mask
-    monkeypatch.setattr(mod, "hull_mask", lambda occ, tiled=False: hull(occ, tiled=False))
+    monkeypatch.setattr(mod, "hull_mask", lambda occ, raster=False: hull(occ, raster=False))
     monkeypatch.setattr(mod, "hollow_mask", hollow)
     monkeypatch.setattr(mod, "column_gap_count", lambda occ: int(mod.column_gap_mask(occ).sum()))
 
@@ -423,7 +423,7 @@ def test_fast_measures_equal_the_former_path_on_several_designs(monkeypatch):
             assert np.array_equal(mod.void_mask(occ, conn), mod.void_mask_labelled(occ, conn))
         assert np.array_equal(mod.ball_dilate(sym, r, symmetric=True), mod.ball_dilate_reference(sym, r))
         assert np.array_equal(mod.ball_dilate(occ, r, complement=True), ~mod.ball_dilate_reference(~occ, r))
-        assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, tiled=False))
+        assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, raster=False))
         assert mod.column_gap_count(occ) == int(mod.column_gap_mask(occ).sum())
     results = [compute_workspace(d, WorkspaceSettings(voxel=6.0)) for d in (Design(), Design(a=10), Design(l_s=20))]
     options = ({}, {"connectivity": 3, "hollowness": "shadow", "completeness": "topological"})
@@ -626,16 +626,32 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
         numba.set_num_threads(before)
 
 
-@pytest.mark.parametrize("tiles", [(64, 16, 8), (16,), (32, 4)])
-def test_hull_tiles_from_their_parents_give_every_facets_columns(tiles, monkeypatch):
-    """The hull's columns with facets kept per tile from the parent tile's list (coarse to fine,
-    kinematics/measures._HULL_TILES) equal the columns with every facet tested at every column, on a
-    rough blob wide enough for several tiles at every level (and tiles cut at the grid's edge)."""
-    from paraspace.kinematics import measures as mod
+def test_hull_raster_equals_every_facet_at_every_column():
+    """The hull's columns from the triangles whose projection covers them (kinematics/hull.py,
+    the default) equal those from every facet's inequality tested at every column, on a rough blob,
+    tilted slabs and wedges (facets nearly vertical, nearly flat, and columns on their edges), lines
+    and planes of voxels (no 3-D hull), single columns, and random fields; and the hull contains the
+    set and is convex along every grid line (the mask of a convex set)."""
+    from paraspace.kinematics import hull as mod
 
     rng = np.random.default_rng(7)
     x, y, z = np.ogrid[-1:1:150j, -1:1:133j, -1:1:24j]
-    occ = (x ** 2 + 1.3 * y ** 2 + (z + 0.2 * x * y) ** 2 < 0.8) & (rng.random((150, 133, 24)) < 0.97)
-    monkeypatch.setattr(mod, "_HULL_TILES", tiles)
-    tiled = mod.hull_mask(occ)
-    assert tiled.sum() > occ.sum() and np.array_equal(tiled, mod.hull_mask(occ, tiled=False))
+    fields = [(x ** 2 + 1.3 * y ** 2 + (z + 0.2 * x * y) ** 2 < 0.8) & (rng.random((150, 133, 24)) < 0.97)]
+    i, j, k = np.ogrid[:40, :37, :30]
+    fields += [np.abs(3 * i - 2 * j + 5 * k - 60) <= 4, (i + j <= 45) & (k <= (i + 2 * j) // 5) & (k >= i // 7),
+               (i == 20) & (j == 5) & (k > 3), (i == 20) & np.ones_like(j, bool) & (k < 12), (k == 0) & (i + j < 30),
+               (np.abs(i - 20) + np.abs(j - 18) + np.abs(k - 15) <= 12)]
+    fields += [rng.random(tuple(rng.integers(2, 16, 3))) < rng.uniform(0.02, 0.9) for _ in range(60)]
+    hulls = 0
+    for occ in fields:
+        occ = np.broadcast_to(occ, np.broadcast_shapes(occ.shape, (1, 1, 1))).copy()
+        fast = mod.hull_mask(occ)
+        assert np.array_equal(fast, mod.hull_mask(occ, raster=False))
+        assert not (occ & ~fast).any()
+        for axis in range(3):  # no gap inside a line of the mask
+            first = np.argmax(fast, axis=axis)
+            last = fast.shape[axis] - 1 - np.argmax(np.flip(fast, axis=axis), axis=axis)
+            counts = fast.sum(axis=axis)
+            assert np.all((counts == 0) | (counts == last - first + 1))
+        hulls += int(fast.sum() > occ.sum())
+    assert hulls >= 40  # most fields have a hull larger than themselves
