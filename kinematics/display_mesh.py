@@ -42,6 +42,11 @@ default, h = 6             voxels, 22 568 -> 12 000; 2.3x; 4.3 mm       3.9x; 4.
 a = 10 (thin caps), h = 4  voxels, 27 260 -> 12 000; 2.5x; 12.5 mm     4x; 12.5 mm
 =========================  ==========================================  ==================
 
+Since then the closedness test buckets the directed edges by their first vertex (linear in the faces,
+instead of a sort and a search of all of them) and the mixed cells are counted in one compiled pass:
+the same meshes, at h = 2 in 31-32 ms instead of 41-43 ms (0.93-0.96x the engine, from 1.25-1.29x;
+alternating runs, load 0.4).
+
 The coarser re-mesh rounds ridges at about a block (``k h``); quadric collapse keeps the budget's
 faces where the surface bends. Stated bounds (the tests use them): ``Hausdorff(T, full) <= (k + 1) h``
 and ``Hausdorff(D, T) <= 1.5 h`` (``3 h`` for thin, knife-edged workspaces such as the caps of
@@ -54,6 +59,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     import trimesh
@@ -82,18 +88,51 @@ def is_closed(mesh: trimesh.Trimesh) -> bool:
 
 def edges_closed(faces: np.ndarray) -> bool:
     """Whether every directed edge of ``faces`` (F, 3) appears exactly once and its reverse exactly
-    once: a watertight, consistently wound, edge-manifold triangle mesh (one sort of 3F integers)."""
-    f = np.asarray(faces, dtype=np.int64)
+    once: a watertight, consistently wound, edge-manifold triangle mesh (the directed edges grouped
+    by their first vertex, each looked up among its second vertex's: :func:`_edges_closed_kernel`)."""
+    f = np.ascontiguousarray(faces, dtype=np.int64)
     if len(f) == 0:
         return False
-    n = int(f.max()) + 1
-    a, b = f.ravel(), f[:, [1, 2, 0]].ravel()
-    key = np.sort(a * n + b)
-    if np.any(key[1:] == key[:-1]):
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"faces of shape {f.shape} are invalid: valid values (F, 3)")
+    if int(f.min()) < 0:  # not vertex indices
         return False
-    rev = b * n + a
-    pos = np.searchsorted(key, rev)
-    return bool(np.all(pos < len(key)) and np.array_equal(key[np.minimum(pos, len(key) - 1)], rev))
+    return bool(_edges_closed_kernel(f, int(f.max()) + 1))
+
+
+@njit(cache=True, nogil=True)
+def _edges_closed_kernel(faces, n):
+    """:func:`edges_closed` of ``faces`` on vertices ``0 .. n - 1``: the directed edges ``(a, b)``
+    bucketed by ``a`` (a counting sort, O(F)), then each edge must be alone in its bucket and ``(b, a)``
+    must be in ``b``'s."""
+    m = faces.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for f in range(m):
+        for c in range(3):
+            start[faces[f, c] + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:n].copy()
+    target = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for c in range(3):
+            a = faces[f, c]
+            target[fill[a]] = faces[f, (c + 1) % 3]
+            fill[a] += 1
+    for a in range(n):
+        for p in range(start[a], start[a + 1]):
+            b = target[p]
+            for q in range(p + 1, start[a + 1]):
+                if target[q] == b:
+                    return False
+            found = False
+            for q in range(start[b], start[b + 1]):
+                if target[q] == a:
+                    found = True
+                    break
+            if not found:
+                return False
+    return True
 
 
 def _signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -142,7 +181,8 @@ def display_shell(result: WorkspaceResult, max_faces: int = DISPLAY_FACES, remes
         empty = trimesh.Trimesh()
         empty.metadata["paraspace"] = meta
         return empty
-    field = np.pad(occ.astype(np.float32), 1)
+    field = np.zeros(tuple(n + 2 for n in occ.shape), np.float32)
+    field[1:-1, 1:-1, 1:-1] = occ
     means = _BlockMeans(field, binary=True)
     origin = np.asarray(result.grid.origin, dtype=float)
     mixed1 = _mixed_cells(field, HALF_LEVEL)

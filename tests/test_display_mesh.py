@@ -115,6 +115,69 @@ def test_edge_closedness_agrees_with_trimesh():
     assert not edges_closed(np.zeros((0, 3), int))
 
 
+def _edges_closed_by_sorting(faces: np.ndarray) -> bool:
+    """The definition by one sort of the directed edges' keys (the former edges_closed)."""
+    f = np.asarray(faces, dtype=np.int64)
+    n = int(f.max()) + 1
+    a, b = f.ravel(), f[:, [1, 2, 0]].ravel()
+    key = np.sort(a * n + b)
+    if np.any(key[1:] == key[:-1]):
+        return False
+    return bool(np.isin(b * n + a, key).all())
+
+
+def test_edge_closedness_equals_the_sorted_keys_on_broken_meshes():
+    """The bucketed test (kinematics/display_mesh._edges_closed_kernel) against the sorted keys on
+    closed meshes, each with a face removed, flipped, doubled, a vertex split off, or faces pinched
+    together at a vertex (two cones sharing an apex: closed by the definition), and random faces;
+    and on the display shell's own meshes."""
+    rng = np.random.default_rng(5)
+    meshes = [trimesh.creation.icosphere(3).faces, trimesh.creation.torus(1, 0.3).faces,
+              trimesh.creation.cylinder(1, 2, sections=7).faces]
+    cone = trimesh.creation.cone(1, 1, sections=6)
+    apex = int(np.argmax(cone.vertices[:, 2]))
+    twin = cone.faces + len(cone.vertices)
+    twin[twin == apex + len(cone.vertices)] = apex
+    meshes.append(np.vstack([cone.faces, twin]))
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=6.0))
+    meshes.append(np.asarray(display_shell(res).faces))
+    cases = []
+    for f in meshes:
+        cases.append(f)
+        cases.append(np.delete(f, rng.integers(len(f)), axis=0))
+        g = f.copy()
+        g[rng.integers(len(f))] = g[rng.integers(len(f))][::-1]
+        cases.append(g)
+        cases.append(np.vstack([f, f[rng.integers(len(f), size=1)]]))
+        g = f.copy()
+        g[rng.integers(len(f)), 0] = f.max() + 1
+        cases.append(g)
+    cases += [rng.integers(0, 12, size=(rng.integers(1, 40), 3)) for _ in range(200)]
+    seen = set()
+    for f in cases:
+        expect = _edges_closed_by_sorting(f)
+        assert edges_closed(f) == expect
+        seen.add(expect)
+    assert seen == {True, False}
+    assert not edges_closed(np.array([[0, 1, -1]]))
+    with pytest.raises(ValueError, match="faces"):
+        edges_closed(np.zeros((4, 2), int))
+
+
+def test_mixed_cells_count_the_definition():
+    """kinematics/shell._mixed_cells against the sum of the 8 corner sides in numpy."""
+    from paraspace.kinematics.shell import _mixed_cells
+
+    rng = np.random.default_rng(9)
+    for shape in [(1, 1, 1), (2, 2, 2), (3, 7, 2), (17, 9, 30)]:
+        for level in (0.2, 0.5, 0.9):
+            field = rng.random(shape).astype(np.float32)
+            b = (field > level).astype(np.uint8)
+            s = sum(b[i:b.shape[0] - 1 + i, j:b.shape[1] - 1 + j, k:b.shape[2] - 1 + k]
+                    for i in (0, 1) for j in (0, 1) for k in (0, 1))
+            assert _mixed_cells(field, level) == int(np.count_nonzero((s > 0) & (s < 8)))
+
+
 def test_decimating_a_given_mesh_gives_a_closed_mesh_under_the_budget_or_the_input():
     res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
     cap = REMESH_FACTOR * DISPLAY_FACES
