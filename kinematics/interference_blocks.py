@@ -75,7 +75,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .blocks import _split, rounding_margin
+from .blocks import rounding_margin
 from .design import Design
 from .feasibility import ChainTables, _leg_sets, chain_points
 from .geometry import platform_points_local
@@ -83,6 +83,7 @@ from .interference import _pose_clear, segment_closest, segment_distance
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
+from .summed_volume import box_count, summed_volume
 
 __all__ = ["interference_free_grid", "TOP"]
 
@@ -373,15 +374,6 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
     return False
 
 
-@njit(cache=True, inline="always")
-def _count(sat, b0, bn, b):
-    """Voxels to test in block ``b`` (``sat``: the summed-volume table of the mask)."""
-    x0, y0, z0 = b0[b, 0], b0[b, 1], b0[b, 2]
-    x1, y1, z1 = x0 + bn[b, 0], y0 + bn[b, 1], z0 + bn[b, 2]
-    return (sat[x1, y1, z1] - sat[x0, y1, z1] - sat[x1, y0, z1] - sat[x1, y1, z0]
-            + sat[x0, y0, z1] + sat[x0, y1, z0] + sat[x1, y0, z0] - sat[x0, y0, z0])
-
-
 @njit(parallel=True, cache=True, nogil=True)
 def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
                    lmin2, lmax2, jc, dmin, state, out):
@@ -389,7 +381,8 @@ def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_
     samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children)."""
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     for b in prange(b0.shape[0]):
-        if _count(sat, b0, bn, b) == 0:
+        if box_count(sat, b0[b, 0], b0[b, 1], b0[b, 2], b0[b, 0] + bn[b, 0], b0[b, 1] + bn[b, 1],
+                     b0[b, 2] + bn[b, 2]) == 0:  # no voxel to test
             state[b] = DONE
             continue
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
@@ -443,8 +436,7 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
     lmax = math.sqrt(tab.lmax2)
     eps = rounding_margin(lmax, (xs, ys, zs))
     margin = 100.0 * eps  # 1e-7 of the design's scale (module doc)
-    sat = np.zeros(tuple(s + 1 for s in mask.shape), np.int64)
-    sat[1:, 1:, 1:] = mask.cumsum(0, dtype=np.int64).cumsum(1).cumsum(2)
+    sat = summed_volume(mask)
     starts = [np.arange(0, s, TOP) for s in mask.shape]
     gx, gy, gz = np.meshgrid(*starts, indexing="ij")
     b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
@@ -459,6 +451,57 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
                 _blocks_kernel(b0[s:s + step], bn[s:s + step], skip[s:s + step], sat, mask, xs, ys, zs, float(h), eps,
                                margin, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
                                tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out)
-        keep = state == UNDECIDED
-        b0, bn, skip = _split(b0[keep], bn[keep], skip[keep])
+        with KERNEL_LOCK:
+            b0, bn, skip = _split_undecided(b0, bn, skip, state)
     return out
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _split_undecided(b0, bn, skip, state):
+    """The UNDECIDED blocks of ``state`` split in eight as :func:`kinematics.blocks._split` does
+    (halving every edge longer than one voxel, the first half the larger), each child with its
+    parent's ``skip`` marks; ``(b0, bn, skip)`` of the children, each block's consecutive (the order
+    changes no answer: every block is decided on its own). Parallel over the blocks, the children's
+    offsets from a prefix sum of their counts."""
+    nb = b0.shape[0]
+    counts = np.zeros(nb, np.int64)
+    for b in prange(nb):
+        if state[b] == UNDECIDED:
+            c = 1
+            for a in range(3):
+                if bn[b, a] > 1:
+                    c *= 2
+            counts[b] = c
+    offs = np.zeros(nb + 1, np.int64)
+    for b in range(nb):
+        offs[b + 1] = offs[b] + counts[b]
+    n_kids = offs[nb]
+    k0 = np.empty((n_kids, 3), np.int64)
+    kn = np.empty((n_kids, 3), np.int64)
+    ks = np.empty((n_kids,) + skip.shape[1:], np.bool_)
+    for b in prange(nb):
+        if counts[b] == 0:
+            continue
+        o = offs[b]
+        for d in range(8):
+            ux, uy, uz = (d >> 2) & 1, (d >> 1) & 1, d & 1
+            x0, nx = _half(b0[b, 0], bn[b, 0], ux)
+            y0, ny = _half(b0[b, 1], bn[b, 1], uy)
+            z0, nz = _half(b0[b, 2], bn[b, 2], uz)
+            if nx <= 0 or ny <= 0 or nz <= 0:
+                continue
+            k0[o, 0], k0[o, 1], k0[o, 2] = x0, y0, z0
+            kn[o, 0], kn[o, 1], kn[o, 2] = nx, ny, nz
+            ks[o] = skip[b]
+            o += 1
+    return k0, kn, ks
+
+
+@njit(cache=True, inline="always")
+def _half(start, n, upper):
+    """Start and length of the lower (``upper == 0``) or upper half of ``n`` voxels from ``start`` as
+    :func:`kinematics.blocks._split` halves them (one voxel: all of it below, nothing above)."""
+    half = (n + 1) // 2
+    if upper == 0:
+        return start, (half if n > 1 else n)
+    return start + half, n - half

@@ -57,6 +57,7 @@ from .kernel_args import kernel_args
 from .orientation_tree import _certified, _exact, build_tree, node_slack
 from .parallel import kernel_launch
 from .progress import CancelToken, Reporter, check
+from .summed_volume import box_count, summed_volume
 from .workspace import rotation_tables
 
 #: Edge (in voxels) of the coarsest position blocks (each voxel's cut and hints start afresh in a
@@ -174,13 +175,6 @@ def _voxel(px, py, pz, first, us, jcs, left, right, parent, leaf, centre, lo2, h
     return True
 
 
-@njit(cache=True, inline="always")
-def _count(cum, x0, y0, z0, x1, y1, z1):
-    """Candidates in the voxels ``[x0, x1) x [y0, y1) x [z0, z1)`` (``cum``: summed-volume table)."""
-    return (cum[x1, y1, z1] - cum[x0, y1, z1] - cum[x1, y0, z1] - cum[x1, y1, z0]
-            + cum[x0, y0, z1] + cum[x0, y1, z0] + cum[x1, y0, z0] - cum[x0, y0, z0])
-
-
 @njit(parallel=True, cache=True, nogil=True)
 def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs, left, right, parent, leaf, centre,
                    lo2, hi2, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, out):
@@ -210,7 +204,7 @@ def _blocks_kernel(t0, tn, cand, cum, xs, ys, zs, h, eps, first, levels, us, jcs
             nx, ny, nz = bn[sp, 0], bn[sp, 1], bn[sp, 2]
             mine = done[sp].copy()
             sp -= 1
-            if _count(cum, x0, y0, z0, x0 + nx, y0 + ny, z0 + nz) == 0:
+            if box_count(cum, x0, y0, z0, x0 + nx, y0 + ny, z0 + nz) == 0:
                 continue
             px = 0.5 * (xs[x0] + xs[x0 + nx - 1])
             py = 0.5 * (ys[y0] + ys[y0 + ny - 1])
@@ -338,13 +332,11 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     inner = np.flatnonzero(left >= 0)
     parent[left[inner]] = inner
     parent[right[inner]] = inner
-    cum = np.zeros(tuple(n + 1 for n in cand.shape), np.int64)
-    cum[1:, 1:, 1:] = cand.cumsum(0).cumsum(1).cumsum(2)
+    cum = summed_volume(cand)
     t0, tn = _even_top_blocks(cand.shape, TOP_BLOCK)
     x0, y0, z0 = t0.T
     x1, y1, z1 = (t0 + tn).T
-    counts = (cum[x1, y1, z1] - cum[x0, y1, z1] - cum[x1, y0, z1] - cum[x1, y1, z0]
-              + cum[x0, y0, z1] + cum[x0, y1, z0] + cum[x1, y0, z0] - cum[x0, y0, z0])
+    counts = box_count.py_func(cum, x0, y0, z0, x1, y1, z1)  # numpy's indexing: every top block at once
     t0, tn = t0[counts > 0], tn[counts > 0]
     levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     seg_k, seg_arc = sub_arcs(cos_t, sin_t)

@@ -84,6 +84,7 @@ from scipy import ndimage as ndi
 from skimage.measure import marching_cubes
 
 from .parallel import KERNEL_LOCK
+from .summed_volume import summed_volume
 from .workspace import WorkspaceResult
 
 SHELL_FORMATS: tuple[str, ...] = ("stl", "ply", "obj", "glb")
@@ -262,24 +263,6 @@ def _block_mean(field: np.ndarray, k: int) -> np.ndarray:
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _summed_volume_kernel(field, s):
-    """``s[i, j, k] = sum(field[:i, :j, :k] > 0.5)`` (the summed-volume table; ``s`` is zero on its
-    three lower faces): 2-D sums per x slice in parallel, then the running sum along x."""
-    n0, n1, n2 = field.shape
-    for i in prange(n0):
-        for j in range(n1):
-            run = np.int32(0)
-            for k in range(n2):
-                if field[i, j, k] > 0.5:
-                    run += 1
-                s[i + 1, j + 1, k + 1] = s[i + 1, j, k + 1] + run
-    for j in prange(n1 + 1):
-        for i in range(n0):
-            for k in range(n2 + 1):
-                s[i + 1, j, k] += s[i, j, k]
-
-
-@njit(parallel=True, cache=True, nogil=True)
 def _block_sums_kernel(s, k, out):
     """Voxel counts of the k^3 blocks of :func:`_block_mean`'s layout from the summed-volume table
     ``s``: block ``b`` covers fine indices ``(b - 1) k .. b k - 1``, clipped to the field."""
@@ -317,9 +300,7 @@ class _BlockMeans:
         if not self.binary:
             return _block_mean(self.field, k)
         if self.table is None:
-            self.table = np.zeros(tuple(n + 1 for n in self.field.shape), np.int32)
-            with KERNEL_LOCK:
-                _summed_volume_kernel(np.ascontiguousarray(self.field), self.table)
+            self.table = summed_volume(self.field)
         counts = np.empty([int(math.ceil(n / k)) + 2 for n in self.field.shape], np.int32)
         with KERNEL_LOCK:
             _block_sums_kernel(self.table, k, counts)
