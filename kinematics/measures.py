@@ -1054,7 +1054,8 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     occ = np.asarray(occupancy, dtype=bool)
     if not occ.any():
         return 0, 0
-    filled = occ | void_mask(occ, connectivity)
+    voids, box = _void_set(occ, connectivity)
+    filled = occ if box is None else occ | voids  # no void (the usual case): the solid itself
     b0 = count_components(filled, connectivity)
     return b0, int(b0 - euler_characteristic(filled, connectivity))
 
