@@ -16,12 +16,16 @@ __all__ = ["WarmUp"]
 
 
 class WarmUp(WorkerPlugin):
-    """``warm_up()`` in the worker process at set-up (idempotent: once per process)."""
+    """In the worker process at set-up (idempotent: once per process): numba takes the thread count
+    the worker's environment names (:func:`kinematics.parallel.adopt_thread_env`; the environment
+    arrives after numba may have been imported), then ``warm_up()``."""
 
     name = "paraspace-warm-up"
     idempotent = True
 
     def setup(self, worker: Any) -> None:
+        from .parallel import adopt_thread_env
         from .warmup import warm_up
 
+        adopt_thread_env()
         warm_up()

@@ -35,6 +35,14 @@ uses one thread when they are at least as many as the cores (:func:`launch_threa
 measurement: 0.96x, 0.77x, 0.76x -- the count is a snapshot of bursty work and misses some of
 it). With one other busy process on a 2-core machine both threads stay (the chunks let the second
 one help). ``LOAD_RULE = False`` turns the rule off; without ``/proc/loadavg`` every thread is used.
+
+Thread count set after import (:func:`adopt_thread_env`): numba reads ``NUMBA_NUM_THREADS`` when
+it is imported and again before each compilation, and refuses a change once its threads are
+running. A Dask worker gets its environment (one thread: ``kinematics.distributed.WORKER_ENV``)
+after the spawned process has re-imported the parent's main module -- which imports numba when the
+parent is ``paraspace`` itself -- so its threads would start at the machine's core count, every
+launch would use them all, and its first compilation (a kernel missing from numba's cache) would
+fail. The worker's warm-up adopts the environment's count first.
 """
 
 from __future__ import annotations
@@ -80,6 +88,34 @@ def launch_threads(configured: int) -> int:
     return 1
 
 
+#: Most threads one launch may use in this process (``None``: numba's count), set from the
+#: environment by :func:`adopt_thread_env` and applied by :data:`KERNEL_LOCK` in every thread.
+_THREAD_CAP: int | None = None
+
+
+def adopt_thread_env() -> int:
+    """Make this process's launches use the ``NUMBA_NUM_THREADS`` of the environment as it is now
+    (module docstring, "Thread count set after import"); returns the threads a launch will use.
+
+    numba fixes the threads it starts when it is imported, so the count is applied as a cap on every
+    launch under :data:`KERNEL_LOCK` (``numba.set_num_threads`` is per Python thread). Its
+    configuration is reloaded from the environment before its threads start; after, the
+    environment is set back to the count they started with, so that no later compilation fails."""
+    global _THREAD_CAP
+    import numba
+    from numba.core import config
+
+    raw = os.environ.get("NUMBA_NUM_THREADS", "").strip()
+    wanted = int(raw) if raw.isdigit() and int(raw) >= 1 else None
+    try:
+        config.reload_config()
+    except RuntimeError:  # the threads run with the count numba read at import
+        os.environ["NUMBA_NUM_THREADS"] = str(int(config.NUMBA_NUM_THREADS))
+    _THREAD_CAP = wanted
+    n = numba.get_num_threads()
+    return n if wanted is None else min(n, wanted)
+
+
 def _set_chunk(n: int) -> int:
     import numba
 
@@ -113,6 +149,8 @@ class _KernelLock:
             self._previous = _set_chunk(DEFAULT_CHUNK)
             self._threads = numba.get_num_threads()
             n = launch_threads(self._threads)
+            if _THREAD_CAP is not None:
+                n = min(n, _THREAD_CAP)
             if n != self._threads:
                 numba.set_num_threads(n)
         except BaseException:

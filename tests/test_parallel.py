@@ -106,3 +106,50 @@ def test_lock_lowers_and_restores_the_thread_count(monkeypatch) -> None:
 def test_other_runnable_reads_the_kernel_count() -> None:
     n = parallel._other_runnable()
     assert n is None or n >= 0
+
+
+_ADOPT = r"""
+import os, sys
+import numba, numpy as np
+from numba import njit, prange
+
+def compiled():  # a kernel that is not in numba's cache: its compilation reloads numba's configuration
+    @njit(parallel=True)
+    def total(a):
+        s = 0.0
+        for i in prange(a.shape[0]):
+            s += a[i]
+        return s
+    return total
+
+launched_first = sys.argv[1] == "launched"
+if launched_first:  # numba's threads already run when the environment arrives
+    compiled()(np.ones(8))
+os.environ["NUMBA_NUM_THREADS"] = "1"  # as a Dask nanny sets a worker's environment, after numba's import
+from paraspace.kinematics.parallel import KERNEL_LOCK, adopt_thread_env
+print(adopt_thread_env())
+f = compiled()
+with KERNEL_LOCK:
+    print(numba.get_num_threads(), f(np.ones(8)))
+print(compiled()(np.ones(3)))
+"""
+
+
+@pytest.mark.parametrize("when", ["before", "launched"])
+def test_a_thread_count_set_after_numbas_import_is_adopted(when, tmp_path) -> None:
+    """A Dask worker's environment (NUMBA_NUM_THREADS=1, kinematics.distributed.WORKER_ENV) arrives
+    after numba was imported; its warm-up's adopt_thread_env makes every launch under the kernel lock
+    use one thread and keeps later compilations from failing (numba refuses a thread count that
+    differs from the running threads'), whether numba's threads had started or not."""
+    import os
+    import subprocess
+    import sys
+
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("needs a default thread count other than 1")
+    script = tmp_path / "adopt.py"
+    script.write_text(_ADOPT)
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}
+    proc = subprocess.run([sys.executable, str(script), when], capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["1", "1", "8.0", "3.0"]
