@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from . import numba_cache  # noqa: F401  first: installs the cache locators before any kernel is decorated
 from .design import PARAMS, Design, ParameterError
 from .forward import forward_kinematics
 from .grid import GridSpec

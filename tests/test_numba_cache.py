@@ -1,0 +1,63 @@
+"""numba's cache of the compiled kernels follows every source file of the package
+(kinematics/numba_cache.py): a kernel whose callee in another module changed is compiled again,
+where numba's own stamp (the kernel's file only) serves the former code."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+_RUN = r"""
+import sys
+from pathlib import Path
+root = Path(sys.argv[1])
+sys.path.insert(0, str(root))
+if sys.argv[2] == "package":
+    from paraspace.kinematics.numba_cache import install
+    install(root / "pkg")
+import pkg.a
+print(pkg.a.kernel(1.0))
+"""
+
+
+def _run(root: Path, mode: str, cache: Path) -> str:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    proc = subprocess.run([sys.executable, str(root / "run.py"), str(root), mode], capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout.strip()
+
+
+@pytest.mark.parametrize("mode,after", [("package", "3.0"), ("numba", "2.0")])
+def test_a_changed_callee_recompiles_its_callers(tmp_path, mode, after):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "b.py").write_text("from numba import njit\n\n\n@njit(cache=True)\ndef f(x):\n    return x + 1.0\n")
+    (pkg / "a.py").write_text("from numba import njit\n\nfrom .b import f\n\n\n@njit(cache=True)\n"
+                              "def kernel(x):\n    return f(x)\n")
+    (tmp_path / "run.py").write_text(_RUN)
+    cache = tmp_path / "cache"
+    assert _run(tmp_path, mode, cache) == "2.0"
+    (pkg / "b.py").write_text("from numba import njit\n\n\n@njit(cache=True)\ndef f(x):\n    return x + 2.0\n")
+    # numba alone serves the kernel compiled with the former f (a.py did not change): the defect
+    assert _run(tmp_path, mode, cache) == after
+
+
+def test_the_cores_kernels_are_stamped_with_every_source_file():
+    import hashlib
+
+    from paraspace.kinematics import numba_cache
+    from paraspace.kinematics.dexterity_neighbour import _neighbour_kernel
+
+    package = Path(numba_cache.__file__).resolve().parent
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    locator = _neighbour_kernel._cache._impl.locator
+    assert type(locator) in numba_cache.locators()
+    assert locator.get_source_stamp()[1] == digest.hexdigest()
