@@ -77,9 +77,10 @@ in one branch-free pass) instead of the full search's 5,300, then ``1/kappa``
 (:mod:`kinematics.dexterity_sweep`), on half the grid where the mirror holds, and the sample check
 (at most 2,000 full searches, bounded by blocks: :mod:`kinematics.carriage_search`, about 22 us
 each instead of 95 us; the first voxel of a plane uses the same bounded search). At ``h = 2``
-(640,014 voxels, 2 cores, load 1.6): the whole field with its check takes 749 ms, 21.9x the
-engine's 34 ms (805 ms, 24.5x, with the unbounded full search in the same session;
-``benchmarks/bench_workspace.py --throughput``, target 3; the 20x target is not met); it was
+(640,014 voxels, 2 cores, load 1.0-1.4): the whole field with its check takes 652-671 ms, 18.8-19.9x
+the engine's 33-36 ms (724-746 ms, 21-22.5x, with the QL eigenvalues of ``1/kappa`` in the same
+session, on fresh numba caches; 20.15x in ``benchmarks/bench_workspace.py --throughput`` at load
+2.1: the 20x target is met on a lightly loaded machine, at its edge under load); it was
 73-102x before the mirror, the 6 x 6 ``1/kappa``, the stricter restart trigger and the scan's
 first-order bounds (measured one by one in issue 24's closing notes). The exact sweep is 297x and
 the full search 325x in the same run.

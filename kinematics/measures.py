@@ -217,9 +217,9 @@ the hull (:mod:`kinematics.hull`) gives qhull only the column ends that are vert
 hulls of their x line, y line and diagonals, and takes each column's limits from the triangles whose
 projection covers it. :func:`measure_fields`
 computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
-default design takes about 0.10 s at h = 2 and 0.7 s at h = 1 in CPU time with one numba thread
-on the shared 2-core machine (load 3-5.5: 1.6x and 3.5x the engine in the same run, from 0.17 s and
-1.65-1.95 s, 2.8x and 8-10x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
+default design takes about 50 ms at h = 2 and 350 ms at h = 1 in CPU time with one numba thread on
+the shared 2-core machine (load 1.1: 0.88x and 2.16x the engine in the same run, from 142 ms and
+1.2 s, 2.5x and 7.4x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
 """
 
 from __future__ import annotations
