@@ -253,6 +253,50 @@ def _split(b0: np.ndarray, bn: np.ndarray, *inherited: np.ndarray) -> tuple[np.n
     return (np.concatenate(kids0), np.concatenate(kidsn), *(np.concatenate(lst) for lst in kids))
 
 
+@njit(cache=True, inline="always")
+def n_children(bn, b):
+    """Children of block ``b`` when it is split as :func:`_split` splits it: 2 per edge longer than one
+    voxel (1, 2, 4 or 8)."""
+    c = 1
+    for a in range(3):
+        if bn[b, a] > 1:
+            c *= 2
+    return c
+
+
+@njit(cache=True, inline="always")
+def child_offsets(counts):
+    """``offs[b]``: the first row of block ``b``'s children when every block's ``counts[b]`` children
+    are written consecutively in block order (``offs[-1]``: their total)."""
+    offs = np.empty(counts.shape[0] + 1, np.int64)
+    offs[0] = 0
+    for b in range(counts.shape[0]):
+        offs[b + 1] = offs[b] + counts[b]
+    return offs
+
+
+@njit(cache=True, inline="always")
+def write_child(b0, bn, b, d, k0, kn, m):
+    """Write child ``d`` of block ``b`` (bit ``2 - a`` of ``d``: the upper half along axis ``a``, the
+    first half the larger, as :func:`_split` halves) into row ``m`` of ``k0``/``kn``; False, writing
+    nothing, where it is empty (an edge of one voxel has no upper half)."""
+    for a in range(3):
+        if (d >> (2 - a)) & 1 and bn[b, a] == 1:
+            return False
+    for a in range(3):
+        half = (bn[b, a] + 1) // 2
+        if bn[b, a] == 1:
+            k0[m, a] = b0[b, a]
+            kn[m, a] = 1
+        elif (d >> (2 - a)) & 1:
+            k0[m, a] = b0[b, a] + half
+            kn[m, a] = bn[b, a] - half
+        else:
+            k0[m, a] = b0[b, a]
+            kn[m, a] = half
+    return True
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _advance(b0, bn, state, win, all_chains, out):
     """One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
@@ -285,15 +329,8 @@ def _advance(b0, bn, state, win, all_chains, out):
                     for z in range(b0[b, 2], b0[b, 2] + bn[b, 2]):
                         out[x, y, z] = bits
         else:
-            c = 1
-            for a in range(3):
-                if bn[b, a] > 1:
-                    c *= 2
-            counts[b] = c  # >= 2: a kept block is never a single voxel
-    offs = np.empty(nb + 1, np.int64)
-    offs[0] = 0
-    for b in range(nb):
-        offs[b + 1] = offs[b] + counts[b]
+            counts[b] = n_children(bn, b)  # >= 2: a kept block is never a single voxel
+    offs = child_offsets(counts)
     n_kids = offs[nb]
     k0 = np.empty((n_kids, 3), np.int64)
     kn = np.empty((n_kids, 3), np.int64)
@@ -304,23 +341,8 @@ def _advance(b0, bn, state, win, all_chains, out):
             continue
         m = offs[b]
         for d in range(8):
-            ok = True
-            for a in range(3):
-                if (d >> (2 - a)) & 1 and bn[b, a] == 1:
-                    ok = False
-            if not ok:
+            if not write_child(b0, bn, b, d, k0, kn, m):
                 continue
-            for a in range(3):
-                half = (bn[b, a] + 1) // 2
-                if bn[b, a] == 1:
-                    k0[m, a] = b0[b, a]
-                    kn[m, a] = 1
-                elif (d >> (2 - a)) & 1:
-                    k0[m, a] = b0[b, a] + half
-                    kn[m, a] = bn[b, a] - half
-                else:
-                    k0[m, a] = b0[b, a]
-                    kn[m, a] = half
             for i in range(3):
                 ks[m, i] = state[b, i]
                 for j in range(3):

@@ -75,7 +75,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .blocks import rounding_margin
+from .blocks import child_offsets, n_children, rounding_margin, write_child
 from .design import Design
 from .feasibility import ChainTables, _leg_sets, chain_points
 from .geometry import platform_points_local
@@ -458,23 +458,16 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
 
 @njit(parallel=True, cache=True, nogil=True)
 def _split_undecided(b0, bn, skip, state):
-    """The UNDECIDED blocks of ``state`` split in eight as :func:`kinematics.blocks._split` does
-    (halving every edge longer than one voxel, the first half the larger), each child with its
-    parent's ``skip`` marks; ``(b0, bn, skip)`` of the children, each block's consecutive (the order
-    changes no answer: every block is decided on its own). Parallel over the blocks, the children's
-    offsets from a prefix sum of their counts."""
+    """The UNDECIDED blocks of ``state`` split in eight as :func:`kinematics.blocks._split` does, each
+    child with its parent's ``skip`` marks: ``(b0, bn, skip)`` of the children, each block's
+    consecutive (the order changes no answer: every block is decided on its own). Parallel over the
+    blocks, with :func:`kinematics.blocks._advance`'s child counts, offsets and boxes."""
     nb = b0.shape[0]
     counts = np.zeros(nb, np.int64)
     for b in prange(nb):
         if state[b] == UNDECIDED:
-            c = 1
-            for a in range(3):
-                if bn[b, a] > 1:
-                    c *= 2
-            counts[b] = c
-    offs = np.zeros(nb + 1, np.int64)
-    for b in range(nb):
-        offs[b + 1] = offs[b] + counts[b]
+            counts[b] = n_children(bn, b)
+    offs = child_offsets(counts)
     n_kids = offs[nb]
     k0 = np.empty((n_kids, 3), np.int64)
     kn = np.empty((n_kids, 3), np.int64)
@@ -482,26 +475,9 @@ def _split_undecided(b0, bn, skip, state):
     for b in prange(nb):
         if counts[b] == 0:
             continue
-        o = offs[b]
+        m = offs[b]
         for d in range(8):
-            ux, uy, uz = (d >> 2) & 1, (d >> 1) & 1, d & 1
-            x0, nx = _half(b0[b, 0], bn[b, 0], ux)
-            y0, ny = _half(b0[b, 1], bn[b, 1], uy)
-            z0, nz = _half(b0[b, 2], bn[b, 2], uz)
-            if nx <= 0 or ny <= 0 or nz <= 0:
-                continue
-            k0[o, 0], k0[o, 1], k0[o, 2] = x0, y0, z0
-            kn[o, 0], kn[o, 1], kn[o, 2] = nx, ny, nz
-            ks[o] = skip[b]
-            o += 1
+            if write_child(b0, bn, b, d, k0, kn, m):
+                ks[m] = skip[b]
+                m += 1
     return k0, kn, ks
-
-
-@njit(cache=True, inline="always")
-def _half(start, n, upper):
-    """Start and length of the lower (``upper == 0``) or upper half of ``n`` voxels from ``start`` as
-    :func:`kinematics.blocks._split` halves them (one voxel: all of it below, nothing above)."""
-    half = (n + 1) // 2
-    if upper == 0:
-        return start, (half if n > 1 else n)
-    return start + half, n - half

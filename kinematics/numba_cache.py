@@ -52,26 +52,28 @@ def locators(package: Path = PACKAGE) -> tuple[type, ...]:
     return _locators(Path(package).resolve())
 
 
-@functools.cache
-def _locators(root: Path) -> tuple[type, ...]:
+class _PackageStamped:
+    """Mixin over one of numba's source-file locators: it claims only the functions defined under
+    ``_root``, and stamps them with :func:`package_stamp` of ``_root`` as well."""
 
-    def from_function(cls: Any, py_func: Any, py_file: str) -> Any:
+    _root: Path
+
+    @classmethod
+    def from_function(cls, py_func: Any, py_file: str) -> Any:
         try:
-            inside = Path(py_file).resolve().is_relative_to(root)
+            inside = Path(py_file).resolve().is_relative_to(cls._root)
         except (OSError, ValueError):
             inside = False
-        if not inside:
-            return None  # not this package's: the next locator decides
-        return super(cls.__mro__[0], cls).from_function(py_func, py_file)
+        return super().from_function(py_func, py_file) if inside else None  # type: ignore[misc]
 
-    def get_source_stamp(self: Any) -> Any:
-        return (super(type(self), self).get_source_stamp(), package_stamp(root))
+    def get_source_stamp(self) -> Any:
+        return (super().get_source_stamp(), package_stamp(self._root))  # type: ignore[misc]
 
-    out = []
-    for base in _numba_locators():
-        out.append(type("Package" + base.__name__, (base,), {"from_function": classmethod(from_function),
-                                                             "get_source_stamp": get_source_stamp}))
-    return tuple(out)
+
+@functools.cache
+def _locators(root: Path) -> tuple[type, ...]:
+    return tuple(type("Package" + base.__name__, (_PackageStamped, base), {"_root": root})
+                 for base in _numba_locators())
 
 
 def _numba_locators() -> tuple[type, ...]:
