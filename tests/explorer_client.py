@@ -52,7 +52,10 @@ class FakeBrowser:
         self.downloads: dict[str, dict[str, Any]] = {}
         self.lock = threading.Lock()
         self.closed = False
-        before = set(explorer.sessions)
+        #: this page's viser client id, read from the key of the server's location request (the
+        #: server names it ``paraspace_location_<client id>``): pages opened at once each wait for
+        #: their own session, never for whichever new session is ready first.
+        self.client_id: int | None = None
         self.ws = connect(explorer.url.replace("http", "ws").rstrip("/"),
                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
         self._send({"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (0.0, 0.0, 500.0),
@@ -60,9 +63,13 @@ class FakeBrowser:
                     "look_at": (0.0, 0.0, 0.0), "up_direction": (0.0, 0.0, 1.0)})
         self.thread = threading.Thread(target=self._recv_loop, daemon=True)
         self.thread.start()
-        self.session: ClientSession = wait_for(
-            lambda: next((s for cid, s in list(explorer.sessions.items()) if cid not in before and s.ready.is_set()),
-                         None), build_timeout, "the session was not built")
+        self.session: ClientSession = wait_for(self._own_ready_session, build_timeout, "the session was not built")
+
+    def _own_ready_session(self) -> ClientSession | None:
+        if self.client_id is None:
+            return None
+        s = self.explorer.session(self.client_id)
+        return s if s is not None and s.ready.is_set() else None
 
     # ----- wire ---------------------------------------------------------------------------------
     def _send(self, msg: dict) -> None:
@@ -92,6 +99,9 @@ class FakeBrowser:
             # Play the browser: the two scripts of app/jsbridge.py that matter here.
             var_k = re.search(r"var k = (\"[^\"]+\");", src)
             if var_k and "location.search" in src:
+                own = re.fullmatch(r"viser-user:paraspace_location_(\d+)", json.loads(var_k.group(1)))
+                if own:
+                    self.client_id = int(own.group(1))
                 self.storage[json.loads(var_k.group(1))] = json.dumps({"search": self.search, "base": self.base})
             if var_k and "navigator.clipboard" in src:  # a page without clipboard access
                 self.storage[json.loads(var_k.group(1))] = "refused"
