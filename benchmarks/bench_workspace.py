@@ -67,6 +67,9 @@ import time
 # benchmarks/ first on sys.path, not the repository root)
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
+from paraspace.kinematics import euler as euler_mod  # noqa: E402
+from paraspace.kinematics import morphology as morph_mod  # noqa: E402
+from paraspace.kinematics import voids as voids_mod  # noqa: E402
 from paraspace.kinematics.design import Design  # noqa: E402
 from paraspace.kinematics.grid import GridSpec  # noqa: E402
 from paraspace.kinematics.reference import reference_reachable  # noqa: E402
@@ -253,6 +256,21 @@ def evaluation_rows(design: Design, runs: int = 5) -> None:
 
 
 @contextlib.contextmanager
+def _patched(*patches):
+    """Set ``(module, {name: value})`` attributes for the ``with`` block, then restore them."""
+    saved = [(module, {k: getattr(module, k) for k in patch}) for module, patch in patches]
+    for module, patch in patches:
+        for k, v in patch.items():
+            setattr(module, k, v)
+    try:
+        yield
+    finally:
+        for module, old in saved:
+            for k, v in old.items():
+                setattr(module, k, v)
+
+
+@contextlib.contextmanager
 def _former_measures():
     """kinematics.measures on its former path (before issue 24): skimage's Euler number, voids by
     labelling the whole padded complement, int32 dilations of the whole grid, every hull facet at
@@ -265,8 +283,8 @@ def _former_measures():
     from paraspace.kinematics import measures as mod
 
     def voids(occ, conn):
-        v = mod.void_mask_labelled(occ, conn)
-        return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
+        v = voids_mod.void_mask_labelled(occ, conn)
+        return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
     hull = mod.hull_mask
 
@@ -275,20 +293,14 @@ def _former_measures():
         return u & (hull(occ, raster=False) if hull_ is None else hull_)
 
     patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
-             "_voids": voids, "ball_dilate": mod.ball_dilate_reference,
+             "_voids": voids,
              "hull_mask": lambda occ, raster=False: hull(occ, raster=False),
-             "feature_filter": mod.feature_filter_reference,
+             "feature_filter": morph_mod.feature_filter_reference,
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
              "RunComponents": LabelledComponents,
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
-    saved = {k: getattr(mod, k) for k in patch}
-    for k, v in patch.items():
-        setattr(mod, k, v)
-    try:
+    with _patched((mod, patch)):
         yield
-    finally:
-        for k, v in saved.items():
-            setattr(mod, k, v)
 
 
 def measure_rows(design: Design, runs: int = 3) -> None:
@@ -345,25 +357,19 @@ def _measures_before_meas1():
 
     def euler(occ, conn=1):
         occ = np.ascontiguousarray(occ, dtype=np.bool_)
-        coefs = mod._EULER_26[::-1] if conn == 1 else mod._EULER_26
+        coefs = euler_mod._EULER_26[::-1] if conn == 1 else euler_mod._EULER_26
         hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
         with mod.KERNEL_LOCK:
             euler_hist_windows(occ, hist)
         return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
     hull = mod.hull_mask
-    patch = {"_voids": mod._voids_labelled_candidates,
-             "_void_set": lambda occ, conn: (mod._voids_labelled_candidates(occ, conn)[0], None),
+    patch = {"_voids": voids_mod._voids_labelled_candidates,
+             "_void_set": lambda occ, conn: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "euler_characteristic": euler}
-    saved = {k: getattr(mod, k) for k in patch}
-    for k, v in patch.items():
-        setattr(mod, k, v)
-    try:
+    with _patched((mod, patch), (voids_mod, {"_void_set": patch["_void_set"]})):  # the sealed cavity's too
         yield
-    finally:
-        for k, v in saved.items():
-            setattr(mod, k, v)
 
 
 def measure_meas1_rows(design: Design, runs: int = 3) -> None:
@@ -458,7 +464,7 @@ def _measures_before_meas2():
 
     def euler(occ, conn=1):
         occ = np.ascontiguousarray(occ, dtype=np.bool_)
-        coefs = mod._EULER_26[::-1] if conn == 1 else mod._EULER_26
+        coefs = euler_mod._EULER_26[::-1] if conn == 1 else euler_mod._EULER_26
         hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
         with mod.KERNEL_LOCK:
             euler_hist_all(occ, hist)
@@ -586,25 +592,16 @@ def _measures_before_meas2():
         d1i = np.empty(m.shape, np.int32)
         d2 = np.empty(m.shape, np.int32)
         with mod.KERNEL_LOCK:
-            mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
+            morph_mod._ball_dilate_kernel(m, w, r2, d1i, d2, out)
         return ~out if complement else out
 
-    reference_filter = mod.feature_filter_reference
+    reference_filter = morph_mod.feature_filter_reference
     patch = {"RunComponents": LabelledComponents, "euler_characteristic": euler,
-             "ball_dilate": dilate_before,
              "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, cancel, dilate=dilate_before),
              "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
-    saved = {k: getattr(mod, k) for k in patch}
-    seed = void_flood._seed_kernel
-    for k, v in patch.items():
-        setattr(mod, k, v)
-    void_flood._seed_kernel = void_flood._seed_kernel_reference
-    try:
+    with _patched((mod, patch), (voids_mod, {"count_components": patch["count_components"]}),
+                  (void_flood, {"_seed_kernel": void_flood._seed_kernel_reference})):
         yield
-    finally:
-        for k, v in saved.items():
-            setattr(mod, k, v)
-        void_flood._seed_kernel = seed
 
 
 def measure_stage_rows(design: Design, runs: int = 5) -> None:
@@ -697,11 +694,11 @@ def feature_filter_rows(design: Design, runs: int = 3) -> None:
         res = compute_workspace(design, WorkspaceSettings(voxel=h))
         m = mod.measure_workspace(res)
         occ, rv = res.occupancy, m.feature_radius_voxels
-        new_out = mod.feature_filter(occ, rv)
-        same = bool(np.array_equal(mod.feature_filter_reference(occ, rv), new_out))
+        new_out = morph_mod.feature_filter(occ, rv)
+        same = bool(np.array_equal(morph_mod.feature_filter_reference(occ, rv), new_out))
 
         def old(occ=occ, rv=rv):
-            return mod.feature_filter_reference(occ, rv)
+            return morph_mod.feature_filter_reference(occ, rv)
 
         fns = {"engine": lambda h=h: compute_workspace(design, WorkspaceSettings(voxel=h))}
         for nt in sorted({1, min(2, threads)}):
@@ -713,7 +710,7 @@ def feature_filter_rows(design: Design, runs: int = 3) -> None:
                     finally:
                         numba.set_num_threads(threads)
                 return run
-            fns[f"new {nt}"] = with_threads(lambda occ=occ, rv=rv: mod.feature_filter(occ, rv))
+            fns[f"new {nt}"] = with_threads(lambda occ=occ, rv=rv: morph_mod.feature_filter(occ, rv))
             fns[f"old {nt}"] = with_threads(old)
         med = _alternating(fns, runs)
         print(f"  target 1, feature filter h={h:g} (r = {rv:.2f} voxels, {occ.size:,} voxels; load average "

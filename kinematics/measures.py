@@ -201,14 +201,15 @@ Computation
 Every number above is computed as defined, by kernels that give the same numbers as the plain
 computations they replaced (tests/test_measures.py compares every measure with that former path):
 the components are counted from the runs along z (:mod:`kinematics.run_components`: a union-find
-over the runs, whose number grows with the surface, not the volume); the Euler number counts the
-2x2x2 configurations in one parallel pass with skimage's (Ohser's) coefficients, reading four
-voxels per window and only the windows that meet their four columns' span; the voids are the
+over the runs, whose number grows with the surface, not the volume); the Euler number
+(:mod:`kinematics.euler`) counts the 2x2x2 configurations in one parallel pass with skimage's
+(Ohser's) coefficients, reading four voxels per window and only the windows that meet their four
+columns' span; the voids and the sealed cavities (:mod:`kinematics.voids`) are the
 unreachable voxels that have reachable ones on both sides along all three axes (any other
 unreachable voxel sees the padding along a straight line) less a flood from those that leak
 (:mod:`kinematics.void_flood`, its seeds found by separable ors: a sealed cavity is never visited,
-and only the voids are counted, when their number is asked for); the dilations work on the solid
-packed 64 voxels to a word along z (the ball as the union over its ``(di, dj)`` offsets of z runs
+and only the voids are counted, when their number is asked for); the dilations
+(:mod:`kinematics.morphology`) work on the solid packed 64 voxels to a word along z (the ball as the union over its ``(di, dj)`` offsets of z runs
 ``|dk| <= floor(sqrt(r^2 - di^2 - dj^2))``: the set dilated along z by each run length, by shifts
 of whole words, moved by each offset and or-ed in), compute half the rows of a mirror-symmetric
 solid, and the filter packs the solid once for its four dilations (an erosion is the complement of
@@ -225,20 +226,21 @@ the shared 2-core machine (load 1.1: 0.88x and 2.16x the engine in the same run,
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
 from numba import njit, prange
 from scipy import ndimage as ndi
-from skimage.measure._regionprops_utils import EULER_COEFS3D_26 as _EULER_COEFS3D_26
 
+from .euler import euler_characteristic
 from .hull import hull_mask
+from .morphology import feature_filter
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
 from .run_components import RunComponents, count_components
 from .serialize import jsonable
-from .void_flood import _contiguous, enclosed_voids
+from .void_flood import _contiguous
+from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_mask
 from .workspace import WorkspaceResult
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -300,106 +302,6 @@ class WorkspaceMeasures:
         return jsonable(dataclasses.asdict(self))
 
 
-def _structure(connectivity: int) -> np.ndarray:
-    return ndi.generate_binary_structure(3, connectivity)
-
-
-def dual_connectivity(connectivity: int) -> int:
-    """Adjacency of the complement paired with ``connectivity`` (1 <-> 3, i.e. 6 <-> 26)."""
-    if connectivity not in (1, 3):
-        raise ValueError(f"connectivity = {connectivity!r} is invalid: valid values 1 (6-neighbours) "
-                         "or 3 (26-neighbours)")
-    return 4 - connectivity
-
-
-def void_mask_labelled(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
-    """:func:`void_mask` by its definition: every component of the padded complement labelled, the
-    one holding the padding is the outside (the reference of the tests)."""
-    occ = np.asarray(occupancy, dtype=bool)
-    comp = np.pad(~occ, 1, constant_values=True)
-    lab, _ = ndi.label(comp, structure=_structure(dual_connectivity(connectivity)))
-    outside = lab[0, 0, 0]
-    voids = (lab != outside) & comp
-    return voids[1:-1, 1:-1, 1:-1]
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _enclosed_ext_kernel(occ, out, ext):
-    """``out``: unreachable voxels with reachable ones on both sides along x, along y and along z
-    (strictly between the first and the last reachable voxel of each of their three axis lines);
-    and each x slice's extent of these candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)``
-    (inclusive; ``j_hi = -1``: none in slice ``i``), so their bounding box needs no serial pass over
-    the grid. Both passes are parallel: the
-    x ends per ``(j, k)`` over y slices, the rest over x slices."""
-    n0, n1, n2 = occ.shape
-    fx = np.empty((n1, n2), np.int64)
-    lx = np.empty((n1, n2), np.int64)
-    for j in prange(n1):
-        for k in range(n2):
-            fx[j, k] = n0
-            lx[j, k] = -1
-        for i in range(n0):
-            for k in range(n2):
-                if occ[i, j, k]:
-                    if fx[j, k] == n0:
-                        fx[j, k] = i
-                    lx[j, k] = i
-    for i in prange(n0):
-        fy = np.full(n2, n1, np.int64)
-        ly = np.full(n2, -1, np.int64)
-        for j in range(n1):
-            for k in range(n2):
-                if occ[i, j, k]:
-                    if fy[k] == n1:
-                        fy[k] = j
-                    ly[k] = j
-        jlo, jhi, klo, khi = n1, -1, n2, -1
-        for j in range(n1):
-            fz = n2
-            for k in range(n2):
-                if occ[i, j, k]:
-                    fz = k
-                    break
-            lz = -1
-            for k in range(n2 - 1, fz, -1):
-                if occ[i, j, k]:
-                    lz = k
-                    break
-            for k in range(n2):
-                out[i, j, k] = False
-            for k in range(fz + 1, lz):  # only strictly between the column's ends
-                v = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
-                out[i, j, k] = v
-                if v:
-                    if jlo == n1:
-                        jlo = j
-                    jhi = j
-                    if k < klo:
-                        klo = k
-                    if k > khi:
-                        khi = k
-        ext[i, 0] = jlo
-        ext[i, 1] = jhi
-        ext[i, 2] = klo
-        ext[i, 3] = khi
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _paste_kernel(sub, lo0, lo1, lo2, out):
-    """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
-    slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
-    n0, n1, n2 = out.shape
-    m0, m1, m2 = sub.shape
-    for i in prange(n0):
-        for j in range(n1):
-            for k in range(n2):
-                out[i, j, k] = False
-        if lo0 <= i < lo0 + m0:
-            for j in range(m1):
-                for k in range(m2):
-                    out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
-
-
 @njit(parallel=True, cache=True, nogil=True)
 def _occ_extent_kernel(occ, ext):
     """Per x slice ``i`` of ``occ``: ``ext[i] = (count, j_lo, j_hi, k_lo, k_hi)`` of its set voxels
@@ -435,18 +337,6 @@ def _occ_extent_kernel(occ, ext):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _floored_kernel(occ, out):
-    """``out = concatenate([ones(n0, n1, 1), occ], axis=2)`` (the grid on its base layer), over x
-    slices in parallel."""
-    n0, n1, n2 = occ.shape
-    for i in prange(n0):
-        for j in range(n1):
-            out[i, j, 0] = True
-            for k in range(n2):
-                out[i, j, k + 1] = occ[i, j, k]
-
-
-@njit(parallel=True, cache=True, nogil=True)
 def _open_sealed_counts_kernel(under, sealed):
     """``(|under & ~sealed|, |under & sealed|)`` in one parallel pass over x slices."""
     n0, n1, n2 = under.shape
@@ -463,205 +353,6 @@ def _open_sealed_counts_kernel(under, sealed):
         n_open[i] = c_under - c_sealed
         n_sealed[i] = c_sealed
     return n_open.sum(), n_sealed.sum()
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _open_labels_kernel(cand, lab, occ, full, n_labels):
-    """Labels of ``cand`` (the candidates' components) with a dual neighbour that is unreachable and
-    not a candidate: those components reach the outside (``full``: 26 neighbours, else 6). Threads
-    only ever set entries of ``opened`` to True."""
-    n0, n1, n2 = cand.shape
-    opened = np.zeros(n_labels + 1, np.bool_)
-    for i in prange(n0):
-        for j in range(n1):
-            for k in range(n2):
-                c = lab[i, j, k]
-                if c == 0 or opened[c]:
-                    continue
-                for di in range(-1, 2):
-                    for dj in range(-1, 2):
-                        for dk in range(-1, 2):
-                            if not full and abs(di) + abs(dj) + abs(dk) != 1:
-                                continue
-                            a, b, e = i + di, j + dj, k + dk
-                            if a < 0 or b < 0 or e < 0 or a >= n0 or b >= n1 or e >= n2:
-                                opened[c] = True  # pragma: no cover - candidates never touch the edge
-                            elif not occ[a, b, e] and not cand[a, b, e]:
-                                opened[c] = True
-    return opened
-
-
-def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple] | None:
-    """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
-    (:func:`_enclosed_ext_kernel`) and their bounding box grown by one voxel (the neighbours the tests
-    look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
-    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
-    if not occ.size:
-        return None
-    cand = np.empty(occ.shape, np.bool_)
-    ext = np.empty((occ.shape[0], 4), np.int64)
-    with KERNEL_LOCK:
-        _enclosed_ext_kernel(occ, cand, ext)
-    rows = np.flatnonzero(ext[:, 1] >= 0)
-    if not rows.size:
-        return None
-    e = ext[rows]
-    lo = [int(rows[0]), int(e[:, 0].min()), int(e[:, 2].min())]
-    hi = [int(rows[-1]) + 1, int(e[:, 1].max()) + 1, int(e[:, 3].max()) + 1]
-    box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
-    return occ, cand, box
-
-
-def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
-    """:func:`_voids` by labelling every candidate component and testing each for a leak (the former
-    path, kept as a reference: the same set and number)."""
-    found = _candidates_box(occupancy)
-    if found is None:
-        return np.zeros(np.shape(occupancy), np.bool_), 0
-    occ, cand, box = found
-    sub = cand[box]
-    lab, n = ndi.label(sub, structure=_structure(dual_connectivity(connectivity)))
-    with KERNEL_LOCK:
-        opened = _open_labels_kernel(sub, lab, occ[box], dual_connectivity(connectivity) == 3, n)
-    keep = ~opened
-    keep[0] = False
-    voids = np.zeros(occ.shape, np.bool_)
-    voids[box] = keep[lab]
-    return voids, int(keep.sum())
-
-
-def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tuple | None]:
-    """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
-    (:func:`_enclosed_ext_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
-    which never visits a sealed cavity; ``box`` bounds the voids (``None``: no void)."""
-    found = _candidates_box(occupancy)
-    if found is None:
-        return np.zeros(np.shape(occupancy), np.bool_), None
-    occ, cand, box = found
-    with KERNEL_LOCK:
-        sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
-    if not n_void:
-        return np.zeros(occ.shape, np.bool_), None
-    voids = np.empty(occ.shape, np.bool_)
-    with KERNEL_LOCK:
-        _paste_kernel(sub, box[0].start, box[1].start, box[2].start, voids)
-    return voids, box
-
-
-def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
-    """``(void_mask, number of voids)`` without labelling the whole complement.
-
-    An unreachable voxel with no reachable voxel on one side along some axis is joined to the
-    padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
-    is outside. The others, the candidates (:func:`_enclosed_ext_kernel`), are outside exactly when they
-    are joined within the candidates to one with a dual neighbour that is unreachable and not a
-    candidate (:func:`_void_set`); only the voids left are counted, as components of runs
-    (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
-    candidate components are not adjacent).
-    """
-    voids, box = _void_set(occupancy, connectivity)
-    if box is None:
-        return voids, 0
-    return voids, count_components(voids[box], dual_connectivity(connectivity))
-
-
-def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
-    """Voxels of the enclosed voids (complement components not connected to the padded outside);
-    computed by :func:`_void_set` (no labelling), the same set as :func:`void_mask_labelled`."""
-    return _void_set(occupancy, connectivity)[0]
-
-
-#: skimage's Ohser coefficients of the 256 2x2x2 configurations (26-adjacency; reversed for 6)
-_EULER_26 = np.asarray(_EULER_COEFS3D_26, dtype=np.int64)
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _euler_hist_kernel(occ, hist):
-    """``hist[i, c]``: 2x2x2 windows of low corner x index ``i - 1`` with configuration ``c``, over
-    every window that meets the grid (voxels outside it empty); bits as skimage's convolution
-    gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
-    window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
-    previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
-    voxels, so each window reads four voxels; and only the windows that meet the span of their four
-    columns (from the lowest to the highest set voxel of any of them) are read: the others hold no
-    set voxel and are counted as configuration 0 without a read."""
-    n0, n1, n2 = occ.shape
-    kb = np.empty((n0, n1), np.int64)  # lowest set z of each column (n2: none)
-    kt = np.empty((n0, n1), np.int64)  # highest (-1: none)
-    for i in prange(n0):
-        for j in range(n1):
-            lo = n2
-            for k in range(n2):
-                if occ[i, j, k]:
-                    lo = k
-                    break
-            hi = -1
-            if lo < n2:
-                for k in range(n2 - 1, lo - 1, -1):
-                    if occ[i, j, k]:
-                        hi = k
-                        break
-            kb[i, j] = lo
-            kt[i, j] = hi
-    for ii in prange(n0 + 1):
-        i = ii - 1
-        x0 = i >= 0
-        x1 = i + 1 < n0
-        row = np.zeros(256, np.int64)
-        for j in range(-1, n1):
-            y0 = j >= 0
-            y1 = j + 1 < n1
-            c00 = x0 and y0
-            c01 = x0 and y1
-            c10 = x1 and y0
-            c11 = x1 and y1
-            lo = n2
-            hi = -1
-            if c00:
-                lo = min(lo, kb[i, j])
-                hi = max(hi, kt[i, j])
-            if c01:
-                lo = min(lo, kb[i, j + 1])
-                hi = max(hi, kt[i, j + 1])
-            if c10:
-                lo = min(lo, kb[i + 1, j])
-                hi = max(hi, kt[i + 1, j])
-            if c11:
-                lo = min(lo, kb[i + 1, j + 1])
-                hi = max(hi, kt[i + 1, j + 1])
-            if hi < 0:
-                row[0] += n2 + 1
-                continue
-            row[0] += n2 + 1 - (hi - lo + 2)  # the windows below lo - 1 and above hi
-            code = 0
-            for k in range(lo - 1, hi + 1):
-                z = k + 1
-                far = 0
-                if z < n2:
-                    if c00 and occ[i, j, z]:
-                        far |= 32
-                    if c01 and occ[i, j + 1, z]:
-                        far |= 16
-                    if c10 and occ[i + 1, j, z]:
-                        far |= 2
-                    if c11 and occ[i + 1, j + 1, z]:
-                        far |= 1
-                code = ((code & 0x33) << 2) | far
-                row[code] += 1
-        for c in range(256):
-            hist[ii, c] = row[c]
-
-
-def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
-    """``skimage.measure.euler_number(occupancy, connectivity)`` (3-D), the same integer, from one
-    parallel pass that counts the 2x2x2 configurations (windows that miss the grid are empty, and
-    the empty configuration's coefficient is 0)."""
-    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
-    coefs = _EULER_26[::-1] if connectivity == 1 else _EULER_26
-    hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
-    with KERNEL_LOCK:
-        _euler_hist_kernel(occ, hist)
-    return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
 
 def touched_faces(occupancy: np.ndarray) -> list[str]:
@@ -764,291 +455,6 @@ def column_gap_count(occupancy: np.ndarray) -> int:
     return int(gaps.sum())
 
 
-@njit(parallel=True, cache=True, nogil=True)
-def _ball_dilate_kernel(m, w, r2, d1, d2, out):
-    """``out = {v : min_{u in m} |u - v|^2 <= r2}`` (index units), separably: the squared distance to
-    the nearest set voxel within the window ``|du_a| <= w`` along x, then y, then z (min-plus of
-    squared distances is separable); exact when ``w >= sqrt(r2)``. Each search runs outward from
-    the voxel and stops once the offset alone costs more than the best found (exact)."""
-    nx, ny, nz = m.shape
-    big = np.int32(1 << 30)
-    for i in prange(nx):
-        for j in range(ny):
-            for k in range(nz):
-                best = big
-                for di in range(w + 1):
-                    if (i + di < nx and m[i + di, j, k]) or (i - di >= 0 and m[i - di, j, k]):
-                        best = di * di
-                        break
-                d1[i, j, k] = best
-    for i in prange(nx):
-        for j in range(ny):
-            for k in range(nz):
-                best = d1[i, j, k]
-                for dj in range(1, w + 1):
-                    c = dj * dj
-                    if c >= best:
-                        break
-                    if j + dj < ny and d1[i, j + dj, k] + c < best:
-                        best = d1[i, j + dj, k] + c
-                    if j - dj >= 0 and d1[i, j - dj, k] + c < best:
-                        best = d1[i, j - dj, k] + c
-                d2[i, j, k] = best
-    for i in prange(nx):
-        for j in range(ny):
-            for k in range(nz):
-                best = d2[i, j, k]
-                for dk in range(1, w + 1):
-                    c = dk * dk
-                    if c >= best or c > r2:
-                        break
-                    if k + dk < nz and d2[i, j, k + dk] + c < best:
-                        best = d2[i, j, k + dk] + c
-                    if k - dk >= 0 and d2[i, j, k - dk] + c < best:
-                        best = d2[i, j, k - dk] + c
-                out[i, j, k] = best <= r2
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _pack_kernel(m, P):
-    """``P[i, j, q]``: bit ``t`` is ``m[i, j, 64 q + t]`` (the bits past ``nz`` are 0)."""
-    nx, ny, nz = m.shape
-    nw = P.shape[2]
-    for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw):
-                word = np.uint64(0)
-                base = 64 * q
-                for t in range(min(64, nz - base)):
-                    word |= np.uint64(m[i, j, base + t]) << np.uint64(t)
-                P[i, j, q] = word
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _unpack_kernel(P, out):
-    """The inverse of :func:`_pack_kernel`."""
-    nx, ny, nz = out.shape
-    nw = P.shape[2]
-    one = np.uint64(1)
-    for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw):
-                word = P[i, j, q]
-                base = 64 * q
-                for t in range(min(64, nz - base)):
-                    out[i, j, base + t] = ((word >> np.uint64(t)) & one) != np.uint64(0)
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _not_kernel(P, last):
-    """The complement of a packed set, in place (``last``: the valid bits of each row's last word)."""
-    nx, ny, nw = P.shape
-    for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw - 1):
-                P[i, j, q] = ~P[i, j, q]
-            P[i, j, nw - 1] = ~P[i, j, nw - 1] & last
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, Z, R):
-    """``R``: the packed set ``P`` dilated by the ball whose offsets ``(DI[e], DJ[e])`` carry the z
-    runs ``|dk| <= A[e]`` (:func:`_ball_offsets`): for ``a = 0 .. w``, ``Z`` = ``P`` dilated along
-    z by ``[-a, a]`` (that of ``a - 1`` or-ed with ``P`` moved ``a`` bits each way across the words),
-    then or-ed into ``R`` moved by every offset whose run is ``a``. With ``half`` (``P`` symmetric
-    under ``j -> ny - 1 - j``, so ``R`` is too) only the rows ``j >= ny // 2`` are or-ed, the others
-    copied. Bits past ``nz`` are cleared (``last``). ``Z``: work array shaped like ``P``."""
-    nx, ny, nw = P.shape
-    j0 = ny // 2 if half else 0
-    zero = np.uint64(0)
-    n = DI.shape[0]
-    for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw):
-                R[i, j, q] = zero
-    for a in range(w + 1):
-        for i in prange(nx):
-            for j in range(ny):
-                for q in range(nw):
-                    if a == 0:
-                        v = P[i, j, q]
-                    else:
-                        up = P[i, j, q] << np.uint64(a)
-                        if q > 0:
-                            up |= P[i, j, q - 1] >> np.uint64(64 - a)
-                        dn = P[i, j, q] >> np.uint64(a)
-                        if q + 1 < nw:
-                            dn |= P[i, j, q + 1] << np.uint64(64 - a)
-                        v = Z[i, j, q] | up | dn
-                    Z[i, j, q] = v
-        for i in prange(nx):
-            for e in range(n):
-                if A[e] != a:
-                    continue
-                ii = i + DI[e]
-                if ii < 0 or ii >= nx:
-                    continue
-                dj = DJ[e]
-                for j in range(max(j0, -dj), min(ny, ny - dj)):
-                    for q in range(nw):
-                        R[i, j, q] |= Z[ii, j + dj, q]
-    for i in prange(nx):
-        for j in range(j0, ny):
-            R[i, j, nw - 1] &= last
-        if half:
-            for j in range(j0):
-                for q in range(nw):
-                    R[i, j, q] = R[i, ny - 1 - j, q]
-
-
-def _ball_offsets(r2: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The digital ball ``{d in Z^3 : |d|^2 <= r2}`` as z runs: its ``(di, dj)`` offsets and each
-    one's half-length ``floor(sqrt(r2 - di^2 - dj^2))`` (int64 arrays)."""
-    d = np.arange(-w, w + 1)
-    di, dj = (a.ravel() for a in np.meshgrid(d, d, indexing="ij"))
-    rest = r2 - di * di - dj * dj
-    keep = rest >= 0
-    runs = np.array([math.isqrt(int(v)) for v in rest[keep]], np.int64)
-    return di[keep].astype(np.int64), dj[keep].astype(np.int64), np.minimum(runs, w)
-
-
-class _Packed:
-    """A boolean grid packed along z for :func:`_dilate_packed_kernel` (its two work arrays and the
-    ball's offsets), dilated and complemented in place of the arrays it holds."""
-
-    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool) -> None:
-        self.shape = m.shape
-        nx, ny, nz = m.shape
-        nw = -(-nz // 64)
-        rem = nz - 64 * (nw - 1)
-        self.last = np.uint64((1 << rem) - 1) if rem < 64 else np.uint64(0xFFFFFFFFFFFFFFFF)
-        self.w = int(np.floor(radius_voxels + 1e-9))
-        self.offsets = _ball_offsets(int(np.floor(radius_voxels * radius_voxels + 1e-9)), self.w)
-        self.symmetric = bool(symmetric)
-        self.P = np.empty((nx, ny, nw), np.uint64)
-        self.Z = np.empty_like(self.P)
-        self.R = np.empty_like(self.P)
-        with KERNEL_LOCK:
-            _pack_kernel(m, self.P)
-
-    def dilate(self, complement: bool = False) -> None:
-        """The set becomes its dilation by the ball (its erosion with ``complement``)."""
-        with KERNEL_LOCK:
-            if complement:
-                _not_kernel(self.P, self.last)
-            _dilate_packed_kernel(self.P, *self.offsets, self.w, self.symmetric, self.last, self.Z, self.R)
-            if complement:
-                _not_kernel(self.R, self.last)
-        self.P, self.R = self.R, self.P
-
-    def unpack(self) -> np.ndarray:
-        out = np.empty(self.shape, np.bool_)
-        with KERNEL_LOCK:
-            _unpack_kernel(self.P, out)
-        return out
-
-
-def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
-                symmetric: bool = False) -> np.ndarray:
-    """Dilation of ``mask`` by the digital Euclidean ball ``{d in Z^3 : |d| <= radius_voxels}``.
-
-    Exact (tested against ``scipy.ndimage``); voxels outside the array are taken as not in
-    ``mask``. ``complement=True`` gives ``~ball_dilate(~mask)`` (the erosion of ``mask``; voxels
-    outside the array are not in ``~mask``); ``symmetric=True`` says that ``mask`` equals
-    ``mask[:, ::-1]`` (half the work). Packed along z (:func:`_dilate_packed_kernel`) for radii below
-    64 voxels, by :func:`ball_dilate_reference`'s kernel above.
-    """
-    m = np.ascontiguousarray(mask, dtype=np.bool_)
-    w = int(np.floor(radius_voxels + 1e-9))
-    if w <= 0 or m.size == 0:
-        return m.copy()
-    r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
-    if w < 64:
-        packed = _Packed(m, radius_voxels, symmetric)
-        packed.dilate(complement)
-        return packed.unpack()
-    out = np.empty(m.shape, np.bool_)
-    if complement:
-        m = ~m
-    d1i = np.empty(m.shape, np.int32)
-    d2 = np.empty(m.shape, np.int32)
-    with KERNEL_LOCK:
-        _ball_dilate_kernel(m, w, r2, d1i, d2, out)
-    return ~out if complement else out
-
-
-def ball_dilate_reference(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
-                          symmetric: bool = False) -> np.ndarray:
-    """:func:`ball_dilate` with int32 distances over the whole array (the former kernel; the tests'
-    reference for the packed and mirrored one). ``symmetric`` is accepted and ignored (the same
-    signature as :func:`ball_dilate`)."""
-    m = np.ascontiguousarray(mask, dtype=np.bool_)
-    w = int(np.floor(radius_voxels + 1e-9))
-    if w <= 0 or m.size == 0:
-        return m.copy()
-    if complement:
-        return ~ball_dilate_reference(~m, radius_voxels)
-    r2 = int(np.floor(radius_voxels * radius_voxels + 1e-9))
-    d1 = np.empty(m.shape, np.int32)
-    d2 = np.empty(m.shape, np.int32)
-    out = np.empty(m.shape, np.bool_)
-    with KERNEL_LOCK:
-        _ball_dilate_kernel(m, w, r2, d1, d2, out)
-    return out
-
-
-class _Grids:
-    """:class:`_Packed`'s steps on boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature)."""
-
-    def __init__(self, o: np.ndarray, radius_voxels: float, symmetric: bool, dilate) -> None:
-        self.o, self.r, self.symmetric, self._dilate = o, radius_voxels, symmetric, dilate
-
-    def dilate(self, complement: bool = False) -> None:
-        self.o = self._dilate(self.o, self.r, complement=complement, symmetric=self.symmetric)
-
-    def unpack(self) -> np.ndarray:
-        return self.o
-
-
-def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken, grids) -> np.ndarray:
-    """:func:`feature_filter`'s steps on the padded solid held by ``grids(o, r, symmetric)`` (a
-    :class:`_Packed` or a :class:`_Grids`)."""
-    occ = np.asarray(occupancy, dtype=bool)
-    w = int(np.floor(radius_voxels + 1e-9))
-    if w <= 0:
-        return occ.copy()
-    p = w + 1
-    o = np.pad(occ, p)
-    g = grids(o, radius_voxels, bool(np.array_equal(o, o[:, ::-1])))  # each step keeps the mirror
-    for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
-        if step:
-            check(cancel)
-        g.dilate(complement)
-    return g.unpack()[p:-p, p:-p, p:-p]
-
-
-def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None) -> np.ndarray:
-    """``S_r = close_r(open_r(W))`` with the digital Euclidean ball of radius ``radius_voxels``.
-
-    The opening drops material thinner than about ``2 r`` (knife-edged sheets, specks, thin
-    bridges); the closing then fills gaps, slots and tunnels narrower than about ``2 r``. The grid
-    is padded with empty voxels first (the box is no obstacle to either operation), and packed once
-    along z for the four dilations (:func:`_dilate_packed_kernel`). Raises
-    :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
-    """
-    if np.floor(radius_voxels + 1e-9) >= 64:
-        return feature_filter_reference(occupancy, radius_voxels, cancel, dilate=ball_dilate)
-    return _open_close(occupancy, radius_voxels, cancel, _Packed)
-
-
-def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None, *,
-                             dilate=ball_dilate_reference) -> np.ndarray:
-    """:func:`feature_filter` (the same signature, so it can stand in for it) as four dilations of
-    boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature; by default
-    :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
-    return _open_close(occupancy, radius_voxels, cancel, lambda o, r, sym: _Grids(o, r, sym, dilate))
-
-
 def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int]:
     """``(b0(F), g)`` of the filled solid ``F = W u voids(W)``: components and genus ``b0(F) - chi(F)``."""
     occ = np.asarray(occupancy, dtype=bool)
@@ -1120,22 +526,6 @@ def chain_binding(chain_mask: np.ndarray, h: float, occupancy: np.ndarray | None
         "chains": chains,
         "summary": summary,
     }
-
-
-def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True) -> np.ndarray:
-    """Unreachable voxels enclosed by the workspace together with the base plane.
-
-    The voids of ``W u P`` where ``P`` is a solid layer just below the grid's bottom face
-    (``floor=True``) -- the plane the workspace stands on; with ``floor=False`` the voids of ``W``.
-    """
-    occ = np.asarray(occupancy, dtype=bool)
-    if not floor:
-        return void_mask(occ, connectivity)
-    floored = np.empty(occ.shape[:2] + (occ.shape[2] + 1,), np.bool_)
-    if floored.size:
-        with KERNEL_LOCK:
-            _floored_kernel(np.ascontiguousarray(occ), floored)
-    return void_mask(floored, connectivity)[:, :, 1:]
 
 
 def measure_workspace(result: WorkspaceResult, *, connectivity: int = 1, hollowness: str = "hull",

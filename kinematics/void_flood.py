@@ -1,13 +1,13 @@
 r"""Voids of a voxel set by a flood from where the complement leaks, not by labelling it.
 
-Definition (that of :mod:`kinematics.measures`): pad the grid with one unreachable layer; the
+Definition (that of :mod:`kinematics.voids`): pad the grid with one unreachable layer; the
 complement ``C = pad(G) \ W``, split into components with the dual adjacency (26 neighbours for a
 6-connected ``W``, 6 for a 26-connected one), has one component holding the padding, the outside
 ``O``; the voids are ``C \ O``.
 
 Computation. An unreachable voxel with no reachable voxel on one side along some axis is joined to
 the padding by that straight line (a path for 6 and for 26 neighbours), so it lies in ``O``. The
-others are the *candidates* ``K`` (``measures._enclosed_ext_kernel``). A path from a candidate to the
+others are the *candidates* ``K`` (``voids._enclosed_ext_kernel``). A path from a candidate to the
 padding leaves ``K`` at a first step onto an unreachable non-candidate, so the candidates in ``O``
 are exactly those joined, within ``K`` and by the dual adjacency, to a *seed*: a candidate with a
 dual neighbour that is unreachable and not a candidate. Hence

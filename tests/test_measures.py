@@ -10,6 +10,9 @@ import numpy as np
 import pytest
 from skimage.measure import marching_cubes
 
+from paraspace.kinematics import euler as euler_mod
+from paraspace.kinematics import morphology as morph_mod
+from paraspace.kinematics import voids as voids_mod
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
 from paraspace.kinematics.measures import measure_workspace
@@ -234,7 +237,7 @@ def test_voxel_euler_matches_marching_cubes_surface(name):
     occ = shapes[name]
     m = measure_workspace(make_result(occ))
     assert mesh_euler(occ) == 2 * m.euler_characteristic
-    from paraspace.kinematics.measures import void_mask
+    from paraspace.kinematics.voids import void_mask
 
     filled = occ | void_mask(occ)
     assert mesh_euler(filled) == 2 * (m.filled_components - m.genus)
@@ -382,8 +385,8 @@ def _slow_measures(monkeypatch):
     from paraspace.kinematics import measures as mod
 
     def voids(occ, conn):
-        v = mod.void_mask_labelled(occ, conn)
-        return v, int(ndi.label(v, structure=mod._structure(mod.dual_connectivity(conn)))[1])
+        v = voids_mod.void_mask_labelled(occ, conn)
+        return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
     def hollow(occ, mode="hull", hull=None):
         occ = np.asarray(occ, bool)
@@ -395,8 +398,7 @@ def _slow_measures(monkeypatch):
 
     monkeypatch.setattr(mod, "euler_characteristic", lambda occ, conn=1: int(euler_number(occ, connectivity=conn)))
     monkeypatch.setattr(mod, "_voids", voids)
-    monkeypatch.setattr(mod, "ball_dilate", mod.ball_dilate_reference)
-    monkeypatch.setattr(mod, "feature_filter", mod.feature_filter_reference)
+    monkeypatch.setattr(mod, "feature_filter", morph_mod.feature_filter_reference)
     hull = mod.hull_mask
     monkeypatch.setattr(mod, "hull_mask", lambda occ, raster=False: hull(occ, raster=False))
     monkeypatch.setattr(mod, "hollow_mask", hollow)
@@ -419,10 +421,10 @@ def test_fast_measures_equal_the_former_path_on_several_designs(monkeypatch):
         sym = occ | occ[:, ::-1]
         r = rng.uniform(0.8, 4.0)
         for conn in (1, 3):
-            assert mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
-            assert np.array_equal(mod.void_mask(occ, conn), mod.void_mask_labelled(occ, conn))
-        assert np.array_equal(mod.ball_dilate(sym, r, symmetric=True), mod.ball_dilate_reference(sym, r))
-        assert np.array_equal(mod.ball_dilate(occ, r, complement=True), ~mod.ball_dilate_reference(~occ, r))
+            assert euler_mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
+            assert np.array_equal(voids_mod.void_mask(occ, conn), voids_mod.void_mask_labelled(occ, conn))
+        assert np.array_equal(morph_mod.ball_dilate(sym, r, symmetric=True), morph_mod.ball_dilate_reference(sym, r))
+        assert np.array_equal(morph_mod.ball_dilate(occ, r, complement=True), ~morph_mod.ball_dilate_reference(~occ, r))
         assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, raster=False))
         assert mod.column_gap_count(occ) == int(mod.column_gap_mask(occ).sum())
     results = [compute_workspace(d, WorkspaceSettings(voxel=6.0)) for d in (Design(), Design(a=10), Design(l_s=20))]
@@ -454,10 +456,10 @@ def test_void_flood_and_extreme_hull_points_equal_the_former_path():
     n_with_voids = 0
     for occ in fields:
         for conn in (1, 3):
-            voids, n = mod._voids(occ, conn)
-            ref, n_ref = mod._voids_labelled_candidates(occ, conn)
+            voids, n = voids_mod._voids(occ, conn)
+            ref, n_ref = voids_mod._voids_labelled_candidates(occ, conn)
             assert np.array_equal(voids, ref) and n == n_ref
-            assert np.array_equal(voids, mod.void_mask_labelled(occ, conn))
+            assert np.array_equal(voids, voids_mod.void_mask_labelled(occ, conn))
             n_with_voids += n > 0
         assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, extreme=False))
     assert n_with_voids >= 4  # the comparison saw voids, not only empty sets
@@ -491,7 +493,7 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
         occ[rng.random(occ.shape[:2]) < 0.3] = False
         occ[:, :, :rng.integers(0, occ.shape[2] + 1)] = False
         for conn in (1, 3):
-            assert mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
+            assert euler_mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
 
     from scipy import ndimage as ndi
 
@@ -499,10 +501,10 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
         blob = ndi.gaussian_filter(rng.random(tuple(rng.integers(8, 30, 3))), 2.0) > 0.5
         sym = blob | blob[:, ::-1]
         r = rng.uniform(0.8, 6.0)
-        assert np.array_equal(mod.ball_dilate(sym, r, symmetric=True), mod.ball_dilate_reference(sym, r))
-        assert np.array_equal(mod.ball_dilate(blob, r), mod.ball_dilate_reference(blob, r))
-        assert np.array_equal(mod.ball_dilate(sym, r, complement=True, symmetric=True),
-                              ~mod.ball_dilate_reference(~sym, r))
+        assert np.array_equal(morph_mod.ball_dilate(sym, r, symmetric=True), morph_mod.ball_dilate_reference(sym, r))
+        assert np.array_equal(morph_mod.ball_dilate(blob, r), morph_mod.ball_dilate_reference(blob, r))
+        assert np.array_equal(morph_mod.ball_dilate(sym, r, complement=True, symmetric=True),
+                              ~morph_mod.ball_dilate_reference(~sym, r))
 
     specks = (R2 <= 12 ** 2) & (R2 > 7 ** 2)
     specks[2, 2, 2] = specks[5, 40, 3] = specks[40, 5, 41] = True
@@ -521,7 +523,8 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
     fast = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast[-6]["fragments"] == 3 and fast[-6]["voids"] == 1  # the specks and the void were seen
     monkeypatch.setattr(mod, "RunComponents", LabelledComponents)
-    monkeypatch.setattr(mod, "count_components", lambda occ, conn=1: LabelledComponents(occ, conn).count)
+    for module in (mod, voids_mod):  # the voids are counted in kinematics.voids
+        monkeypatch.setattr(module, "count_components", lambda occ, conn=1: LabelledComponents(occ, conn).count)
     monkeypatch.setattr(void_flood, "_seed_kernel", void_flood._seed_kernel_reference)
     slow = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast == slow
@@ -577,13 +580,13 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                 floored = np.concatenate([np.ones(occ.shape[:2] + (1,), bool), occ], axis=2)
                 for grid in (occ, floored):
                     if not grid.size:
-                        assert mod._candidates_box(grid) is None
+                        assert voids_mod._candidates_box(grid) is None
                         continue
                     old, new = _enclosed_by_definition(grid), np.ones(grid.shape, bool)
                     ext = np.empty((grid.shape[0], 4), np.int64)
-                    mod._enclosed_ext_kernel(grid, new, ext)
+                    voids_mod._enclosed_ext_kernel(grid, new, ext)
                     assert np.array_equal(new, old)
-                    found = mod._candidates_box(grid)
+                    found = voids_mod._candidates_box(grid)
                     if not old.any():
                         assert found is None
                         continue
@@ -592,14 +595,14 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     assert found[2] == box and np.array_equal(found[1], old)
                 if occ.size:
                     out = np.zeros(floored.shape, bool)
-                    mod._floored_kernel(occ, out)
+                    voids_mod._floored_kernel(occ, out)
                     assert np.array_equal(out, floored)
                     cut = tuple(slice(a // 3, a - a // 4) for a in occ.shape)
                     sub = occ[cut]
                     assert np.array_equal(void_flood._contiguous(sub), np.ascontiguousarray(sub))
                     pasted, ref = np.ones(occ.shape, bool), np.zeros(occ.shape, bool)
                     ref[cut] = sub
-                    mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
+                    voids_mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
                     assert np.array_equal(pasted, ref)
                     ext = np.empty((occ.shape[0], 5), np.int64)
                     mod._occ_extent_kernel(occ, ext)
@@ -611,17 +614,18 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                                                     else [occ.shape[1], -1, occ.shape[2], -1])
                 for conn in (1, 3):
                     for floor in (False, True):
-                        sealed = mod.sealed_mask(occ, conn, floor=floor)
-                        ref = (mod.void_mask_labelled(floored, conn)[:, :, 1:] if floor
-                               else mod.void_mask_labelled(occ, conn))
+                        sealed = voids_mod.sealed_mask(occ, conn, floor=floor)
+                        ref = (voids_mod.void_mask_labelled(floored, conn)[:, :, 1:] if floor
+                               else voids_mod.void_mask_labelled(occ, conn))
                         assert np.array_equal(sealed, ref)
                         under = rng.random(occ.shape) < 0.5
                         if occ.size:
                             counts = mod._open_sealed_counts_kernel(under, sealed)
                             assert (int(counts[0]), int(counts[1])) == (
                                 int(np.count_nonzero(under & ~sealed)), int(np.count_nonzero(under & sealed)))
-            assert mod.sealed_mask(bowl, 1, floor=True).any() and not mod.sealed_mask(bowl, 1, floor=False).any()
-            assert mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not mod.sealed_mask(cup, 1).any()
+            assert voids_mod.sealed_mask(bowl, 1, floor=True).any()
+            assert not voids_mod.sealed_mask(bowl, 1, floor=False).any()
+            assert voids_mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not voids_mod.sealed_mask(cup, 1).any()
     finally:
         numba.set_num_threads(before)
 

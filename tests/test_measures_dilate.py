@@ -12,7 +12,7 @@ import pytest
 from scipy import ndimage as ndi
 
 from paraspace.kinematics.design import Design
-from paraspace.kinematics.measures import ball_dilate, ball_dilate_reference, feature_filter
+from paraspace.kinematics.morphology import ball_dilate, ball_dilate_reference, feature_filter
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 

@@ -12,7 +12,8 @@ from scipy import ndimage as ndi
 
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
-from paraspace.kinematics.measures import ball_dilate, feature_filter, measure_workspace
+from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.morphology import ball_dilate, feature_filter
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 L = 44.0  # edge of the cubic box, length units, centred on 0

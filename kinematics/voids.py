@@ -1,0 +1,266 @@
+r"""Voids (enclosed cavities) of a voxel set, and the sealed cavities of a set standing on its floor.
+
+Definition. ``W`` is a set of voxels of the grid ``G`` with 6-adjacency (``connectivity=1``) or
+26-adjacency (``connectivity=3``); its complement takes the *dual* adjacency (26 for 6, 6 for 26:
+:func:`dual_connectivity`). Pad ``G`` with one unreachable layer on every side; the complement
+``C = pad(G) \ W`` splits into components, and the one holding the padding is the outside ``O``.
+The **voids** are
+
+    voids(W) = C \ O,
+
+the unreachable space enclosed by ``W`` on all sides (not open to any face of the box). With a
+solid base layer ``P`` just below the grid's bottom face (the plane the workspace stands on), the
+**sealed cavities** are ``voids(W u P)`` restricted to the grid (:func:`sealed_mask`).
+
+Computation (the same set as labelling every component of ``C``, :func:`void_mask_labelled`, the
+tests' reference). An unreachable voxel with no reachable voxel on one side along some axis is
+joined to the padding by that straight line, so it lies in ``O``. The others, the *candidates*
+(:func:`_enclosed_ext_kernel`, one parallel pass that also gives their bounding box), are in ``O``
+exactly when they are joined within the candidates to one that leaks (:mod:`kinematics.void_flood`):
+the flood never visits a sealed cavity, and the voids are counted (as components of runs,
+:mod:`kinematics.run_components`) only when their number is asked for (:func:`_voids`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+from scipy import ndimage as ndi
+
+from .parallel import KERNEL_LOCK
+from .run_components import count_components
+from .void_flood import enclosed_voids
+
+
+def _structure(connectivity: int) -> np.ndarray:
+    return ndi.generate_binary_structure(3, connectivity)
+
+
+def dual_connectivity(connectivity: int) -> int:
+    """Adjacency of the complement paired with ``connectivity`` (1 <-> 3, i.e. 6 <-> 26)."""
+    if connectivity not in (1, 3):
+        raise ValueError(f"connectivity = {connectivity!r} is invalid: valid values 1 (6-neighbours) "
+                         "or 3 (26-neighbours)")
+    return 4 - connectivity
+
+
+def void_mask_labelled(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
+    """:func:`void_mask` by its definition: every component of the padded complement labelled, the
+    one holding the padding is the outside (the reference of the tests)."""
+    occ = np.asarray(occupancy, dtype=bool)
+    comp = np.pad(~occ, 1, constant_values=True)
+    lab, _ = ndi.label(comp, structure=_structure(dual_connectivity(connectivity)))
+    outside = lab[0, 0, 0]
+    voids = (lab != outside) & comp
+    return voids[1:-1, 1:-1, 1:-1]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _enclosed_ext_kernel(occ, out, ext):
+    """``out``: unreachable voxels with reachable ones on both sides along x, along y and along z
+    (strictly between the first and the last reachable voxel of each of their three axis lines);
+    and each x slice's extent of these candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)``
+    (inclusive; ``j_hi = -1``: none in slice ``i``), so their bounding box needs no serial pass over
+    the grid. Both passes are parallel: the
+    x ends per ``(j, k)`` over y slices, the rest over x slices."""
+    n0, n1, n2 = occ.shape
+    fx = np.empty((n1, n2), np.int64)
+    lx = np.empty((n1, n2), np.int64)
+    for j in prange(n1):
+        for k in range(n2):
+            fx[j, k] = n0
+            lx[j, k] = -1
+        for i in range(n0):
+            for k in range(n2):
+                if occ[i, j, k]:
+                    if fx[j, k] == n0:
+                        fx[j, k] = i
+                    lx[j, k] = i
+    for i in prange(n0):
+        fy = np.full(n2, n1, np.int64)
+        ly = np.full(n2, -1, np.int64)
+        for j in range(n1):
+            for k in range(n2):
+                if occ[i, j, k]:
+                    if fy[k] == n1:
+                        fy[k] = j
+                    ly[k] = j
+        jlo, jhi, klo, khi = n1, -1, n2, -1
+        for j in range(n1):
+            fz = n2
+            for k in range(n2):
+                if occ[i, j, k]:
+                    fz = k
+                    break
+            lz = -1
+            for k in range(n2 - 1, fz, -1):
+                if occ[i, j, k]:
+                    lz = k
+                    break
+            for k in range(n2):
+                out[i, j, k] = False
+            for k in range(fz + 1, lz):  # only strictly between the column's ends
+                v = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
+                out[i, j, k] = v
+                if v:
+                    if jlo == n1:
+                        jlo = j
+                    jhi = j
+                    if k < klo:
+                        klo = k
+                    if k > khi:
+                        khi = k
+        ext[i, 0] = jlo
+        ext[i, 1] = jhi
+        ext[i, 2] = klo
+        ext[i, 3] = khi
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _paste_kernel(sub, lo0, lo1, lo2, out):
+    """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
+    slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
+    n0, n1, n2 = out.shape
+    m0, m1, m2 = sub.shape
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                out[i, j, k] = False
+        if lo0 <= i < lo0 + m0:
+            for j in range(m1):
+                for k in range(m2):
+                    out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _floored_kernel(occ, out):
+    """``out = concatenate([ones(n0, n1, 1), occ], axis=2)`` (the grid on its base layer), over x
+    slices in parallel."""
+    n0, n1, n2 = occ.shape
+    for i in prange(n0):
+        for j in range(n1):
+            out[i, j, 0] = True
+            for k in range(n2):
+                out[i, j, k + 1] = occ[i, j, k]
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _open_labels_kernel(cand, lab, occ, full, n_labels):
+    """Labels of ``cand`` (the candidates' components) with a dual neighbour that is unreachable and
+    not a candidate: those components reach the outside (``full``: 26 neighbours, else 6). Threads
+    only ever set entries of ``opened`` to True."""
+    n0, n1, n2 = cand.shape
+    opened = np.zeros(n_labels + 1, np.bool_)
+    for i in prange(n0):
+        for j in range(n1):
+            for k in range(n2):
+                c = lab[i, j, k]
+                if c == 0 or opened[c]:
+                    continue
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        for dk in range(-1, 2):
+                            if not full and abs(di) + abs(dj) + abs(dk) != 1:
+                                continue
+                            a, b, e = i + di, j + dj, k + dk
+                            if a < 0 or b < 0 or e < 0 or a >= n0 or b >= n1 or e >= n2:
+                                opened[c] = True  # pragma: no cover - candidates never touch the edge
+                            elif not occ[a, b, e] and not cand[a, b, e]:
+                                opened[c] = True
+    return opened
+
+
+def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple] | None:
+    """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
+    (:func:`_enclosed_ext_kernel`) and their bounding box grown by one voxel (the neighbours the tests
+    look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
+    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
+    if not occ.size:
+        return None
+    cand = np.empty(occ.shape, np.bool_)
+    ext = np.empty((occ.shape[0], 4), np.int64)
+    with KERNEL_LOCK:
+        _enclosed_ext_kernel(occ, cand, ext)
+    rows = np.flatnonzero(ext[:, 1] >= 0)
+    if not rows.size:
+        return None
+    e = ext[rows]
+    lo = [int(rows[0]), int(e[:, 0].min()), int(e[:, 2].min())]
+    hi = [int(rows[-1]) + 1, int(e[:, 1].max()) + 1, int(e[:, 3].max()) + 1]
+    box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
+    return occ, cand, box
+
+
+def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
+    """:func:`_voids` by labelling every candidate component and testing each for a leak (the former
+    path, kept as a reference: the same set and number)."""
+    found = _candidates_box(occupancy)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_), 0
+    occ, cand, box = found
+    sub = cand[box]
+    lab, n = ndi.label(sub, structure=_structure(dual_connectivity(connectivity)))
+    with KERNEL_LOCK:
+        opened = _open_labels_kernel(sub, lab, occ[box], dual_connectivity(connectivity) == 3, n)
+    keep = ~opened
+    keep[0] = False
+    voids = np.zeros(occ.shape, np.bool_)
+    voids[box] = keep[lab]
+    return voids, int(keep.sum())
+
+
+def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tuple | None]:
+    """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
+    (:func:`_enclosed_ext_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
+    which never visits a sealed cavity; ``box`` bounds the voids (``None``: no void)."""
+    found = _candidates_box(occupancy)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_), None
+    occ, cand, box = found
+    with KERNEL_LOCK:
+        sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
+    if not n_void:
+        return np.zeros(occ.shape, np.bool_), None
+    voids = np.empty(occ.shape, np.bool_)
+    with KERNEL_LOCK:
+        _paste_kernel(sub, box[0].start, box[1].start, box[2].start, voids)
+    return voids, box
+
+
+def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
+    """``(void_mask, number of voids)`` without labelling the whole complement.
+
+    An unreachable voxel with no reachable voxel on one side along some axis is joined to the
+    padding by that straight line of unreachable voxels (a path for 6 and for 26 neighbours), so it
+    is outside. The others, the candidates (:func:`_enclosed_ext_kernel`), are outside exactly when they
+    are joined within the candidates to one with a dual neighbour that is unreachable and not a
+    candidate (:func:`_void_set`); only the voids left are counted, as components of runs
+    (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
+    candidate components are not adjacent).
+    """
+    voids, box = _void_set(occupancy, connectivity)
+    if box is None:
+        return voids, 0
+    return voids, count_components(voids[box], dual_connectivity(connectivity))
+
+
+def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
+    """Voxels of the enclosed voids (complement components not connected to the padded outside);
+    computed by :func:`_void_set` (no labelling), the same set as :func:`void_mask_labelled`."""
+    return _void_set(occupancy, connectivity)[0]
+
+
+def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True) -> np.ndarray:
+    """Unreachable voxels enclosed by the workspace together with the base plane.
+
+    The voids of ``W u P`` where ``P`` is a solid layer just below the grid's bottom face
+    (``floor=True``) -- the plane the workspace stands on; with ``floor=False`` the voids of ``W``.
+    """
+    occ = np.asarray(occupancy, dtype=bool)
+    if not floor:
+        return void_mask(occ, connectivity)
+    floored = np.empty(occ.shape[:2] + (occ.shape[2] + 1,), np.bool_)
+    if floored.size:
+        with KERNEL_LOCK:
+            _floored_kernel(np.ascontiguousarray(occ), floored)
+    return void_mask(floored, connectivity)[:, :, 1:]
