@@ -55,8 +55,9 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import paraspace
-from paraspace.kinematics.design import ETA_RANGES, PARAMS, Design, ParameterError, paper_range_text
+from paraspace.kinematics.design import PARAMS, Design, ParameterError
 
+from .cli_flags import add_design_flags, add_joint_flags, design_of, joints_of
 from .fileout import write_atomic
 from .mechanism_cli import add_mechanism_flags
 from .numfmt import fixed, significant
@@ -87,53 +88,6 @@ def _export_shell(result: Any, path: str, fmt: str) -> dict[str, Any]:
     mesh = workspace_shell(result)
     write_atomic(path, export_shell(mesh, fmt))
     return {"file": path, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
-
-
-def _add_design_flags(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("design (paper Table I; defaults are the paper's design)")
-    for name, spec in PARAMS.items():
-        g.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
-                       help=f"{spec.description} (default {spec.default:g}; {paper_range_text(name)}; "
-                            f"accepted [{spec.model_min:g}, {spec.model_max:g}]{' deg' if spec.unit else ''})")
-    g.add_argument("--eta-range", dest="eta_range", default="centered", metavar="|".join(ETA_RANGES),
-                   help="zero of the arc stroke: eta in [-eta_s/2, eta_s/2] (centered) or [0, eta_s]")
-
-
-def _design(ns: argparse.Namespace) -> Design:
-    values: dict[str, Any] = {}
-    for name in PARAMS:
-        raw = getattr(ns, name)
-        try:
-            values[name] = float(raw)
-        except (TypeError, ValueError):
-            raise ParameterError(name, raw,
-                                 f"[{PARAMS[name].model_min:g}, {PARAMS[name].model_max:g}] (a number)") from None
-    return Design(**values, eta_range=ns.eta_range)
-
-
-def _add_joint_flags(p: argparse.ArgumentParser) -> None:
-    from paraspace.kinematics.joints import CONE_AXES, JOINT_RANGES
-
-    g = p.add_argument_group("joints (default: the paper's model, strokes only; see README 'Joint limits')")
-    g.add_argument("--u-cone", dest="theta_u", metavar="DEG",
-                   help=f"half-angle of every U joint's cone, {JOINT_RANGES['theta_u'][3]}")
-    g.add_argument("--s-cone", dest="theta_s", metavar="DEG",
-                   help=f"half-angle of every S joint's cone, {JOINT_RANGES['theta_s'][3]}")
-    g.add_argument("--cone-axis", dest="cone_axis", default="normal", metavar="|".join(CONE_AXES),
-                   help="cone axes: base / platform normal (default) or the legs' home directions")
-    g.add_argument("--leg-diameter", dest="leg_diameter", default=0.0, metavar="W",
-                   help=f"legs are capsules of this diameter, {JOINT_RANGES['leg_diameter'][3]}; two legs closer "
-                        "than W + C interfere (default 0: off)")
-    g.add_argument("--clearance", default=0.0, metavar="C",
-                   help=f"extra distance between legs, {JOINT_RANGES['clearance'][3]} (default 0)")
-
-
-def _joints(ns: argparse.Namespace):
-    """The joint flags as :class:`~kinematics.joints.Joints` (which validates every value)."""
-    from paraspace.kinematics.joints import Joints
-
-    return Joints(theta_u=ns.theta_u, theta_s=ns.theta_s, cone_axis=ns.cone_axis, leg_diameter=ns.leg_diameter,
-                  clearance=ns.clearance)
 
 
 #: The orientation scan's flags (``orientation``, ``sweep``, ``optimize``): flag -> table entry name.
@@ -221,7 +175,7 @@ def _mechanism(ns: argparse.Namespace, paper_only: dict[str, str]) -> tuple[Any,
             if getattr(ns, dest, None):
                 raise ParameterError(flag, getattr(ns, dest) if dest != "param" else ns.param[0],
                                      "only with --mechanism FILE|PRESET")
-        return None, _design(ns)
+        return None, design_of(ns)
     from paraspace.kinematics.mechanism_workspace import paper_design
 
     from .mechanism_cli import resolve_mechanism
@@ -408,7 +362,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     refine = _bracket_refine(ns)
     settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
                                  bracket_refine=refine,
-                                 joints=_joints(ns))
+                                 joints=joints_of(ns))
     total, dexterity = _total_and_dexterity(ns)
     fmt = _export_format(ns)
     warm_up()
@@ -524,7 +478,7 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.settings import ORIENTATION
 
     z0 = float(ORIENTATION["z0"].parse(ns.z0))
-    settings = OrientationSettings(z0=z0, joints=_joints(ns), position_delta=ns.position_delta, **_scan(ns))
+    settings = OrientationSettings(z0=z0, joints=joints_of(ns), position_delta=ns.position_delta, **_scan(ns))
     warm_up()
     with progress_scope("orientation") as progress:
         result = orientation_workspace(design, settings, progress)
@@ -550,7 +504,7 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
     at = _floats("at", ns.at, 3)
     settings = TiltTorsionSettings(azimuth_step=_float_arg("azimuth_step", ns.azimuth_step, "(0, 90] degrees"))
     warm_up()
-    joints = _joints(ns)
+    joints = joints_of(ns)
     report = tilt_torsion_at(design, at, settings, joints)
     out = {"design": design.to_dict(), "joints": joints.to_dict(), **report.to_dict()}
     if ns.json:
@@ -601,7 +555,7 @@ def _task_settings(ns: argparse.Namespace) -> Any:
     from paraspace.kinematics.task import TaskSettings
 
     return TaskSettings(voxel=ns.voxel, eta_step=ns.eta_step, margin_range=ns.margin_range,
-                        carriage_margin=ns.carriage_margin, joints=_joints(ns))
+                        carriage_margin=ns.carriage_margin, joints=joints_of(ns))
 
 
 def _study_task(ns: argparse.Namespace, joints: Any) -> Any:
@@ -716,7 +670,7 @@ def _add_task_parser(sub: Any) -> None:
     from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
 
     t = sub.add_parser("task", help="does the design hold a region (with an orientation set) or follow a pose list")
-    _add_design_flags(t)
+    add_design_flags(t)
     _add_task_flags(t, "the task (exactly one)")
     o = t.add_argument_group("orientation set of a region (default: the home orientation)")
     for name in ("tilt", "torsion"):
@@ -732,7 +686,7 @@ def _add_task_parser(sub: Any) -> None:
     t.add_argument("--json", action="store_true", help="one JSON object: fraction, contained, certified, margin, "
                                                       "worst, binding (and poses, discontinuities for a pose list)")
     t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
-    _add_joint_flags(t)
+    add_joint_flags(t)
     add_mechanism_flags(t)
     t.set_defaults(func=cmd_task)
 
@@ -900,8 +854,8 @@ def cmd_sweep(ns: argparse.Namespace) -> int:
         return _sweep_mechanism(ns)
     if getattr(ns, "set", None):
         raise ParameterError("--set", ns.set[0], "only with --mechanism PRESET")
-    design = _design(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), joints=_joints(ns))
+    design = design_of(ns)
+    settings = WorkspaceSettings(voxel=_voxel(ns), joints=joints_of(ns))
     for field in ("param", "param2"):
         name = getattr(ns, field)
         if name is not None and name not in PARAMS:
@@ -986,8 +940,8 @@ def _sweep_orientation(ns: argparse.Namespace) -> Any:
                 raise ParameterError(given[0].lstrip("-"), getattr(ns, f"scan_{SCAN_FLAGS[given[0]]}"),
                                      "only with --measure TI_1/TI_2 or --z0 (the orientation maps)")
             return None
-        return OrientationSettings(joints=_joints(ns), **_scan(ns))
-    return OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)), joints=_joints(ns), **_scan(ns))
+        return OrientationSettings(joints=joints_of(ns), **_scan(ns))
+    return OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)), joints=joints_of(ns), **_scan(ns))
 
 
 def _with_value(row: dict, param: str, param2: str | None) -> dict:
@@ -1043,7 +997,7 @@ def cmd_ik(ns: argparse.Namespace) -> int:
     mech, design = _mechanism(ns, {"--carriage": "carriage"})
     if design is None:
         return _ik_general(ns, mech)
-    joints = _joints(ns)
+    joints = joints_of(ns)
     pose = Pose.from_array(_floats("pose", ns.pose, 6))
     if ns.carriage:
         c = _floats("carriage", ns.carriage, 6)
@@ -1151,7 +1105,7 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
     preset, values, length_step, known = _optimize_preset(ns)
     general = preset not in (None, "paper")
-    joints = _joints(ns)
+    joints = joints_of(ns)
     spec = _study_task(ns, joints)
     total = None
     if ns.tilt is not None or ns.torsion is not None:
@@ -1163,7 +1117,7 @@ def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
     return OptimizeSettings(
         task=spec, total_orientation=total, preset=preset, preset_values=values, length_step=length_step,
         params=tuple(p.strip() for p in params.split(",")), bounds=_bounds_arg(ns.bounds, known),
-        objectives=objectives, constraints=constraints, design=Design() if preset is not None else _design(ns),
+        objectives=objectives, constraints=constraints, design=Design() if preset is not None else design_of(ns),
         workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
         orientation=OrientationSettings(joints=joints, **_scan(ns)),
         population=int(OPTIMIZE["population"].parse(ns.population)),
@@ -1238,7 +1192,7 @@ def _add_optimize_parser(sub: Any) -> None:
     from paraspace.kinematics.optimize import ALGORITHMS, DEFAULT_PARAMS, MEASURES
 
     z = sub.add_parser("optimize", help="multi-objective optimal design: the Pareto front over design parameters")
-    _add_design_flags(z)
+    add_design_flags(z)
     z.add_argument("--params",
                    help=f"free parameters, comma-separated (default {','.join(DEFAULT_PARAMS)}; any of "
                         f"{', '.join(PARAMS)}); the others keep the design flags' values. With --mechanism "
@@ -1274,7 +1228,7 @@ def _add_optimize_parser(sub: Any) -> None:
                    help="evaluate on a local Dask cluster with N workers, kept warm for the run (0: in this process; "
                         "default: half the cores from 8 usable cores, else in this process)")
     _add_scan_flags(z)
-    _add_joint_flags(z)
+    add_joint_flags(z)
     _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
     add_mechanism_flags(z)
     z.set_defaults(func=cmd_optimize)
@@ -1301,7 +1255,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     w = sub.add_parser("workspace", help="constant-orientation position workspace and its measures")
-    _add_design_flags(w)
+    add_design_flags(w)
     w.add_argument("--voxel", default=2.0, help="voxel edge h (default 2)")
     w.add_argument("--json", action="store_true", help="one JSON object on stdout")
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
@@ -1336,12 +1290,12 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--margin-tolerance", dest="margin_tolerance", metavar="V",
                    help=f"the neighbour search's {mt.label}, checked on a sample; valid range {mt.range_text()} "
                         f"(default {mt.default:g})")
-    _add_joint_flags(w)
+    add_joint_flags(w)
     add_mechanism_flags(w)
     w.set_defaults(func=cmd_workspace)
 
     o = sub.add_parser("orientation", help="orientation workspace along the symmetry lines, TI_1 and TI_2")
-    _add_design_flags(o)
+    add_design_flags(o)
     o.add_argument("--z0", default=130.0, help="height of the x and y' lines (default 130)")
     o.add_argument("--at", metavar="x,y,z",
                    help="tilt-and-torsion report at this position instead: maximal tilt per azimuth, torsion range")
@@ -1353,12 +1307,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="eq. (28)'s position Δ: each region's own (default), the union of a line's regions, "
                         "or the literal reading: one Δ per line taken from the φ region")
     _add_scan_flags(o)
-    _add_joint_flags(o)
+    add_joint_flags(o)
     add_mechanism_flags(o)
     o.set_defaults(func=cmd_orientation)
 
     s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
-    _add_design_flags(s)
+    add_design_flags(s)
     s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS) + " (with --mechanism: one of the "
                                                    "preset's parameters)")
     s.add_argument("--values", required=True, help="comma-separated values")
@@ -1385,7 +1339,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --mechanism: spacing of a sampled (second) prismatic joint's values, [0.01, 100] "
                         "(default 1)")
     _add_scan_flags(s)
-    _add_joint_flags(s)
+    add_joint_flags(s)
     _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")
     s.set_defaults(func=cmd_sweep)
 
@@ -1404,12 +1358,12 @@ def build_parser() -> argparse.ArgumentParser:
     pp.set_defaults(func=cmd_paper)
 
     k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")
-    _add_design_flags(k)
+    add_design_flags(k)
     k.add_argument("--pose", required=True, help="x,y,z,psi,theta,phi (degrees)")
     k.add_argument("--carriage", help="hand-set d1,d2,d3,eta1,eta2,eta3 instead of the resolution")
     k.add_argument("--json", action="store_true")
     k.add_argument("--strict", action="store_true", help="exit 1 when the pose is unreachable")
-    _add_joint_flags(k)
+    add_joint_flags(k)
     add_mechanism_flags(k)
     k.set_defaults(func=cmd_ik)
 

@@ -35,6 +35,8 @@ from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.mechanism import MAX_TEXT_BYTES, Mechanism, loads_mechanism, parse_mechanism
 from paraspace.kinematics.presets import PRESETS, PresetParam
 
+from .numfmt import format_number
+
 #: The mechanism choices of a link's ``mech`` key besides ``paper``: every other preset, and ``file``.
 FILE = "file"
 #: Presets the explorer offers besides the paper's (the paper's is its Design tab).
@@ -145,7 +147,6 @@ def _number(raw: str) -> float | str:
 
 def encode_mechanism(link: MechanismLink | None) -> list[tuple[str, str]]:
     """The link pairs of ``link`` (none for the paper's Design); numbers as ``format_number``."""
-    from .urlstate import format_number
 
     if link is None:
         return []

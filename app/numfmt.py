@@ -9,11 +9,25 @@ kept (``0.4020``, ``5.120e+06``): a value and its bracket written to the same di
 :func:`fixed` writes a fixed number of decimals and never a negative zero: a value that rounds to
 zero prints as ``0.000``, not ``-0.000`` (a carriage at ``eta = -1e-15`` is at zero, and a minus
 sign there only makes a reader look twice).
+
+:func:`format_number` writes the shortest text that parses back to exactly the value (links and
+files: what is shared is what is computed).
 """
 
 from __future__ import annotations
 
-__all__ = ["fixed", "significant"]
+__all__ = ["fixed", "format_number", "significant"]
+
+
+def format_number(value: float) -> str:
+    """Shortest text that parses back to exactly ``value`` (``60.0 -> "60"``, ``0.1 -> "0.1"``)."""
+    v = float(value)
+    if v == 0.0:
+        return "0"  # also for -0.0
+    text = repr(v)
+    if text.endswith(".0"):
+        text = text[:-2]
+    return text
 
 
 def fixed(value: float, decimals: int = 2, width: int = 0) -> str:

@@ -20,7 +20,7 @@ from typing import Any
 import paraspace
 from paraspace.kinematics.design import PARAMS, Design, ParameterError
 
-from .cli import _add_design_flags, _add_joint_flags, _design, _joints
+from .cli_flags import add_design_flags, add_joint_flags, design_of, joints_of
 from .fileout import write_atomic
 from .progressline import progress_line
 
@@ -66,12 +66,12 @@ def cmd_report(ns: argparse.Namespace) -> int:
 
     if not str(ns.out).lower().endswith((".html", ".htm")):
         raise ParameterError("out", ns.out, "a file name ending in .html")
-    base = _design(ns)
+    base = design_of(ns)
     designs = [base] + [parse_change(base, c) for c in ns.compare or ()]
     if len(designs) > MAX_DESIGNS:
         raise ParameterError("compare", len(designs) - 1, f"at most {MAX_DESIGNS - 1} designs to compare")
     voxel = float(WORKSPACE["voxel"].parse(ns.voxel))
-    joints = _joints(ns)
+    joints = joints_of(ns)
     settings = WorkspaceSettings(voxel=voxel, joints=joints)
     orientation = None if ns.no_orientation else OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)),
                                                                      joints=joints)
@@ -102,7 +102,7 @@ def cmd_report(ns: argparse.Namespace) -> int:
 def add_report_parser(sub: Any) -> None:
     """The ``report`` sub-command on ``sub`` (the CLI's sub-parsers)."""
     r = sub.add_parser("report", help="a self-contained HTML report of a design (or several, side by side)")
-    _add_design_flags(r)
+    add_design_flags(r)
     r.add_argument("--compare", action="append", metavar="NAME=V[,NAME=V]",
                    help="add a design: the one above with these parameters changed (repeatable)")
     r.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
@@ -113,5 +113,5 @@ def add_report_parser(sub: Any) -> None:
     r.add_argument("--link-base", dest="link_base", default="http://127.0.0.1:8080/", metavar="URL",
                    help="the explorer's address, for the links that restore each design")
     r.add_argument("--out", required=True, metavar="FILE.html", help="where to write the report")
-    _add_joint_flags(r)
+    add_joint_flags(r)
     r.set_defaults(func=cmd_report)

@@ -52,6 +52,7 @@ from paraspace.kinematics.task import SHAPES as TASK_SHAPES
 from paraspace.kinematics.task import OrientationSet, Region
 
 from .mechanism_link import MechanismLink, encode_mechanism, param_keys, parse_mechanism_pairs
+from .numfmt import format_number
 from .schema import LINK_FIELDS, link_number_error
 
 CarriageMode = Literal["auto", "manual"]
@@ -316,17 +317,6 @@ class ExplorerState:
 
 
 DEFAULT_STATE = ExplorerState()
-
-
-def format_number(value: float) -> str:
-    """Shortest text that parses back to exactly ``value`` (``60.0 -> "60"``, ``0.1 -> "0.1"``)."""
-    v = float(value)
-    if v == 0.0:
-        return "0"  # also for -0.0
-    text = repr(v)
-    if text.endswith(".0"):
-        text = text[:-2]
-    return text
 
 
 def _parse_fields(keys, values: dict[str, str], ranges: Mapping[str, Range], messages: list[str]) -> dict[str, float]:
