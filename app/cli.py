@@ -40,45 +40,49 @@ Scan flags (``orientation``, ``sweep``, ``optimize``, ``paper``; TI_1 and TI_2):
 --position-step S`` (ranges: ``kinematics.settings.ORIENTATION``).
 Every command except ``serve`` uses only the numerical core (no web packages are imported).
 Bad flags or values exit with status 2 and one line naming the field and its valid range.
+
+This module holds the parser, ``workspace``, ``orientation``, ``paper``, ``ik`` and ``serve``; the
+other commands have a module each (``sweep_cli``, ``optimize_cli``, ``task_cli``, ``report_cli``,
+``mechanism_cli``), and the flags they share are read in ``cli_flags``.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
-import io
-import json
-import math
-import os
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import paraspace
-from paraspace.kinematics.design import PARAMS, Design, ParameterError
+from paraspace.kinematics.design import Design, ParameterError
 
-from .cli_flags import add_design_flags, add_joint_flags, design_of, joints_of
+from .cli_flags import (
+    SCAN_FLAGS,
+    add_design_flags,
+    add_joint_flags,
+    add_scan_flags,
+    bracket_refine_of,
+    emit_json,
+    float_of,
+    floats_of,
+    joints_of,
+    length_step_of,
+    mechanism_of,
+    scan_of,
+    voxel_of,
+)
 from .fileout import write_atomic
 from .mechanism_cli import add_mechanism_flags
 from .numfmt import fixed, significant
-from .progressline import progress_line, progress_scope
+from .optimize_cli import add_optimize_parser
+from .progressline import progress_scope
+from .sweep_cli import add_sweep_parser
+from .task_cli import add_task_parser
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:  # one line, status 2
         self.exit(2, f"paraspace: error: {message}\n")
-
-
-def _floats(field: str, text: str, count: int | None = None) -> list[float]:
-    try:
-        vals = [float(v) for v in text.split(",") if v.strip() != ""]
-    except ValueError:
-        raise ParameterError(field, text, "comma-separated numbers") from None
-    if not vals or (count is not None and len(vals) != count):
-        raise ParameterError(field, text, f"{count} comma-separated numbers" if count else "at least one number")
-    if not all(math.isfinite(v) for v in vals):
-        raise ParameterError(field, text, "finite numbers")
-    return vals
 
 
 def _export_shell(result: Any, path: str, fmt: str) -> dict[str, Any]:
@@ -88,120 +92,6 @@ def _export_shell(result: Any, path: str, fmt: str) -> dict[str, Any]:
     mesh = workspace_shell(result)
     write_atomic(path, export_shell(mesh, fmt))
     return {"file": path, "faces": int(len(mesh.faces)), "mesh_volume": float(mesh.volume)}
-
-
-#: The orientation scan's flags (``orientation``, ``sweep``, ``optimize``): flag -> table entry name.
-SCAN_FLAGS: dict[str, str] = {"--angle-range": "angle_range", "--angle-step": "angle_step",
-                              "--position-step": "position_step"}
-
-
-def _add_scan_flags(p: argparse.ArgumentParser) -> None:
-    """The orientation scan's flags, each derived from its entry of ``kinematics.settings.ORIENTATION``
-    (help: label, valid range, default)."""
-    from paraspace.kinematics.settings import ORIENTATION
-
-    g = p.add_argument_group("orientation scan (TI_1, TI_2)")
-    for flag, name in SCAN_FLAGS.items():
-        spec = ORIENTATION[name]
-        g.add_argument(flag, dest=f"scan_{name}", default=None, metavar="V",
-                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
-
-
-def _scan(ns: argparse.Namespace) -> dict[str, Any]:
-    """The scan flags given, read and checked by their table entries (the others keep their defaults)."""
-    from paraspace.kinematics.settings import ORIENTATION
-
-    return {name: float(ORIENTATION[name].parse(getattr(ns, f"scan_{name}"))) for name in SCAN_FLAGS.values()
-            if getattr(ns, f"scan_{name}", None) is not None}
-
-
-def _bracket_refine(ns: argparse.Namespace) -> int:
-    """``--bracket-refine``, read by its one definition (kinematics.settings.WORKSPACE)."""
-    from paraspace.kinematics.settings import WORKSPACE
-
-    return int(WORKSPACE["bracket_refine"].parse(ns.bracket_refine))
-
-
-def _voxel(ns: argparse.Namespace) -> float:
-    """``--voxel`` read and checked by its table entry (:data:`kinematics.settings.WORKSPACE`)."""
-    from paraspace.kinematics.settings import WORKSPACE
-
-    return float(WORKSPACE["voxel"].parse(ns.voxel))
-
-
-def _float_arg(field: str, raw: Any, valid: str) -> float:
-    try:
-        v = float(raw)
-    except (TypeError, ValueError):
-        raise ParameterError(field, raw, f"{valid} (a number)") from None
-    if not math.isfinite(v):
-        raise ParameterError(field, raw, valid)
-    return v
-
-
-def _emit(obj: Any) -> None:
-    json.dump(obj, sys.stdout, indent=2)
-    sys.stdout.write("\n")
-
-
-#: flags that set the paper's design or the global joint options: a mechanism description replaces them
-_DESIGN_FLAGS: dict[str, str] = {**{f"--{n.replace('_', '-')}": n for n in PARAMS}, "--eta-range": "eta_range"}
-_JOINT_FLAGS: dict[str, str] = {"--u-cone": "theta_u", "--s-cone": "theta_s", "--cone-axis": "cone_axis",
-                                "--leg-diameter": "leg_diameter", "--clearance": "clearance"}
-
-
-def _given(ns: argparse.Namespace, flag: str, dest: str) -> bool:
-    """Whether ``flag`` was written on the command line (or its value differs from the default)."""
-    tokens = {t.split("=", 1)[0] for t in getattr(ns, "argv", []) if t.startswith("--")}
-    if flag in tokens:
-        return True
-    default = _DEFAULTS.get(dest)
-    value = getattr(ns, dest, None)
-    return value not in (None, False) and value != default and str(value) != str(default)
-
-
-_DEFAULTS: dict[str, Any] = {**{n: spec.default for n, spec in PARAMS.items()}, "eta_range": "centered",
-                             "cone_axis": "normal", "leg_diameter": 0.0, "clearance": 0.0, "angle_step": 5.0,
-                             "dexterity_mode": "resolved", "bracket_refine": 2, "method": "blocks"}
-
-
-def _mechanism(ns: argparse.Namespace, paper_only: dict[str, str]) -> tuple[Any, Design | None]:
-    """``--mechanism FILE|PRESET [--param NAME=VALUE]...``: ``(mechanism, design)`` where ``design`` is the
-    equivalent paper :class:`Design` (the paper's engine and every option apply) or ``None`` (a general
-    mechanism: the flags of ``paper_only``, the design flags and the joint flags are refused by name).
-    Without ``--mechanism``: ``(None, the design flags' Design)``."""
-    if getattr(ns, "mechanism", None) is None:
-        for flag, dest in (("--param", "param"), ("--length-step", "length_step")):
-            if getattr(ns, dest, None):
-                raise ParameterError(flag, getattr(ns, dest) if dest != "param" else ns.param[0],
-                                     "only with --mechanism FILE|PRESET")
-        return None, design_of(ns)
-    from paraspace.kinematics.mechanism_workspace import paper_design
-
-    from .mechanism_cli import resolve_mechanism
-
-    for flag, dest in _DESIGN_FLAGS.items():
-        if _given(ns, flag, dest):
-            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism: set a preset's parameters with "
-                                 "--param NAME=VALUE (paraspace mechanism presets lists them)")
-    mech = resolve_mechanism(ns.mechanism, ns.param)
-    design = paper_design(mech)
-    if design is None:
-        for flag, dest in _JOINT_FLAGS.items():
-            if _given(ns, flag, dest):
-                raise ParameterError(flag, getattr(ns, dest), "only for the paper's mechanism: a description "
-                                     "carries its own cones (u_cone, s_cone per leg)")
-        for flag, dest in paper_only.items():
-            if _given(ns, flag, dest):
-                raise ParameterError(flag, getattr(ns, dest), f"only for the paper's mechanism, not {mech.name!r}")
-    return mech, design
-
-
-def _length_step(ns: argparse.Namespace) -> float:
-    from paraspace.kinematics.mechanism_workspace import check_length_step
-
-    raw = getattr(ns, "length_step", None)
-    return check_length_step(_float_arg("length_step", raw, "[0.01, 100]")) if raw is not None else 1.0
 
 
 def _total_and_dexterity(ns: argparse.Namespace) -> tuple[tuple[float, float, float] | None,
@@ -277,9 +167,9 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace, warm_up_general
     from paraspace.kinematics.workspace import WorkspaceSettings
 
-    refine = _bracket_refine(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
-    length_step = _length_step(ns)
+    refine = bracket_refine_of(ns)
+    settings = WorkspaceSettings(voxel=voxel_of(ns), method=ns.method, bracket=ns.bracket, bracket_refine=refine)
+    length_step = length_step_of(ns)
     total, dexterity = _total_and_dexterity(ns)
     search = _dexterity_search(ns) if dexterity is not None else {}
     if dexterity is not None:
@@ -314,7 +204,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print(f"mechanism       {mech.name}  (general engine; carriage samples per chain "
               f"{', '.join(str(n) for n in result.samples)})")
@@ -354,13 +244,13 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.measures import measure_workspace
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
-    mech, design = _mechanism(ns, _WORKSPACE_PAPER_ONLY)
+    mech, design = mechanism_of(ns, _WORKSPACE_PAPER_ONLY)
     if design is None:
         return _workspace_general(ns, mech)
     if mech is not None:
-        _length_step(ns)  # validated; the paper's engine solves d exactly and samples no other prismatic joint
-    refine = _bracket_refine(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
+        length_step_of(ns)  # validated; the paper's engine solves d exactly and samples no other prismatic joint
+    refine = bracket_refine_of(ns)
+    settings = WorkspaceSettings(voxel=voxel_of(ns), diagnostics=ns.diagnostics, method=ns.method, bracket=ns.bracket,
                                  bracket_refine=refine,
                                  joints=joints_of(ns))
     total, dexterity = _total_and_dexterity(ns)
@@ -395,7 +285,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if fmt:
         out["export"] = _export_shell(result, ns.export, fmt)
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print(f"volume          {significant(out['volume'], 4)} units³  ({out['voxels']:,} voxels of edge "
               f"{out['voxel_size']:g})")
@@ -441,14 +331,14 @@ def _orientation_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.settings import ORIENTATION
 
     z0 = float(ORIENTATION["z0"].parse(ns.z0))
-    settings = OrientationSettings(z0=z0, position_delta=ns.position_delta, **_scan(ns))
-    length_step = _length_step(ns)
+    settings = OrientationSettings(z0=z0, position_delta=ns.position_delta, **scan_of(ns))
+    length_step = length_step_of(ns)
     warm_up_general()
     with progress_scope("orientation") as progress:
         result = mechanism_orientation_workspace(mech, settings, length_step, progress)
     out = result.to_dict()
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print(f"mechanism {mech.name}: symmetry order {result.order} about z; lines z, x and y' = the "
               f"horizontal line at {result.azimuth:g} deg from x (kinematics/mechanism_orientation.py (S2))")
@@ -464,11 +354,11 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
     from paraspace.kinematics.workspace import warm_up
 
-    mech, design = _mechanism(ns, {"--at": "at"})
+    mech, design = mechanism_of(ns, {"--at": "at"})
     if design is None:
         return _orientation_general(ns, mech)
     if mech is not None:
-        _length_step(ns)  # validated; the paper path samples no second prismatic joint
+        length_step_of(ns)  # validated; the paper path samples no second prismatic joint
     if ns.at is not None:
         given = [flag for flag, name in SCAN_FLAGS.items() if getattr(ns, f"scan_{name}") is not None]
         if given:
@@ -478,7 +368,7 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.settings import ORIENTATION
 
     z0 = float(ORIENTATION["z0"].parse(ns.z0))
-    settings = OrientationSettings(z0=z0, joints=joints_of(ns), position_delta=ns.position_delta, **_scan(ns))
+    settings = OrientationSettings(z0=z0, joints=joints_of(ns), position_delta=ns.position_delta, **scan_of(ns))
     warm_up()
     with progress_scope("orientation") as progress:
         result = orientation_workspace(design, settings, progress)
@@ -486,7 +376,7 @@ def cmd_orientation(ns: argparse.Namespace) -> int:
     if mech is not None:
         out["mechanism"], out["engine"] = mech.to_dict(), "paper"
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print(f"TI_1 = {out['TI_1']:.6g}   TI_2 = {out['TI_2']:.6g}   (z0 = {z0:g})")
         if out["saturation_note"]:
@@ -501,14 +391,14 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
     from paraspace.kinematics.tilt_torsion import TiltTorsionSettings, tilt_torsion_at
     from paraspace.kinematics.workspace import warm_up
 
-    at = _floats("at", ns.at, 3)
-    settings = TiltTorsionSettings(azimuth_step=_float_arg("azimuth_step", ns.azimuth_step, "(0, 90] degrees"))
+    at = floats_of("at", ns.at, 3)
+    settings = TiltTorsionSettings(azimuth_step=float_of("azimuth_step", ns.azimuth_step, "(0, 90] degrees"))
     warm_up()
     joints = joints_of(ns)
     report = tilt_torsion_at(design, at, settings, joints)
     out = {"design": design.to_dict(), "joints": joints.to_dict(), **report.to_dict()}
     if ns.json:
-        _emit(out)
+        emit_json(out)
     elif not report.reachable:
         print(f"position {at} is not reachable at the zero orientation")
     else:
@@ -521,176 +411,6 @@ def _tilt_torsion(ns: argparse.Namespace, design: Design) -> int:
     return 0
 
 
-def _task_of(ns: argparse.Namespace) -> Any:
-    """The task of ``--box`` / ``--cylinder`` / ``--sphere`` / ``--points`` (exactly one)."""
-    from paraspace.kinematics.task import MAX_CSV_BYTES, Region, read_pose_csv
-
-    given = [s for s in ("box", "cylinder", "sphere", "points") if getattr(ns, s, None) is not None]
-    if len(given) != 1:
-        raise ParameterError("task", ",".join(given) or None,
-                             "exactly one of --box CX,CY,CZ,LX,LY,LZ, --cylinder CX,CY,CZ,R,H, --sphere CX,CY,CZ,R "
-                             "or --points FILE.csv")
-    kind = given[0]
-    if kind == "points":
-        path = ns.points
-        if not os.path.isfile(path):
-            raise ParameterError("points", path, "an existing CSV file with the header x,y,z,psi,theta,phi[,t]")
-        size = os.path.getsize(path)
-        if size > MAX_CSV_BYTES:
-            raise ParameterError("points", f"{size:,} bytes", f"at most {MAX_CSV_BYTES:,} bytes (at most "
-                                 f"{MAX_CSV_BYTES // 100:,} poses)")
-        with open(path, "rb") as fh:
-            return read_pose_csv(fh.read())
-    return Region.parse(kind, _floats(kind, getattr(ns, kind)))
-
-
-def _task_orientations(ns: argparse.Namespace) -> Any:
-    from paraspace.kinematics.task import OrientationSet
-
-    o = _floats("orientation", ns.orientation, 3) if ns.orientation else [0.0, 0.0, 0.0]
-    return OrientationSet(tilt=ns.tilt, torsion=ns.torsion, fixed=(o[0], o[1], o[2]), step=ns.angle_step)
-
-
-def _task_settings(ns: argparse.Namespace) -> Any:
-    from paraspace.kinematics.task import TaskSettings
-
-    return TaskSettings(voxel=ns.voxel, eta_step=ns.eta_step, margin_range=ns.margin_range,
-                        carriage_margin=ns.carriage_margin, joints=joints_of(ns))
-
-
-def _study_task(ns: argparse.Namespace, joints: Any) -> Any:
-    """The ``TaskSpec`` of a study's task flags (``sweep``, ``optimize``), or ``None`` when none is given."""
-    if not any(getattr(ns, k, None) is not None for k in ("box", "cylinder", "sphere", "points")):
-        return None
-    from paraspace.kinematics.task import OrientationSet, TaskSettings, TaskSpec
-
-    return TaskSpec(_task_of(ns), OrientationSet(tilt=ns.tilt, torsion=ns.torsion, step=ns.task_angle_step),
-                    TaskSettings(voxel=_voxel(ns), margin_range=ns.margin_range, joints=joints))
-
-
-def _add_study_task_flags(p: argparse.ArgumentParser, title: str) -> None:
-    """The task flags of a study (``sweep``, ``optimize``): the region or pose list, its orientation set
-    and sampling (the task's cells are the study's voxels)."""
-    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
-
-    _add_task_flags(p, title)
-    for name in ("tilt", "torsion"):
-        spec = TOTAL_ORIENTATION[name]
-        p.add_argument(f"--{name}", metavar="DEG", help=f"the task region's {spec.label} (optimize: also the "
-                                                        f"orientation set of total_orientation_volume); valid range "
-                                                        f"{spec.range_text()}")
-    p.add_argument("--task-angle-step", dest="task_angle_step", default=TASK["angle_step"].default, metavar="DEG",
-                   help=f"the task's {TASK['angle_step'].label}; valid range {TASK['angle_step'].range_text()}")
-    p.add_argument("--margin-range", dest="margin_range", default=TASK["margin_range"].default, metavar="V",
-                   help=f"the task's {TASK['margin_range'].label}; valid range {TASK['margin_range'].range_text()}")
-
-
-def task_csv(out: dict[str, Any]) -> str:
-    """A pose list's answer one pose per row (index, t, reachable, leg slack, the 12 actuator values), or a
-    region's answer as one row of its scalars."""
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    if out["kind"] == "poses":
-        names = out["actuator_names"]
-        w.writerow(["index", "t", "reachable", "leg_slack", *names])
-        for r in out["poses"]:
-            w.writerow([r["index"], r.get("t", ""), int(r["reachable"]), repr(r["leg_slack"]), *map(repr, r["q"])])
-    else:
-        keys = ["fraction", "contained", "certified", "margin", "margin_saturated", "sample_points",
-                "reachable_points", "orientation_samples", "seconds"]
-        w.writerow(keys + ["binding"])
-        w.writerow([out[k] for k in keys] + [out["binding"]["message"]])
-    return buf.getvalue()
-
-
-def cmd_task(ns: argparse.Namespace) -> int:
-    """``paraspace task``: does the design hold a region or follow a pose list, by what margin."""
-    from paraspace.kinematics.task import evaluate_task
-    from paraspace.kinematics.workspace import warm_up
-
-    mech, design = _mechanism(ns, {})
-    task = _task_of(ns)
-    oset = _task_orientations(ns)
-    settings = _task_settings(ns)
-    if ns.points is not None and (ns.tilt is not None or ns.torsion is not None or ns.orientation):
-        raise ParameterError("tilt", ns.tilt if ns.tilt is not None else ns.torsion,
-                             "not with --points (each pose carries its orientation)")
-    progress, done = progress_line("task")
-    try:
-        if design is None:  # a general mechanism (kinematics/mechanism_task.py)
-            from paraspace.kinematics.mechanism_task import evaluate_mechanism_task
-            from paraspace.kinematics.mechanism_workspace import warm_up_general
-
-            warm_up_general()
-            res = evaluate_mechanism_task(mech, task, oset, settings, _length_step(ns), progress)
-        else:
-            warm_up()
-            res = evaluate_task(design, task, oset, settings, progress)
-    finally:
-        done()
-    from paraspace.kinematics.serialize import jsonable
-
-    out = jsonable(res.to_dict())
-    if ns.csv:
-        write_atomic(ns.csv, task_csv(out))
-    if ns.json:
-        _emit(out)
-        return 0
-    what = (f"{out['count']} poses" if out["kind"] == "poses" else
-            f"{out['region']['shape']} of {out['sample_points']} sample points x {out['orientation_samples']} "
-            f"orientations")
-    print(f"task            {what}")
-    print(f"fraction        {out['fraction']:.4g}  (contained: {'yes' if out['contained'] else 'no'})")
-    print(f"certified       {out['certified']}")
-    sat = " (at least: no unreachable point within margin_range)" if out.get("margin_saturated") else ""
-    print(f"margin          {out['margin']:.4g}{sat}")
-    print(f"binding         {out['binding']['message']}")
-    if out["kind"] == "poses" and design is None:
-        if out["unreachable"]:
-            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
-                  + (" ..." if len(out["unreachable"]) > 20 else ""))
-    elif out["kind"] == "poses":
-        car = out["carriage"]
-        print(f"carriage travel d {car['travel_d']:.4g}, eta {car['travel_eta']:.4g} deg"
-              + (f"; max speed d {car['max_speed_d']:.4g}/s, eta {car['max_speed_eta']:.4g} deg/s"
-                 if "max_speed_d" in car else ""))
-        jumps = sorted({j["index"] for j in out["discontinuities"]})
-        print(f"discontinuities {', '.join(map(str, jumps)) if jumps else 'none'}")
-        if out["unreachable"]:
-            print(f"unreachable     {', '.join(map(str, out['unreachable'][:20]))}"
-                  + (" ..." if len(out["unreachable"]) > 20 else ""))
-        for a in out["actuators"]:
-            print(f"  {a['name']:<7} {a['min']:9.3f} .. {a['max']:9.3f}  of [{a['stroke'][0]:g}, {a['stroke'][1]:g}]"
-                  f"  ({100 * a['used_fraction']:.0f} % used)")
-    print(f"seconds         {out['seconds']:.2f}")
-    return 0
-
-
-def _add_task_parser(sub: Any) -> None:
-    from paraspace.kinematics.settings import TASK, TOTAL_ORIENTATION
-
-    t = sub.add_parser("task", help="does the design hold a region (with an orientation set) or follow a pose list")
-    add_design_flags(t)
-    _add_task_flags(t, "the task (exactly one)")
-    o = t.add_argument_group("orientation set of a region (default: the home orientation)")
-    for name in ("tilt", "torsion"):
-        spec = TOTAL_ORIENTATION[name]
-        o.add_argument(f"--{name}", metavar="DEG", help=f"{spec.label}; valid range {spec.range_text()}")
-    o.add_argument("--orientation", metavar="PSI,THETA,PHI", help="one fixed orientation instead (eq. (2), degrees)")
-    from paraspace.kinematics.settings import WORKSPACE
-
-    for name in ("voxel", "angle_step", "eta_step", "margin_range", "carriage_margin"):
-        spec = WORKSPACE[name] if name in ("voxel", "eta_step") else TASK[name]
-        t.add_argument(f"--{name.replace('_', '-')}", dest=name, default=spec.default, metavar="V",
-                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g})")
-    t.add_argument("--json", action="store_true", help="one JSON object: fraction, contained, certified, margin, "
-                                                      "worst, binding (and poses, discontinuities for a pose list)")
-    t.add_argument("--csv", metavar="OUT", help="write the answer as CSV (a pose list: one row per pose)")
-    add_joint_flags(t)
-    add_mechanism_flags(t)
-    t.set_defaults(func=cmd_task)
-
-
 def cmd_paper(ns: argparse.Namespace) -> int:
     """``paraspace paper``: every checkable claim of the paper with its verdict under each assumption;
     ``--fit``: the bounded fit of the unstated assumptions toward V, TI_1 and TI_2."""
@@ -698,8 +418,8 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.settings import ORIENTATION
     from paraspace.kinematics.workspace import warm_up
 
-    voxel = _voxel(ns)
-    scan = _scan(ns)
+    voxel = voxel_of(ns)
+    scan = scan_of(ns)
     keys = None
     if ns.assumptions is not None:
         keys = tuple(k.strip() for k in ns.assumptions.split(",") if k.strip())
@@ -719,7 +439,7 @@ def cmd_paper(ns: argparse.Namespace) -> int:
             out = paper_comparison(voxel, progress, assumptions=keys, **steps,
                                    angle_range=scan.get("angle_range", ORIENTATION["angle_range"].default))
     if ns.json:
-        _emit(out)
+        emit_json(out)
         return 0
     if ns.fit:
         print(out["summary"])
@@ -754,259 +474,23 @@ def cmd_paper(ns: argparse.Namespace) -> int:
     return 0
 
 
-#: ``sweep`` flags that only the paper's design study has
-_SWEEP_PAPER_ONLY = {"--plot": "plot", "--z0": "z0", **{flag: f"scan_{name}" for flag, name in SCAN_FLAGS.items()}}
-
-
-def _preset_row(row: dict, names: Sequence[str]) -> dict:
-    """A preset sweep's row: the swept parameters' values first, then the measures (the bookkeeping of
-    sweep_1d, sweep_2d and sweep_grid and the full design dict left out; ``ok``/``error`` kept)."""
-    design = row.get("design") or {}
-    skip = {"param", "value", "param_x", "param_y", "x", "y", "ix", "iy", "params", "index", "design"}
-    return {**{n: design.get(n) for n in names}, **{k: v for k, v in row.items() if k not in skip}}
-
-
-def _sweep_mechanism(ns: argparse.Namespace) -> int:
-    """``paraspace sweep --mechanism PRESET --param NAME --values ... [--param2 NAME --values2 ...]
-    [--set NAME=VALUE]... [--workers N | --scheduler ADDR]``: workspace measures over one or two of the
-    preset's parameters (kinematics/sweep.py on a PresetDesign; Dask: kinematics/distributed.py)."""
-    import functools
-
-    from paraspace.kinematics.mechanism_workspace import warm_up_general
-    from paraspace.kinematics.presets import PRESETS, PresetDesign
-    from paraspace.kinematics.sweep import evaluate_design, sweep_1d, sweep_2d
-    from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
-
-    from .mechanism_cli import _param_values
-
-    if ns.mechanism not in PRESETS:
-        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): a sweep varies a "
-                                                          "preset's parameter")
-    for flag, dest in {**_DESIGN_FLAGS, **_JOINT_FLAGS, **_SWEEP_PAPER_ONLY}.items():
-        if _given(ns, flag, dest):
-            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism (a preset's sweep: --param NAME "
-                                 "--values V1,V2,... [--param2 NAME --values2 ...] [--set NAME=VALUE]... [--voxel H] "
-                                 "[--workers N | --scheduler ADDR] [--json] [--csv FILE])")
-    for flag, dest in (("--box", "box"), ("--cylinder", "cylinder"), ("--sphere", "sphere"), ("--points", "points")):
-        if getattr(ns, dest, None) is not None:
-            raise ParameterError(flag, getattr(ns, dest), "not with --mechanism: task measures exist for the "
-                                                          "paper's model only")
-    if (ns.param2 is None) != (ns.values2 is None):
-        raise ParameterError("param2", ns.param2, "given together with --values2")
-    design = PresetDesign.of(ns.mechanism, _param_values(ns.set))
-    length_step = _length_step(ns)
-    values = _floats("values", ns.values)
-    values2 = None if ns.values2 is None else _floats("values2", ns.values2)
-    settings = WorkspaceSettings(voxel=_voxel(ns))
-    names = [ns.param] + ([] if ns.param2 is None else [ns.param2])
-    distributed = ns.scheduler is not None or ns.workers is not None
-    warm_up()
-    warm_up_general()
-    progress, done = progress_line("sweep")
-    try:
-        if distributed:
-            from paraspace.kinematics.distributed import sweep_grid
-
-            grid = {ns.param: values, **({} if values2 is None else {ns.param2: values2})}
-            raw = sweep_grid(design, grid, settings, scheduler=ns.scheduler, n_workers=ns.workers, progress=progress,
-                             evaluate=functools.partial(evaluate_design, length_step=length_step))
-        elif values2 is not None:
-            raw = sweep_2d(design, ns.param, values, ns.param2, values2, settings, progress=progress,
-                           length_step=length_step)["points"]
-        else:
-            raw = sweep_1d(design, ns.param, values, settings, progress=progress, length_step=length_step)
-    finally:
-        done()
-    rows = [_preset_row(r, names) for r in raw]
-    failed = [r for r in rows if r.get("ok") is False]
-    if ns.csv:
-        write_atomic(ns.csv, rows_to_csv(rows))
-    if ns.json:
-        _emit(rows)
-    else:
-        sys.stdout.write(rows_to_csv(rows))
-    if failed:
-        sys.stderr.write(f"paraspace: error: {len(failed)} of {len(rows)} points failed "
-                         f"(first: {failed[0].get('error', '?')})\n")
-        return 1
-    return 0
-
-
-def _backend_workers(ns: argparse.Namespace, auto: bool = True) -> int | None:
-    """Local Dask workers of a sweep or optimisation: ``--workers`` as given (0: serially in this
-    process); with neither ``--workers`` nor ``--scheduler`` (and ``auto``), the machine's default
-    (:func:`kinematics.distributed.default_workers`: a local cluster of half the cores from 8 usable
-    cores, else serial)."""
-    if ns.workers is not None:
-        return None if ns.workers == 0 else ns.workers
-    if ns.scheduler is not None or not auto:
-        return None
-    from paraspace.kinematics.distributed import default_workers
-
-    return default_workers()
-
-
-def cmd_sweep(ns: argparse.Namespace) -> int:
-    from paraspace.kinematics.sweep import sweep_1d, sweep_2d
-    from paraspace.kinematics.workspace import WorkspaceSettings, warm_up
-
-    if getattr(ns, "mechanism", None) is not None:
-        return _sweep_mechanism(ns)
-    if getattr(ns, "set", None):
-        raise ParameterError("--set", ns.set[0], "only with --mechanism PRESET")
-    design = design_of(ns)
-    settings = WorkspaceSettings(voxel=_voxel(ns), joints=joints_of(ns))
-    for field in ("param", "param2"):
-        name = getattr(ns, field)
-        if name is not None and name not in PARAMS:
-            raise ParameterError(field, name, "one of " + ", ".join(PARAMS))
-    values = _floats("values", ns.values)
-    if (ns.param2 is None) != (ns.values2 is None):
-        raise ParameterError("param2", ns.param2, "given together with --values2")
-    orientation = _sweep_orientation(ns)
-    task = _study_task(ns, settings.joints)
-    if ns.plot:
-        from paraspace.app.figures import export_format
-
-        try:
-            export_format(ns.plot)
-        except ValueError as err:
-            raise ParameterError("plot", ns.plot, str(err)) from None
-    workers = _backend_workers(ns, auto=task is None)
-    distributed = ns.scheduler is not None or workers is not None
-    cores = os.cpu_count() or 1
-    if ns.scheduler is None and workers is not None and workers > cores:
-        # a local cluster of more single-threaded workers than cores is slower than the serial path
-        # (which already uses every core): say so, and run serially
-        sys.stderr.write(f"paraspace: --workers {ns.workers} exceeds this machine's {cores} cores; running the "
-                         f"sweep serially instead (it uses all {cores} cores)\n")
-        distributed = False
-    if task is not None and distributed:
-        raise ParameterError("workers" if ns.workers is not None else "scheduler", ns.workers or ns.scheduler,
-                             "omit it with a task (task sweeps run in this process)")
-    warm_up()
-    progress, done = progress_line("sweep")
-    try:
-        if ns.param2 is not None:
-            values2 = _floats("values2", ns.values2)
-            if distributed:
-                from paraspace.kinematics.distributed import sweep_grid
-
-                rows = sweep_grid(design, {ns.param: values, ns.param2: values2}, settings, orientation=orientation,
-                                  scheduler=ns.scheduler, n_workers=workers, progress=progress)
-            else:
-                rows = sweep_2d(design, ns.param, values, ns.param2, values2, settings, orientation=orientation,
-                                progress=progress, task=task)["points"]
-        elif distributed:
-            from paraspace.kinematics.distributed import sweep_grid
-
-            rows = sweep_grid(design, {ns.param: values}, settings, orientation=orientation, scheduler=ns.scheduler,
-                              n_workers=workers, progress=progress)
-        else:
-            rows = sweep_1d(design, ns.param, values, settings, orientation=orientation, progress=progress,
-                            task=task)
-    finally:
-        done()
-    rows = [_with_value(r, ns.param, ns.param2) for r in rows]
-    failed = [r for r in rows if r.get("ok") is False]
-    if ns.csv:
-        write_atomic(ns.csv, rows_to_csv(rows))
-    if ns.plot:
-        plot_sweep(rows, ns.param, ns.param2, ns.plot, ns.measure, design, settings.voxel)
-    if ns.json:
-        _emit(rows)
-    else:
-        sys.stdout.write(rows_to_csv(rows))
-    if failed:  # the rows above say which; the exit status says that the study is incomplete
-        sys.stderr.write(f"paraspace: error: {len(failed)} of {len(rows)} points failed "
-                         f"(first: {failed[0].get('error', '?')})\n")
-        return 1
-    return 0
-
-
-def _sweep_orientation(ns: argparse.Namespace) -> Any:
-    """The orientation settings of a sweep: ``--z0``, or the paper's z0 = 130 when ``--measure`` is
-    TI_1/TI_2 (``None``: no orientation maps), with the joint flags. Checks ``--measure``."""
-    from paraspace.app.figures import MEASURES
-    from paraspace.kinematics.orientation import OrientationSettings
-    from paraspace.kinematics.settings import ORIENTATION
-
-    if ns.measure not in MEASURES:
-        raise ParameterError("measure", ns.measure, "one of " + ", ".join(MEASURES))
-    if ns.z0 is None:
-        if ns.measure not in ("TI_1", "TI_2"):
-            given = [flag for flag, name in SCAN_FLAGS.items() if getattr(ns, f"scan_{name}") is not None]
-            if given:
-                raise ParameterError(given[0].lstrip("-"), getattr(ns, f"scan_{SCAN_FLAGS[given[0]]}"),
-                                     "only with --measure TI_1/TI_2 or --z0 (the orientation maps)")
-            return None
-        return OrientationSettings(joints=joints_of(ns), **_scan(ns))
-    return OrientationSettings(z0=float(ORIENTATION["z0"].parse(ns.z0)), joints=joints_of(ns), **_scan(ns))
-
-
-def _with_value(row: dict, param: str, param2: str | None) -> dict:
-    out = dict(row)
-    if "value" not in out and param in out.get("design", {}):
-        out["value"] = out["design"][param]
-    if param2 is not None and "value2" not in out and param2 in out.get("design", {}):
-        out["value2"] = out["design"][param2]
-    return out
-
-
-def rows_to_csv(rows: Sequence[dict]) -> str:
-    """Flat CSV of sweep rows (scalar columns only)."""
-    if not rows:
-        return ""
-    keys = [k for k, v in rows[0].items() if isinstance(v, (int, float, str, bool)) or v is None]
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=keys, extrasaction="ignore", lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: r.get(k) for k in keys})
-    return buf.getvalue()
-
-
-def plot_sweep(rows: Sequence[dict], param: str, param2: str | None, path: str, measure: str = "volume",
-               design: Design | None = None, voxel: float | None = None) -> None:
-    """``measure`` against one parameter (paper Fig. 4) or over two (Fig. 5: a 3-D surface and a heat
-    map whose cells are centred on the samples), written to ``path`` (.png at 200 dpi, .svg or .pdf)
-    with :mod:`paraspace.app.figures`, the explorer's plotting module. ``design`` (the design the
-    sweep varies) is marked."""
-    from paraspace.app import figures
-
-    fmt = figures.export_format(path)
-    if param2 is None:
-        cur = float(getattr(design, param)) if design is not None else None
-        spec = figures.sweep_spec(rows, param, measure, current=cur, voxel=voxel)
-    else:
-        xs = sorted({float(r["value"]) for r in rows})
-        ys = sorted({float(r["value2"]) for r in rows})
-        grid: list[list[Any]] = [[None] * len(xs) for _ in ys]
-        for r in rows:
-            grid[ys.index(float(r["value2"]))][xs.index(float(r["value"]))] = r.get(measure)
-        cur2 = (float(getattr(design, param)), float(getattr(design, param2))) if design is not None else None
-        spec = figures.study_spec(xs, ys, grid, param_x=param, param_y=param2, measure=measure, current=cur2,
-                                  voxel=voxel)
-    write_atomic(path, figures.export(spec, fmt))
-
-
 def cmd_ik(ns: argparse.Namespace) -> int:
     from paraspace.kinematics.pose import Pose
     from paraspace.kinematics.redundancy import inverse_kinematics, resolve_redundancy
 
-    mech, design = _mechanism(ns, {"--carriage": "carriage"})
+    mech, design = mechanism_of(ns, {"--carriage": "carriage"})
     if design is None:
         return _ik_general(ns, mech)
     joints = joints_of(ns)
-    pose = Pose.from_array(_floats("pose", ns.pose, 6))
+    pose = Pose.from_array(floats_of("pose", ns.pose, 6))
     if ns.carriage:
-        c = _floats("carriage", ns.carriage, 6)
+        c = floats_of("carriage", ns.carriage, 6)
         res = inverse_kinematics(design, pose, c[:3], c[3:], joints)
     else:
         res = resolve_redundancy(design, pose, joints)
     out = {"design": design.to_dict(), "pose": pose.to_dict(), **res.to_dict()}
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print(res.message)
         for ch in res.chains:
@@ -1028,15 +512,15 @@ def _ik_general(ns: argparse.Namespace, mech: Any) -> int:
     from paraspace.kinematics.mechanism_workspace import mechanism_ik
     from paraspace.kinematics.pose import Pose
 
-    pose = Pose.from_array(_floats("pose", ns.pose, 6))
+    pose = Pose.from_array(floats_of("pose", ns.pose, 6))
     angles = (pose.psi, pose.theta, pose.phi)
-    chains = mechanism_ik(mech, pose.position, angles, length_step=_length_step(ns))
+    chains = mechanism_ik(mech, pose.position, angles, length_step=length_step_of(ns))
     feasible = all(c.feasible for c in chains)
     cond = mechanism_jacobians(mech, pose.position, angles, [c.q for c in chains]).condition_number
     out = {"mechanism": mech.to_dict(), "pose": pose.to_dict(), "feasible": feasible,
            "chains": [c.to_dict() for c in chains], "condition_number": cond}
     if ns.json:
-        _emit(out)
+        emit_json(out)
     else:
         print("reachable: every chain puts its legs in range" if feasible else
               "unreachable: chain(s) " + ", ".join(str(c.chain + 1) for c in chains if not c.feasible)
@@ -1067,185 +551,6 @@ def cmd_serve(ns: argparse.Namespace) -> int:
     serve(host=ns.host, port=ns.port, api_port=ns.api_port, block=True, public_url=public_url,
           trusted_proxy=ns.trusted_proxy, allowed_hosts=parse_allowed_hosts(ns.allowed_host))
     return 0
-
-
-# ----- optimize (issue 11) -------------------------------------------------------------------
-
-
-def _bounds_arg(text: str | None, known: Sequence[str] = tuple(PARAMS)) -> dict[str, tuple[float, float]]:
-    """``"l_s=20:100,a=10:90"`` -> ``{"l_s": (20, 100), "a": (10, 90)}`` (names among ``known``)."""
-    out: dict[str, tuple[float, float]] = {}
-    if not text:
-        return out
-    for part in text.split(","):
-        part = part.strip()
-        if not part:
-            continue
-        name, sep, rng = part.partition("=")
-        lo, sep2, hi = rng.partition(":")
-        if not sep or not sep2:
-            raise ParameterError("bounds", part, "NAME=LO:HI, comma-separated, e.g. l_s=20:100,a=10:90")
-        name = name.strip()
-        if name not in known:
-            raise ParameterError("bounds", name, "parameters " + ", ".join(known))
-        try:
-            out[name] = (float(lo), float(hi))
-        except ValueError:
-            raise ParameterError(name, rng, "LO:HI, two numbers") from None
-    return out
-
-
-def optimize_settings_from_args(ns: argparse.Namespace) -> Any:
-    """The core ``OptimizeSettings`` of the ``optimize`` flags (validated by the core)."""
-    from paraspace.kinematics.optimize import OptimizeSettings
-    from paraspace.kinematics.orientation import OrientationSettings
-    from paraspace.kinematics.settings import OPTIMIZE
-    from paraspace.kinematics.workspace import WorkspaceSettings
-
-    constraints = [c.strip() for raw in (ns.constraint or []) for c in raw.split(",") if c.strip()]
-    preset, values, length_step, known = _optimize_preset(ns)
-    general = preset not in (None, "paper")
-    joints = joints_of(ns)
-    spec = _study_task(ns, joints)
-    total = None
-    if ns.tilt is not None or ns.torsion is not None:
-        total = (0.0 if ns.tilt is None else ns.tilt, 0.0 if ns.torsion is None else ns.torsion, ns.task_angle_step)
-    from paraspace.kinematics.optimize import DEFAULT_PARAMS
-
-    params = ns.params if ns.params is not None else ",".join(known if general else DEFAULT_PARAMS)
-    objectives = ns.objectives if ns.objectives is not None else ("volume,-l_max" if general else "volume,-footprint")
-    return OptimizeSettings(
-        task=spec, total_orientation=total, preset=preset, preset_values=values, length_step=length_step,
-        params=tuple(p.strip() for p in params.split(",")), bounds=_bounds_arg(ns.bounds, known),
-        objectives=objectives, constraints=constraints, design=Design() if preset is not None else design_of(ns),
-        workspace=WorkspaceSettings(voxel=_voxel(ns), joints=joints),
-        orientation=OrientationSettings(joints=joints, **_scan(ns)),
-        population=int(OPTIMIZE["population"].parse(ns.population)),
-        generations=int(OPTIMIZE["generations"].parse(ns.generations)),
-        seed=int(OPTIMIZE["seed"].parse(ns.seed)), step=OPTIMIZE["step"].parse(ns.step), algorithm=ns.algorithm)
-
-
-def _optimize_preset(ns: argparse.Namespace) -> tuple[str | None, dict[str, Any], float, list[str]]:
-    """``optimize --mechanism PRESET [--param NAME=VALUE]... [--length-step L]``: ``(preset, its fixed
-    values, length_step, the names --params and --bounds may use)``; ``(None, {}, 1, PARAMS)`` without
-    ``--mechanism``. A file is refused (the optimiser varies a preset's parameters); so are the design
-    flags, and the joint flags with a general preset (by :func:`_mechanism`)."""
-    from paraspace.kinematics.presets import PRESETS
-
-    from .mechanism_cli import _param_values
-
-    if getattr(ns, "mechanism", None) is not None and ns.mechanism not in PRESETS:
-        raise ParameterError("--mechanism", ns.mechanism, f"a preset ({', '.join(PRESETS)}): the optimiser varies "
-                                                          "a preset's parameters, not a description file's")
-    _mechanism(ns, {})  # refuses the flags a preset replaces (and validates --param)
-    if ns.mechanism is None:
-        return None, {}, 1.0, list(PARAMS)
-    known = [q.name for q in PRESETS[ns.mechanism].params if q.numeric]
-    return ns.mechanism, _param_values(ns.param), _length_step(ns), known
-
-
-def cmd_optimize(ns: argparse.Namespace) -> int:
-    """``paraspace optimize``: the Pareto front of the objectives over the free parameters."""
-    from paraspace.kinematics.optimize import optimize
-    from paraspace.kinematics.workspace import warm_up
-
-    settings = optimize_settings_from_args(ns)
-    if ns.plot and not ns.plot.lower().endswith(".png"):
-        raise ParameterError("plot", ns.plot, "a file name ending in .png")
-    if ns.scheduler is not None and ns.workers is not None:
-        raise ParameterError("workers", ns.workers, "omit it with --scheduler (the scheduler's workers are used)")
-    if settings.general:
-        from paraspace.kinematics.mechanism_workspace import warm_up_general
-
-        warm_up_general()
-    else:
-        warm_up()
-
-    with progress_scope("optimize", force=ns.progress) as progress:
-        result = optimize(settings, scheduler=ns.scheduler, workers=_backend_workers(ns), progress=progress).to_dict()
-    from paraspace.app.optimize_plots import front_csv, front_png
-
-    if ns.csv:
-        write_atomic(ns.csv, front_csv(result))
-    if ns.plot:
-        front_png(result, ns.plot)
-    if ns.json:
-        _emit(result)
-    else:
-        labels = result["settings"]["objectives"]
-        params = result["settings"]["params"]
-        print(f"{len(result['front'])} Pareto-optimal designs ({result['evaluations']} evaluations, "
-              f"{result['computed']} computed, {len(result['failed'])} failed, {result['seconds']:.1f} s, "
-              f"{result['settings']['algorithm']}, {result['backend']})")
-        head = params + [lb.lstrip("-") for lb in labels]
-        print("  ".join(f"{h:>12}" for h in head))
-        for e in result["front"]:
-            vals = [e["design"][p] for p in params] + [e["measures"].get(lb.lstrip("-")) for lb in labels]
-            print("  ".join(f"{v:>12.6g}" if isinstance(v, (int, float)) else f"{v!s:>12}" for v in vals))
-        hv = result["hypervolume"]
-        if hv:
-            print("hypervolume per generation: " + " ".join(f"{v:.4g}" for v in hv))
-    return 0
-
-
-def _add_optimize_parser(sub: Any) -> None:
-    from paraspace.kinematics.optimize import ALGORITHMS, DEFAULT_PARAMS, MEASURES
-
-    z = sub.add_parser("optimize", help="multi-objective optimal design: the Pareto front over design parameters")
-    add_design_flags(z)
-    z.add_argument("--params",
-                   help=f"free parameters, comma-separated (default {','.join(DEFAULT_PARAMS)}; any of "
-                        f"{', '.join(PARAMS)}); the others keep the design flags' values. With --mechanism "
-                        "PRESET: the preset's numeric parameters (default all of them), the others --param's "
-                        "values or the preset's defaults")
-    z.add_argument("--objectives",
-                   help="measures, comma-separated; a leading - minimises (default volume,-footprint; with a "
-                        "general --mechanism volume,-l_max, and only the position workspace's measures and the "
-                        "preset's parameters exist). Measures: " + ", ".join(k for k, m in MEASURES.items()
-                                                                            if not m.flag))
-    z.add_argument("--constraint", action="append", metavar="C",
-                   help="repeatable: a flag (" + ", ".join(k for k, m in MEASURES.items() if m.flag)
-                        + ") or MEASURE>=V / MEASURE<=V, e.g. \"volume>=2e6\"")
-    z.add_argument("--bounds", help="NAME=LO:HI,... (default: paper Table I's ranges; with --mechanism PRESET each "
-                                    "parameter's study range, 'paraspace mechanism presets')")
-    from paraspace.kinematics.settings import OPTIMIZE
-
-    for name, note in (("population", ""), ("generations", "; 16 x 12 at h = 4 takes about 50 s here"), ("seed", ""),
-                       ("step", "")):
-        spec = OPTIMIZE[name]
-        z.add_argument(f"--{name}", default=spec.default,
-                       help=f"{spec.label}; valid range {spec.range_text()} (default {spec.default:g}{note})")
-    z.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
-    z.add_argument("--algorithm", default="auto", choices=ALGORITHMS,
-                   help="auto: NSGA-II up to 2 objectives, NSGA-III from 3")
-    z.add_argument("--json", action="store_true", help="one JSON object: front, hypervolume, settings...")
-    z.add_argument("--csv", metavar="FILE", help="the front, one design per row")
-    z.add_argument("--plot", metavar="FILE.png", help="a picture of the front")
-    z.add_argument("--progress", action="store_true",
-                   help="show the progress bar on stderr even when it is not a terminal")
-    z.add_argument("--scheduler", metavar="ADDR", help="evaluate on a Dask scheduler (e.g. tcp://host:8786)")
-    z.add_argument("--workers", type=int, metavar="N",
-                   help="evaluate on a local Dask cluster with N workers, kept warm for the run (0: in this process; "
-                        "default: half the cores from 8 usable cores, else in this process)")
-    _add_scan_flags(z)
-    add_joint_flags(z)
-    _add_study_task_flags(z, "the task of task_fraction, task_margin and --constraint contains_task")
-    add_mechanism_flags(z)
-    z.set_defaults(func=cmd_optimize)
-
-
-def _add_task_flags(p: argparse.ArgumentParser, title: str) -> None:
-    """``--box | --cylinder | --sphere | --points`` (``task`` and ``optimize``)."""
-    from paraspace.kinematics.settings import TASK
-
-    g = p.add_argument_group(title)
-    size = TASK["size"].range_text()
-    g.add_argument("--box", metavar="CX,CY,CZ,LX,LY,LZ", help=f"a box: centre and edges (edges {size})")
-    g.add_argument("--cylinder", metavar="CX,CY,CZ,R,H", help=f"a cylinder with a vertical axis (R, H {size})")
-    g.add_argument("--sphere", metavar="CX,CY,CZ,R", help=f"a sphere (R {size})")
-    g.add_argument("--points", metavar="FILE.csv",
-                   help="a pose list: header x,y,z,psi,theta,phi[,t], degrees and seconds; at most "
-                        f"{int(TASK['max_poses'].hi):,} poses")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -1306,45 +611,14 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=("per_region", "line", "phi"),
                    help="eq. (28)'s position Δ: each region's own (default), the union of a line's regions, "
                         "or the literal reading: one Δ per line taken from the φ region")
-    _add_scan_flags(o)
+    add_scan_flags(o)
     add_joint_flags(o)
     add_mechanism_flags(o)
     o.set_defaults(func=cmd_orientation)
 
-    s = sub.add_parser("sweep", help="measures against one parameter (or a 2-D grid of two)")
-    add_design_flags(s)
-    s.add_argument("--param", required=True, help="one of " + ", ".join(PARAMS) + " (with --mechanism: one of the "
-                                                   "preset's parameters)")
-    s.add_argument("--values", required=True, help="comma-separated values")
-    s.add_argument("--param2", help="second parameter for a 2-D grid")
-    s.add_argument("--values2", help="values of the second parameter")
-    s.add_argument("--voxel", default=4.0, help="voxel edge h (default 4)")
-    s.add_argument("--json", action="store_true", help="a JSON list of objects with value and volume")
-    s.add_argument("--csv", metavar="FILE")
-    s.add_argument("--plot", metavar="FILE", help="a picture of the study: .png (200 dpi), .svg or .pdf")
-    s.add_argument("--measure", default="volume", metavar="NAME",
-                   help="the plotted measure (default volume; hollowness, void_ratio, solidity, voids, genus, ...; "
-                        "TI_1/TI_2 need --z0)")
-    s.add_argument("--z0", default=None, metavar="Z",
-                   help="also compute TI_1, TI_2 of every point at this height of the x and y' lines (paper: 130)")
-    s.add_argument("--scheduler", metavar="ADDR", help="run on a Dask scheduler (e.g. tcp://host:8786)")
-    s.add_argument("--workers", type=int, metavar="N",
-                   help="run on a local Dask cluster with N workers (0: in this process; default: half the cores "
-                        "from 8 usable cores, else in this process)")
-    s.add_argument("--mechanism", metavar="PRESET", help="sweep a parameter of a mechanism preset instead of the "
-                                                         "paper's design (see 'paraspace mechanism presets')")
-    s.add_argument("--set", action="append", metavar="NAME=VALUE",
-                   help="with --mechanism: a fixed parameter of the preset (repeatable)")
-    s.add_argument("--length-step", dest="length_step", metavar="L",
-                   help="with --mechanism: spacing of a sampled (second) prismatic joint's values, [0.01, 100] "
-                        "(default 1)")
-    _add_scan_flags(s)
-    add_joint_flags(s)
-    _add_study_task_flags(s, "a task: each point also gets task_fraction, task_margin, contains_task")
-    s.set_defaults(func=cmd_sweep)
-
-    _add_optimize_parser(sub)
-    _add_task_parser(sub)
+    add_sweep_parser(sub)
+    add_optimize_parser(sub)
+    add_task_parser(sub)
 
     pp = sub.add_parser("paper", help="every checkable claim of the paper with its verdict under each assumption")
     pp.add_argument("--voxel", default=4.0, help="voxel edge h of every workspace (default 4)")
@@ -1354,7 +628,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "legs10; default all)")
     pp.add_argument("--fit", action="store_true",
                     help="fit the unstated assumptions (arc range, cones, scan range, z floor) to V, TI_1, TI_2")
-    _add_scan_flags(pp)
+    add_scan_flags(pp)
     pp.set_defaults(func=cmd_paper)
 
     k = sub.add_parser("ik", help="inverse kinematics with redundancy resolution")

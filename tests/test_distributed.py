@@ -160,18 +160,18 @@ def test_default_backend_rule_by_core_count(monkeypatch):
     command line's default follows it, an explicit --workers or --scheduler wins, 0 is serial."""
     import argparse
 
-    from paraspace.app.cli import _backend_workers
+    from paraspace.app.sweep_cli import backend_workers
 
     assert [default_workers(c) for c in (1, 2, 4, 7)] == [None] * 4
     assert [default_workers(c) for c in (8, 9, 16, 64)] == [4, 4, 8, 32]
     for cores, expected in ((2, None), (16, 8)):
         monkeypatch.setattr(distributed, "usable_cores", lambda cores=cores: cores)
         assert default_workers() == expected
-        assert _backend_workers(argparse.Namespace(workers=None, scheduler=None)) == expected
-        assert _backend_workers(argparse.Namespace(workers=None, scheduler=None), auto=False) is None
-        assert _backend_workers(argparse.Namespace(workers=3, scheduler=None)) == 3
-        assert _backend_workers(argparse.Namespace(workers=0, scheduler=None)) is None
-        assert _backend_workers(argparse.Namespace(workers=None, scheduler="tcp://h:8786")) is None
+        assert backend_workers(argparse.Namespace(workers=None, scheduler=None)) == expected
+        assert backend_workers(argparse.Namespace(workers=None, scheduler=None), auto=False) is None
+        assert backend_workers(argparse.Namespace(workers=3, scheduler=None)) == 3
+        assert backend_workers(argparse.Namespace(workers=0, scheduler=None)) is None
+        assert backend_workers(argparse.Namespace(workers=None, scheduler="tcp://h:8786")) is None
 
 
 def test_usable_cores_is_the_affinity():

@@ -12,7 +12,7 @@ import json
 
 import pytest
 
-from paraspace.app import cli
+from paraspace.app import cli, optimize_cli
 from paraspace.app.api import models
 from paraspace.app.api.errors import FieldError
 from paraspace.kinematics.design import Design, ParameterError
@@ -98,7 +98,7 @@ def test_cli_optimize_takes_joint_and_scan_flags() -> None:
     ns = cli.build_parser().parse_args(["optimize", "--objectives", "TI_1", "--voxel", "8", "--u-cone", "30",
                                         "--s-cone", "30", "--cone-axis", "home", "--angle-step", "3",
                                         "--position-step", "5", "--angle-range", "60", "--leg-diameter", "4"])
-    s = cli.optimize_settings_from_args(ns)
+    s = optimize_cli.optimize_settings_from_args(ns)
     joints = dataclasses.replace(CONES, leg_diameter=4.0)
     assert s.workspace.joints == joints
     assert s.orientation_used == OrientationSettings(angle_range=60.0, angle_step=3.0, position_step=5.0, joints=joints)

@@ -15,7 +15,7 @@ import textwrap
 
 import pytest
 
-from paraspace.app import cli
+from paraspace.app import cli, optimize_cli
 from paraspace.app.api import models
 from paraspace.app.urlstate import SETTING_RANGES, SETTING_SLIDERS, Range, parse_query
 from paraspace.kinematics.design import ParameterError
@@ -118,7 +118,7 @@ def test_patched_optimiser_bound_reaches_core_and_cli(monkeypatch: pytest.Monkey
         OptimizeSettings(population=500)
     ns = cli.build_parser().parse_args(["optimize", "--population", "500"])
     with pytest.raises(ParameterError, match=r"\[4, 200\]"):
-        cli.optimize_settings_from_args(ns)
+        optimize_cli.optimize_settings_from_args(ns)
     assert "[4, 200]" in cli.build_parser()._subparsers._group_actions[0].choices["optimize"].format_help()
 
 
