@@ -18,7 +18,7 @@ from paraspace.app.explorer.workspace_job import voxel_z_range
 from paraspace.app.urlstate import ExplorerState
 from paraspace.kinematics.bracket import bracket_of
 from paraspace.kinematics.measures import measure_workspace
-from paraspace.kinematics.optimize import MEASURES as OPTIMISER_MEASURES
+from paraspace.kinematics.objectives import MEASURES as OPTIMISER_MEASURES
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 

@@ -13,17 +13,8 @@ import pytest
 
 from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.distributed import close_clients, shared_client
-from paraspace.kinematics.optimize import (
-    MEASURES,
-    Constraint,
-    Measure,
-    OptimizeSettings,
-    non_dominated,
-    normalised_hypervolume,
-    optimize,
-    parse_constraint,
-    parse_objectives,
-)
+from paraspace.kinematics.objectives import MEASURES, Constraint, Measure, parse_constraint, parse_objectives
+from paraspace.kinematics.optimize import OptimizeSettings, non_dominated, normalised_hypervolume, optimize
 from paraspace.kinematics.progress import Cancelled
 from paraspace.kinematics.sweep import ResultCache, evaluate_design, sweep_1d, sweep_2d
 from paraspace.kinematics.workspace import WorkspaceSettings, reach_box
@@ -249,7 +240,7 @@ def test_parsers_and_registry():
     assert Constraint("boundary_complete").violation(1.0) == 0.0
     assert Constraint("boundary_complete").violation(0.0) == 1.0
     # a new measure is one entry
-    from paraspace.kinematics.optimize import register_measure
+    from paraspace.kinematics.objectives import register_measure
 
     register_measure(Measure("test_volume_per_voxel", "test only", derive=lambda row: row["volume"] / row["voxels"]))
     try:

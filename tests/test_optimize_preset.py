@@ -11,7 +11,8 @@ from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.measures import measure_workspace
 from paraspace.kinematics.mechanism_workspace import compute_mechanism_workspace
-from paraspace.kinematics.optimize import MEASURES, OptimizeSettings, optimize
+from paraspace.kinematics.objectives import MEASURES
+from paraspace.kinematics.optimize import OptimizeSettings, optimize
 from paraspace.kinematics.presets import PRESETS, PresetDesign, preset
 from paraspace.kinematics.workspace import WorkspaceSettings
 

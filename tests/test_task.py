@@ -349,7 +349,8 @@ def test_rest_task_over_http():
 
 
 def test_optimiser_task_measures_and_constraint_match_brute_force():
-    from kinematics.optimize import MEASURES, OptimizeSettings, optimize, parse_constraint
+    from kinematics.objectives import MEASURES, parse_constraint
+    from kinematics.optimize import OptimizeSettings, optimize
     from kinematics.task import TaskSpec
     from kinematics.workspace import WorkspaceSettings
 

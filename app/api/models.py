@@ -198,7 +198,7 @@ class OptimizeRequest(BaseModel):
         description="{param: [lo, hi]} for some free parameters; others: Table I's range (a preset's: each "
                     "parameter's study range, GET /mechanism/presets)")
     objectives: list[str] | None = Field(None, min_length=1, max_length=8,
-                                         description="measures; a leading - minimises (kinematics.optimize.MEASURES;"
+                                         description="measures; a leading - minimises (kinematics.objectives.MEASURES;"
                                                      " default volume, -footprint; with a general preset volume, "
                                                      "-l_max)")
     constraints: list[str] = Field(default_factory=list, max_length=8,

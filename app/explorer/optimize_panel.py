@@ -114,7 +114,7 @@ class OptimizePanel:
                        "(`volume`, `-footprint`, `-hollowness`, `TI_1`...). "
                        "TI_1/TI_2 are sampled every 2 deg x 4 here (the CLI and API default to 0.5 deg x 1).")
         from paraspace.kinematics.design import PARAMS
-        from paraspace.kinematics.optimize import MEASURES
+        from paraspace.kinematics.objectives import MEASURES
 
         self.params = g.add_text("free parameters", initial_value=DEFAULTS["params"],
                                  hint="comma-separated, from: " + ", ".join(PARAMS))
