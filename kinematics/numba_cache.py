@@ -18,6 +18,15 @@ module changed). A pip upgrade rewrites every file, so it was safe; a checkout w
 directory only; every other function keeps numba's behaviour). Importing this module installs them;
 ``kinematics/__init__.py`` imports it before any kernel module, since numba picks a function's
 locator when the function is decorated.
+
+Import names. A checkout's modules can be imported under two names: ``paraspace.kinematics.x`` (the
+installed namespace) and ``kinematics.x`` (the checkout's root on ``sys.path``, e.g. a script or
+a test run from it). numba names a cache file by the source file alone, so both names shared one
+entry, and a kernel compiled under one name stores an environment that imports that name when it is
+loaded: a process without the checkout's root on ``sys.path`` then failed with "No module named
+'kinematics'" on a kernel another process had compiled (seen: the explorer's dexterity colours after
+a test run). The cache file's name here also carries a hash of the module's import name, so each
+name has its own entries.
 """
 
 from __future__ import annotations
@@ -54,9 +63,11 @@ def locators(package: Path = PACKAGE) -> tuple[type, ...]:
 
 class _PackageStamped:
     """Mixin over one of numba's source-file locators: it claims only the functions defined under
-    ``_root``, and stamps them with :func:`package_stamp` of ``_root`` as well."""
+    ``_root``, stamps them with :func:`package_stamp` of ``_root`` as well, and keeps each import name
+    of a module in cache files of its own."""
 
     _root: Path
+    _import_name: str = ""
 
     @classmethod
     def from_function(cls, py_func: Any, py_file: str) -> Any:
@@ -64,10 +75,21 @@ class _PackageStamped:
             inside = Path(py_file).resolve().is_relative_to(cls._root)
         except (OSError, ValueError):
             inside = False
-        return super().from_function(py_func, py_file) if inside else None  # type: ignore[misc]
+        if not inside:
+            return None
+        self = super().from_function(py_func, py_file)  # type: ignore[misc]
+        if self is not None:
+            self._import_name = str(getattr(py_func, "__module__", "") or "")
+        return self
 
     def get_source_stamp(self) -> Any:
         return (super().get_source_stamp(), package_stamp(self._root))  # type: ignore[misc]
+
+    def get_disambiguator(self) -> str:
+        # numba names a cache file by the file's base name, the function and its line; the module's
+        # import name goes in too (module docstring, "Import names")
+        tag = hashlib.sha256(self._import_name.encode()).hexdigest()[:8]
+        return f"{super().get_disambiguator()}-{tag}"  # type: ignore[misc]
 
 
 @functools.cache

@@ -1,5 +1,6 @@
 """Architecture rules: the numerical core imports no web package and never imports app/; no import
-circle inside the core; outside app/explorer/, only the server start-up imports the explorer."""
+circle inside the core, app/ or app/explorer/; the core is imported by one name; outside
+app/explorer/, only the server start-up imports the explorer."""
 
 from __future__ import annotations
 
@@ -120,6 +121,30 @@ def test_no_import_circle_in_the_explorer():
     graph = _module_graph("app/explorer")
     assert "session" in graph["server"]  # the graph sees the modules
     assert _cycles(graph) == [], "import circle in app/explorer/"
+
+
+def test_no_import_circle_in_the_app():
+    """app/'s own modules (the command line, its command modules, links, formats...): the circles
+    cli <-> report_cli and urlstate <-> mechanism_link are gone (app/cli_flags.py, app/numfmt.py)."""
+    graph = _module_graph("app")
+    assert "cli_flags" in graph["report_cli"] and "numfmt" in graph["urlstate"]  # the graph sees the modules
+    assert _cycles(graph) == [], "import circle in app/"
+
+
+def test_the_core_is_imported_by_one_name_only():
+    """Every file of the product, its tests, benchmarks and examples imports the core as
+    ``paraspace.kinematics``, never as the checkout's top-level ``kinematics`` (a second copy of every
+    module, compiled again; kinematics/numba_cache.py keeps their compiled kernels apart)."""
+    offenders = []
+    for folder in ("app", "kinematics", "paraspace", "tests", "benchmarks", "examples", "scripts"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                         [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module
+                         else [])
+                offenders += [f"{path.relative_to(ROOT)}:{node.lineno} imports {n}" for n in names
+                              if n == "kinematics" or n.startswith("kinematics.")]
+    assert offenders == []
 
 
 def test_only_the_server_start_up_imports_the_explorer():

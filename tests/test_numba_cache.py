@@ -61,3 +61,41 @@ def test_the_cores_kernels_are_stamped_with_every_source_file():
     locator = _neighbour_kernel._cache._impl.locator
     assert type(locator) in numba_cache.locators()
     assert locator.get_source_stamp()[1] == digest.hexdigest()
+
+
+_RUN_AS = r"""
+import sys
+from pathlib import Path
+top, mode, name = Path(sys.argv[1]), sys.argv[2], sys.argv[3]
+sys.path.insert(0, str(top / "outer") if name == "pkg.k" else str(top))  # only this name is importable
+if mode == "package":
+    from paraspace.kinematics.numba_cache import install
+    install(top / "outer" / "pkg")
+import importlib
+import numpy as np
+print(importlib.import_module(name).kernel(np.arange(10.0)))
+"""
+
+
+@pytest.mark.parametrize("mode", ["package", "numba"])
+def test_a_kernel_compiled_under_another_import_name_is_not_loaded(tmp_path, mode):
+    """A module imported as ``pkg.k`` (its parent directory on sys.path, as ``kinematics.x`` from a
+    checkout's root) and as ``outer.pkg.k`` by a process that cannot import ``pkg``: with numba's
+    locators alone the second process loads the first one's entry, whose environment imports ``pkg``,
+    and fails; the package's locators keep one entry per import name."""
+    pkg = tmp_path / "outer" / "pkg"
+    pkg.mkdir(parents=True)
+    (tmp_path / "outer" / "__init__.py").write_text("")
+    (pkg / "__init__.py").write_text("")
+    (pkg / "k.py").write_text("from numba import njit, prange\n\n\n@njit(cache=True, parallel=True)\n"
+                              "def kernel(x):\n    s = 0.0\n    for i in prange(x.shape[0]):\n        s += x[i]\n"
+                              "    return s\n")
+    (tmp_path / "run.py").write_text(_RUN_AS)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    runs = [subprocess.run([sys.executable, str(tmp_path / "run.py"), str(tmp_path), mode, name], capture_output=True,
+                           text=True, timeout=300, env=env) for name in ("pkg.k", "outer.pkg.k")]
+    assert runs[0].returncode == 0 and runs[0].stdout.strip() == "45.0", runs[0].stderr[-2000:]
+    if mode == "numba":  # the defect the package's locators mend
+        assert runs[1].returncode != 0 and "No module named 'pkg'" in runs[1].stderr, runs[1].stderr[-2000:]
+    else:
+        assert runs[1].returncode == 0 and runs[1].stdout.strip() == "45.0", runs[1].stderr[-2000:]

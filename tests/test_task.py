@@ -13,14 +13,14 @@ import math
 import numpy as np
 import pytest
 
-from kinematics.design import Design, ParameterError
-from kinematics.dexterous import orientation_samples
-from kinematics.geometry import base_points, platform_points
-from kinematics.inverse import leg_lengths
-from kinematics.joints import Joints, cone_angles
-from kinematics.pose import Pose
-from kinematics.rotation import euler_zyx_deg
-from kinematics.task import (
+from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.dexterous import orientation_samples
+from paraspace.kinematics.geometry import base_points, platform_points
+from paraspace.kinematics.inverse import leg_lengths
+from paraspace.kinematics.joints import Joints, cone_angles
+from paraspace.kinematics.pose import Pose
+from paraspace.kinematics.rotation import euler_zyx_deg
+from paraspace.kinematics.task import (
     MAX_POSES,
     OrientationSet,
     PoseList,
@@ -30,8 +30,8 @@ from kinematics.task import (
     read_pose_csv,
     region_task,
 )
-from kinematics.tilt_torsion import tt_rotation, tt_rotations
-from kinematics.workspace import reachable
+from paraspace.kinematics.tilt_torsion import tt_rotation, tt_rotations
+from paraspace.kinematics.workspace import reachable
 
 H = 5.0
 
@@ -349,10 +349,10 @@ def test_rest_task_over_http():
 
 
 def test_optimiser_task_measures_and_constraint_match_brute_force():
-    from kinematics.objectives import MEASURES, parse_constraint
-    from kinematics.optimize import OptimizeSettings, optimize
-    from kinematics.task import TaskSpec
-    from kinematics.workspace import WorkspaceSettings
+    from paraspace.kinematics.objectives import MEASURES, parse_constraint
+    from paraspace.kinematics.optimize import OptimizeSettings, optimize
+    from paraspace.kinematics.task import TaskSpec
+    from paraspace.kinematics.workspace import WorkspaceSettings
 
     region = Region("box", (0.0, 0.0, 140.0), (20.0, 20.0, 10.0))
     spec = TaskSpec(region, OrientationSet(tilt=5.0), TaskSettings(voxel=H, margin_range=5.0))
@@ -401,9 +401,9 @@ def test_rest_optimize_takes_a_task():
 
 
 def test_sweep_rows_carry_the_task_measures():
-    from kinematics.sweep import sweep_1d
-    from kinematics.task import TaskSpec
-    from kinematics.workspace import WorkspaceSettings
+    from paraspace.kinematics.sweep import sweep_1d
+    from paraspace.kinematics.task import TaskSpec
+    from paraspace.kinematics.workspace import WorkspaceSettings
 
     region = Region("sphere", (0.0, 0.0, 140.0), (12.0,))
     spec = TaskSpec(region, OrientationSet(), TaskSettings(voxel=H, margin_range=4.0))
@@ -431,7 +431,7 @@ def test_patched_task_bound_reaches_the_rest_model():
 
 
 def test_binding_names_the_cone_or_the_leg_limit():
-    from kinematics.task import pose_binding
+    from paraspace.kinematics.task import pose_binding
 
     design, p, R = Design(), np.array([[0.0, 0.0, 130.0]]), np.eye(3)
     tight = Joints(theta_u=5.0)
@@ -447,10 +447,10 @@ def test_binding_names_the_cone_or_the_leg_limit():
 
 
 def test_optimiser_offers_gci_and_total_orientation_volume():
-    from kinematics.dexterity import dexterity_field
-    from kinematics.optimize import OptimizeSettings
-    from kinematics.sweep import evaluate_design
-    from kinematics.workspace import WorkspaceSettings, compute_workspace
+    from paraspace.kinematics.dexterity import dexterity_field
+    from paraspace.kinematics.optimize import OptimizeSettings
+    from paraspace.kinematics.sweep import evaluate_design
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
     s = OptimizeSettings(params=("l_s",), objectives="gci,total_orientation_volume", total_orientation=(10, 0, 5))
     assert s.extra_used == {"dexterity": True, "total_orientation": (10.0, 0.0, 5.0)}
@@ -468,8 +468,8 @@ def test_optimiser_offers_gci_and_total_orientation_volume():
 
 
 def test_actuator_usage_maps_against_per_voxel_brute_force():
-    from kinematics.usage import actuator_usage, usage_summary
-    from kinematics.workspace import WorkspaceSettings, compute_workspace
+    from paraspace.kinematics.usage import actuator_usage, usage_summary
+    from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
     design, joints = Design(), Joints(theta_u=60.0, cone_axis="home")
     res = compute_workspace(design, WorkspaceSettings(voxel=10.0, joints=joints))
