@@ -931,6 +931,34 @@ def test_shell_coloured_by_dexterity(explorer, browsers):
     assert s.panels.legend.colorbar.label == "shell colour = height z"
 
 
+def test_a_colour_mode_that_fails_says_so_and_shows_the_height_colours(explorer, browsers, monkeypatch):
+    """A colour job that fails (here the dexterity field raises) never leaves the Legend at
+    "computing...": the dropdown returns to height z, the shell shows its height colours, and the
+    Legend names the mode and the reason; choosing the mode again retries (and then succeeds)."""
+    from paraspace.kinematics import dexterity
+
+    real = dexterity.dexterity_field
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("No module named 'kinematics'")
+
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    height_mesh = s.shell.source
+    monkeypatch.setattr(dexterity, "dexterity_field", broken)
+    b.set(s.panels.shell_colour, "dexterity 1/kappa")
+    wait_for(lambda: "not computed" in s.panels.legend.caption.content, 60.0, "the failure in the Legend")
+    caption = s.panels.legend.caption.content
+    assert "dexterity 1/kappa" in caption and "No module named" in caption and "computing" not in caption
+    assert s.panels.shell_colour.value == "height z"
+    assert "not computed, height z shown" in s.panels.legend.colorbar.label
+    assert s.shell.source is height_mesh or np.array_equal(s.shell.source.vertices, height_mesh.vertices)
+    monkeypatch.setattr(dexterity, "dexterity_field", real)
+    b.set(s.panels.shell_colour, "dexterity 1/kappa")  # a retry
+    wait_for(lambda: "1/kappa at the resolved" in s.panels.legend.caption.content, 60.0, "dexterity colours")
+
+
 def test_shell_coloured_by_the_binding_limit(explorer, browsers):
     """Issue 9: the shell coloured by the limit that binds; checked against the definition: at the
     points just outside, relaxing the named limit makes the failing chains feasible."""

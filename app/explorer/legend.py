@@ -5,7 +5,7 @@
   values, redrawn when a new shell arrives), "dexterity 1/kappa" (the same map over the field's
   range, labelled 1/kappa) and "binding limit" (categorical swatches with each limit's share of
   the surface); "computing..." while a mode's colours are not ready, so the key never describes
-  colours that are not on screen;
+  colours that are not on screen, and "not computed" with the reason when they could not be;
 * the leg colours by state, the platform's colour (pose in or out of the workspace), the axes;
 * the units: lengths in the paper's dimensionless units, volumes in units³, angles in degrees.
 """
@@ -21,6 +21,8 @@ import numpy as np
 import viser
 
 from paraspace.kinematics.shell import viridis
+
+from ..textsafe import md_text
 
 #: Pixel size of the colour bar image.
 BAR_SIZE = (360, 78)
@@ -73,6 +75,14 @@ class LegendPanel:
         self.caption.content = f"{what}: computing... (the shell keeps its previous colours until then)"
         self.colorbar.label = title
         self.colorbar.image = _blank_bar()
+
+
+    def show_not_computed(self, title: str, what: str, why: str) -> None:
+        """The key of a colour mode whose colours could not be computed: the height bar stays (the
+        shell shows its height colours), and the caption says which mode failed and why."""
+        self.caption.content = (f"{what}: **not computed** ({md_text(why)}); the shell shows its height "
+                                "colours again. Choose the mode again to retry.")
+        self.colorbar.label = f"{title}: not computed, height z shown"
 
 
 @functools.lru_cache(maxsize=32)

@@ -209,8 +209,10 @@ class ViewController:
             return field_colours(bundle.mesh, dex, res) + (dex,)
 
         def done(job: Job) -> None:
-            if job.status != "done" or ctx.bundle is not bundle or \
-                    str(ctx.panels.shell_colour.value) != COLOUR_MODES[1]:
+            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != COLOUR_MODES[1]:
+                return
+            if job.status != "done":
+                self._colour_failed(job, bundle, COLOUR_MODES[1])
                 return
             mesh, lo, hi, dex = job.result
             self._show_mesh(mesh)
@@ -239,7 +241,10 @@ class ViewController:
             return mesh, lo, hi, float(finite.mean()) if finite.size else float("nan")
 
         def done(job: Job) -> None:
-            if job.status != "done" or ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != mode:
+            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != mode:
+                return
+            if job.status != "done":
+                self._colour_failed(job, bundle, mode)
                 return
             mesh, lo, hi, mean = job.result
             self._show_mesh(mesh)
@@ -263,8 +268,10 @@ class ViewController:
             return out, counts
 
         def done(job: Job) -> None:
-            if job.status != "done" or ctx.bundle is not bundle or \
-                    str(ctx.panels.shell_colour.value) != COLOUR_MODES[2]:
+            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != COLOUR_MODES[2]:
+                return
+            if job.status != "done":
+                self._colour_failed(job, bundle, COLOUR_MODES[2])
                 return
             mesh, counts = job.result
             self._show_mesh(mesh)
@@ -276,6 +283,24 @@ class ViewController:
                 + ", ".join(f"{LIMIT_COLOUR_NAMES[k]} {k} ({100 * v / total:.0f} %)" for k, v in counts.items()))
 
         self._submit_colours(fn, done, "Limit colours not started")
+
+    def _colour_failed(self, job: Job, bundle: ShellBundle, mode: str) -> None:
+        """A colour job that ended without colours (failed, or cancelled by anything but a newer
+        request, which changes the mode or the bundle first): the shell shows its height colours
+        again, the dropdown says so (choosing the mode again retries), and the Legend and a toast say
+        which mode failed and why, instead of "computing..." forever."""
+        ctx = self.ctx
+        why = job.error or job.message or job.status
+        with ctx.programmatic():
+            ctx.panels.shell_colour.value = COLOUR_MODES[0]
+        self._show_mesh(bundle.mesh)
+        assert ctx.shell is not None  # built before the controllers are wired
+        zr = ctx.shell.z_range()
+        if zr is not None:
+            ctx.panels.legend.show_z_range(*zr)
+        ctx.panels.legend.show_not_computed(f"shell colour = {mode}", f"Shell colour = {mode}", why)
+        if job.status == "failed":
+            ctx.notify(f"Shell colour = {mode} failed", f"{why}; the shell keeps its height colours")
 
     def _submit_colours(self, fn: Any, done: Callable[[Job], None], refused: str) -> None:
         ctx = self.ctx
