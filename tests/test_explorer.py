@@ -757,6 +757,23 @@ def test_pins_never_crowd_out_the_bracket_and_a_refused_bracket_is_named():
             jobs.shutdown(wait=True)
 
 
+def test_a_failed_bracket_is_named_in_the_numbers(explorer, browsers, monkeypatch):
+    """The certified bracket's job fails (here the bracket raises): the Numbers say "bracket failed"
+    with the reason instead of leaving the line out without a word; the volume is still shown."""
+    from paraspace.app.explorer import workspace_controller
+
+    def broken(result, cancel=None):
+        raise RuntimeError("bracket kernel missing")
+
+    monkeypatch.setattr(workspace_controller, "bracket", broken)
+    b = browsers("voxel=7")
+    s = b.session
+    wait_for(lambda: "bracket failed" in s.panels.numbers.content.replace("\\", ""), 60.0, "the failure named")
+    text = s.panels.numbers.content.replace("\\", "")
+    assert "bracket kernel missing" in text and "(continuous workspace, units³)" not in text
+    assert "units³  (full, h = 7)" in text
+
+
 def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
     """Issue 22's Task tab: a region task restored from the link is checked on the design on screen
     (the same answer as the core's, its sample points drawn in two colours, the worst pose marked);

@@ -73,7 +73,7 @@ class ShellInfo:
         measures: its measures, ``None`` until they are computed.
         bracket: its certified volume bracket, ``None`` unless asked for and computed.
         stopped: the user stopped the job before its measures were computed (they are not coming).
-        bracket_note: why the certified bracket is not coming (its job was refused), or ``None``.
+        bracket_note: why the certified bracket is not coming (its job was refused or failed), or ``None``.
     """
 
     volume: float

@@ -136,6 +136,12 @@ class WorkspaceController:
             if job.status == "done" and job.result is not None:
                 bundle.bracket = job.result
                 self.publish_measures(gen, bundle)
+            elif job.status == "failed":  # the panel says so, instead of leaving the line out
+                with ctx.lock:
+                    if gen != self.gen or ctx.closed or ctx.ws_info is None:
+                        return
+                    ctx.ws_info = dataclasses.replace(ctx.ws_info, bracket_note=f"failed: {job.error}")
+                self.numbers.render()
 
         try:
             job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel), kind="bracket",
