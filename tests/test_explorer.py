@@ -774,6 +774,25 @@ def test_a_failed_bracket_is_named_in_the_numbers(explorer, browsers, monkeypatc
     assert "units³  (full, h = 7)" in text
 
 
+def test_a_refused_grid_says_not_computed_and_still_gives_the_indices(explorer, browsers):
+    """A design whose grid at the chosen h is over the server's voxel limit (l_s = 500 at h = 2:
+    137 million voxels): the Numbers and the summary say "not computed" with the reason (never
+    "computing..." with nothing running), TI_1 and TI_2 are computed anyway (they do not depend on
+    the grid), and a coarser h computes the workspace."""
+    b = browsers("voxel=2&l_s=500&angle_step=10")
+    s = b.session
+    wait_for(lambda: "Workspace not computed" in s.panels.numbers.content, 30.0, "the refusal in the Numbers")
+    text = s.panels.numbers.content.replace("\\", "")
+    assert "expected voxel >=" in text and "computing" not in text.split("TI")[0]
+    first = s.panels.summary.content.split("\n")[0]  # the volume's line (TI_1, TI_2 do compute: the next)
+    assert "not computed" in first and "computing" not in first
+    wait_for(lambda: "deg·units" in s.panels.numbers.content, 120.0, "TI_1 and TI_2 of the refused design")
+    assert "Workspace not computed" in s.panels.numbers.content
+    b.set(s.panels.voxel, 8.0)
+    wait_for(lambda: "(full, h = 8)" in s.panels.numbers.content, 120.0, "the workspace at a coarser h")
+    assert "not computed" not in s.panels.numbers.content and "not computed" not in s.panels.summary.content
+
+
 def test_task_tab_region_from_the_link_and_a_path(explorer, browsers):
     """Issue 22's Task tab: a region task restored from the link is checked on the design on screen
     (the same answer as the core's, its sample points drawn in two colours, the worst pose marked);

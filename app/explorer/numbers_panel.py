@@ -67,16 +67,21 @@ def ori_current(s: ExplorerState, ori: OrientationResult | None) -> bool:
 def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
                      ori: OrientationResult | None,
                      design_error: str | None, task_line: str | None = None, mechanism_lines: tuple[str, ...] = (),
-                     pose_line: str | None = None) -> str:
+                     pose_line: str | None = None, refused: str | None = None) -> str:
     """The panel's markdown for state ``s``: ``info`` describes the shell on screen (``ws_info`` of
     :class:`~app.session.SessionContext`, ``None`` before one), ``res`` the pose's IK, ``inside`` whether
     the pose is in the workspace, ``ori`` the orientation maps on screen (shown only when they are of
     ``s``'s design, z0 and joints). For a mechanism of the selector (``s.mechanism``),
-    ``mechanism_lines`` (its name and the shell's bounds) lead and ``pose_line`` is its pose verdict."""
+    ``mechanism_lines`` (its name and the shell's bounds) lead and ``pose_line`` is its pose verdict.
+    ``refused``: why the workspace of ``s`` is not computed (its grid refused): said in place of the
+    numbers of the shell on screen, which are an older state's."""
     lines: list[str] = list(mechanism_lines)
     if not s.joints.is_default:
         lines.append(f"**Joints** {md_text(joints_text(s.joints))}  ")
-    if info is not None:
+    if refused is not None:
+        lines.append(f"**Workspace not computed:** {md_text(refused)}"
+                     + (". The shell on screen is the previous design's." if info is not None else ""))
+    elif info is not None:
         m = info.measures
         kind = "preview" if info.preview else "full"
         lines.append(f"**{hover('Volume', 'volume')}** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
@@ -143,11 +148,13 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
 
 
 def summary_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution | None, inside: bool | None,
-                     ori: OrientationResult | None, pose_line: str | None = None) -> str:
+                     ori: OrientationResult | None, pose_line: str | None = None, refused: str | None = None) -> str:
     """The pinned strip above the tabs: volume with its bracket, boundary, TI_1, TI_2 and the pose,
     in two short lines (the Numbers below the tabs hold the rest). The same values and digits as
     :func:`numbers_markdown`; each name carries its definition as a hover text."""
-    if info is None:
+    if refused is not None:
+        first = f"**{hover('V', 'volume')}** not computed: voxel h is too fine for this design (see above)"
+    elif info is None:
         first = "*workspace: computing...*"
     elif info.volume == 0:
         first = f"**{hover('V', 'volume')}** 0: empty workspace at this orientation"
@@ -194,6 +201,7 @@ class NumbersPanel:
             s = ctx.state
             shown = ctx.bundle if info is not None and not info.preview else ctx.preview
             drawn = ctx.mechanism_pose
+            refused = ctx.ws_refused
         mech_lines: tuple[str, ...] = ()
         pose_line = None
         if s.mechanism is not None:
@@ -203,5 +211,5 @@ class NumbersPanel:
             mech_lines = mechanism_lines(s.mechanism, result)
             pose_line = mechanism_pose_line(drawn, inside)
         ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line,
-                                                      mech_lines, pose_line)
-        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori, pose_line)
+                                                      mech_lines, pose_line, refused)
+        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori, pose_line, refused)

@@ -167,6 +167,8 @@ class SessionContext:
         self.bundle: ShellBundle | None = None  # full result on screen
         self.preview: ShellBundle | None = None
         self.ws_info: ShellInfo | None = None  # the shell on screen (None before one)
+        #: why the workspace of the state on screen is not computed (its grid refused), or None
+        self.ws_refused: str | None = None
         self.resolution: Resolution | None = None  # the paper design's IK (None for the selector's mechanism)
         self.mechanism_ik: list[Any] | None = None  # the selector's mechanism: mechanism_ik per chain
         self.mechanism_pose: Any = None  # ... and its drawing's geometry (app/mechanism_scene.MechanismPose)

@@ -85,6 +85,7 @@ class WorkspaceController:
             self.gen += 1
             gen = self.gen
             s = ctx.state
+            ctx.ws_refused = None
         self.orientation.forget_stale(s)
         try:  # the same grid limit as the API, before any work is queued
             if s.mechanism is None:
@@ -93,8 +94,14 @@ class WorkspaceController:
                 check_mechanism_grid(s.mechanism.mechanism(), ws_settings(s, s.voxel), ctx.explorer.max_voxels)
         except ParameterError as exc:
             ctx.cancel_job(self.job)
+            with ctx.lock:
+                if gen == self.gen:
+                    ctx.ws_refused = str(exc)
+            self._mark_stale("previous design - this one is not computed", "previous design; this one is not computed")
             self.set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
             ctx.notify("Grid too large", str(exc), color="orange")
+            self.numbers.render()
+            self.orientation.submit()  # TI_1, TI_2 do not depend on the voxel grid
             return
         ctx.cancel_job(self.bracket_job)
         cache = ctx.explorer.shell_cache
@@ -157,9 +164,11 @@ class WorkspaceController:
             if gen == self.gen:
                 self.bracket_job = job
 
-    def _mark_stale(self) -> None:
-        """The shell on screen belongs to an older state while a new one computes: say so on it and
-        in the legend (cleared when the new shell is shown)."""
+    def _mark_stale(self, label: str = "previous result - recomputing",
+                    note: str = "previous design, recomputing") -> None:
+        """The shell on screen belongs to an older state while a new one computes (or is not
+        computed): say so on it (``label``) and in the legend (``note``); cleared when the new shell
+        is shown."""
         ctx = self.ctx
         shell = ctx.shell
         assert shell is not None  # built before the controllers are wired
@@ -167,10 +176,10 @@ class WorkspaceController:
             if ctx.closed or shell.source is None:
                 return
             with ctx.client.atomic():
-                shell.set_stale("previous result - recomputing")
+                shell.set_stale(label)
                 zr = shell.z_range()
                 if zr is not None:
-                    ctx.panels.legend.show_z_range(*zr, stale=True)
+                    ctx.panels.legend.show_z_range(*zr, stale=True, stale_note=note)
 
     # ----- progress and status -------------------------------------------------------------------
     def _on_progress(self, gen: int, job: Job) -> None:
