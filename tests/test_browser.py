@@ -360,6 +360,40 @@ def _number_box(page: Page, session: ClientSession, key: str) -> Any:
     return page.locator(f'[id="{uuid}"]').locator("xpath=../..").locator("input.mantine-NumberInput-input")
 
 
+def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browser, explorer: Explorer) -> None:
+    """Trust item 1: a value typed beyond the slider's track (a = 120, Table I's track ends at 100) is
+    applied and stays 120 when the box loses focus (the browser's box clamps to the track's ends on
+    blur: it became 100); a refused value (d_s = 150 > r = 100) stays refused after the blur, never
+    applied as the track's end."""
+    page, s = open_page(browser, explorer, "voxel=6")
+    full_volume_text(page)
+    box = _number_box(page, s, "a")
+    box.click()
+    box.press("Control+a")
+    box.press_sequentially("120", delay=150)
+    box.press("Enter")
+    wait_for(lambda: s.state.design.a == 120.0, 30, "a = 120 applied")
+    other = _number_box(page, s, "l_s")
+    other.click()  # the a box loses focus
+    time.sleep(2.0)
+    assert s.state.design.a == 120.0 and box.input_value() == "120"
+    assert s.panels.design["a"].max >= 120.0  # the track holds the value
+    box = _number_box(page, s, "d_s")
+    box.click()
+    box.press("Control+a")
+    box.press_sequentially("150", delay=150)
+    box.press("Enter")
+    def message() -> str:
+        return s.panels.design_message.content.replace("\\", "")  # markdown-escaped
+
+    wait_for(lambda: s.panels.design_message.visible and "d_s = 150 is invalid" in message(), 30, "d_s = 150 refused")
+    other.click()
+    time.sleep(2.0)
+    assert s.state.design.d_s == 50.0 and box.input_value() == "150"
+    assert "The design keeps d_s = 50" in message()
+    assert "a=120" in page.evaluate("() => location.search") and "d_s=1" not in page.evaluate("() => location.search")
+
+
 def _watch_design(session: ClientSession, key: str, stop: threading.Event, seen: list[float]) -> None:
     while not stop.is_set():
         v = float(getattr(session.state.design, key))

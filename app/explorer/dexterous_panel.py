@@ -23,6 +23,7 @@ from ..numfmt import significant
 from ..textsafe import md_text
 from .scene import glb_with_material, remove_node
 from .session import SessionJobs
+from .typed_values import hold_typed_values
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     import trimesh
@@ -39,8 +40,8 @@ def _slider(gui: Any, label: str, spec: Setting) -> Any:
     """A slider of one row of :data:`kinematics.settings.TOTAL_ORIENTATION` (range, default, words)."""
     assert spec.slider is not None
     lo, hi, step = spec.slider
-    return gui.add_slider(label, min=lo, max=hi, step=step, initial_value=float(spec.default),
-                          hint=f"{spec.label}; valid range {spec.range_text()}")
+    return hold_typed_values(gui.add_slider(label, min=lo, max=hi, step=step, initial_value=float(spec.default),
+                                            hint=f"{spec.label}; valid range {spec.range_text()}"))
 
 
 class DexterousPanel:

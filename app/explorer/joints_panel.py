@@ -18,6 +18,8 @@ import viser
 from paraspace.kinematics.design import ParameterError
 from paraspace.kinematics.joints import CONE_AXES, JOINT_RANGES, Joints
 
+from .typed_values import hold_typed_values
+
 #: Slider ranges (the number boxes accept the whole valid range of kinematics.joints).
 CONE_SLIDER = (5.0, 90.0, 1.0)
 DIAMETER_SLIDER = (0.0, 30.0, 0.5)
@@ -79,28 +81,28 @@ def build_joints_folder(gui: viser.GuiApi, joints: Joints) -> JointsControls:
     with gui.add_folder("Joints (cones, leg interference)", expand_by_default=not joints.is_default) as folder:
         u_on = gui.add_checkbox("limit U joints", joints.theta_u is not None,
                                 hint="each U joint (on a carriage) lets its leg tilt at most theta_U from its axis")
-        u_angle = gui.add_slider("theta_U (deg)", min=CONE_SLIDER[0], max=CONE_SLIDER[1], step=CONE_SLIDER[2],
-                                 initial_value=joints.theta_u if joints.theta_u is not None else DEFAULT_CONE,
-                                 disabled=joints.theta_u is None,
-                                 hint=f"half-angle of every U joint's cone; valid range {cone_text}")
+        u_angle = hold_typed_values(gui.add_slider(
+            "theta_U (deg)", min=CONE_SLIDER[0], max=CONE_SLIDER[1], step=CONE_SLIDER[2],
+            initial_value=joints.theta_u if joints.theta_u is not None else DEFAULT_CONE,
+            disabled=joints.theta_u is None, hint=f"half-angle of every U joint's cone; valid range {cone_text}"))
         s_on = gui.add_checkbox("limit S joints", joints.theta_s is not None,
                                 hint="each S joint (on the platform) lets its leg tilt at most theta_S from its axis")
-        s_angle = gui.add_slider("theta_S (deg)", min=CONE_SLIDER[0], max=CONE_SLIDER[1], step=CONE_SLIDER[2],
-                                 initial_value=joints.theta_s if joints.theta_s is not None else DEFAULT_CONE,
-                                 disabled=joints.theta_s is None,
-                                 hint=f"half-angle of every S joint's cone; valid range {cone_text}")
+        s_angle = hold_typed_values(gui.add_slider(
+            "theta_S (deg)", min=CONE_SLIDER[0], max=CONE_SLIDER[1], step=CONE_SLIDER[2],
+            initial_value=joints.theta_s if joints.theta_s is not None else DEFAULT_CONE,
+            disabled=joints.theta_s is None, hint=f"half-angle of every S joint's cone; valid range {cone_text}"))
         axis = gui.add_dropdown("cone axis", CONE_AXES, initial_value=joints.cone_axis,
                                 hint="normal: base normal (U) and platform normal (S); home: each leg's direction "
                                      "at the home pose (carriages mid-stroke, legs mid-length)")
-        diameter = gui.add_slider("leg diameter", min=DIAMETER_SLIDER[0], max=DIAMETER_SLIDER[1],
-                                  step=DIAMETER_SLIDER[2], initial_value=joints.leg_diameter,
-                                  hint="legs as capsules of this diameter; two legs may not come closer "
-                                       f"(0: no interference test); valid range {JOINT_RANGES['leg_diameter'][3]}")
-        clearance = gui.add_slider("clearance", min=CLEARANCE_SLIDER[0], max=CLEARANCE_SLIDER[1],
-                                   step=CLEARANCE_SLIDER[2], initial_value=joints.clearance,
-                                   disabled=joints.leg_diameter <= 0.0,
-                                   hint="extra distance required between two legs' capsules; valid range "
-                                        f"{JOINT_RANGES['clearance'][3]}")
+        diameter = hold_typed_values(gui.add_slider(
+            "leg diameter", min=DIAMETER_SLIDER[0], max=DIAMETER_SLIDER[1], step=DIAMETER_SLIDER[2],
+            initial_value=joints.leg_diameter,
+            hint="legs as capsules of this diameter; two legs may not come closer (0: no interference test); "
+                 f"valid range {JOINT_RANGES['leg_diameter'][3]}"))
+        clearance = hold_typed_values(gui.add_slider(
+            "clearance", min=CLEARANCE_SLIDER[0], max=CLEARANCE_SLIDER[1], step=CLEARANCE_SLIDER[2],
+            initial_value=joints.clearance, disabled=joints.leg_diameter <= 0.0,
+            hint=f"extra distance required between two legs' capsules; valid range {JOINT_RANGES['clearance'][3]}"))
         message = gui.add_markdown("", visible=False)
     return JointsControls(u_on=u_on, u_angle=u_angle, s_on=s_on, s_angle=s_angle, axis=axis, diameter=diameter,
                           clearance=clearance, message=message, folder=folder)

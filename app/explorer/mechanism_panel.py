@@ -35,6 +35,7 @@ from ..urlstate import POSE_SLIDERS, ExplorerState, encode_query
 from .mechanism_scene import STATE_TEXT, MechanismPose
 from .pagehook import MAX_QUERY_CHARS
 from .panels import pose_slider_span, slider_span
+from .typed_values import hold_typed_values
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from .session import SessionContext
@@ -90,9 +91,9 @@ def build_mechanism_controls(gui: viser.GuiApi, state: ExplorerState) -> Mechani
             for p in preset_params(name):
                 v = float(values.get(p.name, p.default)) if shown else float(p.default)
                 lo, hi = slider_span(*p.study_range, v)  # the study range, widened to hold the value
-                sliders[name][p.name] = gui.add_slider(
+                sliders[name][p.name] = hold_typed_values(gui.add_slider(
                     _slider_label(p.name, p.unit), min=lo, max=hi, step=0.5, initial_value=v,
-                    hint=f"{p.description}; valid range [{p.lo:g}, {p.hi:g}]{' ' + p.unit if p.unit else ''}")
+                    hint=f"{p.description}; valid range [{p.lo:g}, {p.hi:g}]{' ' + p.unit if p.unit else ''}"))
     return MechanismControls(selector, upload, message, folders, sliders)
 
 

@@ -42,6 +42,7 @@ from .dexterity_colour import COLOUR_MODES
 from .joints_panel import JointsControls, build_joints_folder
 from .lazy_plot import LazyPlot
 from .legend import LegendPanel, build_legend_folder
+from .typed_values import hold_typed_values
 
 POSE_HINTS: dict[str, str] = {
     "x": "platform centre P, x (length units)", "y": "platform centre P, y (length units)",
@@ -201,17 +202,18 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             spec = PARAMS[key]
             value = float(getattr(state.design, key))
             lo, hi = slider_span(rng.lo, rng.hi, value)
-            design[key] = gui.add_slider(spec.label, min=lo, max=hi, step=rng.step, initial_value=value,
-                                         hint=f"{spec.description}; {paper_range_text(key)}; type values "
-                                              f"in {DESIGN_RANGES[key].text(spec.unit)} in the box")
+            design[key] = hold_typed_values(gui.add_slider(
+                spec.label, min=lo, max=hi, step=rng.step, initial_value=value,
+                hint=f"{spec.description}; {paper_range_text(key)}; type values in "
+                     f"{DESIGN_RANGES[key].text(spec.unit)} in the box"))
         eta_range = gui.add_dropdown("eta_range", ETA_RANGES, initial_value=state.design.eta_range,
                                      hint="arc stroke: centered [-eta_s/2, eta_s/2] or from-zero [0, eta_s]")
         design_message = gui.add_markdown("", visible=False)
         reset = gui.add_button("Reset to paper defaults", icon=viser.Icon.RESTORE)
         rng = SETTING_SLIDERS["voxel"]
-        voxel = gui.add_slider("voxel h", *slider_span(rng.lo, rng.hi, state.voxel), step=rng.step,
-                               initial_value=state.voxel,
-                               hint="voxel edge of the full workspace computation (preview: h = 6)")
+        voxel = hold_typed_values(gui.add_slider(
+            "voxel h", *slider_span(rng.lo, rng.hi, state.voxel), step=rng.step, initial_value=state.voxel,
+            hint="voxel edge of the full workspace computation (preview: h = 6)"))
         joints = build_joints_folder(gui, state.joints)
 
     pose_tab = tabs.add_tab("Pose", viser.Icon.ARROWS_MOVE)
@@ -221,8 +223,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             rng = POSE_SLIDERS[key]
             value = float(getattr(state.pose, key))
             lo, hi = pose_slider_span(key, state.design, value)
-            pose[key] = gui.add_slider(POSE_LABELS[key], min=lo, max=hi, step=rng.step, initial_value=value,
-                                       hint=POSE_HINTS[key])
+            pose[key] = hold_typed_values(gui.add_slider(POSE_LABELS[key], min=lo, max=hi, step=rng.step,
+                                                         initial_value=value, hint=POSE_HINTS[key]))
         gizmo = gui.add_checkbox("drag gizmo", True, hint="show the drag handle on the platform")
         carriages = gui.add_dropdown("carriages", ("auto", "manual"), initial_value=state.carriages,
                                      hint="auto: redundancy resolved (max leg margin); manual: set d_i, eta_i")
@@ -244,8 +246,8 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
                                   hint="frame the workspace in the part of the window the panel leaves free")
         cut = gui.add_checkbox("cut plane", state.cut, hint="cut the shell by a horizontal plane")
         rng = SETTING_SLIDERS["cut_z"]
-        cut_z = gui.add_slider("cut height", *slider_span(rng.lo, rng.hi, state.cut_z), step=rng.step,
-                               initial_value=state.cut_z)
+        cut_z = hold_typed_values(gui.add_slider("cut height", *slider_span(rng.lo, rng.hi, state.cut_z),
+                                                 step=rng.step, initial_value=state.cut_z))
         cut_keep = gui.add_dropdown("keep", CUT_KEEPS, initial_value=state.cut_keep,
                                     hint="which side of the cut plane stays visible")
         shell_colour = gui.add_dropdown("shell colour", COLOUR_MODES, initial_value=COLOUR_MODES[0],
@@ -254,19 +256,21 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
                                              "large a joint angle, the resolved carriages use (computed at h = 6 "
                                              "in the background)")
         rng = SETTING_SLIDERS["opacity"]
-        opacity = gui.add_slider("shell opacity", *slider_span(rng.lo, rng.hi, state.opacity), step=rng.step,
-                                 initial_value=state.opacity)
+        opacity = hold_typed_values(gui.add_slider(
+            "shell opacity", *slider_span(rng.lo, rng.hi, state.opacity), step=rng.step,
+            initial_value=state.opacity))
         payload = gui.add_markdown("")
 
     plots_tab = tabs.add_tab("Plots", viser.Icon.CHART_LINE)
     with plots_tab:
         with gui.add_folder("Orientation maps (Fig. 3 e-g)", expand_by_default=True) as orientation_folder:
             rng = SETTING_SLIDERS["z0"]
-            z0 = gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step, initial_value=state.z0,
-                                hint="height of the x and y' lines")
+            z0 = hold_typed_values(gui.add_slider("z0", *slider_span(rng.lo, rng.hi, state.z0), step=rng.step,
+                                                  initial_value=state.z0, hint="height of the x and y' lines"))
             scan_range, scan_step = (
-                gui.add_slider(label, *slider_span(rng.lo, rng.hi, value), step=rng.step, initial_value=value,
-                               hint=f"{ORIENTATION[key].label}; type values in {ORIENTATION[key].range_text()}")
+                hold_typed_values(gui.add_slider(
+                    label, *slider_span(rng.lo, rng.hi, value), step=rng.step, initial_value=value,
+                    hint=f"{ORIENTATION[key].label}; type values in {ORIENTATION[key].range_text()}"))
                 for label, key, rng, value in (
                     ("scan ± (deg)", "angle_range", SETTING_SLIDERS["angle_range"], state.angle_range),
                     ("scan step (deg)", "angle_step", SETTING_SLIDERS["angle_step"], state.angle_step)))

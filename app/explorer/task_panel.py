@@ -43,6 +43,7 @@ from ..urlstate import TaskLink
 from .lazy_plot import LazyPlot
 from .scene import glb_with_material, remove_node
 from .session import SessionJobs
+from .typed_values import hold_typed_values
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from paraspace.kinematics.joints import Joints
@@ -188,11 +189,12 @@ class TaskPanel:
         self.sizes: Any = gui.add_text("sizes", DEFAULT_SIZES["box"], hint=SIZE_HINTS["box"])
         tilt, torsion = TOTAL_ORIENTATION["tilt"], TOTAL_ORIENTATION["torsion"]
         assert tilt.slider is not None and torsion.slider is not None
-        self.tilt: Any = gui.add_slider("tilt ≤ (deg)", min=tilt.slider[0], max=tilt.slider[1], step=tilt.slider[2],
-                                   initial_value=0.0, hint=f"{tilt.label} at every point; 0 with torsion 0: the "
-                                                           "home orientation only")
-        self.torsion: Any = gui.add_slider("torsion ± (deg)", min=torsion.slider[0], max=torsion.slider[1],
-                                      step=torsion.slider[2], initial_value=0.0, hint=torsion.label)
+        self.tilt: Any = hold_typed_values(gui.add_slider(
+            "tilt ≤ (deg)", min=tilt.slider[0], max=tilt.slider[1], step=tilt.slider[2], initial_value=0.0,
+            hint=f"{tilt.label} at every point; 0 with torsion 0: the home orientation only"))
+        self.torsion: Any = hold_typed_values(gui.add_slider(
+            "torsion ± (deg)", min=torsion.slider[0], max=torsion.slider[1], step=torsion.slider[2],
+            initial_value=0.0, hint=torsion.label))
         self.csv: Any = gui.add_text("poses (CSV)", EXAMPLE_CSV, multiline=True, visible=False,
                                 hint="header x,y,z,psi,theta,phi[,t]; angles in degrees, t in seconds")
         self.upload: Any = gui.add_upload_button("Upload CSV", icon=viser.Icon.UPLOAD, mime_type="text/csv")
