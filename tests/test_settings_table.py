@@ -147,7 +147,11 @@ def test_patched_total_orientation_bounds_reach_core_cli_and_sliders(monkeypatch
 
         def add_slider(self, label: str, **kw):
             self.sliders[label] = kw
-            return label
+            return Handle()
+
+    class Handle:  # a slider handle: the explorer widens its track on updates (app/explorer/typed_values.py)
+        def on_update(self, callback) -> None:
+            pass
 
     from paraspace.app.explorer.dexterous_panel import _slider
 
