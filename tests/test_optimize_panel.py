@@ -115,6 +115,9 @@ def test_bad_settings_and_stop(host):
     panel = make()
     panel.objectives.value = "volume,-<b>nope</b>"
     assert panel.run() is None and "objectives" in panel.status.value and "nope" in panel.status.value
+    panel.objectives.value = "volume,-footprint"
+    panel.voxel.value = 2.0  # below the explorer's optimiser minimum: refused by name, never raised to 4
+    assert panel.run() is None and "voxel" in panel.status.value and ">= 4" in panel.status.value
     panel.apply_query({"opt_params": "a,l_s", "opt_objectives": "volume,-footprint", "opt_pop": "32",
                        "opt_gen": "20", "opt_voxel": "4", "opt_seed": "77"})
     job = panel.run()

@@ -195,6 +195,8 @@ class OptimizePanel:
             ParameterError: a field is invalid (the message names it).
         """
         v = self._values()
+        if v["voxel"] < MIN_VOXEL:  # refused by name, never raised to the minimum without a word
+            raise ParameterError("voxel", v["voxel"], f">= {MIN_VOXEL:g} in the explorer's optimiser")
         if v["population"] * v["generations"] > MAX_EVALUATIONS:
             raise ParameterError("generations", v["generations"],
                                  f"population x generations <= {MAX_EVALUATIONS} in the explorer")
@@ -202,7 +204,7 @@ class OptimizePanel:
         return OptimizeSettings(params=v["params"], objectives=v["objectives"],
                                 constraints=[c for c in v["constraints"].split(",") if c.strip()],
                                 design=self.get_design(),
-                                workspace=WorkspaceSettings(voxel=max(MIN_VOXEL, v["voxel"]), joints=joints),
+                                workspace=WorkspaceSettings(voxel=v["voxel"], joints=joints),
                                 orientation=dataclasses.replace(PANEL_ORIENTATION, joints=joints),
                                 population=v["population"], generations=v["generations"], seed=v["seed"])
 
