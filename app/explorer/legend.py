@@ -47,14 +47,13 @@ class LegendPanel:
     caption: Any
     text: Any
 
-    def show_z_range(self, lo: float, hi: float, stale: bool = False,
-                     stale_note: str = "previous design, recomputing") -> None:
-        """Redraw the colour bar for a shell spanning ``z in [lo, hi]`` (``stale``: of an older state,
-        said with ``stale_note``)."""
+    def show_z_range(self, lo: float, hi: float, stale: str = "") -> None:
+        """Redraw the colour bar for a shell spanning ``z in [lo, hi]`` (``stale``: the shell is an
+        older state's, and why, e.g. "previous design, recomputing")."""
         self.colorbar.label = "shell colour = height z"
         self.colorbar.image = colorbar_image(lo, hi)
         self.caption.content = (f"Shell colour = height z, from {lo:.4g} (bottom) to {hi:.4g} (top), length units"
-                                + (f" - *{stale_note}*" if stale else ""))
+                                + (f" - *{stale}*" if stale else ""))
 
     def show_field_range(self, lo: float, hi: float, label: str, caption: str,
                          title: str = "shell colour = dexterity 1/kappa") -> None:

@@ -185,11 +185,7 @@ class ViewController:
             ctx.notify("Shell coloured by height", f"shell colour = {mode}: {link.not_yet()}", color="orange")
             mode = COLOUR_MODES[0]
         if mode == COLOUR_MODES[0]:
-            self._show_mesh(bundle.mesh)
-            assert ctx.shell is not None  # built before the controllers are wired
-            zr = ctx.shell.z_range()
-            if zr is not None:
-                ctx.panels.legend.show_z_range(*zr)
+            self._show_height(bundle)
             return
         s = ctx.state
         if mode == COLOUR_MODES[2]:
@@ -209,10 +205,7 @@ class ViewController:
             return field_colours(bundle.mesh, dex, res) + (dex,)
 
         def done(job: Job) -> None:
-            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != COLOUR_MODES[1]:
-                return
-            if job.status != "done":
-                self._colour_failed(job, bundle, COLOUR_MODES[1])
+            if not self._colours_ready(job, bundle, COLOUR_MODES[1]):
                 return
             mesh, lo, hi, dex = job.result
             self._show_mesh(mesh)
@@ -241,10 +234,7 @@ class ViewController:
             return mesh, lo, hi, float(finite.mean()) if finite.size else float("nan")
 
         def done(job: Job) -> None:
-            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != mode:
-                return
-            if job.status != "done":
-                self._colour_failed(job, bundle, mode)
+            if not self._colours_ready(job, bundle, mode):
                 return
             mesh, lo, hi, mean = job.result
             self._show_mesh(mesh)
@@ -268,10 +258,7 @@ class ViewController:
             return out, counts
 
         def done(job: Job) -> None:
-            if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != COLOUR_MODES[2]:
-                return
-            if job.status != "done":
-                self._colour_failed(job, bundle, COLOUR_MODES[2])
+            if not self._colours_ready(job, bundle, COLOUR_MODES[2]):
                 return
             mesh, counts = job.result
             self._show_mesh(mesh)
@@ -284,23 +271,34 @@ class ViewController:
 
         self._submit_colours(fn, done, "Limit colours not started")
 
-    def _colour_failed(self, job: Job, bundle: ShellBundle, mode: str) -> None:
-        """A colour job that ended without colours (failed, or cancelled by anything but a newer
-        request, which changes the mode or the bundle first): the shell shows its height colours
-        again, the dropdown says so (choosing the mode again retries), and the Legend and a toast say
-        which mode failed and why, instead of "computing..." forever."""
+    def _show_height(self, bundle: ShellBundle) -> None:
+        """The shell in its own (height) colours, with their key in the Legend."""
         ctx = self.ctx
-        why = job.error or job.message or job.status
-        with ctx.programmatic():
-            ctx.panels.shell_colour.value = COLOUR_MODES[0]
         self._show_mesh(bundle.mesh)
         assert ctx.shell is not None  # built before the controllers are wired
         zr = ctx.shell.z_range()
         if zr is not None:
             ctx.panels.legend.show_z_range(*zr)
+
+    def _colours_ready(self, job: Job, bundle: ShellBundle, mode: str) -> bool:
+        """Whether the colour job ``job`` of ``mode`` holds colours to show: it is done, and its shell
+        and mode are still on screen. One that ended otherwise for the shell and mode on screen (failed,
+        or cancelled by anything but a newer request, which changes the mode or the bundle first): the
+        shell shows its height colours again, the dropdown says so (choosing the mode again retries),
+        and the Legend and a toast say which mode failed and why, instead of "computing..." forever."""
+        ctx = self.ctx
+        if ctx.bundle is not bundle or str(ctx.panels.shell_colour.value) != mode:
+            return False
+        if job.status == "done":
+            return True
+        why = job.error or job.message or job.status
+        with ctx.programmatic():
+            ctx.panels.shell_colour.value = COLOUR_MODES[0]
+        self._show_height(bundle)
         ctx.panels.legend.show_not_computed(f"shell colour = {mode}", f"Shell colour = {mode}", why)
         if job.status == "failed":
             ctx.notify(f"Shell colour = {mode} failed", f"{why}; the shell keeps its height colours")
+        return False
 
     def _submit_colours(self, fn: Any, done: Callable[[Job], None], refused: str) -> None:
         ctx = self.ctx

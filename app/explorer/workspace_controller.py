@@ -97,7 +97,7 @@ class WorkspaceController:
             with ctx.lock:
                 if gen == self.gen:
                     ctx.ws_refused = str(exc)
-            self._mark_stale("previous design - this one is not computed", "previous design; this one is not computed")
+            self._mark_stale("this design is not computed")
             self.set_status(gen, f"**not started:** {md_text(exc)}", 0.0, running=False)
             ctx.notify("Grid too large", str(exc), color="orange")
             self.numbers.render()
@@ -144,31 +144,30 @@ class WorkspaceController:
                 bundle.bracket = job.result
                 self.publish_measures(gen, bundle)
             elif job.status == "failed":  # the panel says so, instead of leaving the line out
-                with ctx.lock:
-                    if gen != self.gen or ctx.closed or ctx.ws_info is None:
-                        return
-                    ctx.ws_info = dataclasses.replace(ctx.ws_info, bracket_note=f"failed: {job.error}")
-                self.numbers.render()
+                self._note_bracket(gen, f"failed: {job.error}")
 
         try:
             job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel), kind="bracket",
                                   client=ctx.job_client, supersede=True, on_done=done)
         except (LimitExceeded, RuntimeError) as exc:  # the server's total limit, or shut down: say so
-            with ctx.lock:
-                if gen != self.gen or ctx.closed or ctx.ws_info is None:
-                    return
-                ctx.ws_info = dataclasses.replace(ctx.ws_info, bracket_note=f"not started: {exc}")
-            self.numbers.render()
+            self._note_bracket(gen, f"not started: {exc}")
             return
         with ctx.lock:
             if gen == self.gen:
                 self.bracket_job = job
 
-    def _mark_stale(self, label: str = "previous result - recomputing",
-                    note: str = "previous design, recomputing") -> None:
+    def _note_bracket(self, gen: int, note: str) -> None:
+        """Why the certified bracket of generation ``gen``'s result is not coming, in the Numbers."""
+        ctx = self.ctx
+        with ctx.lock:
+            if gen != self.gen or ctx.closed or ctx.ws_info is None:
+                return
+            ctx.ws_info = dataclasses.replace(ctx.ws_info, bracket_note=note)
+        self.numbers.render()
+
+    def _mark_stale(self, why: str = "recomputing") -> None:
         """The shell on screen belongs to an older state while a new one computes (or is not
-        computed): say so on it (``label``) and in the legend (``note``); cleared when the new shell
-        is shown."""
+        computed, ``why``): say so on it and in the legend; cleared when the new shell is shown."""
         ctx = self.ctx
         shell = ctx.shell
         assert shell is not None  # built before the controllers are wired
@@ -176,10 +175,10 @@ class WorkspaceController:
             if ctx.closed or shell.source is None:
                 return
             with ctx.client.atomic():
-                shell.set_stale(label)
+                shell.set_stale(f"previous result - {why}")
                 zr = shell.z_range()
                 if zr is not None:
-                    ctx.panels.legend.show_z_range(*zr, stale=True, stale_note=note)
+                    ctx.panels.legend.show_z_range(*zr, stale=f"previous design, {why}")
 
     # ----- progress and status -------------------------------------------------------------------
     def _on_progress(self, gen: int, job: Job) -> None:
