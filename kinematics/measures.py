@@ -391,14 +391,23 @@ def hollow_mask(occupancy: np.ndarray, mode: str = "hull", hull: np.ndarray | No
     occ = np.ascontiguousarray(occupancy, dtype=bool)
     if not occ.any():
         return np.zeros_like(occ)
+    return _hollow(occ, mode, hull)[0]
+
+
+def _hollow(occ: np.ndarray, mode: str, hull: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """:func:`hollow_mask` of a non-empty contiguous ``occ`` and its number of voxels (one kernel,
+    the hull's intersection in the same pass)."""
     u = np.empty_like(occ)
-    with KERNEL_LOCK:
-        _covered_kernel(occ, u)  # covered & ~occ
     if mode == "shadow":
+        with KERNEL_LOCK:
+            _covered_kernel(occ, occ, False, u)
         kmin = int(np.argmax(occ.any(axis=(0, 1))))
         u[:, :, :kmin] = False
-        return u
-    return u & (hull_mask(occ) if hull is None else hull)
+        return u, int(np.count_nonzero(u))
+    within = np.ascontiguousarray(hull_mask(occ) if hull is None else hull, dtype=bool)
+    with KERNEL_LOCK:
+        n = int(_covered_kernel(occ, within, True, u))
+    return u, n
 
 
 def column_gap_mask(occupancy: np.ndarray) -> np.ndarray:
@@ -410,10 +419,13 @@ def column_gap_mask(occupancy: np.ndarray) -> np.ndarray:
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _covered_kernel(occ, out):
-    """``out``: unreachable voxels with a reachable voxel above them in their column."""
+def _covered_kernel(occ, within, use_within, out):
+    """``out``: unreachable voxels with a reachable voxel above them in their column (and, with
+    ``use_within``, in ``within``), in one parallel pass over x slices; returns their number."""
     nx, ny, nz = occ.shape
+    counts = np.zeros(nx, np.int64)
     for i in prange(nx):
+        c = 0
         for j in range(ny):
             top = -1
             for k in range(nz - 1, -1, -1):
@@ -421,7 +433,13 @@ def _covered_kernel(occ, out):
                     top = k
                     break
             for k in range(nz):
-                out[i, j, k] = k < top and not occ[i, j, k]
+                v = k < top and not occ[i, j, k]
+                if use_within:
+                    v = v and within[i, j, k]
+                out[i, j, k] = v
+                c += v
+        counts[i] = c
+    return counts.sum()
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -644,8 +662,7 @@ class _Steps:
         return hull, int(np.count_nonzero(hull)) * self.vv
 
     def _under(self):
-        under = hollow_mask(self.occ, "hull", self.get("hull")[0])
-        return under, int(np.count_nonzero(under))
+        return _hollow(self.occ, "hull", self.get("hull")[0])
 
     def _hollow_volume(self):
         if self.o["hollowness_mode"] == "hull":

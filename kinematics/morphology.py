@@ -17,7 +17,8 @@ the ball is the union over its ``(di, dj)`` offsets of the z runs ``|dk| <= floo
 dj^2))``; the set dilated along z by each run length (by shifts of whole words) is moved by each
 offset and or-ed in. A set symmetric under ``j -> n_y - 1 - j`` is computed on half its rows. The
 filter packs the set once for its four dilations (an erosion is a not of the words around a
-dilation).
+dilation), padding it in the same parallel pass, and unpacks the result without its padding: no
+serial pass over the grid (no ``np.pad``, no ``np.array_equal`` for the mirror test).
 """
 
 from __future__ import annotations
@@ -77,33 +78,64 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _pack_kernel(m, P):
-    """``P[i, j, q]``: bit ``t`` is ``m[i, j, 64 q + t]`` (the bits past ``nz`` are 0)."""
+def _pack_kernel(m, p, P):
+    """``P[i, j, q]``: bit ``t`` is voxel ``(i - p, j - p, 64 q + t - p)`` of ``m`` (``m`` padded with
+    ``p`` empty voxels on every side, in the same pass; the bits past the padded ``nz`` are 0)."""
     nx, ny, nz = m.shape
-    nw = P.shape[2]
-    for i in prange(nx):
-        for j in range(ny):
+    NX, NY, nw = P.shape
+    zero = np.uint64(0)
+    for I in prange(NX):
+        i = I - p
+        for J in range(NY):
+            j = J - p
+            inside = 0 <= i < nx and 0 <= j < ny
             for q in range(nw):
-                word = np.uint64(0)
-                base = 64 * q
-                for t in range(min(64, nz - base)):
-                    word |= np.uint64(m[i, j, base + t]) << np.uint64(t)
-                P[i, j, q] = word
+                word = zero
+                if inside:
+                    k0 = max(64 * q - p, 0)
+                    k1 = min(64 * q + 64 - p, nz)
+                    for k in range(k0, k1):
+                        word |= np.uint64(m[i, j, k]) << np.uint64(k + p - 64 * q)
+                P[I, J, q] = word
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _unpack_kernel(P, out):
-    """The inverse of :func:`_pack_kernel`."""
+def _unpack_kernel(P, p, out):
+    """The inverse of :func:`_pack_kernel`: ``out`` is the packed set less its padding ``p``."""
     nx, ny, nz = out.shape
-    nw = P.shape[2]
     one = np.uint64(1)
     for i in prange(nx):
         for j in range(ny):
-            for q in range(nw):
-                word = P[i, j, q]
-                base = 64 * q
-                for t in range(min(64, nz - base)):
-                    out[i, j, base + t] = ((word >> np.uint64(t)) & one) != np.uint64(0)
+            for k in range(nz):
+                b = k + p
+                out[i, j, k] = ((P[i + p, j + p, b >> 6] >> np.uint64(b & 63)) & one) != np.uint64(0)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _mirror_kernel(m):
+    """Whether ``m`` equals ``m[:, ::-1]`` (x slices in parallel; each slice stops at its first
+    difference)."""
+    nx, ny, nz = m.shape
+    diff = np.zeros(nx, np.bool_)
+    for i in prange(nx):
+        for j in range(ny // 2):
+            jj = ny - 1 - j
+            for k in range(nz):
+                if m[i, j, k] != m[i, jj, k]:
+                    diff[i] = True
+                    break
+            if diff[i]:
+                break
+    return not diff.any()
+
+
+def is_mirror_symmetric(mask: np.ndarray) -> bool:
+    """``np.array_equal(mask, mask[:, ::-1])`` by :func:`_mirror_kernel` (a parallel pass)."""
+    m = np.ascontiguousarray(mask, dtype=np.bool_)
+    if m.ndim != 3 or m.size == 0:
+        return bool(np.array_equal(m, m[:, ::-1]))
+    with KERNEL_LOCK:
+        return bool(_mirror_kernel(m))
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -180,12 +212,14 @@ def _ball_offsets(r2: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 class _Packed:
-    """A boolean grid packed along z for :func:`_dilate_packed_kernel` (its two work arrays and the
-    ball's offsets), dilated and complemented in place of the arrays it holds."""
+    """A boolean grid padded by ``pad`` empty voxels on every side and packed along z for
+    :func:`_dilate_packed_kernel` (its two work arrays and the ball's offsets), dilated and
+    complemented in place of the arrays it holds; :meth:`unpack` drops the padding again."""
 
-    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool) -> None:
-        self.shape = m.shape
-        nx, ny, nz = m.shape
+    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool, pad: int = 0) -> None:
+        m = np.ascontiguousarray(m, dtype=np.bool_)
+        self.shape, self.pad = m.shape, int(pad)
+        nx, ny, nz = (n + 2 * self.pad for n in m.shape)
         nw = -(-nz // 64)
         rem = nz - 64 * (nw - 1)
         self.last = np.uint64((1 << rem) - 1) if rem < 64 else np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -196,7 +230,7 @@ class _Packed:
         self.Z = np.empty_like(self.P)
         self.R = np.empty_like(self.P)
         with KERNEL_LOCK:
-            _pack_kernel(m, self.P)
+            _pack_kernel(m, self.pad, self.P)
 
     def dilate(self, complement: bool = False) -> None:
         """The set becomes its dilation by the ball (its erosion with ``complement``)."""
@@ -209,9 +243,10 @@ class _Packed:
         self.P, self.R = self.R, self.P
 
     def unpack(self) -> np.ndarray:
+        """The set, less its padding."""
         out = np.empty(self.shape, np.bool_)
         with KERNEL_LOCK:
-            _unpack_kernel(self.P, out)
+            _unpack_kernel(self.P, self.pad, out)
         return out
 
 
@@ -265,33 +300,34 @@ def ball_dilate_reference(mask: np.ndarray, radius_voxels: float, *, complement:
 
 
 class _Grids:
-    """:class:`_Packed`'s steps on boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature)."""
+    """:class:`_Packed`'s steps on boolean grids (padded by ``np.pad``), each by ``dilate``
+    (:func:`ball_dilate`'s signature)."""
 
-    def __init__(self, o: np.ndarray, radius_voxels: float, symmetric: bool, dilate) -> None:
-        self.o, self.r, self.symmetric, self._dilate = o, radius_voxels, symmetric, dilate
+    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool, pad: int, dilate) -> None:
+        self.o, self.pad = np.pad(np.asarray(m, dtype=bool), pad), pad
+        self.r, self.symmetric, self._dilate = radius_voxels, symmetric, dilate
 
     def dilate(self, complement: bool = False) -> None:
         self.o = self._dilate(self.o, self.r, complement=complement, symmetric=self.symmetric)
 
     def unpack(self) -> np.ndarray:
-        return self.o
+        p = self.pad
+        return self.o[p:-p, p:-p, p:-p]
 
 
 def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken, grids) -> np.ndarray:
-    """:func:`feature_filter`'s steps on the padded solid held by ``grids(o, r, symmetric)`` (a
-    :class:`_Packed` or a :class:`_Grids`)."""
+    """:func:`feature_filter`'s steps on the solid padded by ``floor(r) + 1`` empty voxels, held by
+    ``grids(occupancy, r, symmetric, pad)`` (a :class:`_Packed` or a :class:`_Grids`)."""
     occ = np.asarray(occupancy, dtype=bool)
     w = int(np.floor(radius_voxels + 1e-9))
     if w <= 0:
         return occ.copy()
-    p = w + 1
-    o = np.pad(occ, p)
-    g = grids(o, radius_voxels, bool(np.array_equal(o, o[:, ::-1])))  # each step keeps the mirror
+    g = grids(occ, radius_voxels, is_mirror_symmetric(occ), w + 1)  # each step keeps the mirror
     for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
         if step:
             check(cancel)
         g.dilate(complement)
-    return g.unpack()[p:-p, p:-p, p:-p]
+    return g.unpack()
 
 
 def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None) -> np.ndarray:
@@ -313,4 +349,4 @@ def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel
     """:func:`feature_filter` (the same signature, so it can stand in for it) as four dilations of
     boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature; by default
     :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
-    return _open_close(occupancy, radius_voxels, cancel, lambda o, r, sym: _Grids(o, r, sym, dilate))
+    return _open_close(occupancy, radius_voxels, cancel, lambda m, r, sym, pad: _Grids(m, r, sym, pad, dilate))

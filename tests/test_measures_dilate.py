@@ -12,7 +12,7 @@ import pytest
 from scipy import ndimage as ndi
 
 from paraspace.kinematics.design import Design
-from paraspace.kinematics.morphology import ball_dilate, ball_dilate_reference, feature_filter
+from paraspace.kinematics.morphology import ball_dilate, ball_dilate_reference, feature_filter, is_mirror_symmetric
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
@@ -93,3 +93,30 @@ def test_packed_rows_across_words_equal_scipy(rv):
                 assert np.array_equal(eroded, scipy_erode(m, rv)), (shape, p)
     m = rng.random((9, 10, 70)) < 0.6
     assert np.array_equal(feature_filter(m, rv), scipy_feature_filter(m, rv))
+
+
+@pytest.mark.parametrize("rv", [1.4, 5.2])
+def test_feature_filter_padded_across_words_equals_scipy(rv):
+    # the filter pads the grid by floor(r) + 1 inside its pack pass: padded rows just under, at and
+    # over one and two words, symmetric and not, against scipy on np.pad's grid
+    rng = np.random.default_rng(7)
+    p = int(np.floor(rv + 1e-9)) + 1
+    for nz in (64 - 2 * p - 1, 64 - 2 * p, 64 - 2 * p + 1, 128 - 2 * p, 128 - 2 * p + 3):
+        for q in (0.4, 0.8):
+            m = rng.random((8, 9, nz)) < q
+            for g in (m, m | m[:, ::-1]):
+                assert np.array_equal(feature_filter(g, rv), scipy_feature_filter(g, rv)), (nz, q)
+
+
+def test_mirror_test_equals_array_equal():
+    rng = np.random.default_rng(3)
+    for shape in ((5, 1, 3), (6, 2, 4), (7, 9, 5), (4, 10, 66)):
+        m = rng.random(shape) < 0.5
+        s = m | m[:, ::-1]
+        assert is_mirror_symmetric(s) and np.array_equal(s, s[:, ::-1])
+        assert is_mirror_symmetric(m) == np.array_equal(m, m[:, ::-1])
+        if shape[1] > 1:
+            t = s.copy()
+            t[shape[0] - 1, 0, shape[2] - 1] ^= True  # one voxel off the mirror, in the last slice
+            assert not is_mirror_symmetric(t)
+    assert is_mirror_symmetric(np.zeros((0, 3, 3), bool))
