@@ -357,25 +357,29 @@ def _open_sealed_counts_kernel(under, sealed):
 
 
 def touched_faces(occupancy: np.ndarray) -> list[str]:
-    """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel."""
+    """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel (each face
+    read as a view of its layer: no pass over the grid)."""
     occ = np.asarray(occupancy, dtype=bool)
     out = []
     for a in range(3):
         for side, idx in (("-", 0), ("+", -1)):
-            if occ.shape[a] and np.take(occ, idx, axis=a).any():
+            if occ.shape[a] and occ[(slice(None),) * a + (idx,)].any():
                 out.append("xyz"[a] + side)
     return out
 
 
 def box_contact_fraction(occupancy: np.ndarray) -> float:
-    """``|W n B| / |B|``, ``B`` the voxels on the six faces of the grid box."""
+    """``|W n B| / |B|``, ``B`` the voxels on the six faces of the grid box (counted on the six
+    layers, split so that no voxel is counted twice: no pass over the grid)."""
     occ = np.asarray(occupancy, dtype=bool)
     if occ.size == 0:
         return 0.0
-    inner = occ[1:-1, 1:-1, 1:-1] if min(occ.shape) > 2 else np.zeros((0,), bool)
-    n_inner = int(np.prod([max(0, s - 2) for s in occ.shape]))
-    n_face = occ.size - n_inner
-    return float((int(np.count_nonzero(occ)) - int(np.count_nonzero(inner))) / n_face) if n_face else 0.0
+    if min(occ.shape) <= 2:  # every voxel lies on a face
+        return float(np.count_nonzero(occ) / occ.size)
+    n_face = occ.size - int(np.prod([s - 2 for s in occ.shape]))
+    mid = slice(1, -1)
+    layers = (occ[0], occ[-1], occ[mid, 0], occ[mid, -1], occ[mid, mid, 0], occ[mid, mid, -1])
+    return float(sum(int(np.count_nonzero(layer)) for layer in layers) / n_face)
 
 
 def hollow_mask(occupancy: np.ndarray, mode: str = "hull", hull: np.ndarray | None = None) -> np.ndarray:

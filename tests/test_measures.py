@@ -15,7 +15,7 @@ from paraspace.kinematics import morphology as morph_mod
 from paraspace.kinematics import voids as voids_mod
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
-from paraspace.kinematics.measures import measure_workspace
+from paraspace.kinematics.measures import box_contact_fraction, measure_workspace, touched_faces
 from paraspace.kinematics.run_components import LabelledComponents
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
@@ -659,3 +659,22 @@ def test_hull_raster_equals_every_facet_at_every_column():
             assert np.all((counts == 0) | (counts == last - first + 1))
         hulls += int(fast.sum() > occ.sum())
     assert hulls >= 40  # most fields have a hull larger than themselves
+
+
+def test_box_contact_and_touched_faces_against_the_face_voxels():
+    # |W n B| / |B| and the touched faces from the face voxels listed by their indices (brute force)
+    rng = np.random.default_rng(11)
+    for shape in ((1, 1, 1), (2, 3, 4), (3, 3, 3), (4, 5, 6), (7, 2, 9), (9, 8, 7)):
+        for p in (0.02, 0.5, 0.97):
+            occ = rng.random(shape) < p
+            idx = np.indices(shape)
+            on = np.zeros(shape, bool)
+            faces = []
+            for a in range(3):
+                for side, k in (("-", 0), ("+", shape[a] - 1)):
+                    layer = idx[a] == k
+                    on |= layer
+                    if (occ & layer).any():
+                        faces.append("xyz"[a] + side)
+            assert box_contact_fraction(occ) == (occ & on).sum() / on.sum(), shape
+            assert touched_faces(occ) == faces, shape
