@@ -1009,6 +1009,40 @@ class _StageClock:
             setattr(obj, attr, fn)
 
 
+class _KernelClock:
+    """Seconds spent inside numba's parallel kernels while the clock is on: every ``parallel=True``
+    dispatcher bound in a module of ``paraspace.kinematics`` is wrapped (in each module that binds
+    it) by a timer. The rest of a one-thread run is single-threaded code (numpy, scipy's qhull,
+    serial kernels, Python) whatever the machine's load: target 7's direct measure."""
+
+    def __init__(self) -> None:
+        self.seconds, self.saved = 0.0, []
+
+    def _wrap(self, fn):
+        def timed(*a, **k):
+            t = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                self.seconds += time.perf_counter() - t
+        return timed
+
+    def __enter__(self):
+        import sys
+        for name, mod in list(sys.modules.items()):
+            if not name.startswith("paraspace.kinematics"):
+                continue
+            for attr, fn in list(vars(mod).items()):
+                if hasattr(fn, "py_func") and getattr(fn, "targetoptions", {}).get("parallel"):
+                    self.saved.append((mod, attr, fn))
+                    setattr(mod, attr, self._wrap(fn))
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for mod, attr, fn in reversed(self.saved):
+            setattr(mod, attr, fn)
+
+
 #: Stage label of the per-level bookkeeping (a parallel kernel since target 7; its serial share is
 #: estimated by Amdahl's law like a measure step's, not assumed 0).
 ADVANCE = "_advance: write decided blocks, split (parallel)"
@@ -1022,7 +1056,9 @@ def stage_rows(design: Design, h: float = 0.5, runs: int = 5) -> None:
     time: the stages that are serial code (glue; ``_advance`` and each measure step by Amdahl's
     law from its 1- and 2-thread times, ``s = 2 t2 / t1 - 1`` clipped to [0, 1]). Other work on a
     shared machine only adds time, and more to the 2-thread runs (they need both cores), so the
-    share is printed from the medians and from each stage's fastest runs (the least disturbed)."""
+    share is printed from the medians and from each stage's fastest runs (the least disturbed).
+    The direct measure, which the load does not bias: in the 1-thread runs, the time outside
+    numba's parallel kernels (:class:`_KernelClock`), per stage and in all."""
     import numba
 
     from paraspace.kinematics import blocks, measures, workspace
@@ -1037,42 +1073,60 @@ def stage_rows(design: Design, h: float = 0.5, runs: int = 5) -> None:
                  (workspace, "_finish_kernel", "mirror fill + == 7 (parallel kernel)")]
     meas_patch = [(measures._Steps, "get", None)]
     per: dict = {}
+    outside: dict = {}  # 1-thread runs: seconds outside the parallel kernels, per stage
     for n in (1, 2) * runs:
         numba.set_num_threads(n)
-        clock = _StageClock(eng_patch)
-        with clock:
-            t = time.perf_counter()
-            compute_workspace(design, ws)
-            total = time.perf_counter() - t
-        clock.times["Python glue (serial)"] = total - sum(clock.times.values())
-        clock.times["engine total"] = total
-        steps: dict = {}
-        get = measures._Steps.get
+        kernels = _KernelClock() if n == 1 else contextlib.nullcontext()
+        with kernels:
+            clock = _StageClock(eng_patch)
+            with clock:
+                t = time.perf_counter()
+                compute_workspace(design, ws)
+                total = time.perf_counter() - t
+            eng_kernels = kernels.seconds if n == 1 else 0.0
+            clock.times["Python glue (serial)"] = total - sum(clock.times.values())
+            clock.times["engine total"] = total
+            steps: dict = {}
+            serial: dict = {}
+            get = measures._Steps.get
 
-        def timed_get(self, name, steps=steps, get=get, stack=[]):  # noqa: B006
-            if name in self._memo:
-                return get(self, name)
-            stack.append(0.0)
-            t0 = time.perf_counter()
-            out = get(self, name)
-            dt = time.perf_counter() - t0
-            inner = stack.pop()
-            steps["measures: " + name] = steps.get("measures: " + name, 0.0) + dt - inner
-            if stack:
-                stack[-1] += dt
-            return out
+            def timed_get(self, name, steps=steps, serial=serial, get=get, stack=[], kernels=kernels):  # noqa: B006
+                if name in self._memo:
+                    return get(self, name)
+                k0 = kernels.seconds if n == 1 else 0.0
+                stack.append([0.0, 0.0])
+                t0 = time.perf_counter()
+                out = get(self, name)
+                dt = time.perf_counter() - t0
+                dk = (kernels.seconds if n == 1 else 0.0) - k0
+                inner, inner_k = stack.pop()
+                key = "measures: " + name
+                steps[key] = steps.get(key, 0.0) + dt - inner
+                serial[key] = serial.get(key, 0.0) + (dt - inner) - (dk - inner_k)
+                if stack:
+                    stack[-1][0] += dt
+                    stack[-1][1] += dk
+                return out
 
-        measures._Steps.get = timed_get  # type: ignore[method-assign]
-        try:
-            t = time.perf_counter()
-            measure_workspace(res)
-            mtotal = time.perf_counter() - t
-        finally:
-            measures._Steps.get = get  # type: ignore[method-assign]
+            measures._Steps.get = timed_get  # type: ignore[method-assign]
+            try:
+                t = time.perf_counter()
+                k0 = kernels.seconds if n == 1 else 0.0
+                measure_workspace(res)
+                mtotal = time.perf_counter() - t
+                meas_kernels = (kernels.seconds if n == 1 else 0.0) - k0
+            finally:
+                measures._Steps.get = get  # type: ignore[method-assign]
         steps["measures: outside the steps"] = mtotal - sum(steps.values())
         steps["measures total"] = mtotal
         for k, v in {**clock.times, **steps}.items():
             per.setdefault(k, {1: [], 2: []})[n].append(v)
+        if n == 1:
+            serial["measures: outside the steps"] = (mtotal - meas_kernels) - sum(serial.values())
+            serial["engine total"] = total - eng_kernels
+            serial["measures total"] = mtotal - meas_kernels
+            for k, v in serial.items():
+                outside.setdefault(k, []).append(v)
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     del meas_patch
     med = {k: {n: statistics.median(v[n]) for n in (1, 2)} for k, v in per.items()}
@@ -1101,6 +1155,13 @@ def stage_rows(design: Design, h: float = 0.5, runs: int = 5) -> None:
               f"(medians / fastest) {cell}")
     print(f"    single-threaded share of the 1-thread time (engine + measures): {totals['medians']:.1%} from the "
           f"medians, {totals['fastest runs']:.1%} from the fastest runs (target < 10 %)")
+    out_med = {k: statistics.median(v) for k, v in outside.items()}
+    one = med["engine total"][1] + med["measures total"][1]
+    direct = (out_med["engine total"] + out_med["measures total"]) / one
+    top = sorted(((v, k) for k, v in out_med.items() if k.startswith("measures: ")), reverse=True)[:4]
+    print(f"    direct: time outside numba's parallel kernels in the 1-thread runs, engine {out_med['engine total'] * 1e3:.1f}"
+          f" ms + measures {out_med['measures total'] * 1e3:.1f} ms = {direct:.1%} of the 1-thread time (target < 10 %);"
+          f" the largest: " + ", ".join(f"{k[10:]} {v * 1e3:.1f} ms" for v, k in top))
 
 
 def throughput_rows(design: Design) -> None:

@@ -242,7 +242,7 @@ from .run_components import RunComponents, count_components
 from .serialize import jsonable
 from .void_flood import _contiguous
 from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_mask
-from .workspace import WorkspaceResult
+from .workspace import WorkspaceResult, _touching_faces
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
 HOLLOWNESS_MODES: tuple[str, ...] = ("hull", "shadow")
@@ -357,15 +357,10 @@ def _open_sealed_counts_kernel(under, sealed):
 
 
 def touched_faces(occupancy: np.ndarray) -> list[str]:
-    """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel (each face
-    read as a view of its layer: no pass over the grid)."""
-    occ = np.asarray(occupancy, dtype=bool)
-    out = []
-    for a in range(3):
-        for side, idx in (("-", 0), ("+", -1)):
-            if occ.shape[a] and occ[(slice(None),) * a + (idx,)].any():
-                out.append("xyz"[a] + side)
-    return out
+    """Names of the grid-box faces whose outermost voxel layer holds a reachable voxel (the engine's
+    own test of its box, :func:`kinematics.workspace._touching_faces`)."""
+    faces = _touching_faces(np.asarray(occupancy, dtype=bool))
+    return ["xyz"[a] + side for a in range(3) for side, hit in zip("-+", faces[a]) if hit]
 
 
 def box_contact_fraction(occupancy: np.ndarray) -> float:

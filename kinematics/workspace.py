@@ -527,7 +527,12 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
 
 
 def _touching_faces(occ: np.ndarray) -> list[tuple[bool, bool]]:
-    return [(bool(np.take(occ, 0, axis=a).any()), bool(np.take(occ, -1, axis=a).any())) for a in range(3)]
+    """Per axis, whether the grid's first and last layer hold a reachable voxel (each layer read as a
+    view: no copy, no pass over the grid)."""
+    def hit(a: int, idx: int) -> bool:
+        return bool(occ.shape[a]) and bool(occ[(slice(None),) * a + (idx,)].any())
+
+    return [(hit(a, 0), hit(a, -1)) for a in range(3)]
 
 
 _WARM = False
