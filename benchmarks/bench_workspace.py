@@ -38,7 +38,9 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      against the re-mesh alone, with the GLB bytes). Target 8: an optimiser generation's time per
      design, serially, on a local cluster of 2 workers started by the run, and on the warm client
      reused by the next run (first and later generations). Target 6: the certified bracket alone at
-     h = 2 with 0, 1, 2 refinements.
+     h = 2 with 0, 1, 2 refinements. Target 7 (also alone, ``--serial-tail``): each stage of the
+     engine and of the measures at h = 0.5 with 1 and 2 threads, the single-threaded share by
+     Amdahl's law and measured directly (the time outside numba's parallel kernels with 1 thread).
   9. a row per mechanism preset (kinematics/presets.py) at h = 2 with derived bounds, against the
      paper engine on the paper's default design in the same run (medians of alternating runs; its
      dense method too, which like the general engine evaluates every voxel, though it computes half the
