@@ -119,7 +119,12 @@ def viridis(u: np.ndarray) -> np.ndarray:
 
 
 def _mc_with_volume(field: np.ndarray, level: float, h: float) -> tuple[trimesh.Trimesh, float]:
-    """Marching cubes, outward-oriented, and its enclosed volume (computed once)."""
+    """Marching cubes, outward-oriented, and its enclosed volume (computed once). A field with no
+    value on each side of ``level`` has no surface there: an empty mesh of volume 0 (which no
+    caller takes as a shell: none is closed), not skimage's error. That is the block means of a
+    workspace thinner than a block, e.g. a sheet one voxel thick, whose means never pass 1/2."""
+    if field.size == 0 or not float(field.min()) < level < float(field.max()):
+        return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), np.int64), process=False), 0.0
     verts, faces, _, _ = marching_cubes(field, level=level, spacing=(h, h, h))
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
     vol = _signed_volume(mesh)

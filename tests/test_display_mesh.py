@@ -189,3 +189,24 @@ def test_decimating_a_given_mesh_gives_a_closed_mesh_under_the_budget_or_the_inp
     for bad in (3, 0, 2.5, True):
         with pytest.raises(ValueError, match="max_faces"):
             display_mesh(remesh, bad)  # type: ignore[arg-type]
+
+
+def test_a_sheet_one_voxel_thick_gets_a_closed_shell_not_an_error():
+    # the block means of a sheet thinner than a block never pass 1/2: marching cubes has no surface
+    # there (skimage raised "Surface level must be within volume data range" from the display shell,
+    # the API's shell export and the report); the shells fall back to decimating the voxel mesh
+    from paraspace.kinematics.grid import GridSpec
+    from paraspace.kinematics.workspace import WorkspaceResult
+
+    occ = np.zeros((120, 120, 20), bool)
+    occ[5:115, 5:115, 10] = True  # 12,100 voxels, about 49,000 faces at full resolution
+    grid = GridSpec(origin=(0.5, 0.5, 0.5), h=1.0, shape=occ.shape)
+    res = WorkspaceResult(design=Design(), settings=WorkspaceSettings(voxel=1.0, bounds=((0, 0, 0), (120, 120, 20))),
+                          grid=grid, occupancy=occ, chain_mask=None, compute_seconds=0.0, n_eta=61)
+    for mesh, budget in ((display_shell(res), DISPLAY_FACES),
+                         (workspace_shell(res, max_faces=1000, reduction="remesh"), 1000)):
+        assert 0 < len(mesh.faces) <= budget
+        assert mesh.is_watertight and mesh.is_winding_consistent
+        assert mesh.volume == pytest.approx(occ.sum(), rel=0.02)  # the voxel volume, h = 1
+        lo, hi = mesh.bounds
+        assert lo[0] >= 4.5 - 0.5 and hi[0] <= 115.5 + 0.5 and lo[2] >= 9.5 - 0.5 and hi[2] <= 11.5 + 0.5
