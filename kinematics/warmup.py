@@ -136,9 +136,15 @@ def _measures_and_shells() -> None:
 
     res = _tiny_result()
     measure_workspace(res)
+    # the feature filter's packed dilations run only for a radius of at least one voxel (the tiny
+    # result's default radius is under one), as on every real grid
+    measure_workspace(res, feature_radius=2.5 * res.grid.h)
     RunComponents(np.ones((2, 2, 2), bool)).mask(np.ones(1, bool))  # the pieces' mask: only with fragments
     workspace_shell(res)
     display_shell(res)
+    # over their face budgets (as every real grid is): the re-mesh from the block means' table
+    workspace_shell(res, max_faces=24, reduction="remesh")
+    display_shell(res, max_faces=24)
 
 
 def _general() -> None:

@@ -1,6 +1,8 @@
 """No request compiles (trust item 9): after kinematics.warmup.warm_up(), requests over real HTTP
 that reach every engine option (joint cones about both axes, leg interference, the bracket, the
-dense engine, orientation, inverse kinematics, tasks) add no compiled signature to any numba kernel."""
+dense engine, orientation, inverse kinematics, tasks), the measures of a grid fine enough for the
+feature filter's dilations, a shell download over its face budget, and the explorer's job on that
+grid (its measures and display shell) add no compiled signature to any numba kernel."""
 
 from __future__ import annotations
 
@@ -13,9 +15,13 @@ from numba.core.registry import CPUDispatcher
 
 import paraspace.kinematics as core
 from paraspace.app.api import API_PREFIX, create_api
+from paraspace.app.explorer.workspace_job import make_shell as explorer_shell
+from paraspace.app.explorer.workspace_job import measure as explorer_measures
 from paraspace.app.jobs import JobManager
 from paraspace.app.serve import start_api
+from paraspace.kinematics.design import Design
 from paraspace.kinematics.warmup import warm_up
+from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
 def _compiled() -> dict[str, int]:
@@ -58,6 +64,14 @@ def test_requests_after_warm_up_compile_nothing() -> None:
             r = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 12, "method": "dense",
                                                                          "orientation": {"psi": 10}}})
             assert _wait(http, r.json()["job_id"])["status"] == "done"
+            # voxel 4: the feature radius (2 % of the extent) is over one voxel, so the measures run the
+            # packed dilations; the shell at 500 faces is decimated
+            job_id = http.post(f"{API_PREFIX}/workspace", json={"settings": {"voxel": 4}}).json()["job_id"]
+            assert _wait(http, job_id)["status"] == "done"
+            measures = http.get(f"{API_PREFIX}/workspace/{job_id}").json()["measures"]
+            assert measures["feature_radius_voxels"] >= 1.0, measures
+            r = http.get(f"{API_PREFIX}/workspace/{job_id}/shell.glb", params={"max_faces": 500})
+            assert r.status_code == 200, r.text
             r = http.post(f"{API_PREFIX}/orientation", json={"settings": {"angle_step": 15, "position_step": 20}})
             assert r.status_code in (200, 202), r.text  # 200: done before the answer
             assert _wait(http, r.json()["job_id"])["status"] == "done"
@@ -72,6 +86,12 @@ def test_requests_after_warm_up_compile_nothing() -> None:
     finally:
         jobs.shutdown(wait=False)
         srv.stop()
+    # the explorer's job on a real grid: its measures and its display shell from the block means
+    # (a re-mesh budget under the full mesh's faces, as on every grid the explorer shows)
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
+    explorer_measures(res)
+    shell = explorer_shell(res, max_faces=2000)
+    assert "block re-mesh" in shell.metadata["paraspace"]["reduction"], shell.metadata["paraspace"]
     after = _compiled()
     grown = {k: (before.get(k, 0), v) for k, v in after.items() if v > before.get(k, 0)}
     assert not grown, f"kernels compiled inside a request (before, after): {grown}"
