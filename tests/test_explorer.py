@@ -674,7 +674,8 @@ def test_pin_compare_and_fig3_pair_travel_in_the_link(explorer, browsers):
     v10 = s.compare.pinned.result.volume
     v80 = s.bundle.result.volume
     assert s.compare.pinned.result.design.a == 10.0 and s.bundle.result.design.a == 80.0 and v10 != v80
-    assert s.compare.handle is not None and s.compare.cage is not None  # the ghost and its cage are in the scene
+    # the ghost and its cage are in the scene (added one after the other by the ghost's thread)
+    wait_for(lambda: s.compare.handle is not None and s.compare.cage is not None, 10.0, "the ghost and its cage")
     wait_for(lambda: "pin=" in b.search, 5.0, "pin in the link")
     b2 = browsers(b.search.lstrip("?"))
     s2 = b2.session

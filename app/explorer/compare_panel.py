@@ -432,9 +432,8 @@ class ComparePanel:
                 return
             if pin.shown is not None and pin.shown[0] != node:
                 self._remove_ghost(pin)  # another place: its old nodes have other names
-            pin.handle = self.scene.add_glb(node, ghost_glb(mesh, pin.colour), cast_shadow=False,
-                                            receive_shadow=False)
-            cage = ghost_contours(mesh)
+            glb, cage = ghost_glb(mesh, pin.colour), ghost_contours(mesh)  # both ready before either is shown
+            pin.handle = self.scene.add_glb(node, glb, cast_shadow=False, receive_shadow=False)
             if len(cage):
                 pin.cage = self.scene.add_line_segments(node + "_cage", cage.astype(np.float32), pin.colour[:3],
                                                         thickness=GHOST_LINE_PX, thickness_units="screen")
