@@ -64,6 +64,19 @@ def _tiny_result():  # noqa: ANN202 - a WorkspaceResult (imported lazily)
                            compute_seconds=0.0, n_eta=default_n_eta(Design(), settings.eta_step))
 
 
+def _tiny_mirror_result():  # noqa: ANN202 - a WorkspaceResult
+    """A small result symmetric under ``y -> -y`` (grid and voxels), by hand like :func:`_tiny_result`:
+    the dexterity field's mirror path (:func:`kinematics.dexterity_neighbour.mirror_rows`)."""
+    import dataclasses
+
+    res = _tiny_result()
+    h = res.grid.h
+    grid = dataclasses.replace(res.grid, origin=(res.grid.origin[0], -3 * h, res.grid.origin[2]))
+    occ = np.zeros(res.grid.shape, bool)
+    occ[1:6, 1:6, 0:4] = True  # symmetric about the middle row j = 3 (y = 0)
+    return dataclasses.replace(res, grid=grid, occupancy=occ)
+
+
 def _engines() -> None:
     from .workspace import WorkspaceSettings, compute_workspace
 
@@ -126,6 +139,7 @@ def _dexterity() -> None:
     res = _tiny_result()
     for search in ("neighbour", "sweep"):  # the full search's kernels: the neighbour's run-time check
         dexterity_field(res, search=search)
+    dexterity_field(_tiny_mirror_result())  # the mirror fill (every symmetric design at zero orientation)
 
 
 def _measures_and_shells() -> None:

@@ -1,8 +1,9 @@
 """No request compiles (trust item 9): after kinematics.warmup.warm_up(), requests over real HTTP
 that reach every engine option (joint cones about both axes, leg interference, the bracket, the
 dense engine, orientation, inverse kinematics, tasks), the measures of a grid fine enough for the
-feature filter's dilations, a shell download over its face budget, and the explorer's job on that
-grid (its measures and display shell) add no compiled signature to any numba kernel."""
+feature filter's dilations, a shell download over its face budget, and the explorer's jobs on that
+grid (its measures, display shell and dexterity colours) add no compiled signature to any numba
+kernel."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from paraspace.app.explorer.workspace_job import measure as explorer_measures
 from paraspace.app.jobs import JobManager
 from paraspace.app.serve import start_api
 from paraspace.kinematics.design import Design
+from paraspace.kinematics.dexterity import dexterity_field
 from paraspace.kinematics.warmup import warm_up
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
@@ -86,10 +88,12 @@ def test_requests_after_warm_up_compile_nothing() -> None:
     finally:
         jobs.shutdown(wait=False)
         srv.stop()
-    # the explorer's job on a real grid: its measures and its display shell from the block means
-    # (a re-mesh budget under the full mesh's faces, as on every grid the explorer shows)
+    # the explorer's job on a real grid: its measures, its display shell from the block means (a
+    # re-mesh budget under the full mesh's faces, as on every grid the explorer shows) and its
+    # dexterity colours (the default design at zero orientation: the field's mirror path)
     res = compute_workspace(Design(), WorkspaceSettings(voxel=4.0))
     explorer_measures(res)
+    dexterity_field(res, 0.005)
     shell = explorer_shell(res, max_faces=2000)
     assert "block re-mesh" in shell.metadata["paraspace"]["reduction"], shell.metadata["paraspace"]
     after = _compiled()
