@@ -666,7 +666,7 @@ class _Steps:
     def _hollow_volume(self):
         if self.o["hollowness_mode"] == "hull":
             return self.get("under")[1] * self.vv
-        return int(np.count_nonzero(hollow_mask(self.occ, self.o["hollowness_mode"]))) * self.vv
+        return _hollow(self.occ, self.o["hollowness_mode"])[1] * self.vv
 
     def _gap_volume(self):
         return column_gap_count(self.occ) * self.vv

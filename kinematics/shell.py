@@ -119,12 +119,7 @@ def viridis(u: np.ndarray) -> np.ndarray:
 
 
 def _mc_with_volume(field: np.ndarray, level: float, h: float) -> tuple[trimesh.Trimesh, float]:
-    """Marching cubes, outward-oriented, and its enclosed volume (computed once). A field with no
-    value on each side of ``level`` has no surface there: an empty mesh of volume 0 (which no
-    caller takes as a shell: none is closed), not skimage's error. That is the block means of a
-    workspace thinner than a block, e.g. a sheet one voxel thick, whose means never pass 1/2."""
-    if field.size == 0 or not float(field.min()) < level < float(field.max()):
-        return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), np.int64), process=False), 0.0
+    """Marching cubes, outward-oriented, and its enclosed volume (computed once)."""
     verts, faces, _, _ = marching_cubes(field, level=level, spacing=(h, h, h))
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
     vol = _signed_volume(mesh)
@@ -175,9 +170,20 @@ def _volume_slope(mesh: trimesh.Trimesh, field: np.ndarray, h: float) -> float:
 
 def _volume_preserving(field: np.ndarray, h: float, target: float,
                        rtol: float = _VOLUME_RTOL) -> tuple[trimesh.Trimesh, float]:
-    """Marching cubes at the level whose mesh volume matches ``target`` (Newton, then secant)."""
+    """Marching cubes at the level whose mesh volume matches ``target`` (Newton, then secant). A
+    level with no value of the field on each side has no surface: the empty mesh of volume 0 (which
+    no caller takes as a shell: none is closed), not skimage's error. That is the block means of a
+    workspace thinner than a block, e.g. a sheet one voxel thick, whose means never pass 1/2 (the
+    field's range read once per call, not once per marching cubes)."""
+    lo, hi = (float(field.min()), float(field.max())) if field.size else (0.0, 0.0)
+
+    def mc(level: float) -> tuple[trimesh.Trimesh, float]:
+        if not lo < level < hi:
+            return trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), np.int64), process=False), 0.0
+        return _mc_with_volume(field, level, h)
+
     t0 = HALF_LEVEL
-    m0, v0 = _mc_with_volume(field, t0, h)
+    m0, v0 = mc(t0)
     best = (abs(v0 - target), m0, t0)
     if best[0] <= rtol * target:
         return m0, t0
@@ -187,7 +193,7 @@ def _volume_preserving(field: np.ndarray, h: float, target: float,
         t1 = float(min(0.95, max(0.05, t1)))
         if t1 == t0:
             break
-        m1, v1 = _mc_with_volume(field, t1, h)
+        m1, v1 = mc(t1)
         if abs(v1 - target) < best[0]:
             best = (abs(v1 - target), m1, t1)
         if best[0] <= rtol * target or v1 == v0:
