@@ -32,8 +32,10 @@ the arc samples in the witness search's order (outward from the middle sample) a
 * and stop at the first sample (of at most :data:`MAX_OWN` that pass the tightened test) where some
   probe clears at every centre. The feasible set at ``P`` lies between the tightened set at ``Pc``
   (``[t0, t1]`` its hull) and the relaxed one, so the first probe (the least feasible ``rho``: the
-  pieces come in increasing ``rho``) lies in ``[r0, t0]``; when no leg's widest gap (lower limit
-  tightened) meets ``[r0, r1]`` the set is one interval at every ``P`` and the next probes, its
+  pieces come in increasing ``rho``) lies in ``[r0, t0]``; when no leg's gap (the ``rho`` where it is
+  shorter than ``l_min``) splits ``[r0, r1]`` at any ``P`` (:func:`_no_split`: its gap with the lower
+  limit tightened misses ``[r0, r1]``, or its gap with the lower limit relaxed, which the gap at ``P``
+  contains, reaches past an end of it) the set is one interval at every ``P`` and the next probes, its
   greatest and middle ``rho``, lie in ``[t1, r1]`` and ``[(r0 + t1) / 2, (t0 + r1) / 2]``. A probe
   range whose legs stay ``d_min`` apart under every move of at most ``e`` (own-leg lower bound,
   bisection of the range) stops the search there at every ``P``; the ranges tried before it whose
@@ -58,11 +60,13 @@ centres of the parent. Both tests and the per-voxel search pass over marked samp
 no answer (a marked sample yields no witness, so the witness search finds the same witnesses in the
 same order) and saves most of the scan of a chain whose own legs collide.
 
-Any other block is split in eight; a single voxel is decided by the per-voxel search itself
+A block holding voxels outside ``where`` is not tested for clear (the children decide, so no answer
+changes): the certificate proves every chain feasible at every centre, which a block across the
+boundary of the engine's occupancy (its ``where``) does not have (none of them passed, default design,
+h = 1). Any other block is split in eight; a single voxel is decided by the per-voxel search itself
 (:func:`kinematics.interference._pose_clear`, with the marks its block inherited), so the result is
-voxel-identical to it. Blocks with
-no voxel to test are skipped. Distances get one more margin of ``1e-7`` of the design's scale so the
-rounding of the closed-form distance never matters.
+voxel-identical to it. Blocks with no voxel to test are skipped. Distances get one more margin of
+``1e-7`` of the design's scale so the rounding of the closed-form distance never matters.
 
 Cost: about the number of blocks near poses where legs come within ``d_min`` of each other, instead
 of every voxel of the workspace.
@@ -126,6 +130,17 @@ def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, h
             if lo <= hi:
                 h0, h1 = min(h0, lo), max(h1, hi)
     return h0 <= h1, h0, h1, g1a, g1b, g2a, g2b
+
+
+@njit(cache=True, inline="always")
+def _no_split(ga, gb, ha, hb, r0, r1):
+    """Whether one leg's gap (its rho where the leg is shorter than ``l_min``) leaves one interval of
+    the relaxed hull ``[r0, r1]`` at every centre of the block: the gap at a centre lies in the gap
+    ``(ga, gb)`` at the block centre with the lower limit tightened, and holds the gap ``(ha, hb)`` at
+    the block centre with it relaxed (an empty gap is ``(1, 0)``). So it does not split the hull when
+    ``(ga, gb)`` misses ``(r0, r1)``, or when ``(ha, hb)`` reaches past one end of it (the gap at the
+    centre is an interval that then covers that end)."""
+    return ga > gb or gb <= r0 or ga >= r1 or (ha < hb and (ha < r0 or hb > r1))
 
 
 @njit(cache=True)
@@ -260,8 +275,8 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
             if k < 0 or k >= n or skip[i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
-            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                          jc[i], e)
+            ok, r0, r1, h1a, h1b, h2a, h2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
+                                                           lo_r2, hi_r2, jc[i], e)
             if not ok or _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
                 skip[i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
                 continue
@@ -270,9 +285,8 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
             nk[i] += 1
             okt, t0, t1, g1a, g1b, g2a, g2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
                                                             lo_t2, hi_t2, jc[i], -e)
-            # the feasible set is one interval at every centre when no leg's widest gap (at the tightened
-            # lower limit) meets the relaxed hull
-            one = (g1a > g1b or g1b <= r0 or g1a >= r1) and (g2a > g2b or g2b <= r0 or g2a >= r1)
+            # the feasible set is one interval at every centre when no leg's gap splits the relaxed hull
+            one = _no_split(g1a, g1b, h1a, h1b, r0, r1) and _no_split(g2a, g2b, h2a, h2b, r0, r1)
             if okt:
                 tries += 1
                 if tries > MAX_OWN:
@@ -381,8 +395,9 @@ def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_
     samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children)."""
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     for b in prange(b0.shape[0]):
-        if box_count(sat, b0[b, 0], b0[b, 1], b0[b, 2], b0[b, 0] + bn[b, 0], b0[b, 1] + bn[b, 1],
-                     b0[b, 2] + bn[b, 2]) == 0:  # no voxel to test
+        nin = box_count(sat, b0[b, 0], b0[b, 1], b0[b, 2], b0[b, 0] + bn[b, 0], b0[b, 1] + bn[b, 1],
+                        b0[b, 2] + bn[b, 2])
+        if nin == 0:  # no voxel to test
             state[b] = DONE
             continue
         nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
@@ -403,8 +418,11 @@ def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_
         bx = np.empty((3, 2))
         by = np.empty((3, 2))
         bz = np.empty((3, 2))
-        if _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip[b],
-                        stack, ks, hull, bx, by, bz):
+        # a block with voxels outside ``where`` is not tested for clear: in the engine's use (``where``
+        # its occupancy) the certificate, which proves every chain feasible at every centre, never holds
+        # there (the children decide; this saves time and changes no answer)
+        if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
+                                                dmin, margin, skip[b], stack, ks, hull, bx, by, bz):
             for x in range(b0[b, 0], b0[b, 0] + nx):
                 for y in range(b0[b, 1], b0[b, 1] + ny):
                     for z in range(b0[b, 2], b0[b, 2] + nz):

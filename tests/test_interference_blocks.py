@@ -158,8 +158,8 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
 def test_blocks_decide_only_the_voxels_asked_about():
     """On a sparse ``where`` (every third voxel the chains reach, so most blocks, down to two voxels
     across, hold voxels left out) the answer is the per-voxel search's at the voxels asked about and
-    False elsewhere: a block decided clear writes ``where``, not True, and a block with nothing to test
-    is skipped."""
+    False elsewhere: a block with voxels left out is never decided clear as a whole, and a block with
+    nothing to test is skipped."""
     design, joints, h = Design(), Joints(leg_diameter=10.0), 4.0
     plain = compute_workspace(design, WorkspaceSettings(voxel=h))
     xs, ys, zs = plain.grid.axes()
@@ -173,3 +173,63 @@ def test_blocks_decide_only_the_voxels_asked_about():
     assert not np.any(new & ~where)
     assert np.array_equal(new[idx[:, 0], idx[:, 1], idx[:, 2]], old)
     assert 0 < old.sum() < old.size
+
+
+def test_one_interval_rule_holds_at_every_centre_of_the_block():
+    """``_no_split``: where it says a leg's gap leaves the relaxed hull in one piece at every centre of a
+    block, the per-voxel feasible set (:func:`kinematics.feasibility.feasible_rho`) is one interval at
+    random points within the block's half-diagonal of its centre (brute force); and the rule's second
+    case (the relaxed gap reaches past an end of the hull, as at the lower end of a rail where the legs
+    are short) fires on blocks where the first (the tightened gap misses the hull) does not."""
+    import math
+
+    from paraspace.kinematics.blocks import rounding_margin
+    from paraspace.kinematics.feasibility import ChainTables, chain_points, feasible_rho
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.interference_blocks import _no_split, _relaxed_hull
+    from paraspace.kinematics.joints import cone_table
+
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 4.0
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h))
+    xs, ys, zs = plain.grid.axes()
+    tab = ChainTables(design, plain.n_eta)
+    u = np.ascontiguousarray(platform_points_local(design))
+    jc = np.ascontiguousarray(cone_table(design, joints, np.eye(3)))
+    eps = rounding_margin(math.sqrt(tab.lmax2), (xs, ys, zs))
+    lmin, lmax = math.sqrt(tab.lmin2), math.sqrt(tab.lmax2)
+    n = tab.cos_t.shape[1]
+    rng = np.random.default_rng(11)
+    idx = np.argwhere(plain.occupancy)
+    pieces = np.empty((4, 2))
+    # 400 random (voxel, chain, sample) draws and every draw of 6000 where a gap splits the feasible set at
+    # the block centre itself (rare: where a rule that ignored where the gap lies would go wrong)
+    draws = [(v, int(rng.integers(3)), int(rng.integers(n))) for v in idx[rng.choice(len(idx), 6000)]]
+    split = [(v, i, k) for v, i, k in draws
+             if feasible_rho(*chain_points(xs[v[0]], ys[v[1]], zs[v[2]], u, i), tab.cos_t[i, k], tab.sin_t[i, k],
+                             tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2, jc[i], pieces) > 1]
+    one_blocks = second_case = 0
+    for (ix, iy, iz), i, k in draws[:400] + split:
+        pc = np.array([xs[ix], ys[iy], zs[iz]])
+        e = rng.uniform(0.5, 12.0) + eps
+        c, s = tab.cos_t[i, k], tab.sin_t[i, k]
+        pts = chain_points(*pc, u, i)
+        ok, r0, r1, h1a, h1b, h2a, h2b = _relaxed_hull(*pts, c, s, tab.hb, tab.rho_lo, tab.rho_hi,
+                                                       max(lmin - e, 0.0) ** 2, (lmax + e) ** 2, jc[i], e)
+        if not ok:
+            continue
+        _, _, _, g1a, g1b, g2a, g2b = _relaxed_hull(*pts, c, s, tab.hb, tab.rho_lo, tab.rho_hi, (lmin + e) ** 2,
+                                                    (lmax - e) ** 2, jc[i], -e)
+        if not (_no_split(g1a, g1b, h1a, h1b, r0, r1) and _no_split(g2a, g2b, h2a, h2b, r0, r1)):
+            continue
+        one_blocks += 1
+        first = all(ga > gb or gb <= r0 or ga >= r1 for ga, gb in ((g1a, g1b), (g2a, g2b)))
+        second_case += not first
+        for q in range(40):
+            v = rng.normal(size=3)
+            p = pc + v / np.linalg.norm(v) * (e - eps) * rng.uniform(0.0, 1.0) ** (1 / 3) * (q > 0)
+            cnt = feasible_rho(*chain_points(*p, u, i), c, s, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2,
+                               jc[i], pieces)
+            assert cnt <= 1, (pc, e, i, k, p, pieces[:cnt])
+            if cnt:
+                assert r0 - 1e-9 <= pieces[0, 0] and pieces[0, 1] <= r1 + 1e-9  # inside the relaxed hull
+    assert len(split) > 10 and one_blocks > 100 and second_case > 10  # every case is exercised
