@@ -865,32 +865,44 @@ def dexterity_rows(design: Design, runs: int = 1, fast_runs: int = 5) -> None:
 
 def bracket_rows(design: Design, runs: int = 3) -> None:
     """Target 6: the certified bracket alone (:func:`kinematics.bracket.bracket_of` on a computed
-    workspace) at h = 2 with 0, 1 and 2 refinements, alternating with the engine and with the former
-    refinement that tests each child on its own (``method="cubes"``, before), which must give the
-    same bracket."""
+    workspace) at h = 2 with 0, 1 and 2 refinements, alternating with the engine, with the former
+    refinement that tests each child on its own (``method="cubes"``), which must give the same
+    bracket, and with every cube classified (no mirror half, the path before)."""
     import functools
 
     from paraspace.kinematics.bracket import bracket_of, volume_bracket
     from paraspace.kinematics.kernel_args import kernel_args
+    from paraspace.kinematics.workspace import mirror_symmetric
 
     ws = WorkspaceSettings(voxel=2.0)
     res = compute_workspace(design, ws)
     args = kernel_args(design, ws.orientation, res.n_eta, ws.joints)
+    sym = mirror_symmetric(design, ws)
 
-    def before(refine: int):
-        return volume_bracket(design, res.grid, args, res.n_eta, ws.z_floor, refine=refine, method="cubes")
+    def per_child(refine: int):
+        return volume_bracket(design, res.grid, args, res.n_eta, ws.z_floor, refine=refine, method="cubes",
+                              symmetric=sym)
 
-    same = all(bracket_of(res, refine=r) == before(r) for r in (1, 2))  # also compiles both
+    def every_cube(refine: int):
+        return volume_bracket(design, res.grid, args, res.n_eta, ws.z_floor, refine=refine)
+
+    same = all(bracket_of(res, refine=r) == per_child(r) for r in (1, 2))  # also compiles both
     fns = {"engine": lambda: compute_workspace(design, ws)}
     fns.update({f"refine {r}": functools.partial(bracket_of, res, refine=r) for r in (0, 1, 2)})
-    fns.update({f"before {r}": functools.partial(before, r) for r in (1, 2)})
+    fns.update({f"cubes {r}": functools.partial(per_child, r) for r in (1, 2)})
+    fns.update({f"full {r}": functools.partial(every_cube, r) for r in (0, 2)})
     med = _alternating(fns, runs)
+    half, full = bracket_of(res, refine=2), every_cube(2)
     print(f"  target 6, certified bracket h=2 (load average {os.getloadavg()[0]:.2f}; "
-          f"engine {med['engine'] * 1e3:.0f} ms; the same bracket both ways: {same}):")
+          f"engine {med['engine'] * 1e3:.0f} ms; the same bracket both refinement methods: {same}; mirror half: "
+          f"{sym}, refine 2 [{half.volume_inner:.6g}, {half.volume_outer:.6g}] vs every cube "
+          f"[{full.volume_inner:.6g}, {full.volume_outer:.6g}]):")
     for r in (0, 1, 2):
         _row(f"bracket, refine {r}", med[f"refine {r}"], med["engine"], "(target <= 10x)" if r == 2 else "")
     for r in (1, 2):
-        _row(f"bracket, refine {r}, each child alone (before)", med[f"before {r}"], med["engine"])
+        _row(f"bracket, refine {r}, each child alone", med[f"cubes {r}"], med["engine"])
+    for r in (0, 2):
+        _row(f"bracket, refine {r}, every cube (before)", med[f"full {r}"], med["engine"])
 
 
 def total_orientation_rows(design: Design, runs: int = 3) -> None:

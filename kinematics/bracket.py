@@ -47,6 +47,14 @@ samples per gap of the workspace's samples (all of which are kept), the fewest t
 most half the cubes' half-diagonal (:func:`_arc`, at most :data:`MAX_FINE`): both tests stay as
 rigorous (any arc angle is a valid carriage pose for the inside test; the slack shrinks with the
 spacing for the outside test).
+
+**Mirror.** With the centered arc range and zero orientation the mechanism, hence ``W``, is symmetric
+under ``y -> -y`` (chain 1 onto itself, chains 2 and 3 swapped). A cube inside (outside) ``W`` then has
+its mirror image inside (outside) ``W``: on a grid whose y centres are exactly symmetric, so that the
+image of a cube is a cube of the grid, only the cubes with ``y <= 0`` are classified and the others
+take their image's class (and its chains, 2 and 3 swapped); the refinement splits the boundary cubes
+of that half and counts the children of a cube off the middle row twice. The bracket is the same as
+with every cube classified (tested), in about half the time.
 """
 
 from __future__ import annotations
@@ -231,17 +239,37 @@ def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
     return out
 
 
+def _half(grid: GridSpec, symmetric: bool) -> bool:
+    """Whether only the cubes with ``y <= 0`` are classified (module docstring, *Mirror*): the workspace
+    is symmetric and the grid's y centres are exactly so (else every cube is)."""
+    ys = grid.axes()[1]
+    return symmetric and bool(np.array_equal(ys, -ys[::-1]))
+
+
+def _mirror_fill(a: np.ndarray, swap_chains: bool) -> None:
+    """Rows ``ny - 1 - j`` of ``a`` (x, y, z) get rows ``j < ny // 2``; with ``swap_chains`` the bits of
+    chains 2 and 3 (1 and 2) are swapped (the mirror maps chain 2 onto chain 3)."""
+    m = a.shape[1] // 2
+    src = a[:, :m][:, ::-1]
+    if swap_chains:
+        src = (src & 1) | ((src & 2) << 1) | ((src & 4) >> 1)
+    a[:, a.shape[1] - m:] = src
+
+
 def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float,
                  progress: Reporter | None = None, cancel: CancelToken = None,
-                 chain_bits: np.ndarray | None = None) -> np.ndarray:
+                 chain_bits: np.ndarray | None = None, symmetric: bool = False) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
-    ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube."""
+    ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube.
+    ``symmetric``: the workspace is symmetric under ``y -> -y`` (module docstring, *Mirror*)."""
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     fa = _arc(design, grid, args, n_eta, 0.5 * grid.h * math.sqrt(3.0))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
     out = np.zeros(grid.shape, np.uint8)
-    b0, bn = _top_blocks(grid.shape, TOP_BLOCK)
+    half = _half(grid, symmetric)
+    nx, ny, nz = grid.shape
+    b0, bn = _top_blocks((nx, ny - ny // 2 if half else ny, nz), TOP_BLOCK)
     state = np.zeros((b0.shape[0], 3), np.int8)
     win = initial_windows(b0.shape[0], fa.cos_t.shape[1])
     level = 0
@@ -268,6 +296,10 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
         if done.all():
             break
         b0, bn, state, win = _split(b0[~done], bn[~done], state[~done], win[~done])
+    if half:
+        _mirror_fill(out, False)
+        if chain_bits is not None:
+            _mirror_fill(chain_bits, True)
     return out
 
 
@@ -277,7 +309,8 @@ _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) f
 
 def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float, cls: np.ndarray,
                     chain_bits: np.ndarray, levels: int, progress: Reporter | None = None,
-                    cancel: CancelToken = None, method: str = "parents") -> tuple[float, float, int]:
+                    cancel: CancelToken = None, method: str = "parents",
+                    symmetric: bool = False) -> tuple[float, float, int]:
     """Split each boundary cube into 8 children ``levels`` times, classifying every child with the
     same tests as the cubes (module docstring): returns ``(inside volume found, outside volume found,
     boundary children left)``; the bracket becomes ``[V_in + inside, V_out - outside]``. A child
@@ -285,15 +318,22 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
 
     ``method``: ``"parents"`` (default) decides the 8 children of a cube together, after one pass
     over the cube's samples at its centre (:mod:`kinematics.bracket_children`; without joint cones);
-    ``"cubes"`` tests each child on its own. Both give the same classes (tested)."""
+    ``"cubes"`` tests each child on its own. Both give the same classes (tested). ``symmetric``: the
+    workspace is symmetric under ``y -> -y``; with a grid exactly so, only the boundary cubes with
+    ``y <= 0`` are refined, those with ``y < 0`` counted twice (module docstring, *Mirror*)."""
     if method not in METHODS:
         raise ParameterError("method", method, " or ".join(METHODS))
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     per_parent = method == "parents" and not has_cones(jc)
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     idx = np.argwhere(cls == BOUNDARY)
+    weight = np.ones(idx.shape[0])  # cubes each one stands for: 2 for one and its mirror image
+    if _half(grid, symmetric):
+        m = cls.shape[1] // 2
+        idx = idx[idx[:, 1] < cls.shape[1] - m]
+        weight = np.where(idx[:, 1] < m, 2.0, 1.0)
     centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
-    parent_bits = chain_bits[cls == BOUNDARY]
+    parent_bits = chain_bits[idx[:, 0], idx[:, 1], idx[:, 2]]
     size = float(grid.h)
     inside = outside = 0.0
     chunk = 1 << 18
@@ -305,8 +345,8 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
         parent_win = _rescale_windows(parent_win, fa.fine // fine_before, fa.cos_t.shape[1])
         fine_before = fa.fine
         last = level == levels - 1  # the last level's boundary children are only counted
-        left, left_bits, left_win = [], [], []
-        n_left = 0
+        left, left_bits, left_win, left_weight = [], [], [], []
+        n_left = 0.0
         for s in range(0, centres.shape[0], chunk // 8):
             check(cancel)
             n_kids = 8 * min(chunk // 8, centres.shape[0] - s)
@@ -329,38 +369,43 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                     _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
                                     fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
                                     out)
-            counts = np.bincount(out, minlength=3)
+            kid_weight = np.repeat(weight[s:s + chunk // 8], 8)
+            counts = np.bincount(out, weights=kid_weight, minlength=3)
             inside += float(counts[INSIDE]) * size ** 3
             outside += float(counts[OUTSIDE]) * size ** 3
-            n_left += int(counts[BOUNDARY])
+            n_left += float(counts[BOUNDARY])
             if not last:
                 keep = out == BOUNDARY
                 left.append(kids[keep])
                 left_bits.append(bits[keep])
                 left_win.append(win[keep])
+                left_weight.append(kid_weight[keep])
         if progress is not None:
             progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
         if last:
-            return inside, outside, n_left
+            return inside, outside, round(n_left)
         centres = np.concatenate(left) if left else np.zeros((0, 3))
         parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
         parent_win = np.concatenate(left_win) if left_win else np.zeros((0, 3, 3), np.int64)
-    return inside, outside, int(centres.shape[0])
+        weight = np.concatenate(left_weight) if left_weight else np.zeros(0)
+    return inside, outside, round(float(weight.sum()))
 
 
 def volume_bracket(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float = 0.0,
                    progress: Reporter | None = None, cancel: CancelToken = None,
-                   refine: int = REFINE, method: str = "parents") -> VolumeBracket:
+                   refine: int = REFINE, method: str = "parents", symmetric: bool = False) -> VolumeBracket:
     """The certified bracket of the continuous workspace volume over ``grid`` (module docstring):
     cubes of the grid, then ``refine`` halvings of the boundary cubes (:func:`refine_boundary`, with
-    its ``method``)."""
+    its ``method``). ``symmetric``: the caller knows the workspace is symmetric under ``y -> -y``
+    (:func:`kinematics.workspace.mirror_symmetric`); on a grid exactly so, half the cubes are
+    classified (*Mirror*; the same bracket)."""
     bits = np.zeros(grid.shape, np.uint8)
-    cls = cube_classes(design, grid, args, n_eta, z_floor, progress, cancel, chain_bits=bits)
+    cls = cube_classes(design, grid, args, n_eta, z_floor, progress, cancel, chain_bits=bits, symmetric=symmetric)
     n_in = int(np.count_nonzero(cls == INSIDE))
     n_b = int(np.count_nonzero(cls == BOUNDARY))
     v = grid.voxel_volume
     add, cut, left = (refine_boundary(design, grid, args, n_eta, z_floor, cls, bits, refine, progress, cancel,
-                                          method)
+                                      method, symmetric)
                       if refine > 0 else (0.0, 0.0, n_b))
     return VolumeBracket(volume_inner=n_in * v + add, volume_outer=(n_in + n_b) * v - cut, cubes_inside=n_in,
                          cubes_boundary=n_b, voxel=grid.h, refine=refine, boundary_left=left)
@@ -377,6 +422,9 @@ def bracket_of(result: object, progress: Reporter | None = None, cancel: CancelT
     r: Any = result
     if r.settings.joints.min_distance > 0.0:
         raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
+    from .workspace import mirror_symmetric
+
     args = kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
     return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel,
-                          refine=r.settings.bracket_refine if refine is None else refine)
+                          refine=r.settings.bracket_refine if refine is None else refine,
+                          symmetric=mirror_symmetric(r.design, r.settings))

@@ -398,9 +398,14 @@ def _padded_reach_box(design: Design, settings: WorkspaceSettings):
     return (lo[0] - h, lo[1] - h, lo[2] if lo[2] <= settings.z_floor else lo[2] - h), (hi[0] + h, hi[1] + h, hi[2] + h)
 
 
+def mirror_symmetric(design: Design, settings: WorkspaceSettings) -> bool:
+    """Whether the workspace is symmetric under ``y -> -y`` and ``settings`` let the engines use it: the
+    centered arc range and zero orientation (module docstring)."""
+    return settings.symmetry and design.eta_range == "centered" and all(abs(a) == 0.0 for a in settings.orientation)
+
+
 def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> bool:
-    return (settings.symmetry and design.eta_range == "centered"
-            and all(abs(a) == 0.0 for a in settings.orientation) and grid.is_mirror_symmetric_y())
+    return mirror_symmetric(design, settings) and grid.is_mirror_symmetric_y()
 
 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
@@ -519,7 +524,8 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
 
         t1 = time.perf_counter()
         br = volume_bracket(design, grid, kernel_args(design, settings.orientation, n_eta, settings.joints),
-                            n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine)
+                            n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine,
+                            symmetric=mirror_symmetric(design, settings))
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from paraspace.kinematics.bracket import BOUNDARY, INSIDE, OUTSIDE, cube_classes
+from paraspace.kinematics.bracket import BOUNDARY, INSIDE, OUTSIDE, _half, cube_classes
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.kernel_args import kernel_args
 from paraspace.kinematics.reference import reference_reachable
@@ -28,11 +28,16 @@ def test_bracket_contains_the_estimates_and_shrinks(design):
     assert coarse.volume_inner <= fine.volume <= coarse.volume_outer
 
 
-def test_cube_classes_against_the_brute_force():
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_cube_classes_against_the_brute_force(symmetric):
+    """Every class checked by the brute force, on all cubes; with ``symmetric`` the cubes with y > 0 take
+    their mirror image's class (module doc, *Mirror*), which the brute force checks on its own."""
     design = Design()
     res = compute_workspace(design, WorkspaceSettings(voxel=8.0))
     grid = res.grid
-    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
+    assert _half(grid, True)  # an exactly symmetric grid: the mirror is used
+    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0,
+                       symmetric=symmetric)
     assert {INSIDE, OUTSIDE, BOUNDARY} <= set(np.unique(cls).tolist())
     rng = np.random.default_rng(3)
     centres = grid.points()
@@ -98,10 +103,13 @@ def test_explorer_shows_the_certified_bracket():
 
 
 @pytest.mark.slow
-def test_bracket_agrees_with_an_independent_interval_oracle():
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_bracket_agrees_with_an_independent_interval_oracle(symmetric):
     """codac's interval arithmetic classifies the same cubes (a quarter of the h = 16 grid) on its own:
     no cube is proven inside by one tool and outside by the other, codac confirms most of our
-    decided cubes, and the two certified brackets of that region overlap (both enclose the truth)."""
+    decided cubes, and the two certified brackets of that region overlap (both enclose the truth).
+    The quarter has y >= 0: with ``symmetric`` its cubes off the middle row take their mirror image's
+    class."""
     import importlib.util
     import json
     import pathlib
@@ -113,7 +121,8 @@ def test_bracket_agrees_with_an_independent_interval_oracle():
     design = Design()
     res = compute_workspace(design, WorkspaceSettings(voxel=16.0))
     grid = res.grid
-    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0)
+    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0,
+                       symmetric=symmetric)
     centres = grid.points()
     quarter = np.argwhere((centres[..., 0] >= 0) & (centres[..., 1] >= 0))
     cubes = []

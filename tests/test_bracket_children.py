@@ -120,3 +120,45 @@ def test_branch_free_parent_test_as_the_interval_test():
         n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
         ref = n1 > 0 and n2 > 0 and sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
         assert bool(_passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)) == ref, (p1, q1, p2, q2)
+
+
+@pytest.mark.parametrize("design, joints", [(Design(), Joints()), (Design(a=30.0), Joints(theta_u=45.0))])
+def test_the_mirror_half_gives_an_equally_certified_bracket(design, joints):
+    """``symmetric`` (module doc of kinematics.bracket, *Mirror*): the classes are mirror images of each
+    other across y = 0 (chain bits 2 and 3 swapped), both refinement methods give the same bracket on
+    the half, which holds the voxel estimate and overlaps the bracket with every cube classified (both
+    enclose V; they differ only where the blocks' path differs, a block decided whole or cube by cube).
+    A grid whose y centres are not exactly symmetric classifies every cube: the same as without."""
+    from paraspace.kinematics.bracket import _half
+    from paraspace.kinematics.grid import GridSpec
+
+    res = compute_workspace(design, WorkspaceSettings(voxel=6.0, joints=joints))
+    args = kernel_args(design, (0.0, 0.0, 0.0), res.n_eta, joints)
+    grid = res.grid
+    assert _half(grid, True) and grid.shape[1] % 2 == 0
+    bits = np.zeros(grid.shape, np.uint8)
+    cls = cube_classes(design, grid, args, res.n_eta, 0.0, chain_bits=bits, symmetric=True)
+    np.testing.assert_array_equal(cls, cls[:, ::-1])
+    swapped = (bits & 1) | ((bits & 2) << 1) | ((bits & 4) >> 1)
+    np.testing.assert_array_equal(bits, swapped[:, ::-1])
+    assert np.any((bits & 2) != ((bits & 4) >> 1))  # chains 2 and 3 differ somewhere: the swap is tested
+    for refine in (1, 2):
+        half = volume_bracket(design, grid, args, res.n_eta, refine=refine, symmetric=True)
+        assert half == volume_bracket(design, grid, args, res.n_eta, refine=refine, method="cubes", symmetric=True)
+        full = volume_bracket(design, grid, args, res.n_eta, refine=refine)
+        assert half.volume_inner <= res.volume <= half.volume_outer
+        assert max(half.volume_inner, full.volume_inner) <= min(half.volume_outer, full.volume_outer)
+        assert abs(half.gap - full.gap) <= 0.02 * full.gap
+    # an odd number of rows: the middle row (y = 0) is classified and refined once, its children counted once
+    odd = GridSpec(origin=(grid.origin[0], grid.origin[1] - 0.5 * grid.h, grid.origin[2]), h=grid.h,
+                   shape=(grid.shape[0], grid.shape[1] + 1, grid.shape[2]))
+    assert _half(odd, True)
+    half = volume_bracket(design, odd, args, res.n_eta, refine=1, symmetric=True)
+    full = volume_bracket(design, odd, args, res.n_eta, refine=1)
+    assert max(half.volume_inner, full.volume_inner) <= min(half.volume_outer, full.volume_outer)
+    assert abs(half.gap - full.gap) <= 0.02 * full.gap
+    # not exactly symmetric: every cube is classified
+    off = GridSpec(origin=(grid.origin[0], grid.origin[1] + 1e-12, grid.origin[2]), h=grid.h, shape=grid.shape)
+    assert not _half(off, True)
+    assert volume_bracket(design, off, args, res.n_eta, refine=1, symmetric=True) == volume_bracket(
+        design, off, args, res.n_eta, refine=1)
