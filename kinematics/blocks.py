@@ -298,8 +298,9 @@ def write_child(b0, bn, b, d, k0, kn, m):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _advance(b0, bn, state, win, all_chains, out):
-    """One level's bookkeeping: write the bits of the decided blocks into ``out`` and return the
+def _advance(b0, bn, state, win, all_chains, out, fail_bit=0):
+    """One level's bookkeeping: write the bits of the decided blocks into ``out`` (the chains proven
+    feasible; with ``fail_bit | `` them where a chain failed: the bracket's cubes) and return the
     undecided ones split in eight (as :func:`_split` does; each block's children consecutive, in
     block order), with the chain states and sample windows they inherit.
 
@@ -324,6 +325,8 @@ def _advance(b0, bn, state, win, all_chains, out):
                 bits |= 1 << i
         single = bn[b, 0] == 1 and bn[b, 1] == 1 and bn[b, 2] == 1
         if single or not unknown or (fail and not all_chains):
+            if fail:
+                bits |= fail_bit
             for x in range(b0[b, 0], b0[b, 0] + bn[b, 0]):
                 for y in range(b0[b, 1], b0[b, 1] + bn[b, 1]):
                     for z in range(b0[b, 2], b0[b, 2] + bn[b, 2]):

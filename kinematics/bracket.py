@@ -68,11 +68,9 @@ from numba import njit, prange
 
 from .blocks import (
     FAIL,
-    OK,
     TOP_BLOCK,
     UNKNOWN,
-    _fill_kernel,
-    _split,
+    _advance,
     _top_blocks,
     block_centre,
     decide_chain,
@@ -91,6 +89,8 @@ from .progress import CancelToken, Reporter, check
 __all__ = ["VolumeBracket", "volume_bracket", "bracket_of"]
 
 INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
+#: Written by :func:`kinematics.blocks._advance` beside a cube's chain bits where a chain fails.
+_FAILED = 8
 #: Halvings of the boundary cubes by default (each one divides the bracket's gap by about 2).
 REFINE = 2
 #: How :func:`refine_boundary` decides a boundary cube's children (its ``method``).
@@ -266,7 +266,7 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     fa = _arc(design, grid, args, n_eta, 0.5 * grid.h * math.sqrt(3.0))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
-    out = np.zeros(grid.shape, np.uint8)
+    v = np.zeros(grid.shape, np.uint8)  # per cube: the chains proven inside, | _FAILED where one fails
     half = _half(grid, symmetric)
     nx, ny, nz = grid.shape
     b0, bn = _top_blocks((nx, ny - ny // 2 if half else ny, nz), TOP_BLOCK)
@@ -281,21 +281,14 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
                 _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], win[s:s + 65536], xs, ys, zs,
                              float(grid.h), fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u, fa.cos_t,
                              fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
-        fail = np.any(state == FAIL, axis=1)
-        inside = np.all(state == OK, axis=1)
-        single = np.all(bn == 1, axis=1)
-        done = fail | inside | single
-        cls = np.where(fail, OUTSIDE, np.where(inside, INSIDE, BOUNDARY)).astype(np.uint8)
-        _fill_kernel(b0[done], bn[done], cls[done], out)
-        if chain_bits is not None:
-            bits = ((state == OK) * np.array([1, 2, 4], np.int8)[None, :]).sum(axis=1).astype(np.uint8)
-            _fill_kernel(b0[done], bn[done], bits[done], chain_bits)
+        with kernel_launch(b0.shape[0]):  # decided blocks and single cubes written, the others split
+            b0, bn, state, win = _advance(b0, bn, state, win, False, v, _FAILED)
         level += 1
         if progress is not None:
             progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
-        if done.all():
-            break
-        b0, bn, state, win = _split(b0[~done], bn[~done], state[~done], win[~done])
+    out = np.where(v & _FAILED, OUTSIDE, np.where(v == 7, INSIDE, BOUNDARY)).astype(np.uint8)
+    if chain_bits is not None:
+        chain_bits[...] = v & 7
     if half:
         _mirror_fill(out, False)
         if chain_bits is not None:
