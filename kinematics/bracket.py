@@ -415,9 +415,7 @@ def bracket_of(result: object, progress: Reporter | None = None, cancel: CancelT
     r: Any = result
     if r.settings.joints.min_distance > 0.0:
         raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
-    from .workspace import mirror_symmetric
-
     args = kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
     return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel,
                           refine=r.settings.bracket_refine if refine is None else refine,
-                          symmetric=mirror_symmetric(r.design, r.settings))
+                          symmetric=r.settings.symmetry and r.design.mirror_symmetric(r.settings.orientation))

@@ -157,6 +157,12 @@ class Design:
             return (-0.5 * self.eta_s, 0.5 * self.eta_s)
         return (0.0, self.eta_s)
 
+    def mirror_symmetric(self, orientation: tuple[float, float, float]) -> bool:
+        """Whether the workspace at the platform ``orientation`` (ZYX Euler angles, degrees) is
+        symmetric under ``y -> -y`` (chain 1 onto itself, chains 2 and 3 swapped): the centered arc
+        range and zero orientation."""
+        return self.eta_range == "centered" and all(abs(a) == 0.0 for a in orientation)
+
     @property
     def characteristic_length(self) -> float:
         """``L = a / 2`` used to make the Jacobian dimensionally homogeneous (paper, eq. (26))."""

@@ -401,7 +401,7 @@ def _padded_reach_box(design: Design, settings: WorkspaceSettings):
 def mirror_symmetric(design: Design, settings: WorkspaceSettings) -> bool:
     """Whether the workspace is symmetric under ``y -> -y`` and ``settings`` let the engines use it: the
     centered arc range and zero orientation (module docstring)."""
-    return settings.symmetry and design.eta_range == "centered" and all(abs(a) == 0.0 for a in settings.orientation)
+    return settings.symmetry and design.mirror_symmetric(settings.orientation)
 
 
 def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> bool:
