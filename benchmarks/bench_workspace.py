@@ -872,12 +872,11 @@ def bracket_rows(design: Design, runs: int = 3) -> None:
 
     from paraspace.kinematics.bracket import bracket_of, volume_bracket
     from paraspace.kinematics.kernel_args import kernel_args
-    from paraspace.kinematics.workspace import mirror_symmetric
 
     ws = WorkspaceSettings(voxel=2.0)
     res = compute_workspace(design, ws)
     args = kernel_args(design, ws.orientation, res.n_eta, ws.joints)
-    sym = mirror_symmetric(design, ws)
+    sym = ws.mirror_symmetric(design)
 
     def per_child(refine: int):
         return volume_bracket(design, res.grid, args, res.n_eta, ws.z_floor, refine=refine, method="cubes",

@@ -300,7 +300,7 @@ def write_child(b0, bn, b, d, k0, kn, m):
 @njit(parallel=True, cache=True, nogil=True)
 def _advance(b0, bn, state, win, all_chains, out, fail_bit=0):
     """One level's bookkeeping: write the bits of the decided blocks into ``out`` (the chains proven
-    feasible; with ``fail_bit | `` them where a chain failed: the bracket's cubes) and return the
+    feasible, or'ed with ``fail_bit`` where a chain failed: the bracket's outside cubes) and return the
     undecided ones split in eight (as :func:`_split` does; each block's children consecutive, in
     block order), with the chain states and sample windows they inherit.
 

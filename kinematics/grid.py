@@ -51,9 +51,12 @@ class GridSpec:
     def size(self) -> int:
         return int(np.prod(self.shape))
 
-    def is_mirror_symmetric_y(self) -> bool:
-        """Whether the y centres are symmetric about 0 (so ``y -> -y`` maps voxels onto voxels)."""
+    def is_mirror_symmetric_y(self, exact: bool = False) -> bool:
+        """Whether the y centres are symmetric about 0 (so ``y -> -y`` maps voxels onto voxels): to
+        ``1e-9 h``, or bit for bit with ``exact``."""
         ys = self.axes()[1]
+        if exact:
+            return bool(np.array_equal(ys, -ys[::-1]))
         return bool(np.allclose(ys, -ys[::-1], atol=1e-9 * max(1.0, self.h)))
 
     def points(self) -> np.ndarray:

@@ -114,6 +114,11 @@ class WorkspaceSettings:
     def key(self) -> tuple:
         return dataclasses.astuple(self)
 
+    def mirror_symmetric(self, design: Design) -> bool:
+        """Whether ``design``'s workspace at these settings is symmetric under ``y -> -y`` and they let
+        the engines use it (:meth:`Design.mirror_symmetric`, the ``symmetry`` switch)."""
+        return self.symmetry and design.mirror_symmetric(self.orientation)
+
 
 @dataclasses.dataclass
 class WorkspaceResult:
@@ -398,14 +403,8 @@ def _padded_reach_box(design: Design, settings: WorkspaceSettings):
     return (lo[0] - h, lo[1] - h, lo[2] if lo[2] <= settings.z_floor else lo[2] - h), (hi[0] + h, hi[1] + h, hi[2] + h)
 
 
-def mirror_symmetric(design: Design, settings: WorkspaceSettings) -> bool:
-    """Whether the workspace is symmetric under ``y -> -y`` and ``settings`` let the engines use it: the
-    centered arc range and zero orientation (module docstring)."""
-    return settings.symmetry and design.mirror_symmetric(settings.orientation)
-
-
 def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> bool:
-    return mirror_symmetric(design, settings) and grid.is_mirror_symmetric_y()
+    return settings.mirror_symmetric(design) and grid.is_mirror_symmetric_y()
 
 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
@@ -525,7 +524,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
         t1 = time.perf_counter()
         br = volume_bracket(design, grid, kernel_args(design, settings.orientation, n_eta, settings.joints),
                             n_eta, settings.z_floor, cancel=cancel, refine=settings.bracket_refine,
-                            symmetric=mirror_symmetric(design, settings))
+                            symmetric=settings.mirror_symmetric(design))
         result.volume_inner, result.volume_outer = br.volume_inner, br.volume_outer
         result.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
