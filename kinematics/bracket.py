@@ -235,10 +235,17 @@ def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
     if r == 1:
         return win
     out = np.empty_like(win)
-    out[..., 0] = win[..., 0] * r
-    out[..., 1] = np.maximum(win[..., 1] * r - r // 2, 0)
-    out[..., 2] = np.minimum(win[..., 2] * r + r // 2, n - 1)
+    _rescale_kernel(win, r, n, out)
     return out
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _rescale_kernel(win, r, n, out):
+    for b in prange(win.shape[0]):
+        for i in range(3):
+            out[b, i, 0] = win[b, i, 0] * r
+            out[b, i, 1] = max(win[b, i, 1] * r - r // 2, 0)
+            out[b, i, 2] = min(win[b, i, 2] * r + r // 2, n - 1)
 
 
 def _half(grid: GridSpec, symmetric: bool) -> bool:
@@ -247,14 +254,79 @@ def _half(grid: GridSpec, symmetric: bool) -> bool:
     return symmetric and grid.is_mirror_symmetric_y(exact=True)
 
 
-def _mirror_fill(a: np.ndarray, swap_chains: bool) -> None:
-    """Rows ``ny - 1 - j`` of ``a`` (x, y, z) get rows ``j < ny // 2``; with ``swap_chains`` the bits of
-    chains 2 and 3 (1 and 2) are swapped (the mirror maps chain 2 onto chain 3)."""
-    m = a.shape[1] // 2
-    src = a[:, :m][:, ::-1]
-    if swap_chains:
-        src = (src & 1) | ((src & 2) << 1) | ((src & 4) >> 1)
-    a[:, a.shape[1] - m:] = src
+@njit(parallel=True, cache=True, nogil=True)
+def _finish_classes(v, m, out, bits):
+    """``out``: INSIDE / OUTSIDE / BOUNDARY of every cube from ``v`` (the chains proven inside, |
+    ``_FAILED`` where one fails), ``bits``: its chains proven inside; the rows ``y >= ny - m`` take
+    those of their mirror image ``ny - 1 - y`` (*Mirror*; ``m = 0``: no mirror), with the bits of
+    chains 2 and 3 swapped (the mirror maps chain 2 onto chain 3)."""
+    nx, ny, nz = v.shape
+    for x in prange(nx):
+        for y in range(ny):
+            src = ny - 1 - y if y >= ny - m else y
+            for z in range(nz):
+                c = v[x, src, z]
+                b = c & 7
+                if src != y:
+                    b = (b & 1) | ((b & 2) << 1) | ((b & 4) >> 1)
+                bits[x, y, z] = b
+                out[x, y, z] = OUTSIDE if c & _FAILED else (INSIDE if b == 7 else BOUNDARY)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _boundary_cubes(cls, y_end):
+    """``(x, y, z)`` of every BOUNDARY cube with ``y < y_end``, in C order (as ``np.argwhere``)."""
+    nx, ny, nz = cls.shape
+    per_x = np.zeros(nx + 1, np.int64)
+    for x in prange(nx):
+        c = 0
+        for y in range(y_end):
+            for z in range(nz):
+                c += cls[x, y, z] == BOUNDARY
+        per_x[x + 1] = c
+    for x in range(nx):
+        per_x[x + 1] += per_x[x]
+    idx = np.empty((per_x[nx], 3), np.int64)
+    for x in prange(nx):
+        c = per_x[x]
+        for y in range(y_end):
+            for z in range(nz):
+                if cls[x, y, z] == BOUNDARY:
+                    idx[c, 0] = x
+                    idx[c, 1] = y
+                    idx[c, 2] = z
+                    c += 1
+    return idx
+
+
+@njit(cache=True, nogil=True)
+def _tally(out, weight):
+    """Weighted counts ``(inside, outside, boundary)`` of the children ``out`` (child ``8 p + j`` of
+    parent ``p`` weighs ``weight[p]``)."""
+    t = np.zeros(3)
+    for c in range(out.shape[0]):
+        t[out[c]] += weight[c // 8]
+    return t
+
+
+@njit(cache=True, nogil=True)
+def _keep_boundary(out, parents, bits, win, weight, size, offsets, at, c_out, b_out, w_out, wt_out):
+    """Append the BOUNDARY children of ``out`` (child ``8 p + j``: centre ``parents[p] + size *
+    offsets[j]``, its chain bits, windows and its parent's weight) at row ``at`` of the ``*_out``
+    arrays; returns the new row count."""
+    for c in range(out.shape[0]):
+        if out[c] != BOUNDARY:
+            continue
+        p, j = c // 8, c % 8
+        for t in range(3):
+            c_out[at, t] = parents[p, t] + size * offsets[j, t]
+        b_out[at] = bits[c]
+        for i in range(3):
+            for t in range(3):
+                w_out[at, i, t] = win[c, i, t]
+        wt_out[at] = weight[p]
+        at += 1
+    return at
 
 
 def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float,
@@ -287,13 +359,10 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
         level += 1
         if progress is not None:
             progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
-    out = np.where(v & _FAILED, OUTSIDE, np.where(v == 7, INSIDE, BOUNDARY)).astype(np.uint8)
-    if chain_bits is not None:
-        chain_bits[...] = v & 7
-    if half:
-        _mirror_fill(out, False)
-        if chain_bits is not None:
-            _mirror_fill(chain_bits, True)
+    out = np.empty(grid.shape, np.uint8)
+    bits = np.empty(grid.shape, np.uint8) if chain_bits is None else chain_bits
+    with kernel_launch(nx):
+        _finish_classes(v, ny // 2 if half else 0, out, bits)
     return out
 
 
@@ -320,17 +389,16 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     per_parent = method == "parents" and not has_cones(jc)
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
-    idx = np.argwhere(cls == BOUNDARY)
-    weight = np.ones(idx.shape[0])  # cubes each one stands for: 2 for one and its mirror image
-    if _half(grid, symmetric):
-        m = cls.shape[1] // 2
-        idx = idx[idx[:, 1] < cls.shape[1] - m]
-        weight = np.where(idx[:, 1] < m, 2.0, 1.0)
+    half = _half(grid, symmetric)
+    m = cls.shape[1] // 2 if half else 0
+    with kernel_launch(cls.shape[0]):
+        idx = _boundary_cubes(cls, cls.shape[1] - m)
+    weight = np.where(idx[:, 1] < m, 2.0, 1.0)  # cubes each one stands for: 2 for one and its mirror image
     centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
     parent_bits = chain_bits[idx[:, 0], idx[:, 1], idx[:, 2]]
     size = float(grid.h)
     inside = outside = 0.0
-    chunk = 1 << 18
+    chunk = 1 << 15  # parents per kernel call
     parent_win = initial_windows(centres.shape[0], n_eta)  # in the workspace's samples
     fine_before = 1
     for level in range(levels):
@@ -339,49 +407,50 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
         parent_win = _rescale_windows(parent_win, fa.fine // fine_before, fa.cos_t.shape[1])
         fine_before = fa.fine
         last = level == levels - 1  # the last level's boundary children are only counted
-        left, left_bits, left_win, left_weight = [], [], [], []
+        n_par = centres.shape[0]
+        if not last:  # the boundary children, parents of the next level
+            left = np.empty((8 * n_par, 3))
+            left_bits = np.empty(8 * n_par, np.uint8)
+            left_win = np.empty((8 * n_par, 3, 3), np.int64)
+            left_weight = np.empty(8 * n_par)
+        n_kept = 0
         n_left = 0.0
-        for s in range(0, centres.shape[0], chunk // 8):
+        for s in range(0, n_par, chunk):
             check(cancel)
-            n_kids = 8 * min(chunk // 8, centres.shape[0] - s)
-            kids = (np.empty((0, 3)) if per_parent and last else
-                    np.ascontiguousarray((centres[s:s + chunk // 8, None, :] + size * _CHILDREN[None]).reshape(-1, 3)))
+            par = np.ascontiguousarray(centres[s:s + chunk])
+            p_bits = np.ascontiguousarray(parent_bits[s:s + chunk])
+            p_win = np.ascontiguousarray(parent_win[s:s + chunk])
+            n_kids = 8 * par.shape[0]
             out = np.empty(n_kids, np.uint8)
             if per_parent:
                 bits = np.empty(n_kids, np.uint8)
                 win = np.empty((n_kids, 3, 3), np.int64)
-                with kernel_launch(min(chunk // 8, centres.shape[0] - s)):
-                    children_kernel(np.ascontiguousarray(centres[s:s + chunk // 8]),
-                                    np.ascontiguousarray(parent_bits[s:s + chunk // 8]),
-                                    np.ascontiguousarray(parent_win[s:s + chunk // 8]), size, fa.eps, fa.arc_slack,
-                                    float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo,
-                                    rho_hi, lmin, lmax, _CHILDREN, level < levels - 1, out, bits, win)
+                with kernel_launch(par.shape[0]):
+                    children_kernel(par, p_bits, p_win, size, fa.eps, fa.arc_slack, float(z_floor), u, fa.cos_t,
+                                    fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, _CHILDREN,
+                                    not last, out, bits, win)
             else:
-                bits = np.ascontiguousarray(np.repeat(parent_bits[s:s + chunk // 8], 8))
-                win = np.ascontiguousarray(np.repeat(parent_win[s:s + chunk // 8], 8, axis=0))
+                kids = np.ascontiguousarray((par[:, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
+                bits = np.ascontiguousarray(np.repeat(p_bits, 8))
+                win = np.ascontiguousarray(np.repeat(p_win, 8, axis=0))
                 with KERNEL_LOCK:
                     _subcube_kernel(kids, bits, win, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u,
                                     fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
                                     out)
-            kid_weight = np.repeat(weight[s:s + chunk // 8], 8)
-            counts = np.bincount(out, weights=kid_weight, minlength=3)
+            p_weight = np.ascontiguousarray(weight[s:s + chunk])
+            counts = _tally(out, p_weight)
             inside += float(counts[INSIDE]) * size ** 3
             outside += float(counts[OUTSIDE]) * size ** 3
             n_left += float(counts[BOUNDARY])
             if not last:
-                keep = out == BOUNDARY
-                left.append(kids[keep])
-                left_bits.append(bits[keep])
-                left_win.append(win[keep])
-                left_weight.append(kid_weight[keep])
+                n_kept = _keep_boundary(out, par, bits, win, p_weight, size, _CHILDREN, n_kept, left, left_bits,
+                                        left_win, left_weight)
         if progress is not None:
             progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
         if last:
             return inside, outside, round(n_left)
-        centres = np.concatenate(left) if left else np.zeros((0, 3))
-        parent_bits = np.concatenate(left_bits) if left_bits else np.zeros(0, np.uint8)
-        parent_win = np.concatenate(left_win) if left_win else np.zeros((0, 3, 3), np.int64)
-        weight = np.concatenate(left_weight) if left_weight else np.zeros(0)
+        centres, parent_bits = left[:n_kept], left_bits[:n_kept]
+        parent_win, weight = left_win[:n_kept], left_weight[:n_kept]
     return inside, outside, round(float(weight.sum()))
 
 

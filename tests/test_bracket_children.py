@@ -14,6 +14,8 @@ from paraspace.kinematics.blocks import initial_windows
 from paraspace.kinematics.bracket import (
     _CHILDREN,
     BOUNDARY,
+    INSIDE,
+    OUTSIDE,
     _arc,
     _rescale_windows,
     _subcube_kernel,
@@ -162,3 +164,63 @@ def test_the_mirror_half_gives_an_equally_certified_bracket(design, joints):
     assert not _half(off, True)
     assert volume_bracket(design, off, args, res.n_eta, refine=1, symmetric=True) == volume_bracket(
         design, off, args, res.n_eta, refine=1)
+
+
+def _refine_in_numpy(design, grid, args, n_eta, z_floor, cls, bits, levels, half):
+    """refine_boundary's bookkeeping written out in plain numpy (np.argwhere, np.repeat, masks, a
+    weighted sum per class), each child decided on its own by the per-child kernel: the refinement
+    as first written, before its bookkeeping was compiled (and the mirror half weighing 2)."""
+    u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
+    idx = np.argwhere(cls == BOUNDARY)
+    weight = np.ones(idx.shape[0])
+    if half:
+        m = cls.shape[1] // 2
+        idx = idx[idx[:, 1] < cls.shape[1] - m]
+        weight = np.where(idx[:, 1] < m, 2.0, 1.0)
+    centres = np.asarray(grid.origin, dtype=np.float64) + grid.h * idx
+    pbits = bits[idx[:, 0], idx[:, 1], idx[:, 2]]
+    pwin = initial_windows(centres.shape[0], n_eta)
+    size, fine_before, inside, outside = float(grid.h), 1, 0.0, 0.0
+    for _ in range(levels):
+        size *= 0.5
+        fa = _arc(design, grid, args, n_eta, 0.5 * size * math.sqrt(3.0))
+        r, n = fa.fine // fine_before, fa.cos_t.shape[1]
+        fine_before = fa.fine
+        pwin = np.stack([pwin[..., 0] * r, np.maximum(pwin[..., 1] * r - r // 2, 0),
+                         np.minimum(pwin[..., 2] * r + r // 2, n - 1)], axis=-1)
+        kids = np.ascontiguousarray((centres[:, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
+        kb = np.ascontiguousarray(np.repeat(pbits, 8))
+        kw = np.ascontiguousarray(np.repeat(pwin, 8, axis=0))
+        kwt = np.repeat(weight, 8)
+        out = np.empty(kids.shape[0], np.uint8)
+        _subcube_kernel(kids, kb, kw, size, fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u, fa.cos_t,
+                        fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, math.sqrt(lmin2), math.sqrt(lmax2),
+                        jc, out)
+        inside += kwt[out == INSIDE].sum() * size ** 3
+        outside += kwt[out == OUTSIDE].sum() * size ** 3
+        keep = out == BOUNDARY
+        centres, pbits, pwin, weight = kids[keep], kb[keep], kw[keep], kwt[keep]
+    return inside, outside, round(weight.sum())
+
+
+@pytest.mark.parametrize("design, orientation, z_floor, symmetric",
+                         [(Design(), (0.0, 0.0, 0.0), 0.0, True)] + [(*c, False) for c in CASES])
+def test_the_refinement_as_its_bookkeeping_in_plain_numpy(design, orientation, z_floor, symmetric):
+    """refine_boundary (compiled bookkeeping: the boundary cubes listed, children counted by weight,
+    boundary children kept) gives the same inner and outer volumes found and the same children left
+    as the same steps in plain numpy, at 1 to 3 levels, with and without the mirror half."""
+    from paraspace.kinematics.bracket import _half, refine_boundary
+
+    res, args = _setup(design, orientation, 8.0)
+    grid, n_eta = res.grid, res.n_eta
+    bits = np.zeros(grid.shape, np.uint8)
+    cls = cube_classes(design, grid, args, n_eta, z_floor, chain_bits=bits, symmetric=symmetric)
+    assert _half(grid, symmetric) == symmetric
+    for levels in (1, 2, 3):
+        ref = _refine_in_numpy(design, grid, args, n_eta, z_floor, cls, bits, levels, symmetric)
+        for method in ("parents", "cubes"):
+            got = refine_boundary(design, grid, args, n_eta, z_floor, cls, bits, levels, method=method,
+                                  symmetric=symmetric)
+            assert got[2] == ref[2] and got[2] > 0
+            assert got[0] == pytest.approx(ref[0], rel=1e-12) and got[1] == pytest.approx(ref[1], rel=1e-12)
+            assert got[0] > 0 and got[1] > 0
