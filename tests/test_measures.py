@@ -661,6 +661,43 @@ def test_hull_raster_equals_every_facet_at_every_column():
     assert hulls >= 40  # most fields have a hull larger than themselves
 
 
+def test_hull_mask_against_supporting_planes_by_brute_force():
+    """The hull mask (qhull with its input joggled, then the exact lattice raster: kinematics/hull.py)
+    equals the brute-force hull of small random sets: every plane through three of the set's centres
+    with all of them on one side (exact integers) bounds it, and a voxel is in the hull iff its centre
+    is inside every such plane; and equals the exact (unjoggled) hull's every-facet test on designs
+    whose lattice hulls have many coplanar points."""
+    from itertools import combinations
+
+    from paraspace.kinematics import hull as mod
+
+    rng = np.random.default_rng(31)
+    checked = 0
+    while checked < 40:
+        shape = tuple(int(v) for v in rng.integers(2, 7, 3))
+        occ = rng.random(shape) < rng.uniform(0.03, 0.25)
+        pts = np.argwhere(occ).astype(np.int64)
+        if len(pts) < 4 or np.linalg.matrix_rank(pts - pts[0]) < 3:
+            continue
+        idx = np.array(list(combinations(range(len(pts)), 3)))
+        a, b, c = pts[idx[:, 0]], pts[idx[:, 1]], pts[idx[:, 2]]
+        n = np.cross(b - a, c - a)
+        d = np.einsum("ij,ij->i", n, a)
+        side = pts @ n.T - d  # (points, planes)
+        n, d, side = n[np.any(n != 0, axis=1)], d[np.any(n != 0, axis=1)], side[:, np.any(n != 0, axis=1)]
+        flip = np.all(side >= 0, axis=0)
+        keep = flip | np.all(side <= 0, axis=0)
+        n = np.where(flip[:, None], -n, n)[keep]
+        d = np.where(flip, -d, d)[keep]
+        centres = np.argwhere(np.ones(shape, bool))
+        inside = np.all(centres @ n.T <= d, axis=1).reshape(shape)
+        assert np.array_equal(mod.hull_mask(occ), inside), shape
+        checked += 1
+    for design, h in ((Design(d_s=80), 1.0), (Design(), 2.0), (Design(a=10), 1.5)):
+        occ = compute_workspace(design, WorkspaceSettings(voxel=h)).occupancy
+        assert np.array_equal(mod.hull_mask(occ), mod.hull_mask(occ, raster=False))
+
+
 def test_box_contact_and_touched_faces_against_the_face_voxels():
     # |W n B| / |B| and the touched faces from the face voxels listed by their indices (brute force)
     rng = np.random.default_rng(11)
