@@ -235,12 +235,14 @@ def _rescale_windows(win: np.ndarray, r: int, n: int) -> np.ndarray:
     if r == 1:
         return win
     out = np.empty_like(win)
-    _rescale_kernel(win, r, n, out)
+    with kernel_launch(win.shape[0]):
+        _rescale_kernel(win, r, n, out)
     return out
 
 
 @njit(parallel=True, cache=True, nogil=True)
 def _rescale_kernel(win, r, n, out):
+    """:func:`_rescale_windows` of every block's three windows into ``out``."""
     for b in prange(win.shape[0]):
         for i in range(3):
             out[b, i, 0] = win[b, i, 0] * r
