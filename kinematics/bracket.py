@@ -27,7 +27,9 @@ apart (both stroke ends are samples, so every arc angle is within ``Delta_eta / 
   stroke, so it also rejects a sub-arc between two samples (relaxed by ``delta`` alone): the samples
   of a rejected sub-arc need no test, and a cube is outside when every sub-arc is rejected or every
   sample of the others fails the relaxed test above.
-* a block is split while undecided; a single cube left undecided is a **boundary** cube.
+* a block is split while undecided; a single cube left undecided is a **boundary** cube (the 8 cubes
+  of an undecided block of 2 x 2 x 2 are decided together, by the refinement's per-parent step on
+  their own centres: :func:`_cubes_by_parent`; the same decisions as one by one).
 
 A cube is inside ``W`` when all three chains are inside, outside when one chain is outside.
 Then ``N_in h^3 <= V <= (N_in + N_boundary) h^3`` for the part of ``W`` in the grid box (the
@@ -70,6 +72,7 @@ from numba import njit, prange
 
 from .blocks import (
     FAIL,
+    OK,
     TOP_BLOCK,
     UNKNOWN,
     _advance,
@@ -331,17 +334,70 @@ def _keep_boundary(out, parents, bits, win, weight, size, offsets, at, c_out, b_
     return at
 
 
+#: The eight child-cube offsets (in units of the child's edge) from a cube's centre.
+_CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) for dz in (-0.5, 0.5)])
+#: :func:`kinematics.bracket_children.children_kernel`'s ``centres`` when the children are parent + offset.
+_NO_CENTRES = np.zeros((0, 3))
+#: Parents per launch of :func:`kinematics.bracket_children.children_kernel`.
+_PARENTS_PER_CALL = 1 << 15
+
+
+def _cubes_by_parent(b0: np.ndarray, bn: np.ndarray, state: np.ndarray, win: np.ndarray, axes: tuple,
+                     h: float, fa: _Arc, z_floor: float, args: KernelArgs, v: np.ndarray,
+                     cancel: CancelToken) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Decide the 8 cubes of every undecided block of 2 x 2 x 2 cubes together (the refinement's
+    per-parent step, :mod:`kinematics.bracket_children`, on the grid's own centres), writing their
+    chains proven inside, ``| _FAILED`` where one fails, into ``v``; return the other blocks. Each
+    cube gets the decision (and chain bits) that :func:`_cube_kernel` gives it as a single cube after
+    :func:`kinematics.blocks._advance` splits its block: the same centre, half-diagonal, window and
+    inherited chains (``_subcube_kernel``'s test, which the per-parent step reproduces)."""
+    u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = args
+    sel = (np.all(bn == 2, axis=1) & ~np.any(state == FAIL, axis=1) & np.any(state == UNKNOWN, axis=1))
+    if not sel.any():
+        return b0, bn, state, win
+    xs, ys, zs = axes
+    pb0 = b0[sel]
+    pbits = ((state[sel] == OK) * np.array([1, 2, 4])).sum(axis=1).astype(np.uint8)
+    pwin = np.ascontiguousarray(win[sel])
+    parents = np.stack([0.5 * (xs[pb0[:, 0]] + xs[pb0[:, 0] + 1]), 0.5 * (ys[pb0[:, 1]] + ys[pb0[:, 1] + 1]),
+                        0.5 * (zs[pb0[:, 2]] + zs[pb0[:, 2] + 1])], axis=1)
+    step = (_CHILDREN > 0).astype(np.int64)  # child j's cube: the block's lower corner + step[j]
+    ix, iy, iz = (pb0[:, None, a] + step[None, :, a] for a in range(3))  # (N, 8) each
+    for s in range(0, parents.shape[0], _PARENTS_PER_CALL):
+        check(cancel)
+        e = min(s + _PARENTS_PER_CALL, parents.shape[0])
+        gx, gy, gz = ix[s:e].ravel(), iy[s:e].ravel(), iz[s:e].ravel()
+        centres = np.ascontiguousarray(np.stack([xs[gx], ys[gy], zs[gz]], axis=1))
+        n_kids = 8 * (e - s)
+        out = np.empty(n_kids, np.uint8)
+        kbits = np.empty(n_kids, np.uint8)
+        kwin = np.empty((n_kids, 3, 3), np.int64)
+        with kernel_launch(e - s):
+            children_kernel(np.ascontiguousarray(parents[s:e]), np.ascontiguousarray(pbits[s:e]), pwin[s:e], float(h),
+                            fa.eps, fa.arc_slack, float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc,
+                            hb, rho_lo, rho_hi, math.sqrt(lmin2), math.sqrt(lmax2), _CHILDREN, False, out, kbits,
+                            kwin, centres)
+        v[gx, gy, gz] = kbits | np.where(out == OUTSIDE, _FAILED, 0).astype(np.uint8)
+    keep = ~sel
+    return b0[keep], bn[keep], state[keep], win[keep]
+
+
 def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float,
                  progress: Reporter | None = None, cancel: CancelToken = None,
-                 chain_bits: np.ndarray | None = None, symmetric: bool = False) -> np.ndarray:
+                 chain_bits: np.ndarray | None = None, symmetric: bool = False,
+                 per_parent: bool = True) -> np.ndarray:
     """INSIDE / OUTSIDE / BOUNDARY for every cube of ``grid`` (uint8 array of the grid's shape);
     ``chain_bits`` (uint8, the grid's shape), when given, receives the chains proven inside per cube.
-    ``symmetric``: the workspace is symmetric under ``y -> -y`` (module docstring, *Mirror*)."""
+    ``symmetric``: the workspace is symmetric under ``y -> -y`` (module docstring, *Mirror*).
+    ``per_parent`` (default; without joint cones): the 8 cubes of an undecided block of 2 x 2 x 2 are
+    decided together (:func:`_cubes_by_parent`); ``False``: each on its own. The same classes and
+    chain bits (tested)."""
     u, _, _, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc = args
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     fa = _arc(design, grid, args, n_eta, 0.5 * grid.h * math.sqrt(3.0))
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in grid.axes())
     v = np.zeros(grid.shape, np.uint8)  # per cube: the chains proven inside, | _FAILED where one fails
+    by_parent = per_parent and not has_cones(jc)
     half = _half(grid, symmetric)
     nx, ny, nz = grid.shape
     b0, bn = _top_blocks((nx, ny - ny // 2 if half else ny, nz), TOP_BLOCK)
@@ -356,6 +412,9 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
                 _cube_kernel(b0[s:s + 65536], bn[s:s + 65536], state[s:s + 65536], win[s:s + 65536], xs, ys, zs,
                              float(grid.h), fa.eps, fa.arc_slack, fa.cone_slack, float(z_floor), u, fa.cos_t,
                              fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc)
+        if by_parent:
+            b0, bn, state, win = _cubes_by_parent(b0, bn, state, win, (xs, ys, zs), grid.h, fa, z_floor, args, v,
+                                                  cancel)
         with kernel_launch(b0.shape[0]):  # decided blocks and single cubes written, the others split
             b0, bn, state, win = _advance(b0, bn, state, win, False, v, _FAILED)
         level += 1
@@ -366,10 +425,6 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
     with kernel_launch(nx):
         _finish_classes(v, ny // 2 if half else 0, out, bits)
     return out
-
-
-#: The eight child-cube offsets (in units of the child's edge) from a cube's centre.
-_CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) for dz in (-0.5, 0.5)])
 
 
 def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z_floor: float, cls: np.ndarray,
@@ -430,7 +485,7 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                 with kernel_launch(par.shape[0]):
                     children_kernel(par, p_bits, p_win, size, fa.eps, fa.arc_slack, float(z_floor), u, fa.cos_t,
                                     fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, _CHILDREN,
-                                    not last, out, bits, win)
+                                    not last, out, bits, win, _NO_CENTRES)
             else:
                 kids = np.ascontiguousarray((par[:, None, :] + size * _CHILDREN[None]).reshape(-1, 3))
                 bits = np.ascontiguousarray(np.repeat(p_bits, 8))

@@ -310,9 +310,10 @@ def _sample_lists(flags, klo, khi, lists, counts):
 @njit(parallel=True, cache=True, nogil=True)
 def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
                     u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, offsets, need_window,
-                    out, kbits, kwin):
+                    out, kbits, kwin, centres):
     """INSIDE / OUTSIDE / BOUNDARY of the 8 children (edge ``size``, centres ``parent + size *
-    offsets[j]``) of each parent cube (``parents`` (N, 3)): child ``8 p + j`` in ``out``, its chains
+    offsets[j]``, or ``centres[8 p + j]`` where ``centres`` is not empty: the same points as given by a
+    grid's axes) of each parent cube (``parents`` (N, 3)): child ``8 p + j`` in ``out``, its chains
     proven inside in ``kbits`` (the parent's ``pbits`` and those it proves) and its windows in
     ``kwin`` (from the parent's ``pwin``, updated where ``need_window``) -- as
     :func:`kinematics.bracket._subcube_kernel` on the same children, with the parent's sample flags
@@ -334,9 +335,12 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
         seg_state = np.zeros(seg_k.shape[0], np.int8)
         for j in range(8):
             c = 8 * p + j
-            px = parents[p, 0] + size * offsets[j, 0]
-            py = parents[p, 1] + size * offsets[j, 1]
-            pz = parents[p, 2] + size * offsets[j, 2]
+            if centres.shape[0] > 0:
+                px, py, pz = centres[c, 0], centres[c, 1], centres[c, 2]
+            else:
+                px = parents[p, 0] + size * offsets[j, 0]
+                py = parents[p, 1] + size * offsets[j, 1]
+                pz = parents[p, 2] + size * offsets[j, 2]
             below = pz - 0.5 * size < zfloor - eps
             kbits[c] = pbits[p]
             for i in range(3):

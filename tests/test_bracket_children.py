@@ -70,7 +70,7 @@ def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
         need_window = level < levels - 1
         children_kernel(np.ascontiguousarray(centres), pbits, np.ascontiguousarray(pwin), size, fa.eps, fa.arc_slack,
                         z_floor, u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi,
-                        lmin, lmax, _CHILDREN, need_window, out, kb, kw)
+                        lmin, lmax, _CHILDREN, need_window, out, kb, kw, np.zeros((0, 3)))
         assert {0, 1, 2} <= set(np.unique(ref).tolist())
         np.testing.assert_array_equal(out, ref)
         left = ref == BOUNDARY
@@ -224,3 +224,37 @@ def test_the_refinement_as_its_bookkeeping_in_plain_numpy(design, orientation, z
             assert got[2] == ref[2] and got[2] > 0
             assert got[0] == pytest.approx(ref[0], rel=1e-12) and got[1] == pytest.approx(ref[1], rel=1e-12)
             assert got[0] > 0 and got[1] > 0
+
+
+@pytest.mark.parametrize("design, orientation, z_floor, symmetric",
+                         [(Design(), (0.0, 0.0, 0.0), 0.0, True)] + [(*c, False) for c in CASES])
+def test_cube_classes_by_parent_as_each_cube_alone(design, orientation, z_floor, symmetric):
+    """cube_classes deciding the 8 cubes of each undecided 2 x 2 x 2 block together (the default)
+    gives every cube the class and chain bits it gets on its own after its block is split (the path
+    before), at two voxel sizes; more than 50 blocks of 8 cubes took the per-parent path."""
+    from paraspace.kinematics import bracket as mod
+
+    seen: list[int] = []
+    real = mod._cubes_by_parent
+
+    def spy(b0, bn, state, *rest):
+        seen.append(int((np.all(bn == 2, axis=1) & np.any(state == 0, axis=1) & ~np.any(state == 2, axis=1)).sum()))
+        return real(b0, bn, state, *rest)
+
+    for voxel in (8.0, 5.0):
+        res, args = _setup(design, orientation, voxel)
+        grid, n_eta = res.grid, res.n_eta
+        seen.clear()
+        mod._cubes_by_parent = spy
+        try:
+            bits = np.zeros(grid.shape, np.uint8)
+            cls = cube_classes(design, grid, args, n_eta, z_floor, chain_bits=bits, symmetric=symmetric)
+        finally:
+            mod._cubes_by_parent = real
+        ref_bits = np.zeros(grid.shape, np.uint8)
+        ref = cube_classes(design, grid, args, n_eta, z_floor, chain_bits=ref_bits, symmetric=symmetric,
+                           per_parent=False)
+        np.testing.assert_array_equal(cls, ref)
+        np.testing.assert_array_equal(bits, ref_bits)
+        assert {0, 1, 2} <= set(np.unique(cls).tolist())
+        assert sum(seen) > 50  # blocks of 8 cubes took the per-parent path
