@@ -362,11 +362,10 @@ def _cubes_by_parent(b0: np.ndarray, bn: np.ndarray, state: np.ndarray, win: np.
     parents = np.stack([0.5 * (xs[pb0[:, 0]] + xs[pb0[:, 0] + 1]), 0.5 * (ys[pb0[:, 1]] + ys[pb0[:, 1] + 1]),
                         0.5 * (zs[pb0[:, 2]] + zs[pb0[:, 2] + 1])], axis=1)
     step = (_CHILDREN > 0).astype(np.int64)  # child j's cube: the block's lower corner + step[j]
-    ix, iy, iz = (pb0[:, None, a] + step[None, :, a] for a in range(3))  # (N, 8) each
     for s in range(0, parents.shape[0], _PARENTS_PER_CALL):
         check(cancel)
         e = min(s + _PARENTS_PER_CALL, parents.shape[0])
-        gx, gy, gz = ix[s:e].ravel(), iy[s:e].ravel(), iz[s:e].ravel()
+        gx, gy, gz = ((pb0[s:e, None, a] + step[None, :, a]).ravel() for a in range(3))
         centres = np.ascontiguousarray(np.stack([xs[gx], ys[gy], zs[gz]], axis=1))
         n_kids = 8 * (e - s)
         out = np.empty(n_kids, np.uint8)
