@@ -45,7 +45,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .feasibility import _chain_excluded, _feasible_at, chain_points
+from .feasibility import _feasible_at, chain_excluded_at, chain_points, sub_arc_excluded_at
 from .parallel import KERNEL_LOCK, kernel_launch
 from .progress import CancelToken, Reporter, check
 
@@ -58,9 +58,17 @@ UNKNOWN, OK, FAIL = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
-def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo, hi):
-    """False when the whole-arc bound rejects the chain over one sub-arc with limits ``[lo, hi]``."""
-    return not _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, rho_lo, rho_hi, lo * lo, hi * hi)
+def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo, hi):
+    """False when the whole-arc bound rejects chain ``i`` over its sub-arc ``g`` (``seg_arc[i, g]``)
+    with limits ``[lo, hi]``."""
+    return not sub_arc_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo * lo, hi * hi)
+
+
+@njit(cache=True, inline="always")
+def _stroke_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo, hi):
+    """False when the whole-arc bound rejects chain ``i`` over its whole stroke (``arc[i]``) with
+    limits ``[lo, hi]``."""
+    return not chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo * lo, hi * hi)
 
 
 @njit(cache=True, inline="always")
@@ -106,7 +114,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     lo_b = max(lmin - e_bound, 0.0)
     hi_b = lmax + e_bound
     narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]  # fewer samples than a sub-arc: no bound is worth it
-    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    if not narrow and not _stroke_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo_b, hi_b):
         return FAIL
     n_seg = seg_k.shape[0]
     g_lo = 0
@@ -127,7 +135,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             if off > n_seg:
                 break
             continue
-        if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi,
+        if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi,
                                             lo_b, hi_b):
             continue
         for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):

@@ -44,7 +44,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .blocks import FAIL, OK, UNKNOWN, _segment_open
+from .blocks import FAIL, OK, UNKNOWN, _segment_open, _stroke_open
 from .feasibility import chain_points
 
 __all__ = ["children_kernel", "has_cones"]
@@ -118,26 +118,26 @@ def _limits2(lo, hi):
 
 
 @njit(cache=True, inline="always")
-def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b, klo, flags):
-    """The three tests of every sample ``a..b`` (no branch: SIMD lanes); an empty limit pair
-    (``lo2 > hi2``) never passes."""
+def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b, klo,
+              flags):
+    """The three tests of every sample ``a..b`` of chain ``i``, into ``flags[i]`` (no branch: SIMD lanes); an
+    empty limit pair (``lo2 > hi2``) never passes."""
     for k in range(a, b + 1):
-        p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, ci[k], si[k], hb)
+        p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb)
         f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
         f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
         fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
-        flags[k - klo] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
+        flags[i, k - klo] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
 
 
 @njit(cache=True, nogil=True)
 def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x,
                   flags):
-    """``flags[k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
+    """``flags[i, k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
     (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
     (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there;
     the samples of the other sub-arcs are tested in runs, all three tests each."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    ci, si = cos_t[i], sin_t[i]
     l1, h1 = _limits2(lmin - r1, lmax + r1)
     l0, h0 = _limits2(lmin - r0, lmax + r0)
     lx, hx = _limits2(lmin + x, lmax - x)
@@ -147,17 +147,17 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
         a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
         if b < a or b <= done:
             continue
-        if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g], rho_lo, rho_hi, lo1, hi1):
+        if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo1, hi1):
             for k in range(a, b + 1):
-                flags[k - klo] = 0
+                flags[i, k - klo] = 0
         else:
-            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, ci, si, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx,
+            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx,
                       max(a, done + 1), b, klo, flags)
         done = b
 
 
 @njit(cache=True, inline="always")
-def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i, rho_lo, rho_hi, lo_b, hi_b):
+def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi, lo_b, hi_b):
     """Whether :func:`kinematics.blocks.decide_chain` visits sample ``k`` of the window: always when
     ``narrow``, else when a sub-arc holding it is open (its bound computed once, cached in
     ``seg_state``: 0 not yet, 1 open, 2 rejected)."""
@@ -169,7 +169,7 @@ def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_
     for g in range(max(g1 - 1, 0), min(g1 + 1, n_seg - 1) + 1):
         if seg_k[g, 0] <= k <= seg_k[g, 1]:
             if seg_state[g] == 0:
-                seg_state[g] = 1 if _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc_i[g], rho_lo, rho_hi,
+                seg_state[g] = 1 if _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi,
                                                   lo_b, hi_b) else 2
             if seg_state[g] == 1:
                 return True
@@ -178,7 +178,7 @@ def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_
 
 @njit(cache=True, inline="always")
 def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
-                 e_bound, e_relax, e_tight, can_ok, win, flags, flo, lists, counts, seg_state, need_window):
+                 e_bound, e_relax, e_tight, can_ok, kwin, c, flags, flo, lists, counts, seg_state, need_window):
     """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
     its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
@@ -193,9 +193,9 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     the same order as a scan that skips the samples without the flag."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     n = cos_t.shape[1]
-    klo = max(win[1], 0)
-    khi = min(win[2], n - 1)
-    hint = win[0]
+    klo = max(kwin[c, i, 1], 0)
+    khi = min(kwin[c, i, 2], n - 1)
+    hint = kwin[c, i, 0]
     if hint < klo or hint > khi:
         hint = (klo + khi) // 2
     lo_r = max(lmin - e_relax, 0.0)
@@ -207,104 +207,104 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     if klo > khi:
         return FAIL
-    n_x, n_r0, n_r1 = counts[0], counts[1], counts[2]
+    n_x, n_r0, n_r1 = counts[i, 0], counts[i, 1], counts[i, 2]
     if n_r0 + n_r1 == 0:  # no sample can pass the relaxed test (R0 and X imply R1), nor the tight one
         return FAIL
     if can_ok:
-        if flags[hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
-                                            rho_lo, rho_hi, lo_t2, hi_t2):
-            win[0] = hint
+        if flags[i, hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
+                                               rho_lo, rho_hi, lo_t2, hi_t2):
+            kwin[c, i, 0] = hint
             return OK
         for t in range(n_x):
-            k = lists[0, t]
+            k = lists[i, 0, t]
             if k == hint:
                 continue
             # both tests must pass (as in decide_chain): the tight one first, it fails more often
             if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2, hi_t2):
-                if flags[k - flo] & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
+                if flags[i, k - flo] & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
                                                  rho_hi, lo_r2, hi_r2):
-                    win[0] = k
+                    kwin[c, i, 0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
     hi_b = lmax + e_bound
     narrow = khi - klo < seg_k[0, 1] - seg_k[0, 0]
-    if not narrow and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lo_b, hi_b):
+    if not narrow and not _stroke_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo_b, hi_b):
         return FAIL
     for g in range(seg_k.shape[0]):
         seg_state[g] = 0
     # visited samples with R0 pass the relaxed test untested: the lowest and highest of them first
     r0_lo = -1
     for t in range(n_r0):
-        k = lists[1, t]
-        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+        k = lists[i, 1, t]
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                     lo_b, hi_b):
             r0_lo = k
             break
     if r0_lo >= 0 and (not can_ok or not need_window):
-        win[0] = r0_lo
+        kwin[c, i, 0] = r0_lo
         return UNKNOWN
     # the first visited sample (from below) that passes the relaxed test: only below r0_lo
     p_lo = r0_lo
     for t in range(n_r1):
-        k = lists[2, t]
+        k = lists[i, 2, t]
         if r0_lo >= 0 and k >= r0_lo:
             break
         if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
-            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
                 break
     if p_lo < 0:
         return FAIL
     if not can_ok:
-        win[0] = p_lo
+        kwin[c, i, 0] = p_lo
         return UNKNOWN
     if not need_window:
         return UNKNOWN
     r0_hi = -1
     for t in range(n_r0 - 1, -1, -1):
-        k = lists[1, t]
+        k = lists[i, 1, t]
         if k <= p_lo:
             break
-        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+        if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                     lo_b, hi_b):
             r0_hi = k
             break
     p_hi = max(p_lo, r0_hi)
     for t in range(n_r1 - 1, -1, -1):
-        k = lists[2, t]
+        k = lists[i, 2, t]
         if k <= p_hi:
             break
         if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
-            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i], rho_lo, rho_hi,
+            if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k
                 break
-    win[0] = min(max(hint, p_lo), p_hi)
-    win[1] = p_lo
-    win[2] = p_hi
+    kwin[c, i, 0] = min(max(hint, p_lo), p_hi)
+    kwin[c, i, 1] = p_lo
+    kwin[c, i, 2] = p_hi
     return UNKNOWN
 
 
 @njit(cache=True, inline="always")
-def _sample_lists(flags, klo, khi, lists, counts):
+def _sample_lists(flags, i, klo, khi, lists, counts):
     """The samples ``klo..khi`` by their flags (:func:`_child_chain`): ``lists[0]`` those with ``X``,
     ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending."""
     n_x = n_r0 = n_r1 = 0
     for k in range(klo, khi + 1):
-        f = flags[k - klo]
+        f = flags[i, k - klo]
         if f & _X:
-            lists[0, n_x] = k
+            lists[i, 0, n_x] = k
             n_x += 1
         if f & _R0:
-            lists[1, n_r0] = k
+            lists[i, 1, n_r0] = k
             n_r0 += 1
         elif f & _R1:
-            lists[2, n_r1] = k
+            lists[i, 2, n_r1] = k
             n_r1 += 1
-    counts[0] = n_x
-    counts[1] = n_r0
-    counts[2] = n_r1
+    counts[i, 0] = n_x
+    counts[i, 1] = n_r0
+    counts[i, 2] = n_r1
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -356,12 +356,12 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
                     flo[i] = klo
                     if klo <= khi:
                         _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
-                                      seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags[i])
-                        _sample_lists(flags[i], klo, khi, lists[i], counts[i])
+                                      seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags)
+                        _sample_lists(flags, i, klo, khi, lists, counts)
                     done[i] = True
                 st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
-                                  lmax, delta + eps, e_relax, e_tight, not below, kwin[c, i], flags[i], flo[i],
-                                  lists[i], counts[i], seg_state, need_window)
+                                  lmax, delta + eps, e_relax, e_tight, not below, kwin, c, flags, flo[i], lists,
+                                  counts, seg_state, need_window)
                 if st == FAIL:
                     cls = OUTSIDE
                     break

@@ -220,15 +220,15 @@ def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
 
 
 @njit(cache=True, inline="always")
-def _in_arc(wx, wy, arc):
+def _in_arc(wx, wy, c0, s0, c1, s1, cm, sm):
     """Whether the direction ``w`` lies in the stroke's arc ``[v0, v1]`` (at most a half-turn):
-    ``arc = (cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)``, ``vm`` the arc's bisector."""
-    return (arc[0] * wy - arc[1] * wx >= 0.0 and wx * arc[3] - wy * arc[2] >= 0.0
-            and wx * arc[4] + wy * arc[5] >= 0.0)
+    ``(c0, s0, c1, s1, cm, sm) = (cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)``, ``vm`` the arc's
+    bisector."""
+    return c0 * wy - s0 * wx >= 0.0 and wx * s1 - wy * c1 >= 0.0 and wx * cm + wy * sm >= 0.0
 
 
 @njit(cache=True)
-def _leg_excluded(bx, by, bz, sigma_hb, arc, rho_lo, rho_hi, lmin2, lmax2):
+def _leg_excluded(bx, by, bz, sigma_hb, c0, s0, c1, s1, cm, sm, rho_lo, rho_hi, lmin2, lmax2):
     """Conservative rho-set of one leg over the whole arc stroke ``varpi in [v0, v1]``.
 
     ``p = B . e(varpi)`` and ``B . t(varpi)`` are ``|B_xy|`` times the cosine and sine of ``beta -
@@ -238,23 +238,27 @@ def _leg_excluded(bx, by, bz, sigma_hb, arc, rho_lo, rho_hi, lmin2, lmax2):
     Returns (empty, lo, hi, gap_lo, gap_hi): the leg's feasible rho for ANY varpi in the stroke lie in
     ``[lo, hi]`` minus the open gap ``(gap_lo, gap_hi)``.
     """
-    pa = bx * arc[2] + by * arc[3]  # |B| cos(beta - v1)
-    pb = bx * arc[0] + by * arc[1]  # |B| cos(beta - v0)
-    sa = by * arc[2] - bx * arc[3]  # |B| sin(beta - v1)
-    sb = by * arc[0] - bx * arc[1]
+    pa = bx * c1 + by * s1  # |B| cos(beta - v1)
+    pb = bx * c0 + by * s0  # |B| cos(beta - v0)
+    sa = by * c1 - bx * s1  # |B| sin(beta - v1)
+    sb = by * c0 - bx * s0
     p_hi = max(pa, pb)
     p_lo = min(pa, pb)
     s_hi = max(sa, sb)
     s_lo = min(sa, sb)
-    if _in_arc(bx, by, arc) or _in_arc(-bx, -by, arc) or _in_arc(by, -bx, arc) or _in_arc(-by, bx, arc):
+    at_p = _in_arc(bx, by, c0, s0, c1, s1, cm, sm)
+    at_m = _in_arc(-bx, -by, c0, s0, c1, s1, cm, sm)
+    at_s = _in_arc(by, -bx, c0, s0, c1, s1, cm, sm)
+    at_t = _in_arc(-by, bx, c0, s0, c1, s1, cm, sm)
+    if at_p or at_m or at_s or at_t:
         rb = math.sqrt(bx * bx + by * by)
-        if _in_arc(bx, by, arc):
+        if at_p:
             p_hi = rb
-        if _in_arc(-bx, -by, arc):
+        if at_m:
             p_lo = -rb
-        if _in_arc(by, -bx, arc):
+        if at_s:
             s_hi = rb
-        if _in_arc(-by, bx, arc):
+        if at_t:
             s_lo = -rb
     m_lo, m_hi = s_lo - sigma_hb, s_hi - sigma_hb
     if m_lo <= 0.0 <= m_hi:
@@ -282,11 +286,37 @@ def _leg_excluded(bx, by, bz, sigma_hb, arc, rho_lo, rho_hi, lmin2, lmax2):
 @njit(cache=True)
 def _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, rho_lo, rho_hi, lmin2, lmax2):
     """Conservative whole-stroke rejection: True only if no carriage pose can serve the chain (the
-    joint cones only shrink the feasible set, so the bound without them stays conservative)."""
-    e1, lo1, hi1, g1lo, g1hi = _leg_excluded(b1x, b1y, b1z, hb, arc, rho_lo, rho_hi, lmin2, lmax2)
+    joint cones only shrink the feasible set, so the bound without them stays conservative).
+    ``arc``: the stroke's 6 numbers (:func:`_in_arc`)."""
+    return _excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[0], arc[1], arc[2], arc[3], arc[4], arc[5], rho_lo,
+                     rho_hi, lmin2, lmax2)
+
+
+@njit(cache=True, inline="always")
+def chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arcs, i, rho_lo, rho_hi, lmin2, lmax2):
+    """:func:`_chain_excluded` over the stroke ``arcs[i]`` (``arcs`` (m, 6)), read in place: no view
+    of the table is made (in a parallel loop each view costs two atomic reference counts on the
+    table that every thread shares)."""
+    return _excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arcs[i, 0], arcs[i, 1], arcs[i, 2], arcs[i, 3], arcs[i, 4],
+                     arcs[i, 5], rho_lo, rho_hi, lmin2, lmax2)
+
+
+@njit(cache=True, inline="always")
+def sub_arc_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lmin2, lmax2):
+    """:func:`_chain_excluded` over the sub-arc ``seg_arc[i, g]`` (``seg_arc`` (3, m, 6)), read in
+    place (:func:`chain_excluded_at`)."""
+    return _excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc[i, g, 0], seg_arc[i, g, 1], seg_arc[i, g, 2],
+                     seg_arc[i, g, 3], seg_arc[i, g, 4], seg_arc[i, g, 5], rho_lo, rho_hi, lmin2, lmax2)
+
+
+@njit(cache=True)
+def _excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, c0, s0, c1, s1, cm, sm, rho_lo, rho_hi, lmin2, lmax2):
+    """:func:`_chain_excluded` for the stroke given by its 6 numbers."""
+    e1, lo1, hi1, g1lo, g1hi = _leg_excluded(b1x, b1y, b1z, hb, c0, s0, c1, s1, cm, sm, rho_lo, rho_hi, lmin2, lmax2)
     if e1:
         return True
-    e2, lo2, hi2, g2lo, g2hi = _leg_excluded(b2x, b2y, b2z, -hb, arc, rho_lo, rho_hi, lmin2, lmax2)
+    e2, lo2, hi2, g2lo, g2hi = _leg_excluded(b2x, b2y, b2z, -hb, c0, s0, c1, s1, cm, sm, rho_lo, rho_hi, lmin2,
+                                             lmax2)
     if e2:
         return True
     lo, hi = max(lo1, lo2), min(hi1, hi2)

@@ -79,7 +79,7 @@ def test_whole_stroke_bound_without_atan2_matches_the_polar_form():
                 bx, by = rng.uniform(-250, 250, 2)
                 bz = rng.uniform(0, 200)
                 lims = (tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2)
-                new = _leg_excluded(bx, by, bz, 7.0, tab.arc[i], *lims)
+                new = _leg_excluded(bx, by, bz, 7.0, *tab.arc[i], *lims)
                 old = _ref_leg_excluded(bx, by, bz, 7.0, v0, v1, *lims)
                 assert new[0] == old[0]
                 if not new[0]:
