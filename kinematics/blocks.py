@@ -90,6 +90,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     (:func:`sub_arcs`), visited outward from the hint's. ``can_ok = False`` skips the OK test. With
     ``e_relax = e_tight = 0`` this is the exact test at P (one evaluation per sample)."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    jci = jc[i]  # one view per call, not one per sample (each view costs two atomic reference counts)
     n = cos_t.shape[1]
     klo = max(win[1], 0)
     khi = min(win[2], n - 1)
@@ -108,7 +109,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return FAIL
     # the hint first: it usually serves the whole block
     if can_ok and _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb, rho_lo, rho_hi,
-                               lo_t2, hi_t2, jc[i], -e_tight):
+                               lo_t2, hi_t2, jci, -e_tight):
         win[0] = hint
         return OK
     lo_b = max(lmin - e_bound, 0.0)
@@ -140,7 +141,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             continue
         for k in range(max(seg_k[g, 0], klo), min(seg_k[g, 1], khi) + 1):
             if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                            jc[i], cone_relax):
+                            jci, cone_relax):
                 if exact:
                     win[0] = k
                     return OK if can_ok else UNKNOWN
@@ -148,7 +149,7 @@ def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
                     win[0] = k
                     return UNKNOWN
                 if _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi,
-                                lo_t2, hi_t2, jc[i], -e_tight):
+                                lo_t2, hi_t2, jci, -e_tight):
                     win[0] = k
                     return OK
                 p_lo = min(p_lo, k)
