@@ -103,8 +103,17 @@ def _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
 @njit(cache=True, inline="always")
 def _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
     """:func:`kinematics.feasibility._feasible_at` without cones (the same answer: :func:`_passes`),
-    for the squared leg limits ``lo2 <= hi2``, inlined."""
+    for the squared leg limits ``lo2 <= hi2``, inlined. One test at a time (the children's), so it
+    first answers the cheap cases with branches: a leg longer than the outer limit at every ``rho``,
+    or the two legs' outer intervals (without their inner gaps) not meeting on the rail -- then no
+    pair of their parts meets either, and :func:`_passes` is False too."""
     p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
+    if q1 > hi2 or q2 > hi2:
+        return False
+    ro1 = math.sqrt(hi2 - q1)
+    ro2 = math.sqrt(hi2 - q2)
+    if _mx(_mx(p1 - ro1, p2 - ro2), rho_lo) > _mn(_mn(p1 + ro1, p2 + ro2), rho_hi):
+        return False
     return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
 
 

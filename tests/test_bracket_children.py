@@ -124,6 +124,41 @@ def test_branch_free_parent_test_as_the_interval_test():
         assert bool(_passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)) == ref, (p1, q1, p2, q2)
 
 
+def test_the_childrens_test_with_early_exits_as_the_exact_test():
+    """The children's one-at-a-time test (bracket_children._test: a leg too long at every rho, or
+    the legs' outer intervals apart on the rail, answered before the full test) answers as the
+    engine's exact test (feasibility._feasible_at, no joint cones): random poses, and poses whose
+    outer intervals touch exactly (one common rho), end at the rail's ends, or miss by a hair."""
+    from paraspace.kinematics.bracket_children import _test
+    from paraspace.kinematics.feasibility import _feasible_at
+
+    jc = kernel_args(Design(), (0.0, 0.0, 0.0), 11)[9][0]  # no joint cones
+    hb, rho_lo, rho_hi = 12.0, -40.0, 60.0
+    rng = np.random.default_rng(11)
+    cases = []
+    for _ in range(30000):
+        b = rng.uniform(-150.0, 150.0, 6)
+        th = rng.uniform(-1.0, 1.0)
+        lo, hi = sorted(rng.uniform(0.0, 180.0, 2))
+        cases.append((*b, math.cos(th), math.sin(th), lo * lo, hi * hi))
+    # exact edges with c = 1, s = 0 and b_y = +-hb: p = b_x, q = b_z^2; q = 120^2, hi = 130: ro = 50
+    for p1, gap in [(0.0, 100.0), (0.0, 100.0 + 1e-9), (-90.0, 100.0), (10.0, 100.0), (-140.0, 100.0),
+                    (0.0, 0.0), (60.0, -100.0), (60.0, -100.0 - 1e-9)]:
+        for lo2 in (0.0, 110.0 ** 2, 125.0 ** 2):
+            cases.append((p1, hb, 120.0, p1 + gap, -hb, 120.0, 1.0, 0.0, lo2, 130.0 ** 2))
+    cases.append((-90.0, hb, 131.0, 10.0, -hb, 120.0, 1.0, 0.0, 0.0, 130.0 ** 2))  # leg 1 too long
+    answers = set()
+    for b1x, b1y, b1z, b2x, b2y, b2z, c, s, lo2, hi2 in cases:
+        ref = _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, 0.0)
+        got = _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2)
+        assert bool(got) == bool(ref), (b1x, b1y, b1z, b2x, b2y, b2z, c, s, lo2, hi2)
+        answers.add(bool(ref))
+    assert answers == {True, False}
+    # the touching pair passes (one common rho), the pair a hair apart does not
+    assert _test(0.0, hb, 120.0, 100.0, -hb, 120.0, 1.0, 0.0, hb, rho_lo, rho_hi, 0.0, 130.0 ** 2)
+    assert not _test(0.0, hb, 120.0, 100.0 + 1e-9, -hb, 120.0, 1.0, 0.0, hb, rho_lo, rho_hi, 0.0, 130.0 ** 2)
+
+
 @pytest.mark.parametrize("design, joints", [(Design(), Joints()), (Design(a=30.0), Joints(theta_u=45.0))])
 def test_the_mirror_half_gives_an_equally_certified_bracket(design, joints):
     """``symmetric`` (module doc of kinematics.bracket, *Mirror*): the classes are mirror images of each
