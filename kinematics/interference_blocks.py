@@ -144,16 +144,16 @@ def _no_split(ga, gb, ha, hb, r0, r1):
 
 
 @njit(cache=True)
-def _own_bounds(rho, c, s, hb, bx, by, bz, shift):
+def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
     """Lower and upper bounds ``(lo, hi, d0)`` of the distance of the two legs of one carriage (S
-    joints ``bx/by/bz[0..1]``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
+    joints ``B_1 = (b1x, b1y, b1z)`` and ``B_2``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
     before the move) after the platform and the carriage move so that leg 1's vector ``X = B_1 -
     D_1`` moves by at most ``shift`` (module doc, own legs)."""
     x1, y1 = _u_joints(rho, c, s, hb, 0)
     x2, y2 = _u_joints(rho, c, s, hb, 1)
-    s0, t0 = segment_closest(x1, y1, 0.0, bx[0], by[0], bz[0], x2, y2, 0.0, bx[1], by[1], bz[1])
-    ax, ay, az = bx[0] - x1, by[0] - y1, bz[0]
-    qx, qy, qz = bx[1] - x2, by[1] - y2, bz[1]
+    s0, t0 = segment_closest(x1, y1, 0.0, b1x, b1y, b1z, x2, y2, 0.0, b2x, b2y, b2z)
+    ax, ay, az = b1x - x1, b1y - y1, b1z
+    qx, qy, qz = b2x - x2, b2y - y2, b2z
     wx = x1 + ax * s0 - (x2 + qx * t0)
     wy = y1 + ay * s0 - (y2 + qy * t0)
     wz = az * s0 - qz * t0
@@ -184,10 +184,11 @@ def _own_bounds(rho, c, s, hb, bx, by, bz, shift):
 
 
 @njit(cache=True)
-def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear, stack):
-    """Whether the two legs of one carriage are at least ``thr`` apart (``clear``) or below ``thr``
-    (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform move of at most ``e``
-    (bisection of the rail range with :func:`_own_bounds`; ``stack``: scratch of shape (64, >= 2))."""
+def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear, stack):
+    """Whether the two legs of one carriage (S joints ``B_1``, ``B_2``) are at least ``thr`` apart
+    (``clear``) or below ``thr`` (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform
+    move of at most ``e`` (bisection of the rail range with :func:`_own_bounds`; ``stack``: scratch of
+    shape (64, >= 2))."""
     stack[0, 0], stack[0, 1] = r0, r1
     top = 1
     evals = 0
@@ -195,7 +196,7 @@ def _own_legs(bx, by, bz, c, s, hb, r0, r1, e, thr, clear, stack):
         top -= 1
         a, b = stack[top, 0], stack[top, 1]
         m = 0.5 * (a + b)
-        lo, hi, d0 = _own_bounds(m, c, s, hb, bx, by, bz, e + 0.5 * (b - a))
+        lo, hi, d0 = _own_bounds(m, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, e + 0.5 * (b - a))
         evals += 1
         if clear:
             if lo >= thr:
@@ -267,6 +268,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
+        jci = jc[i]  # one view per chain, not one per sample (each costs two atomic reference counts)
         stopped = False
         tries = 0
         for step in range(n):  # the witness search's order (interference._witnesses)
@@ -276,15 +278,15 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, h1a, h1b, h2a, h2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
-                                                           lo_r2, hi_r2, jc[i], e)
-            if not ok or _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                                                           lo_r2, hi_r2, jci, e)
+            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
                 skip[i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
                 continue
             ks[i, nk[i]] = k
             hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
             nk[i] += 1
             okt, t0, t1, g1a, g1b, g2a, g2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
-                                                            lo_t2, hi_t2, jc[i], -e)
+                                                            lo_t2, hi_t2, jci, -e)
             # the feasible set is one interval at every centre when no leg's gap splits the relaxed hull
             one = _no_split(g1a, g1b, h1a, h1b, r0, r1) and _no_split(g2a, g2b, h2a, h2b, r0, r1)
             if okt:
@@ -297,11 +299,11 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                 for probe in range(3 if one else 1):
                     q0, q1 = (r0, t0) if probe == 0 else ((t1, r1) if probe == 1 else
                                                           (0.5 * (r0 + t1), 0.5 * (t0 + r1)))
-                    if _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin + margin, True, stack):
+                    if _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin + margin, True, stack):
                         hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = min(w0, q0), max(w1, q1)
                         stopped = True
                         break
-                    if not _own_legs(bx[i], by[i], bz[i], c, s, hb, q0, q1, e, dmin - margin, False, stack):
+                    if not _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin - margin, False, stack):
                         w0, w1 = min(w0, q0), max(w1, q1)
                 if stopped:
                     break
@@ -371,14 +373,15 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
+        jci = jc[i]
         alive = False
         for k in range(n):
             if skip[i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                                   jc[i], e)
-            if not ok or _own_legs(bx[i], by[i], bz[i], c, s, hb, r0, r1, e, dmin - margin, False, stack):
+                                                   jci, e)
+            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
                 skip[i, k] = True
             else:
                 alive = True

@@ -58,7 +58,7 @@ def test_own_leg_bounds_hold_for_sampled_moves():
         b = np.array([[rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(80, 200)] for _ in range(2)])
         b[1] = b[0] + rng.normal(size=3) * 15.0
         shift = rng.uniform(0.0, 6.0)
-        lo, hi, d0 = _own_bounds(rho, c, s, hb, b[:, 0].copy(), b[:, 1].copy(), b[:, 2].copy(), shift)
+        lo, hi, d0 = _own_bounds(rho, c, s, hb, b[0, 0], b[0, 1], b[0, 2], b[1, 0], b[1, 1], b[1, 2], shift)
         at = (rho * c - hb * s, rho * s + hb * c, 0.0), (rho * c + hb * s, rho * s - hb * c, 0.0)
         assert d0 == pytest.approx(segment_distance(*at[0], *b[0], *at[1], *b[1]), abs=1e-9)
         for _ in range(40):
