@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design
-from .feasibility import _chain_excluded, chain_points, feasible_rho
+from .feasibility import chain_excluded_at, chain_points, feasible_rho
 from .geometry import platform_points_local
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
@@ -93,23 +93,25 @@ def segment_closest(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
 
 
 @njit(cache=True)
-def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
+def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
                cap, out, skip):
-    """Up to ``cap`` witness carriage poses of one chain (module doc, step 2) as the two U joints
+    """Up to ``cap`` witness carriage poses of chain ``i`` (module doc, step 2) as the two U joints
     ``(D1, D2)`` in ``out[w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found. Samples ``k``
-    with ``skip[k]`` are passed over: the caller knows they are no witness (all False: every sample
-    is tried)."""
-    n = cos_t.shape[0]
+    with ``skip[i, k]`` are passed over: the caller knows they are no witness (all False: every
+    sample is tried). The tables (``cos_t``, ``sin_t``, ``skip`` (3, n), ``jc``) are read in place:
+    a view costs two atomic reference counts, on tables every thread shares."""
+    n = cos_t.shape[1]
+    jci = jc[i]
     pieces = np.empty((4, 2))
     cnt = 0
     mid = n // 2
     for step in range(n):
         off = (step + 1) // 2
         k = mid + off if step % 2 == 1 else mid - off
-        if k < 0 or k >= n or skip[k]:
+        if k < 0 or k >= n or skip[i, k]:
             continue
-        c, s = cos_t[k], sin_t[k]
-        npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, pieces)
+        c, s = cos_t[i, k], sin_t[i, k]
+        npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, pieces)
         found = False
         for pc in range(npc):
             for probe in range(3):
@@ -158,11 +160,11 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bp[i, 0, 0], bp[i, 0, 1], bp[i, 0, 2] = b1x, b1y, b1z
         bp[i, 1, 0], bp[i, 1, 1], bp[i, 1, 2] = b2x, b2y, b2z
-        if _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc[i], rho_lo, rho_hi, lmin2, lmax2):
+        if chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
             return False
         w = w0 if i == 0 else (w1 if i == 1 else w2)
-        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc[i], dmin, 1, w, skip[i])
+        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                               lmin2, lmax2, jc, dmin, 1, w, skip)
         if counts[i] == 0:
             return False
     if _clear(bp, w0, 0, w1, 0, 0, 1, dmin) and _clear(bp, w1, 0, w2, 0, 1, 2, dmin) \
@@ -173,8 +175,8 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         w = w0 if i == 0 else (w1 if i == 1 else w2)
-        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i], sin_t[i], hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc[i], dmin, n, w, skip[i])
+        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                               lmin2, lmax2, jc, dmin, n, w, skip)
     pick = np.empty((3, SPREAD), np.int64)
     npick = np.empty(3, np.int64)
     for i in range(3):

@@ -147,10 +147,10 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
             for i in range(3):
                 pts = chain_points(xs[ix], ys[iy], zs[iz], u, i)
                 for k in np.nonzero(skip[i])[0]:
-                    solo = np.ones(n, np.bool_)
-                    solo[k] = False
-                    assert _witnesses(*pts, tab.cos_t[i], tab.sin_t[i], tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                                      tab.lmax2, jc[i], joints.min_distance, 1, w, solo) == 0
+                    solo = np.ones((3, n), np.bool_)
+                    solo[i, k] = False
+                    assert _witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
+                                      tab.lmax2, jc, joints.min_distance, 1, w, solo) == 0
                     marked += 1
     assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
 
