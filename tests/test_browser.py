@@ -278,7 +278,9 @@ def test_the_explorer_explains_itself(browser: Browser, explorer: Explorer) -> N
     wait_for(lambda: "volume V (units³)" in page.locator("body").inner_text()
              and re.search(r"Hollowness \d", page.locator("body").inner_text()), 60,
              "the table and the measures on screen")
-    assert page.evaluate("() => !!window.__viserMutable.nodeRefFromName['/workspace/pinned']")  # the ghost
+    # the ghost: drawn after the pin's numbers are stored, and a scene message reaches the browser later
+    wait_for(lambda: page.evaluate("() => !!window.__viserMutable.nodeRefFromName['/workspace/pinned']"), 30,
+             "the pinned design's ghost in the browser's scene")
     page.mouse.move(5, 5)  # no tooltip over the panel
     page.get_by_text("Pin 1").first.scroll_into_view_if_needed()
     time.sleep(1.0)
