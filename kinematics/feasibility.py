@@ -197,7 +197,7 @@ def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
     return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, out):
     """The feasible set of ``rho`` at one carriage angle as at most 4 intervals written to ``out``
     (shape (4, 2)); returns their number (0: the angle does not serve the chain)."""

@@ -93,22 +93,31 @@ def segment_closest(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
 
 
 @njit(cache=True)
+def pose_scratch(n):
+    """The scratch one :func:`_pose_clear` call writes, for ``n`` arc samples: ``(wit (3, n, 6), bp
+    (3, 2, 3), pieces (4, 2), pick (3, SPREAD), cnt (2, 3))``. A caller that decides many poses
+    allocates it once (each allocation costs a call to the allocator and atomic reference counts)."""
+    return (np.empty((3, n, 6)), np.empty((3, 2, 3)), np.empty((4, 2)), np.empty((3, SPREAD), np.int64),
+            np.empty((2, 3), np.int64))
+
+
+@njit(cache=True, inline="always")
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
-               cap, out, skip):
+               cap, wit, skip, sb, pieces):
     """Up to ``cap`` witness carriage poses of chain ``i`` (module doc, step 2) as the two U joints
-    ``(D1, D2)`` in ``out[w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found. Samples ``k``
-    with ``skip[i, k]`` are passed over: the caller knows they are no witness (all False: every
-    sample is tried). The tables (``cos_t``, ``sin_t``, ``skip`` (3, n), ``jc``) are read in place:
-    a view costs two atomic reference counts, on tables every thread shares."""
+    ``(D1, D2)`` in ``wit[i, w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found. Samples
+    ``k`` with ``skip[sb, i, k]`` are passed over: the caller knows they are no witness (all False:
+    every sample is tried). The tables (``cos_t``, ``sin_t``, ``skip`` (m, 3, n), ``jc``) are read in
+    place: a view costs two atomic reference counts, on tables every thread shares. ``pieces`` (4,
+    2): scratch."""
     n = cos_t.shape[1]
     jci = jc[i]
-    pieces = np.empty((4, 2))
     cnt = 0
     mid = n // 2
     for step in range(n):
         off = (step + 1) // 2
         k = mid + off if step % 2 == 1 else mid - off
-        if k < 0 or k >= n or skip[i, k]:
+        if k < 0 or k >= n or skip[sb, i, k]:
             continue
         c, s = cos_t[i, k], sin_t[i, k]
         npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, pieces)
@@ -120,8 +129,8 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
                 x1, y1 = rho * c - hb * s, rho * s + hb * c
                 x2, y2 = rho * c + hb * s, rho * s - hb * c
                 if segment_distance(x1, y1, 0.0, b1x, b1y, b1z, x2, y2, 0.0, b2x, b2y, b2z) >= dmin:
-                    out[cnt, 0], out[cnt, 1], out[cnt, 2] = x1, y1, 0.0
-                    out[cnt, 3], out[cnt, 4], out[cnt, 5] = x2, y2, 0.0
+                    wit[i, cnt, 0], wit[i, cnt, 1], wit[i, cnt, 2] = x1, y1, 0.0
+                    wit[i, cnt, 3], wit[i, cnt, 4], wit[i, cnt, 5] = x2, y2, 0.0
                     cnt += 1
                     found = True
                     break
@@ -133,65 +142,63 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
 
 
 @njit(cache=True, inline="always")
-def _clear(bp, wa, ia, wb, ib, i, j, dmin):
-    """Whether every leg of chain ``i`` (witness ``wa[ia]``) clears every leg of chain ``j``."""
+def _clear(bp, wit, i, ia, j, ib, dmin):
+    """Whether every leg of chain ``i`` (witness ``wit[i, ia]``) clears every leg of chain ``j``
+    (witness ``wit[j, ib]``)."""
     for la in range(2):
         for lb in range(2):
-            if segment_distance(wa[ia, 3 * la], wa[ia, 3 * la + 1], wa[ia, 3 * la + 2],
+            if segment_distance(wit[i, ia, 3 * la], wit[i, ia, 3 * la + 1], wit[i, ia, 3 * la + 2],
                                 bp[i, la, 0], bp[i, la, 1], bp[i, la, 2],
-                                wb[ib, 3 * lb], wb[ib, 3 * lb + 1], wb[ib, 3 * lb + 2],
+                                wit[j, ib, 3 * lb], wit[j, ib, 3 * lb + 1], wit[j, ib, 3 * lb + 2],
                                 bp[j, lb, 0], bp[j, lb, 1], bp[j, lb, 2]) < dmin:
                 return False
     return True
 
 
-@njit(cache=True)
-def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip):
+@njit(cache=True, inline="always")
+def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip, sb,
+                wit, bp, pieces, pick, cnt):
     """Module doc, steps 2-3, for one platform pose (``u``: its rotated platform points); the chosen
-    U joints are written to ``sel`` (3, 6) when it returns True. ``skip`` (3, n): arc samples known to
-    be no witness of their chain at this pose, passed over (:func:`_witnesses`; all False: none)."""
+    U joints are written to ``sel`` (3, 6) when it returns True. ``skip[sb]`` (3, n): arc samples
+    known to be no witness of their chain at this pose, passed over (:func:`_witnesses`; all False:
+    none). ``wit, bp, pieces, pick, cnt``: scratch from :func:`pose_scratch`."""
     n = cos_t.shape[1]
-    bp = np.empty((3, 2, 3))
-    w0 = np.empty((n, 6))
-    w1 = np.empty((n, 6))
-    w2 = np.empty((n, 6))
-    counts = np.zeros(3, np.int64)
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bp[i, 0, 0], bp[i, 0, 1], bp[i, 0, 2] = b1x, b1y, b1z
         bp[i, 1, 0], bp[i, 1, 1], bp[i, 1, 2] = b2x, b2y, b2z
         if chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
             return False
-        w = w0 if i == 0 else (w1 if i == 1 else w2)
-        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc, dmin, 1, w, skip)
-        if counts[i] == 0:
+        cnt[0, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                               lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces)
+        if cnt[0, i] == 0:
             return False
-    if _clear(bp, w0, 0, w1, 0, 0, 1, dmin) and _clear(bp, w1, 0, w2, 0, 1, 2, dmin) \
-            and _clear(bp, w0, 0, w2, 0, 0, 2, dmin):
-        sel[0], sel[1], sel[2] = w0[0], w1[0], w2[0]
+    if _clear(bp, wit, 0, 0, 1, 0, dmin) and _clear(bp, wit, 1, 0, 2, 0, dmin) and _clear(bp, wit, 0, 0, 2, 0, dmin):
+        for i in range(3):
+            for t in range(6):
+                sel[i, t] = wit[i, 0, t]
         return True
     # the first witnesses collide: combine witnesses spread over the stroke
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-        w = w0 if i == 0 else (w1 if i == 1 else w2)
-        counts[i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc, dmin, n, w, skip)
-    pick = np.empty((3, SPREAD), np.int64)
-    npick = np.empty(3, np.int64)
+        cnt[0, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                               lmin2, lmax2, jc, dmin, n, wit, skip, sb, pieces)
     for i in range(3):
-        m = min(SPREAD, counts[i])
-        npick[i] = m
+        m = min(SPREAD, cnt[0, i])
+        cnt[1, i] = m
         for q in range(m):
-            pick[i, q] = 0 if m == 1 else int(round(q * (counts[i] - 1) / (m - 1)))
-    for q0 in range(npick[0]):
-        for q1 in range(npick[1]):
-            if not _clear(bp, w0, pick[0, q0], w1, pick[1, q1], 0, 1, dmin):
+            pick[i, q] = 0 if m == 1 else int(round(q * (cnt[0, i] - 1) / (m - 1)))
+    for q0 in range(cnt[1, 0]):
+        for q1 in range(cnt[1, 1]):
+            if not _clear(bp, wit, 0, pick[0, q0], 1, pick[1, q1], dmin):
                 continue
-            for q2 in range(npick[2]):
-                if _clear(bp, w1, pick[1, q1], w2, pick[2, q2], 1, 2, dmin) and \
-                        _clear(bp, w0, pick[0, q0], w2, pick[2, q2], 0, 2, dmin):
-                    sel[0], sel[1], sel[2] = w0[pick[0, q0]], w1[pick[1, q1]], w2[pick[2, q2]]
+            for q2 in range(cnt[1, 2]):
+                if _clear(bp, wit, 1, pick[1, q1], 2, pick[2, q2], dmin) and \
+                        _clear(bp, wit, 0, pick[0, q0], 2, pick[2, q2], dmin):
+                    for t in range(6):
+                        sel[0, t] = wit[0, pick[0, q0], t]
+                        sel[1, t] = wit[1, pick[1, q1], t]
+                        sel[2, t] = wit[2, pick[2, q2], t]
                     return True
     return False
 
@@ -199,14 +206,16 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
 @njit(parallel=True, cache=True, nogil=True)
 def _clear_kernel(points, us, jcs, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, dmin, where, out):
     n_m = us.shape[0]
-    skip = np.zeros((3, cos_t.shape[1]), np.bool_)  # read only: every sample is tried
+    skip = np.zeros((1, 3, cos_t.shape[1]), np.bool_)  # read only: every sample is tried
     for q in prange(points.shape[0] * n_m):
         p = q // n_m
         m = q - p * n_m
         if where[p, m]:
             sel = np.empty((3, 6))
+            wit, bp, pieces, pick, cnt = pose_scratch(cos_t.shape[1])
             out[p, m] = _pose_clear(points[p, 0], points[p, 1], points[p, 2], us[m], cos_t, sin_t, arc, hb,
-                                    rho_lo, rho_hi, lmin2, lmax2, jcs[m], dmin, sel, skip)
+                                    rho_lo, rho_hi, lmin2, lmax2, jcs[m], dmin, sel, skip, 0,
+                                    wit, bp, pieces, pick, cnt)
 
 
 def interference_free(design: Design, joints: Joints, points: np.ndarray, rotations: np.ndarray, n_eta: int,
@@ -247,7 +256,8 @@ def clear_configuration(design: Design, joints: Joints, position, rotation: np.n
     px, py, pz = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
     with KERNEL_LOCK:
         ok = _pose_clear(px, py, pz, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                         tab.lmax2, jc, float(joints.min_distance), sel, np.zeros(tab.cos_t.shape, np.bool_))
+                         tab.lmax2, jc, float(joints.min_distance), sel, np.zeros((1,) + tab.cos_t.shape, np.bool_),
+                         0, *pose_scratch(tab.cos_t.shape[1]))
     if not ok:
         return None
     mid = 0.5 * (sel[:, 0:2] + sel[:, 3:5])  # carriage centre rho e on the base plane

@@ -83,7 +83,7 @@ from .blocks import child_offsets, n_children, rounding_margin, write_child
 from .design import Design
 from .feasibility import ChainTables, _leg_sets, chain_points
 from .geometry import platform_points_local
-from .interference import _pose_clear, segment_closest, segment_distance
+from .interference import _pose_clear, pose_scratch, segment_closest, segment_distance
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
@@ -97,6 +97,8 @@ TOP = 16
 MAX_EVAL = 16
 #: Samples per chain whose own legs are tried as the last witness before the block is split instead.
 MAX_OWN = 16
+#: Blocks one thread decides with one set of scratch.
+CHUNK = 16
 
 UNDECIDED, DONE = 0, 1
 
@@ -109,7 +111,7 @@ def _u_joints(rho, c, s, hb, leg):
     return rho * c + hb * s, rho * s - hb * c
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e):
     """Hull ``(ok, r0, r1, g1a, g1b, g2a, g2b)`` of the feasible ``rho`` at one carriage angle with the
     leg limits ``[lo2, hi2]`` (squared) and the cones relaxed by ``cone_e``, and each leg's gap
@@ -183,7 +185,7 @@ def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
     return lo, hi, d0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear, stack):
     """Whether the two legs of one carriage (S joints ``B_1``, ``B_2``) are at least ``thr`` apart
     (``clear``) or below ``thr`` (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform
@@ -248,11 +250,12 @@ def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb
 
 
 @njit(cache=True)
-def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, stack, ks,
-                 hull, bx, by, bz):
+def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, sb, stack,
+                 ks, hull, bx, by, bz, nk, cen, rad):
     """The module doc's certificate at the block centre ``P`` with ``e = delta + eps``: True when
-    every centre of the block is clear (``skip`` (3, n): samples known to be no witness anywhere in
-    the block, passed over; ``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2): scratch)."""
+    every centre of the block is clear (``skip[sb]`` (3, n): samples known to be no witness anywhere
+    in the block, passed over; ``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2),
+    ``nk`` (3,), ``cen`` (3, 2, 2), ``rad`` (3, 2): scratch, from :func:`_block_scratch`)."""
     need = dmin + e + margin
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
@@ -262,7 +265,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
     if lo_t > hi_t:
         return False
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
-    nk = np.zeros(3, np.int64)
+    nk[:] = 0
     mid = n // 2
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
@@ -274,13 +277,13 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         for step in range(n):  # the witness search's order (interference._witnesses)
             off = (step + 1) // 2
             k = mid + off if step % 2 == 1 else mid - off
-            if k < 0 or k >= n or skip[i, k]:
+            if k < 0 or k >= n or skip[sb, i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, h1a, h1b, h2a, h2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
                                                            lo_r2, hi_r2, jci, e)
             if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
-                skip[i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
+                skip[sb, i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
                 continue
             ks[i, nk[i]] = k
             hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
@@ -315,8 +318,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         if not stopped:
             return False
     # every U joint a chain's first witness can use lies within ``rad`` of ``cen`` (per chain and leg)
-    cen = np.empty((3, 2, 2))
-    rad = np.zeros((3, 2))
+    rad[:] = 0.0
     for i in range(3):
         for la in range(2):
             x_lo, x_hi, y_lo, y_hi = 1e300, -1e300, 1e300, -1e300
@@ -357,9 +359,9 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
 
 
 @njit(cache=True)
-def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, stack, bx, by,
-             bz):
-    """Mark in ``skip`` (3, n) every arc sample that is no witness of its chain at any centre of the
+def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, sb, stack, bx,
+             by, bz):
+    """Mark in ``skip[sb]`` (3, n) every arc sample that is no witness of its chain at any centre of the
     block (``e = delta + eps``; samples already marked, by the parent block, are not tested again):
     it fails at ``P`` with the limits relaxed by ``e``, or its two legs stay below ``d_min - margin``
     over the relaxed hull after any move of at most ``e`` (every probe of the witness search
@@ -376,13 +378,13 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
         jci = jc[i]
         alive = False
         for k in range(n):
-            if skip[i, k]:
+            if skip[sb, i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
                                                    jci, e)
             if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
-                skip[i, k] = True
+                skip[sb, i, k] = True
             else:
                 alive = True
                 break  # a chain with a possible witness: the rest of its samples stay to be tested
@@ -391,51 +393,68 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
     return False
 
 
+@njit(cache=True)
+def _block_scratch(n):
+    """The scratch of :func:`_block_clear` and :func:`_exclude` for ``n`` arc samples: ``(stack, ks,
+    hull, bx, by, bz, nk, cen, rad)``."""
+    return (np.empty((64, 4)), np.empty((3, n), np.int64), np.empty((3, n, 2)), np.empty((3, 2)),
+            np.empty((3, 2)), np.empty((3, 2)), np.empty(3, np.int64), np.empty((3, 2, 2)), np.empty((3, 2)))
+
+
 @njit(parallel=True, cache=True, nogil=True)
-def _blocks_kernel(b0, bn, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                   lmin2, lmax2, jc, dmin, state, out):
+def _blocks_kernel(b0, bn, pskip, par, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo,
+                   rho_hi, lmin2, lmax2, jc, dmin, state, out):
     """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED, with the
-    samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children)."""
+    samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children):
+    block ``b`` starts from its parent's marks ``pskip[par[b]]``, which a single voxel reads in place
+    and a larger block copies into ``skip[b]`` before its tests add to them (so the rows of single
+    voxels are never written). Parallel over runs of :data:`CHUNK` blocks, each with one set of
+    scratch (an allocation per block or voxel cost a call to the allocator and atomic reference
+    counts each); every table is read in place, by index."""
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
-    for b in prange(b0.shape[0]):
-        nin = box_count(sat, b0[b, 0], b0[b, 1], b0[b, 2], b0[b, 0] + bn[b, 0], b0[b, 1] + bn[b, 1],
-                        b0[b, 2] + bn[b, 2])
-        if nin == 0:  # no voxel to test
-            state[b] = DONE
-            continue
-        nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
-        if nx == 1 and ny == 1 and nz == 1:
-            sel = np.empty((3, 6))
-            ix, iy, iz = b0[b, 0], b0[b, 1], b0[b, 2]
-            out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                                          lmin2, lmax2, jc, dmin, sel, skip[b])
-            state[b] = DONE
-            continue
-        px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
-        py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
-        pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
-        e = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2) + eps
-        stack = np.empty((64, 4))
-        ks = np.empty((3, cos_t.shape[1]), np.int64)
-        hull = np.empty((3, cos_t.shape[1], 2))
-        bx = np.empty((3, 2))
-        by = np.empty((3, 2))
-        bz = np.empty((3, 2))
-        # a block with voxels outside ``where`` is not tested for clear: in the engine's use (``where``
-        # its occupancy) the certificate, which proves every chain feasible at every centre, never holds
-        # there (the children decide; this saves time and changes no answer)
-        if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
-                                                dmin, margin, skip[b], stack, ks, hull, bx, by, bz):
-            for x in range(b0[b, 0], b0[b, 0] + nx):
-                for y in range(b0[b, 1], b0[b, 1] + ny):
-                    for z in range(b0[b, 2], b0[b, 2] + nz):
-                        out[x, y, z] = where[x, y, z]
-            state[b] = DONE
-        elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip[b], stack,
-                      bx, by, bz):
-            state[b] = DONE  # every voxel interferes: out stays False
-        else:
-            state[b] = UNDECIDED
+    nb = b0.shape[0]
+    n = cos_t.shape[1]
+    for c in prange((nb + CHUNK - 1) // CHUNK):
+        sel = np.empty((3, 6))
+        wit, bp, pieces, pick, cnt = pose_scratch(n)
+        stack, ks, hull, bx, by, bz, nk, cen, rad = _block_scratch(n)
+        for b in range(c * CHUNK, min(nb, c * CHUNK + CHUNK)):
+            nin = box_count(sat, b0[b, 0], b0[b, 1], b0[b, 2], b0[b, 0] + bn[b, 0], b0[b, 1] + bn[b, 1],
+                            b0[b, 2] + bn[b, 2])
+            if nin == 0:  # no voxel to test
+                state[b] = DONE
+                continue
+            nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
+            if nx == 1 and ny == 1 and nz == 1:
+                ix, iy, iz = b0[b, 0], b0[b, 1], b0[b, 2]
+                out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
+                                              lmin2, lmax2, jc, dmin, sel, pskip, par[b], wit, bp, pieces, pick, cnt)
+                state[b] = DONE
+                continue
+            p = par[b]
+            for i in range(3):
+                for k in range(n):
+                    skip[b, i, k] = pskip[p, i, k]
+            px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
+            py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
+            pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
+            e = 0.5 * h * math.sqrt((nx - 1) ** 2 + (ny - 1) ** 2 + (nz - 1) ** 2) + eps
+            # a block with voxels outside ``where`` is not tested for clear: in the engine's use (``where``
+            # its occupancy) the certificate, which proves every chain feasible at every centre, never
+            # holds there (the children decide; this saves time and changes no answer)
+            if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
+                                                    jc, dmin, margin, skip, b, stack, ks, hull, bx, by, bz, nk, cen,
+                                                    rad):
+                for x in range(b0[b, 0], b0[b, 0] + nx):
+                    for y in range(b0[b, 1], b0[b, 1] + ny):
+                        for z in range(b0[b, 2], b0[b, 2] + nz):
+                            out[x, y, z] = where[x, y, z]
+                state[b] = DONE
+            elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, b,
+                          stack, bx, by, bz):
+                state[b] = DONE  # every voxel interferes: out stays False
+            else:
+                state[b] = UNDECIDED
 
 
 def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -462,25 +481,31 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
     gx, gy, gz = np.meshgrid(*starts, indexing="ij")
     b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
     bn = np.minimum(TOP, np.array(mask.shape, np.int64)[None, :] - b0)
-    skip = np.zeros((b0.shape[0], 3, tab.cos_t.shape[1]), np.bool_)  # samples no witness in the block
+    n = tab.cos_t.shape[1]
+    pskip = np.zeros((1, 3, n), np.bool_)  # the top blocks' parent: no sample marked
+    par = np.zeros(b0.shape[0], np.int64)
     step = 8192  # blocks per launch: cancellation within a fraction of a second
     while b0.shape[0]:
         state = np.empty(b0.shape[0], np.int8)
+        # samples no witness in the block; np.empty maps a page when it is first written, and the
+        # rows of single voxels never are
+        skip = np.empty((b0.shape[0], 3, n), np.bool_)
         for s in range(0, b0.shape[0], step):
             check(cancel)
             with KERNEL_LOCK:
-                _blocks_kernel(b0[s:s + step], bn[s:s + step], skip[s:s + step], sat, mask, xs, ys, zs, float(h), eps,
-                               margin, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                               tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out)
+                _blocks_kernel(b0[s:s + step], bn[s:s + step], pskip, par[s:s + step], skip[s:s + step], sat, mask,
+                               xs, ys, zs, float(h), eps, margin, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo,
+                               tab.rho_hi, tab.lmin2, tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out)
         with KERNEL_LOCK:
-            b0, bn, skip = _split_undecided(b0, bn, skip, state)
+            b0, bn, par = _split_undecided(b0, bn, state)
+        pskip = skip
     return out
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _split_undecided(b0, bn, skip, state):
-    """The UNDECIDED blocks of ``state`` split in eight as :func:`kinematics.blocks._split` does, each
-    child with its parent's ``skip`` marks: ``(b0, bn, skip)`` of the children, each block's
+def _split_undecided(b0, bn, state):
+    """The UNDECIDED blocks of ``state`` split in eight as :func:`kinematics.blocks._split` does:
+    ``(b0, bn, par)`` of the children, ``par`` each child's parent (its index in ``b0``), each block's
     consecutive (the order changes no answer: every block is decided on its own). Parallel over the
     blocks, with :func:`kinematics.blocks._advance`'s child counts, offsets and boxes."""
     nb = b0.shape[0]
@@ -492,13 +517,13 @@ def _split_undecided(b0, bn, skip, state):
     n_kids = offs[nb]
     k0 = np.empty((n_kids, 3), np.int64)
     kn = np.empty((n_kids, 3), np.int64)
-    ks = np.empty((n_kids,) + skip.shape[1:], np.bool_)
+    par = np.empty(n_kids, np.int64)
     for b in prange(nb):
         if counts[b] == 0:
             continue
         m = offs[b]
         for d in range(8):
             if write_child(b0, bn, b, d, k0, kn, m):
-                ks[m] = skip[b]
+                par[m] = b
                 m += 1
-    return k0, kn, ks
+    return k0, kn, par

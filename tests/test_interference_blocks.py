@@ -133,24 +133,24 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
     for x0, y0, z0 in starts[rng.choice(len(starts), 60, replace=False)]:
         cx, cy, cz = (0.5 * (a[i] + a[i + m - 1]) for a, i in ((xs, x0), (ys, y0), (zs, z0)))
         e = 0.5 * h * math.sqrt(3.0) * (m - 1) + eps
-        skip = np.zeros((3, n), np.bool_)
+        skip = np.zeros((1, 3, n), np.bool_)
         bx, by, bz = np.empty((3, 2)), np.empty((3, 2)), np.empty((3, 2))
         is_blocked = _exclude(cx, cy, cz, e, u, tab.cos_t, tab.sin_t, tab.hb, tab.rho_lo, tab.rho_hi,
                               math.sqrt(tab.lmin2), math.sqrt(tab.lmax2), jc, joints.min_distance, 100.0 * eps, skip,
-                              np.empty((64, 4)), bx, by, bz)
+                              0, np.empty((64, 4)), bx, by, bz)
         block = occ[x0:x0 + m, y0:y0 + m, z0:z0 + m]
         if is_blocked:
             blocked += 1
             assert not ok[x0:x0 + m, y0:y0 + m, z0:z0 + m][block].any()
-        w = np.empty((n, 6))
+        w = np.empty((3, n, 6))
         for ix, iy, iz in np.argwhere(block) + (x0, y0, z0):
             for i in range(3):
                 pts = chain_points(xs[ix], ys[iy], zs[iz], u, i)
-                for k in np.nonzero(skip[i])[0]:
-                    solo = np.ones((3, n), np.bool_)
-                    solo[i, k] = False
+                for k in np.nonzero(skip[0, i])[0]:
+                    solo = np.ones((1, 3, n), np.bool_)
+                    solo[0, i, k] = False
                     assert _witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                                      tab.lmax2, jc, joints.min_distance, 1, w, solo) == 0
+                                      tab.lmax2, jc, joints.min_distance, 1, w, solo, 0, np.empty((4, 2))) == 0
                     marked += 1
     assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
 
