@@ -166,17 +166,25 @@ def _leg_cones(jc, j, p, m, q, bx, by, bz, c, s, shb, e, lo, hi):
 
 
 @njit(cache=True, inline="always")
+def _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
+    """Each leg's S joint in its carriage's rail frame at one carriage angle: ``(p1, m1, q1, p2, m2,
+    q2)``, ``p`` along the rail, ``m`` across it from the U joint's offset, ``q = z^2 + m^2`` (F2)."""
+    p1 = b1x * c + b1y * s
+    m1 = -b1x * s + b1y * c - hb
+    q1 = b1z * b1z + m1 * m1
+    p2 = b2x * c + b2y * s
+    m2 = -b2x * s + b2y * c + hb
+    q2 = b2z * b2z + m2 * m2
+    return p1, m1, q1, p2, m2, q2
+
+
+@njit(cache=True, inline="always")
 def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
     """Both legs' (F2) interval sets at one carriage angle and the rail ``[rho_lo, rho_hi]`` cut by
     the joint cones: ``(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)``; ``ok`` is
     False when a set is already empty."""
-    p1 = b1x * c + b1y * s
-    m1 = -b1x * s + b1y * c - hb
-    q1 = b1z * b1z + m1 * m1
+    p1, m1, q1, p2, m2, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
     n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lmin2, lmax2)
-    p2 = b2x * c + b2y * s
-    m2 = -b2x * s + b2y * c + hb
-    q2 = b2z * b2z + m2 * m2
     n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lmin2, lmax2)
     if n1 == 0 or n2 == 0:
         return False, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
@@ -197,7 +205,7 @@ def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
     return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, out):
     """The feasible set of ``rho`` at one carriage angle as at most 4 intervals written to ``out``
     (shape (4, 2)); returns their number (0: the angle does not serve the chain)."""

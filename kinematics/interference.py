@@ -101,7 +101,7 @@ def pose_scratch(n):
             np.empty((2, 3), np.int64))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
                cap, wit, skip, sb, pieces):
     """Up to ``cap`` witness carriage poses of chain ``i`` (module doc, step 2) as the two U joints
@@ -155,7 +155,7 @@ def _clear(bp, wit, i, ia, j, ib, dmin):
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip, sb,
                 wit, bp, pieces, pick, cnt):
     """Module doc, steps 2-3, for one platform pose (``u``: its rotated platform points); the chosen

@@ -81,7 +81,7 @@ from numba import njit, prange
 
 from .blocks import child_offsets, n_children, rounding_margin, write_child
 from .design import Design
-from .feasibility import ChainTables, _leg_sets, chain_points
+from .feasibility import ChainTables, _leg_frames, _leg_intervals, _leg_sets, chain_points
 from .geometry import platform_points_local
 from .interference import _pose_clear, pose_scratch, segment_closest, segment_distance
 from .joints import Joints, cone_table
@@ -111,27 +111,61 @@ def _u_joints(rho, c, s, hb, leg):
     return rho * c + hb * s, rho * s - hb * c
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e):
     """Hull ``(ok, r0, r1, g1a, g1b, g2a, g2b)`` of the feasible ``rho`` at one carriage angle with the
     leg limits ``[lo2, hi2]`` (squared) and the cones relaxed by ``cone_e``, and each leg's gap
     ``(g_a, g_b)`` of (F2) (:mod:`kinematics.feasibility`; ``(1, 0)`` when it has none)."""
     ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, r_lo, r_hi = _leg_sets(
         b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e)
+    return _hull(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, r_lo, r_hi)
+
+
+@njit(cache=True)
+def _relaxed_hull_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
+    """:func:`_relaxed_hull` of a chain without joint cones: numbers only, no array argument (numba
+    counts an atomic reference on each, per call)."""
+    p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
+    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
+    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
+    return _hull(n1 > 0 and n2 > 0, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
+
+
+@njit(cache=True, inline="always")
+def _hull(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, r_lo, r_hi):
+    """The hull and gaps of :func:`_relaxed_hull` from both legs' interval sets and the rail."""
     g1a, g1b = (a1, a2) if n1 == 2 else (1.0, 0.0)
     g2a, g2b = (c1, c2) if n2 == 2 else (1.0, 0.0)
     if not ok:
         return False, 0.0, 0.0, g1a, g1b, g2a, g2b
-    h0, h1 = 1e300, -1e300
-    for u in range(n1):
-        lo_a, hi_a = (a0, a1) if u == 0 else (a2, a3)
-        for v in range(n2):
-            lo_b, hi_b = (c0, c1) if v == 0 else (c2, c3)
-            lo = max(lo_a, lo_b, r_lo)
-            hi = min(hi_a, hi_b, r_hi)
-            if lo <= hi:
-                h0, h1 = min(h0, lo), max(h1, hi)
+    # the (at most 2 x 2) pairs of the legs' intervals
+    h0, h1 = _meet(1e300, -1e300, a0, a1, c0, c1, r_lo, r_hi)
+    if n2 == 2:
+        h0, h1 = _meet(h0, h1, a0, a1, c2, c3, r_lo, r_hi)
+    if n1 == 2:
+        h0, h1 = _meet(h0, h1, a2, a3, c0, c1, r_lo, r_hi)
+        if n2 == 2:
+            h0, h1 = _meet(h0, h1, a2, a3, c2, c3, r_lo, r_hi)
     return h0 <= h1, h0, h1, g1a, g1b, g2a, g2b
+
+
+@njit(cache=True, inline="always")
+def _hull_at(cones, b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e):
+    """:func:`_relaxed_hull` where the chain has joint cones (``cones``), else
+    :func:`_relaxed_hull_plain` (the same numbers: without cones ``_leg_sets`` leaves the rail as it is)."""
+    if cones:
+        return _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, cone_e)
+    return _relaxed_hull_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2)
+
+
+@njit(cache=True, inline="always")
+def _meet(h0, h1, lo_a, hi_a, lo_b, hi_b, r_lo, r_hi):
+    """The hull ``(h0, h1)`` grown by the meet of ``[lo_a, hi_a]``, ``[lo_b, hi_b]`` and the rail."""
+    lo = max(lo_a, lo_b, r_lo)
+    hi = min(hi_a, hi_b, r_hi)
+    if lo <= hi:
+        return min(h0, lo), max(h1, hi)
+    return h0, h1
 
 
 @njit(cache=True, inline="always")
@@ -185,37 +219,37 @@ def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
     return lo, hi, d0
 
 
-@njit(cache=True, inline="always")
-def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear, stack):
+@njit(cache=True)
+def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear):
     """Whether the two legs of one carriage (S joints ``B_1``, ``B_2``) are at least ``thr`` apart
     (``clear``) or below ``thr`` (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform
-    move of at most ``e`` (bisection of the rail range with :func:`_own_bounds`; ``stack``: scratch of
-    shape (64, >= 2))."""
-    stack[0, 0], stack[0, 1] = r0, r1
-    top = 1
+    move of at most ``e`` (bisection of the rail range with :func:`_own_bounds`, at most
+    :data:`MAX_EVAL` bounds). The bisection walks the dyadic pieces ``[r0 + j w, r0 + (j + 1) w]``,
+    ``w = (r1 - r0) / 2^d``, depth first (the right half first) by their indices ``(d, j)`` alone: no
+    stack, so no array argument (numba counts an atomic reference on each, in a function that
+    loops)."""
+    d = 0
+    j = 0
     evals = 0
-    while top > 0:
-        top -= 1
-        a, b = stack[top, 0], stack[top, 1]
-        m = 0.5 * (a + b)
-        lo, hi, d0 = _own_bounds(m, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, e + 0.5 * (b - a))
+    while True:
+        w = (r1 - r0) / (1 << d)
+        a, b = r0 + j * w, r0 + (j + 1) * w
+        lo, hi, d0 = _own_bounds(0.5 * (a + b), c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, e + 0.5 * (b - a))
         evals += 1
-        if clear:
-            if lo >= thr:
-                continue
-            if d0 < thr:
-                return False
-        else:
-            if hi <= thr:
-                continue
-            if d0 > thr:
-                return False
-        if evals > MAX_EVAL or top + 2 > 64:
+        if (lo >= thr) if clear else (hi <= thr):  # this piece is decided: on to the next
+            while d > 0 and j % 2 == 0:  # a left half: its parent is done too
+                j //= 2
+                d -= 1
+            if d == 0:
+                return True
+            j -= 1  # a right half: its left sibling is next
+            continue
+        if (d0 < thr) if clear else (d0 > thr):
             return False
-        stack[top, 0], stack[top, 1] = a, m
-        stack[top + 1, 0], stack[top + 1, 1] = m, b
-        top += 2
-    return True
+        if evals > MAX_EVAL:
+            return False
+        d += 1
+        j = 2 * j + 1  # the right half first
 
 
 @njit(cache=True)
@@ -272,6 +306,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         jci = jc[i]  # one view per chain, not one per sample (each costs two atomic reference counts)
+        cones = jci[0, 6] > -1.0 or jci[0, 7] > -1.0  # as feasibility._leg_sets tells
         stopped = False
         tries = 0
         for step in range(n):  # the witness search's order (interference._witnesses)
@@ -280,15 +315,15 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
             if k < 0 or k >= n or skip[sb, i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
-            ok, r0, r1, h1a, h1b, h2a, h2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
+            ok, r0, r1, h1a, h1b, h2a, h2b = _hull_at(cones, b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
                                                            lo_r2, hi_r2, jci, e)
-            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
+            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False):
                 skip[sb, i, k] = True  # it fails, or its own legs collide at every probe and centre: never a witness
                 continue
             ks[i, nk[i]] = k
             hull[i, nk[i], 0], hull[i, nk[i], 1] = r0, r1
             nk[i] += 1
-            okt, t0, t1, g1a, g1b, g2a, g2b = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
+            okt, t0, t1, g1a, g1b, g2a, g2b = _hull_at(cones, b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
                                                             lo_t2, hi_t2, jci, -e)
             # the feasible set is one interval at every centre when no leg's gap splits the relaxed hull
             one = _no_split(g1a, g1b, h1a, h1b, r0, r1) and _no_split(g2a, g2b, h2a, h2b, r0, r1)
@@ -302,11 +337,11 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                 for probe in range(3 if one else 1):
                     q0, q1 = (r0, t0) if probe == 0 else ((t1, r1) if probe == 1 else
                                                           (0.5 * (r0 + t1), 0.5 * (t0 + r1)))
-                    if _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin + margin, True, stack):
+                    if _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin + margin, True):
                         hull[i, nk[i] - 1, 0], hull[i, nk[i] - 1, 1] = min(w0, q0), max(w1, q1)
                         stopped = True
                         break
-                    if not _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin - margin, False, stack):
+                    if not _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, q0, q1, e, dmin - margin, False):
                         w0, w1 = min(w0, q0), max(w1, q1)
                 if stopped:
                     break
@@ -359,8 +394,8 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
 
 
 @njit(cache=True)
-def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, sb, stack, bx,
-             by, bz):
+def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, sb, bx, by,
+             bz):
     """Mark in ``skip[sb]`` (3, n) every arc sample that is no witness of its chain at any centre of the
     block (``e = delta + eps``; samples already marked, by the parent block, are not tested again):
     it fails at ``P`` with the limits relaxed by ``e``, or its two legs stay below ``d_min - margin``
@@ -376,14 +411,15 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         jci = jc[i]
+        cones = jci[0, 6] > -1.0 or jci[0, 7] > -1.0
         alive = False
         for k in range(n):
             if skip[sb, i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
-            ok, r0, r1, _, _, _, _ = _relaxed_hull(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2, hi_r2,
-                                                   jci, e)
-            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False, stack):
+            ok, r0, r1, _, _, _, _ = _hull_at(cones, b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo_r2,
+                                              hi_r2, jci, e)
+            if not ok or _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, dmin - margin, False):
                 skip[sb, i, k] = True
             else:
                 alive = True
@@ -451,7 +487,7 @@ def _blocks_kernel(b0, bn, pskip, par, skip, sat, where, xs, ys, zs, h, eps, mar
                             out[x, y, z] = where[x, y, z]
                 state[b] = DONE
             elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, b,
-                          stack, bx, by, bz):
+                          bx, by, bz):
                 state[b] = DONE  # every voxel interferes: out stays False
             else:
                 state[b] = UNDECIDED

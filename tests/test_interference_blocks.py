@@ -137,7 +137,7 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
         bx, by, bz = np.empty((3, 2)), np.empty((3, 2)), np.empty((3, 2))
         is_blocked = _exclude(cx, cy, cz, e, u, tab.cos_t, tab.sin_t, tab.hb, tab.rho_lo, tab.rho_hi,
                               math.sqrt(tab.lmin2), math.sqrt(tab.lmax2), jc, joints.min_distance, 100.0 * eps, skip,
-                              0, np.empty((64, 4)), bx, by, bz)
+                              0, bx, by, bz)
         block = occ[x0:x0 + m, y0:y0 + m, z0:z0 + m]
         if is_blocked:
             blocked += 1
