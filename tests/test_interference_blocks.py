@@ -74,6 +74,78 @@ def test_own_leg_bounds_hold_for_sampled_moves():
     assert checked == 12000
 
 
+def test_own_legs_bisection_holds_for_sampled_rho_and_moves():
+    """``_own_legs`` (the bisection over a rail range, walked by the indices of its pieces): where it
+    says the two legs clear ``thr`` (or stay below it) over ``[r0, r1]`` after every move of at most
+    ``e``, sampled rails and moves agree (closed-form distance); both answers and "cannot tell" occur,
+    and a range it proves clear is also proved clear on either half."""
+    from paraspace.kinematics.interference_blocks import _own_legs
+
+    design = Design()
+    rng = np.random.default_rng(17)
+    hb = 0.5 * design.b
+    said = {True: 0, False: 0, None: 0}
+    for _ in range(600):
+        eta = rng.uniform(-0.3, 0.3)
+        c, s = np.cos(eta), np.sin(eta)
+        r0 = rng.uniform(40.0, 100.0)
+        r1 = r0 + rng.uniform(0.0, 20.0)
+        b = np.array([[rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(80, 200)] for _ in range(2)])
+        b[1] = b[0] + rng.normal(size=3) * 15.0
+        e = rng.uniform(0.0, 3.0)
+        rm = 0.5 * (r0 + r1)  # a threshold near the legs' distance at the range's middle: all three answers
+        thr = max(segment_distance(rm * c - hb * s, rm * s + hb * c, 0.0, *b[0], rm * c + hb * s, rm * s - hb * c,
+                                   0.0, *b[1]) + rng.uniform(-4.0, 4.0), 0.5)
+        clear = bool(_own_legs(*b[0], *b[1], c, s, hb, r0, r1, e, thr, True))
+        below = bool(_own_legs(*b[0], *b[1], c, s, hb, r0, r1, e, thr, False))
+        assert not (clear and below)
+        said[True if clear else (False if below else None)] += 1
+        if clear:
+            m = 0.5 * (r0 + r1)
+            assert _own_legs(*b[0], *b[1], c, s, hb, r0, m, e, thr, True)
+            assert _own_legs(*b[0], *b[1], c, s, hb, m, r1, e, thr, True)
+        if not (clear or below):
+            continue
+        for _ in range(30):
+            v = rng.normal(size=3)
+            v *= rng.uniform(0, 1) * e / np.linalg.norm(v)
+            r = rng.uniform(r0, r1)
+            d1 = (r * c - hb * s, r * s + hb * c, 0.0)
+            d2 = (r * c + hb * s, r * s - hb * c, 0.0)
+            dist = segment_distance(*d1, *(b[0] + v), *d2, *(b[1] + v))
+            assert dist >= thr - 1e-9 if clear else dist <= thr + 1e-9
+    assert min(said.values()) > 20  # every answer is exercised
+
+
+def test_relaxed_hull_without_cones_is_the_general_one():
+    """``_relaxed_hull_plain`` (numbers only, for chains without joint cones) gives the very numbers of
+    ``_relaxed_hull`` with a cone table that sets no cone, at random poses, samples and limits."""
+    from paraspace.kinematics.feasibility import ChainTables, chain_points
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.interference_blocks import _relaxed_hull, _relaxed_hull_plain
+    from paraspace.kinematics.joints import cone_table
+
+    design = Design()
+    tab = ChainTables(design, 61)
+    u = np.ascontiguousarray(platform_points_local(design))
+    jc = np.ascontiguousarray(cone_table(design, Joints(), np.eye(3)))
+    assert (jc[:, :, 6:8] == -1.0).all()  # no cone set
+    rng = np.random.default_rng(23)
+    oks = 0
+    for _ in range(3000):
+        p = rng.uniform((-150, -150, 60), (150, 150, 260))
+        i, k = int(rng.integers(3)), int(rng.integers(61))
+        e = rng.uniform(-3.0, 3.0)
+        lo2, hi2 = max(design.l_min - e, 0.0) ** 2, (design.l_max + e) ** 2
+        pts = chain_points(*p, u, i)
+        a = _relaxed_hull(*pts, tab.cos_t[i, k], tab.sin_t[i, k], tab.hb, tab.rho_lo, tab.rho_hi, lo2, hi2,
+                          jc[i], e)
+        b = _relaxed_hull_plain(*pts, tab.cos_t[i, k], tab.sin_t[i, k], tab.hb, tab.rho_lo, tab.rho_hi, lo2, hi2)
+        assert a == b
+        oks += a[0]
+    assert 100 < oks < 2900  # both answers occur
+
+
 def test_interference_bit_is_set_where_the_legs_interfere():
     design = Design()
     joints = Joints(leg_diameter=10.0)
