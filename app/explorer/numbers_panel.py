@@ -9,6 +9,7 @@ design that was not applied. :func:`numbers_markdown` builds the text from those
 
 from __future__ import annotations
 
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -187,6 +188,13 @@ class NumbersPanel:
 
     def __init__(self, ctx: SessionContext) -> None:
         self.ctx = ctx
+        #: renders run on several threads (GUI callbacks, jobs' ends): each takes a number with its
+        #: snapshot, and one whose snapshot is older than the last one written writes nothing, so a
+        #: late render of an older state never overwrites a newer one (nor leaves the Numbers and the
+        #: summary from two states)
+        self._taken = 0
+        self._written = 0
+        self._write_lock = threading.Lock()
 
     def render(self) -> None:
         """Redraw the panel from what the session has on screen now."""
@@ -194,6 +202,8 @@ class NumbersPanel:
         if ctx.closed:  # the browser left: its GUI handles lead nowhere
             return
         with ctx.lock:
+            self._taken += 1
+            ticket = self._taken
             info = ctx.ws_info  # immutable: replaced, never changed in place
             res = ctx.resolution
             inside = ctx.in_workspace
@@ -210,6 +220,12 @@ class NumbersPanel:
             result = shown.result if shown is not None and shown.mechanism == s.mechanism else None
             mech_lines = mechanism_lines(s.mechanism, result)
             pose_line = mechanism_pose_line(drawn, inside)
-        ctx.panels.numbers.content = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line,
-                                                      mech_lines, pose_line, refused)
-        ctx.panels.summary.content = summary_markdown(s, info, res, inside, ori, pose_line, refused)
+        numbers = numbers_markdown(s, info, res, inside, ori, ctx.design_error, ctx.task_line, mech_lines, pose_line,
+                                   refused)
+        summary = summary_markdown(s, info, res, inside, ori, pose_line, refused)
+        with self._write_lock:
+            if ticket < self._written:
+                return
+            self._written = ticket
+            ctx.panels.numbers.content = numbers
+            ctx.panels.summary.content = summary
