@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open, _stroke_open
-from .feasibility import chain_points
+from .feasibility import chain_points, cones_set
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -55,8 +55,9 @@ _R1, _R0, _X = 1, 2, 4
 
 
 def has_cones(jc: np.ndarray) -> bool:
-    """Whether any chain's tests include joint cones (as :func:`kinematics.feasibility._leg_sets` decides)."""
-    return bool(np.any((jc[:, 0, 6] > -1.0) | (jc[:, 0, 7] > -1.0)))
+    """Whether any chain's tests include joint cones (:func:`kinematics.feasibility.cones_set`, as
+    :func:`kinematics.feasibility._leg_sets` decides)."""
+    return any(cones_set(np.ascontiguousarray(jc[i])) for i in range(jc.shape[0]))
 
 
 @njit(cache=True, inline="always")

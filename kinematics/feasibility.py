@@ -179,6 +179,13 @@ def _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
 
 
 @njit(cache=True, inline="always")
+def cones_set(jci):
+    """Whether a chain's cone table ``jci`` (2, 8) (:func:`kinematics.joints.cone_table`) sets a joint
+    cone (``k = -1`` marks none; every leg has the same two)."""
+    return jci[0, 6] > -1.0 or jci[0, 7] > -1.0
+
+
+@njit(cache=True, inline="always")
 def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
     """Both legs' (F2) interval sets at one carriage angle and the rail ``[rho_lo, rho_hi]`` cut by
     the joint cones: ``(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)``; ``ok`` is
@@ -188,7 +195,7 @@ def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lma
     n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lmin2, lmax2)
     if n1 == 0 or n2 == 0:
         return False, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
-    if jc[0, 6] > -1.0 or jc[0, 7] > -1.0:
+    if cones_set(jc):
         rho_lo, rho_hi = _leg_cones(jc, 0, p1, m1, q1, b1x, b1y, b1z, c, s, hb, cone_e, rho_lo, rho_hi)
         rho_lo, rho_hi = _leg_cones(jc, 1, p2, m2, q2, b2x, b2y, b2z, c, s, -hb, cone_e, rho_lo, rho_hi)
     return rho_lo <= rho_hi, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi

@@ -81,7 +81,7 @@ from numba import njit, prange
 
 from .blocks import child_offsets, n_children, rounding_margin, write_child
 from .design import Design
-from .feasibility import ChainTables, _leg_frames, _leg_intervals, _leg_sets, chain_points
+from .feasibility import ChainTables, _leg_frames, _leg_intervals, _leg_sets, chain_points, cones_set
 from .geometry import platform_points_local
 from .interference import _pose_clear, pose_scratch, segment_closest, segment_distance
 from .joints import Joints, cone_table
@@ -306,7 +306,7 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         jci = jc[i]  # one view per chain, not one per sample (each costs two atomic reference counts)
-        cones = jci[0, 6] > -1.0 or jci[0, 7] > -1.0  # as feasibility._leg_sets tells
+        cones = cones_set(jci)
         stopped = False
         tries = 0
         for step in range(n):  # the witness search's order (interference._witnesses)
@@ -411,7 +411,7 @@ def _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc,
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
         bx[i, 1], by[i, 1], bz[i, 1] = b2x, b2y, b2z
         jci = jc[i]
-        cones = jci[0, 6] > -1.0 or jci[0, 7] > -1.0
+        cones = cones_set(jci)
         alive = False
         for k in range(n):
             if skip[sb, i, k]:
