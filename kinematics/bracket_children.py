@@ -19,8 +19,8 @@ tested ONCE per sample ``k`` with three limits, flags:
 The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
 the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
 sample of it has ``R1``. The samples of the other sub-arcs get all three tests, in a loop without
-branches (SIMD lanes; :func:`_passes` answers exactly as the per-sample test, and only the
-soundness of the flags, not their values, enters the children's decisions). The parent then lists
+branches (SIMD lanes; :func:`kinematics.feasibility._passes` answers exactly as the per-sample
+test, and only the soundness of the flags, not their values, enters the children's decisions). The parent then lists
 its samples by flag once (``X``; ``R0``; ``R1`` without ``R0``), and a child's searches walk these
 lists in the window's order: the samples, tests and order of a scan that skips unflagged samples.
 
@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import FAIL, OK, UNKNOWN, _segment_open, _stroke_open
-from .feasibility import chain_points, cones_set
+from .feasibility import _leg_frames, _passes, chain_points, cones_set, feasible_plain
 
 __all__ = ["children_kernel", "has_cones"]
 
@@ -58,64 +58,6 @@ def has_cones(jc: np.ndarray) -> bool:
     """Whether any chain's tests include joint cones (:func:`kinematics.feasibility.cones_set`, as
     :func:`kinematics.feasibility._leg_sets` decides)."""
     return any(cones_set(np.ascontiguousarray(jc[i])) for i in range(jc.shape[0]))
-
-
-@njit(cache=True, inline="always")
-def _mx(a, b):
-    return a if a > b else b
-
-
-@njit(cache=True, inline="always")
-def _mn(a, b):
-    return a if a < b else b
-
-
-@njit(cache=True, inline="always")
-def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
-    """The test of :func:`kinematics.feasibility._feasible_at` without cones, from both legs'
-    ``p``, ``q`` (F1) and the squared leg limits ``lo2 <= hi2``, without branches (so that a loop
-    over samples runs in SIMD lanes). The same answer as ``_leg_intervals`` + ``sets_meet``: a leg
-    with ``q <= lo2`` has the one interval ``[p - ro, p + ro]``, here its two halves ``[p - ro, p]``
-    and ``[p, p + ro]`` (``ri = 0``), which meet an interval iff it does (min and max are exact)."""
-    ro1 = math.sqrt(_mx(hi2 - q1, 0.0))
-    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
-    ro2 = math.sqrt(_mx(hi2 - q2, 0.0))
-    ri2 = math.sqrt(_mx(lo2 - q2, 0.0))
-    a0, a1, a2, a3 = p1 - ro1, p1 - ri1, p1 + ri1, p1 + ro1
-    c0, c1, c2, c3 = p2 - ro2, p2 - ri2, p2 + ri2, p2 + ro2
-    meet = ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
-            | (_mx(_mx(a0, c2), rho_lo) <= _mn(_mn(a1, c3), rho_hi))
-            | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
-            | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
-    return meet & (q1 <= hi2) & (q2 <= hi2)
-
-
-@njit(cache=True, inline="always")
-def _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
-    """Each leg's S joint in the rail's frame: ``(p1, q1, p2, q2)``, ``p`` the position along the rail
-    of direction ``(c, s)`` and ``q`` the squared distance from the leg's line of U joints."""
-    p1 = b1x * c + b1y * s
-    m1 = -b1x * s + b1y * c - hb
-    p2 = b2x * c + b2y * s
-    m2 = -b2x * s + b2y * c + hb
-    return p1, b1z * b1z + m1 * m1, p2, b2z * b2z + m2 * m2
-
-
-@njit(cache=True, inline="always")
-def _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
-    """:func:`kinematics.feasibility._feasible_at` without cones (the same answer: :func:`_passes`),
-    for the squared leg limits ``lo2 <= hi2``, inlined. One test at a time (the children's), so it
-    first answers the cheap cases with branches: a leg longer than the outer limit at every ``rho``,
-    or the two legs' outer intervals (without their inner gaps) not meeting on the rail -- then no
-    pair of their parts meets either, and :func:`_passes` is False too."""
-    p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
-    if q1 > hi2 or q2 > hi2:
-        return False
-    ro1 = math.sqrt(hi2 - q1)
-    ro2 = math.sqrt(hi2 - q2)
-    if _mx(_mx(p1 - ro1, p2 - ro2), rho_lo) > _mn(_mn(p1 + ro1, p2 + ro2), rho_hi):
-        return False
-    return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
 
 
 @njit(cache=True, inline="always")
@@ -133,7 +75,7 @@ def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
     """The three tests of every sample ``a..b`` of chain ``i``, into ``flags[i]`` (no branch: SIMD lanes); an
     empty limit pair (``lo2 > hi2``) never passes."""
     for k in range(a, b + 1):
-        p1, q1, p2, q2 = _legs_on_rail(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb)
+        p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb)
         f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
         f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
         fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
@@ -194,7 +136,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
     reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
     and the bounds are computed only for the sub-arcs of samples that pass the relaxed test.
-    Without joint cones: each test is :func:`_test`, which answers as
+    Without joint cones: each test is :func:`kinematics.feasibility.feasible_plain`, which answers as
     :func:`kinematics.feasibility._feasible_at` there.
 
     The samples are visited from the parent's lists (:func:`_sample_lists`: ``lists[0]`` those with
@@ -221,8 +163,8 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if n_r0 + n_r1 == 0:  # no sample can pass the relaxed test (R0 and X imply R1), nor the tight one
         return FAIL
     if can_ok:
-        if flags[i, hint - flo] & _X and _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint], sin_t[i, hint], hb,
-                                               rho_lo, rho_hi, lo_t2, hi_t2):
+        if flags[i, hint - flo] & _X and feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint],
+                                                        sin_t[i, hint], hb, rho_lo, rho_hi, lo_t2, hi_t2):
             kwin[c, i, 0] = hint
             return OK
         for t in range(n_x):
@@ -230,9 +172,10 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             if k == hint:
                 continue
             # both tests must pass (as in decide_chain): the tight one first, it fails more often
-            if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2, hi_t2):
-                if flags[i, k - flo] & _R0 or _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo,
-                                                 rho_hi, lo_r2, hi_r2):
+            if feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2,
+                              hi_t2):
+                if flags[i, k - flo] & _R0 or feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k],
+                                                             hb, rho_lo, rho_hi, lo_r2, hi_r2):
                     kwin[c, i, 0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
@@ -259,7 +202,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         k = lists[i, 2, t]
         if r0_lo >= 0 and k >= r0_lo:
             break
-        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
+        if feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_lo = k
@@ -285,7 +228,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         k = lists[i, 2, t]
         if k <= p_hi:
             break
-        if _test(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
+        if feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_r2, hi_r2):
             if _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, rho_lo, rho_hi,
                         lo_b, hi_b):
                 p_hi = k

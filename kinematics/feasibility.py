@@ -201,15 +201,81 @@ def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lma
     return rho_lo <= rho_hi, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
 
 
+@njit(cache=True, inline="always")
+def _mx(a, b):
+    return a if a > b else b
+
+
+@njit(cache=True, inline="always")
+def _mn(a, b):
+    return a if a < b else b
+
+
+@njit(cache=True, inline="always")
+def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
+    """The test of :func:`_feasible_sets` without cones, from both legs'
+    ``p``, ``q`` (F1) and the squared leg limits ``lo2 <= hi2``, without branches (so that a loop
+    over samples runs in SIMD lanes). The same answer as ``_leg_intervals`` + ``sets_meet``: a leg
+    with ``q <= lo2`` has the one interval ``[p - ro, p + ro]``, here its two halves ``[p - ro, p]``
+    and ``[p, p + ro]`` (``ri = 0``), which meet an interval iff it does (min and max are exact)."""
+    ro1 = math.sqrt(_mx(hi2 - q1, 0.0))
+    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
+    ro2 = math.sqrt(_mx(hi2 - q2, 0.0))
+    ri2 = math.sqrt(_mx(lo2 - q2, 0.0))
+    a0, a1, a2, a3 = p1 - ro1, p1 - ri1, p1 + ri1, p1 + ro1
+    c0, c1, c2, c3 = p2 - ro2, p2 - ri2, p2 + ri2, p2 + ro2
+    meet = ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
+            | (_mx(_mx(a0, c2), rho_lo) <= _mn(_mn(a1, c3), rho_hi))
+            | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
+            | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
+    return meet & (q1 <= hi2) & (q2 <= hi2)
+
+
+@njit(cache=True, inline="always")
+def feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
+    """:func:`_feasible_at` for a chain without joint cones (the same answer as its interval sets,
+    :func:`_feasible_sets`: :func:`_passes`), for the squared leg limits ``lo2 <= hi2``, inlined. One
+    test at a time, so it first answers the cheap cases with branches: a leg longer than the outer
+    limit at every ``rho``, or the two legs' outer intervals (without their inner gaps) not meeting on
+    the rail -- then no pair of their parts meets either, and :func:`_passes` is False too."""
+    p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
+    if q1 > hi2 or q2 > hi2:
+        return False
+    ro1 = math.sqrt(hi2 - q1)
+    ro2 = math.sqrt(hi2 - q2)
+    if _mx(_mx(p1 - ro1, p2 - ro2), rho_lo) > _mn(_mn(p1 + ro1, p2 + ro2), rho_hi):
+        return False
+    return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
+
+
 @njit(cache=True)
 def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
     """Exact test in rho at one carriage angle (cos c, sin s): both legs' (F2) sets meet the rail
-    (and, when ``jc`` sets joint cones, both legs' cone intervals, relaxed by ``cone_e``)."""
+    (and, when ``jc`` sets joint cones, both legs' cone intervals, relaxed by ``cone_e``). Without
+    cones it runs :func:`feasible_plain` (the same answer, tested; no interval sets, early exits), else
+    the interval sets themselves (:func:`_feasible_sets`). (The sets' test is inlined here, not
+    called: measured, this function then stays a call in the engines' loops and is faster there.)"""
+    if not cones_set(jc):
+        return feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2)
+    return _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
+
+
+@njit(cache=True, inline="always")
+def _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
+    """Both legs' (F2) interval sets (cut by the joint cones where ``jc`` sets them) meet on the rail
+    (:func:`_leg_sets`, :func:`sets_meet`): the definition of :func:`_feasible_at`."""
     ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi = _leg_sets(
         b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
     if not ok:
         return False
     return sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
+
+
+@njit(cache=True)
+def _feasible_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
+    """:func:`_feasible_at` by its definition, with or without cones (:func:`_sets_test`; the tests'
+    reference for :func:`feasible_plain`)."""
+    return _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
 
 
 @njit(cache=True)

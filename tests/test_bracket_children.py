@@ -102,63 +102,6 @@ def test_joint_cones_take_the_per_child_path_and_a_bad_method_is_refused():
         volume_bracket(design, res.grid, args, res.n_eta, refine=1, method="children")
 
 
-def test_branch_free_parent_test_as_the_interval_test():
-    """The parents' branch-free test (bracket_children._passes, SIMD) answers as the per-sample
-    interval test (_leg_intervals + sets_meet), also at the exact edges of its cases."""
-    from paraspace.kinematics.bracket_children import _passes
-    from paraspace.kinematics.feasibility import _leg_intervals, sets_meet
-
-    rng = np.random.default_rng(7)
-    lo2, hi2, rho_lo, rho_hi = 90.0 ** 2, 130.0 ** 2, -40.0, 0.0
-    n = 40000
-    p = rng.uniform(-200.0, 200.0, (n, 2))
-    q = rng.uniform(0.0, 1.3 * hi2, (n, 2))
-    q[::7, 0] = lo2  # the edges: one interval or two, empty or not
-    q[::11, 1] = hi2
-    q[::13, 0] = 0.0
-    for k in range(n):
-        p1, p2, q1, q2 = p[k, 0], p[k, 1], q[k, 0], q[k, 1]
-        n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lo2, hi2)
-        n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lo2, hi2)
-        ref = n1 > 0 and n2 > 0 and sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)
-        assert bool(_passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)) == ref, (p1, q1, p2, q2)
-
-
-def test_the_childrens_test_with_early_exits_as_the_exact_test():
-    """The children's one-at-a-time test (bracket_children._test: a leg too long at every rho, or
-    the legs' outer intervals apart on the rail, answered before the full test) answers as the
-    engine's exact test (feasibility._feasible_at, no joint cones): random poses, and poses whose
-    outer intervals touch exactly (one common rho), end at the rail's ends, or miss by a hair."""
-    from paraspace.kinematics.bracket_children import _test
-    from paraspace.kinematics.feasibility import _feasible_at
-
-    jc = kernel_args(Design(), (0.0, 0.0, 0.0), 11)[9][0]  # no joint cones
-    hb, rho_lo, rho_hi = 12.0, -40.0, 60.0
-    rng = np.random.default_rng(11)
-    cases = []
-    for _ in range(30000):
-        b = rng.uniform(-150.0, 150.0, 6)
-        th = rng.uniform(-1.0, 1.0)
-        lo, hi = sorted(rng.uniform(0.0, 180.0, 2))
-        cases.append((*b, math.cos(th), math.sin(th), lo * lo, hi * hi))
-    # exact edges with c = 1, s = 0 and b_y = +-hb: p = b_x, q = b_z^2; q = 120^2, hi = 130: ro = 50
-    for p1, gap in [(0.0, 100.0), (0.0, 100.0 + 1e-9), (-90.0, 100.0), (10.0, 100.0), (-140.0, 100.0),
-                    (0.0, 0.0), (60.0, -100.0), (60.0, -100.0 - 1e-9)]:
-        for lo2 in (0.0, 110.0 ** 2, 125.0 ** 2):
-            cases.append((p1, hb, 120.0, p1 + gap, -hb, 120.0, 1.0, 0.0, lo2, 130.0 ** 2))
-    cases.append((-90.0, hb, 131.0, 10.0, -hb, 120.0, 1.0, 0.0, 0.0, 130.0 ** 2))  # leg 1 too long
-    answers = set()
-    for b1x, b1y, b1z, b2x, b2y, b2z, c, s, lo2, hi2 in cases:
-        ref = _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2, jc, 0.0)
-        got = _test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2)
-        assert bool(got) == bool(ref), (b1x, b1y, b1z, b2x, b2y, b2z, c, s, lo2, hi2)
-        answers.add(bool(ref))
-    assert answers == {True, False}
-    # the touching pair passes (one common rho), the pair a hair apart does not
-    assert _test(0.0, hb, 120.0, 100.0, -hb, 120.0, 1.0, 0.0, hb, rho_lo, rho_hi, 0.0, 130.0 ** 2)
-    assert not _test(0.0, hb, 120.0, 100.0 + 1e-9, -hb, 120.0, 1.0, 0.0, hb, rho_lo, rho_hi, 0.0, 130.0 ** 2)
-
-
 @pytest.mark.parametrize("design, joints", [(Design(), Joints()), (Design(a=30.0), Joints(theta_u=45.0))])
 def test_the_mirror_half_gives_an_equally_certified_bracket(design, joints):
     """``symmetric`` (module doc of kinematics.bracket, *Mirror*): the classes are mirror images of each
