@@ -257,7 +257,7 @@ def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     return m, -dy1 / l1, -bz1 / l1, l1, False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, ST, D,
                          thr, CS, T, py, pz, need):
     """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the
@@ -275,7 +275,9 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
     climbs again only when the result's margin exceeds ``thr``: then the skipped points are below
     the maximum, so the first maximiser and the decision are :func:`_coarse_best`'s; otherwise the
     margin returned is a value ``<= thr`` (``-inf`` when every point was skipped). ``CS[a]``: the
-    cosine and sine of ``gamma + eta`` of row ``a`` (:func:`_scan_rows`)."""
+    cosine and sine of ``gamma + eta`` of row ``a`` (:func:`_scan_rows`). Inlined, with
+    :func:`kinematics.dexterity_sweep._inverse_condition`, for the reference counts of its array
+    arguments and of the views the kernel passes (measured there)."""
     n_e = 1 if e_hi <= e_lo else _CE
     n_r = 1 if r_hi <= r_lo else _CR
     n = n_e * n_r
