@@ -219,16 +219,23 @@ def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
     with ``q <= lo2`` has the one interval ``[p - ro, p + ro]``, here its two halves ``[p - ro, p]``
     and ``[p, p + ro]`` (``ri = 0``), which meet an interval iff it does (min and max are exact)."""
     ro1 = math.sqrt(_mx(hi2 - q1, 0.0))
-    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
     ro2 = math.sqrt(_mx(hi2 - q2, 0.0))
+    return _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi) & (q1 <= hi2) & (q2 <= hi2)
+
+
+@njit(cache=True, inline="always")
+def _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi):
+    """Whether a part of leg 1's set, a part of leg 2's and the rail meet (no branch): each leg's
+    parts ``[p - ro, p - ri]`` and ``[p + ri, p + ro]`` with its outer radius ``ro`` given and
+    ``ri = sqrt(max(lo2 - q, 0))`` (:func:`_passes`)."""
+    ri1 = math.sqrt(_mx(lo2 - q1, 0.0))
     ri2 = math.sqrt(_mx(lo2 - q2, 0.0))
     a0, a1, a2, a3 = p1 - ro1, p1 - ri1, p1 + ri1, p1 + ro1
     c0, c1, c2, c3 = p2 - ro2, p2 - ri2, p2 + ri2, p2 + ro2
-    meet = ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
+    return ((_mx(_mx(a0, c0), rho_lo) <= _mn(_mn(a1, c1), rho_hi))
             | (_mx(_mx(a0, c2), rho_lo) <= _mn(_mn(a1, c3), rho_hi))
             | (_mx(_mx(a2, c0), rho_lo) <= _mn(_mn(a3, c1), rho_hi))
             | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
-    return meet & (q1 <= hi2) & (q2 <= hi2)
 
 
 @njit(cache=True, inline="always")
@@ -237,7 +244,8 @@ def feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, 
     :func:`_feasible_sets`: :func:`_passes`), for the squared leg limits ``lo2 <= hi2``, inlined. One
     test at a time, so it first answers the cheap cases with branches: a leg longer than the outer
     limit at every ``rho``, or the two legs' outer intervals (without their inner gaps) not meeting on
-    the rail -- then no pair of their parts meets either, and :func:`_passes` is False too."""
+    the rail -- then no pair of their parts meets either, and :func:`_passes` is False too; else
+    :func:`_passes`'s meet of the parts, with the outer radii already taken."""
     p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
     if q1 > hi2 or q2 > hi2:
         return False
@@ -245,7 +253,7 @@ def feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, 
     ro2 = math.sqrt(hi2 - q2)
     if _mx(_mx(p1 - ro1, p2 - ro2), rho_lo) > _mn(_mn(p1 + ro1, p2 + ro2), rho_hi):
         return False
-    return _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi)
+    return _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi)  # its outer radii, not computed again
 
 
 @njit(cache=True)
