@@ -103,6 +103,7 @@ from .dexterity_sweep import (
     _inverse_condition,
     by_planes,
     field_inputs,
+    plane_costs,
     plane_index,
     plane_offsets,
 )
@@ -172,13 +173,13 @@ def _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, 
 
 
 @njit(cache=True)
-def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r):
+def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r, trig):
     """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
     in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
     ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``. The cosine and sine of
     ``gamma + eta`` at a step of ``eta`` come from those at the current ``eta`` by the angle-addition
-    formulas (one sine and cosine of the step per level instead of one per profile; computed
-    directly where the step is cut at a stroke end)."""
+    formulas (computed directly where the step is cut at a stroke end); those of the step at each
+    level are ``trig`` (:func:`_step_trig`: the same for every climb of a field, so taken once)."""
     se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
     sr = (r_hi - r_lo) / (_NR - 1) if r_hi > r_lo else 0.0
     e = _clamp(e, e_lo, e_hi)
@@ -187,7 +188,7 @@ def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin
     r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
     for lev in range(_LEVELS):
         if se > 0.0:
-            cd, sd = math.cos(se), math.sin(se)
+            cd, sd = trig[2 * lev], trig[2 * lev + 1]
             direction = 0.0
             for _ in range(_MAX_MOVES):
                 best, be, br, bc, bs = m, e, r, c, s
@@ -212,6 +213,19 @@ def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin
         se /= _ZOOM
         sr /= _ZOOM
     return r, e, m
+
+
+@njit(cache=True)
+def _step_trig(e_lo, e_hi):
+    """The cosine and sine of :func:`_climb`'s step in ``eta`` at each of its levels, as
+    ``(cos s_0, sin s_0, cos s_1, sin s_1, cos s_2, sin s_2)`` (the steps as :func:`_climb` takes
+    them, so the same numbers bit for bit)."""
+    se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
+    c0, s0 = math.cos(se), math.sin(se)
+    se /= _ZOOM
+    c1, s1 = math.cos(se), math.sin(se)
+    se /= _ZOOM
+    return (c0, s0, c1, s1, math.cos(se), math.sin(se))
 
 
 @njit(cache=True)
@@ -318,15 +332,18 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
+def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
                       out, rho_out, eta_out, margin_out, bounded):
-    """The neighbour search (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
+    """The neighbour search (module docstring) over the ``x`` planes ``planes`` (``-1``: none): ``out`` gets
     ``1/kappa``, ``rho_out``/``eta_out``/``margin_out`` (N, 3; ``rho = r - d``, ``eta`` in radians)
     the chosen carriage and its chain margins, for the reachable voxels in C order. ``bounded``: the
     restart scan pruned by the Lipschitz bounds (:func:`_coarse_best_bounded`; the same poses), else
     every scan point computed (:func:`_coarse_best`, the reference the tests compare with)."""
     ny, nz = occ.shape[1], occ.shape[2]
-    for i in prange(i0, i1):
+    for t in prange(planes.shape[0]):
+        i = planes[t]
+        if i < 0:
+            continue
         CS, UB = work_arrays()
         rho = np.zeros(3)
         eta = np.zeros(3)
@@ -338,6 +355,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         CNEED = np.empty(_CE * _CR, np.bool_)
         for c in range(3):
             _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
+        trig = _step_trig(e_lo, e_hi)
         index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
         first = True
@@ -365,7 +383,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                                         lmin, lmax)
                     else:
                         r, e, mg = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
-                                          eta[c], rho[c])
+                                          eta[c], rho[c], trig)
                         # a second start at the best of a coarse scan of the strokes: another local
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
@@ -377,7 +395,7 @@ def _neighbour_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                                                       lmin, lmax)
                         if cm > mg:
                             r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
-                                                lmax, ce, cr)
+                                                lmax, ce, cr, trig)
                             if m2 > mg:
                                 r, e, mg = r2, e2, m2
                     rho[c] = r
@@ -484,8 +502,8 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     rho = np.zeros((n, 3))
     eta = np.zeros((n, 3))
     margin = np.zeros((n, 3))
-    by_planes(f.occ.shape[0], lambda i0, i1: _neighbour_kernel(
-        f.occ, i0, i1, offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
+    by_planes(plane_costs(f.occ), lambda planes: _neighbour_kernel(
+        f.occ, planes, offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
         float(design.l_min), float(design.l_max), out, rho, eta, margin, bool(bounded)), progress, cancel)
     if ny_eval is not None:
         with kernel_launch(occ.shape[0]):

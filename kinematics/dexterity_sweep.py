@@ -48,18 +48,22 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 
+import numba
 import numpy as np
 from numba import njit, prange
 
 from .carriage_search import best_carriage, work_arrays
 from .design import Design
 from .geometry import LEG_SIGN, platform_points_local
-from .parallel import kernel_launch
+from .parallel import dealt_launch
 from .progress import CancelToken, Reporter, check
 from .rotation import euler_rate_matrix, euler_zyx_deg
 
-#: x planes per kernel launch (cancellation and progress are checked between launches).
-PLANES = 8
+#: x planes per thread of a kernel launch (cancellation and progress are checked between launches).
+PLANES = 4
+#: A plane's first voxel's cost in reachable voxels' (:func:`plane_costs`: the full search of three
+#: chains, about 65 us, against about 2.7 us a voxel on one core at h = 2).
+FIRST_VOXEL_COST = 25.0
 #: Stated tolerance on 1/kappa against the full search's: relative and absolute (module docstring).
 TOL_REL, TOL_ABS = 1e-9, 1e-12
 #: ``1/kappa^2`` below which :func:`_inverse_condition` takes the Jacobi eigenvalues instead of the
@@ -324,13 +328,16 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _sweep_kernel(occ, i0, i1, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
+def _sweep_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi, hb, inv_L, lmin, lmax,
                   out, rho_out, eta_out):
-    """The exact field (module docstring) over the ``x`` planes ``i0 <= i < i1``: ``out`` gets
+    """The exact field (module docstring) over the ``x`` planes ``planes`` (``-1``: none): ``out`` gets
     ``1/kappa`` and ``rho_out``/``eta_out`` (N, 3; ``rho = r - d``, ``eta`` in radians) the resolved
     carriage of the reachable voxels in C order (``offset[i]``: the index of plane ``i``'s first)."""
     ny, nz = occ.shape[1], occ.shape[2]
-    for i in prange(i0, i1):
+    for t in prange(planes.shape[0]):
+        i = planes[t]
+        if i < 0:
+            continue
         CS, UB = work_arrays()
         rho = np.zeros(3)
         eta = np.zeros(3)
@@ -400,15 +407,29 @@ def plane_offsets(occ: np.ndarray) -> tuple[np.ndarray, int]:
     return np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64), int(counts.sum())
 
 
-def by_planes(nx: int, launch: Callable[[int, int], None], progress: Reporter | None,
+def plane_costs(occ: np.ndarray) -> np.ndarray:
+    """Each ``x`` plane's estimated cost for :func:`by_planes`, in reachable voxels: its reachable
+    voxels, plus :data:`FIRST_VOXEL_COST` for a plane that has one (the neighbour search's full
+    search at a plane's first voxel)."""
+    counts = occ.reshape(occ.shape[0], -1).sum(axis=1).astype(float)
+    return counts + FIRST_VOXEL_COST * (counts > 0)
+
+
+def by_planes(costs: np.ndarray, launch: Callable[[np.ndarray], None], progress: Reporter | None,
               cancel: CancelToken) -> None:
-    """Call ``launch(i0, i1)`` on the x planes ``[i0, i1)`` in runs of ``PLANES``, checking
-    ``cancel`` before each run and reporting the share done after it."""
-    for i0 in range(0, nx, PLANES):
+    """Call ``launch(planes)`` on the x planes in runs of ``PLANES`` per thread, checking ``cancel``
+    before each run and reporting the share done after it. ``planes`` is the run's planes in
+    :func:`kinematics.parallel.dealt_order` for their ``costs`` (:func:`plane_costs`), ``-1`` where
+    none: the threads' slices of a launch carry nearly equal work (numba hands a launch out in equal
+    contiguous slices, so planes in grid order left the thread with the larger planes of a run of
+    unequal ones working alone)."""
+    nx = int(costs.size)
+    run = PLANES * numba.get_num_threads()
+    for i0 in range(0, nx, run):
         check(cancel)
-        i1 = min(nx, i0 + PLANES)
-        with kernel_launch(i1 - i0):
-            launch(i0, i1)
+        i1 = min(nx, i0 + run)
+        with dealt_launch(costs[i0:i1]) as order:
+            launch(np.where(order >= 0, order + i0, -1))
         if progress is not None:
             progress(i1 / nx, "dexterity")
 
@@ -423,7 +444,7 @@ def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.
     out = np.zeros(f.n)
     rho = np.zeros((f.n, 3))
     eta = np.zeros((f.n, 3))
-    by_planes(f.occ.shape[0], lambda i0, i1: _sweep_kernel(
-        f.occ, i0, i1, f.offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
+    by_planes(plane_costs(f.occ), lambda planes: _sweep_kernel(
+        f.occ, planes, f.offset, f.xs, f.ys, f.zs, f.u, f.R2, f.e_lo, f.e_hi, f.r_lo, f.r_hi, f.hb, f.inv_L,
         float(design.l_min), float(design.l_max), out, rho, eta), progress, cancel)
     return out, design.r - rho, np.degrees(eta) + 0.0

@@ -13,17 +13,22 @@ second process busy on one core). Unless the user chose a policy, the threads sl
 (``OMP_WAIT_POLICY=PASSIVE``; set here, before libgomp is loaded at the first parallel launch),
 which costs a few microseconds per launch on an idle machine.
 
-Sharing policy: by default numba splits a ``prange`` into one equal slice per thread, so when one
-core is busy with another process the thread on it holds the whole launch back (2 threads were
-measured slower than 1 under load). Holding :data:`KERNEL_LOCK` therefore also hands the
-iterations out in chunks (numba's ``parallel_chunksize``, a per-thread setting restored on
-release): a thread that finishes a chunk takes the next one, so the thread on the free core does
-most of the work instead of waiting for the other. :data:`DEFAULT_CHUNK` iterations per chunk
-(every kernel's iteration costs at least one feasibility test, so the per-chunk cost of a fraction
-of a microsecond is negligible); :func:`kernel_launch` sizes the chunks from the launch's
-iteration count. The results do not depend on the chunking or the thread count: each iteration
-writes only its own outputs. (Measured ratios: README, performance section; on the shared,
-never idle machine they are rough.)
+Sharing policy: by default numba splits a ``prange`` into one equal slice per thread. Holding
+:data:`KERNEL_LOCK` also sets numba's ``parallel_chunksize`` (a per-thread setting restored on
+release) to :data:`DEFAULT_CHUNK` iterations, and :func:`kernel_launch` sizes the chunks from the
+launch's iteration count. The results do not depend on the chunking or the thread count: each
+iteration writes only its own outputs.
+
+Static slices: the chunks are handed out dynamically (a thread that finishes one takes the next)
+only by the ``tbb`` layer. The ``omp`` layer (the one this project gets from the wheels: libgomp's
+``omp for`` is statically scheduled) and the ``workqueue`` layer give each thread an equal
+contiguous slice of the chunks, so with any chunk size a launch whose costly iterations sit together
+waits for the thread that got them (measured, 2 threads: 64 iterations whose first 32 hold all the
+work take 95 ms with chunks of 0, 1 or 4 under ``omp`` and ``workqueue``, 51 ms with chunks of 1
+under ``tbb``, 48 ms with the work interleaved; ``tests/test_parallel.py`` checks the slices). A
+launch over items of known unequal cost therefore orders them with :func:`dealt_order`
+(:func:`dealt_launch`), which balances the slices under every layer. (Until issue 24's last round
+this paragraph said the chunks balanced the threads under ``omp``; they never did.)
 
 Busy machine: Linux schedules each login session as one group (``sched_autogroup``) and shares the
 CPU fairly between the groups, so when the other sessions already keep every core busy a second
@@ -33,8 +38,9 @@ the speed of 1 for the blocks and dense engines and the orientation scan, chunks
 launch therefore counts the other runnable tasks (``/proc/loadavg``'s instantaneous count) and
 uses one thread when they are at least as many as the cores (:func:`launch_threads`; same
 measurement: 0.96x, 0.77x, 0.76x -- the count is a snapshot of bursty work and misses some of
-it). With one other busy process on a 2-core machine both threads stay (the chunks let the second
-one help). ``LOAD_RULE = False`` turns the rule off; without ``/proc/loadavg`` every thread is used.
+it). With one other busy process on a 2-core machine both threads stay (under ``omp`` each keeps its
+slice, "Static slices" below, so the thread that shares its core finishes last).
+``LOAD_RULE = False`` turns the rule off; without ``/proc/loadavg`` every thread is used.
 
 Thread count set after import (:func:`adopt_thread_env`): numba reads ``NUMBA_NUM_THREADS`` when
 it is imported and again before each compilation, and refuses a change once its threads are
@@ -52,6 +58,8 @@ import os
 import threading
 from collections.abc import Iterator
 from typing import Any
+
+import numpy as np
 
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
@@ -170,6 +178,42 @@ class _KernelLock:
 
 
 KERNEL_LOCK = _KernelLock()
+
+
+def dealt_order(costs: np.ndarray, threads: int) -> np.ndarray:
+    """The order in which to launch items of estimated ``costs`` so that ``threads`` equal contiguous
+    slices of it (how numba's ``omp`` and ``workqueue`` layers hand a launch out, module docstring,
+    "Static slices") carry nearly equal costs: the items by cost, largest first, dealt to the slices
+    back and forth (``0 .. T-1``, then ``T-1 .. 0``, ...), each slice padded with ``-1`` (no item) to
+    the same length. Returns int64 indices into ``costs`` and ``-1`` pads, ``T * ceil(n / T)`` of
+    them."""
+    c = np.asarray(costs, float).ravel()
+    t = max(1, int(threads))
+    if c.size == 0:
+        return np.zeros(0, np.int64)
+    q = -(-c.size // t)
+    rank = np.argsort(-c, kind="stable")
+    rounds, pos = np.divmod(np.arange(c.size), t)
+    slot = np.where(rounds % 2 == 0, pos, t - 1 - pos)
+    out = np.full((t, q), -1, np.int64)
+    out[slot, rounds] = rank
+    return out.ravel()
+
+
+@contextlib.contextmanager
+def dealt_launch(costs: np.ndarray) -> Iterator[np.ndarray]:
+    """Hold :data:`KERNEL_LOCK` for one launch over items of estimated ``costs``, yielding the order
+    to launch them in (:func:`dealt_order` for the launch's thread count; the kernel skips ``-1``),
+    with numba's even split into one slice per thread."""
+    import numba
+
+    with KERNEL_LOCK:
+        order = dealt_order(costs, numba.get_num_threads())
+        previous = _set_chunk(0)
+        try:
+            yield order
+        finally:
+            _set_chunk(previous)
 
 
 @contextlib.contextmanager

@@ -185,3 +185,30 @@ def test_no_mirror_where_it_does_not_hold(design, orientation, flip):
         i, j, k = next(v for v in np.argwhere(occ) if v[1] != occ.shape[1] - 1 - v[1])
         occ[i, j, k] = False
     assert mirror_rows(design, occ, res.grid.axes(), orientation) is None
+
+
+def test_the_field_is_independent_of_the_launches_and_threads(monkeypatch):
+    """The planes are launched in runs, in a dealt order (kinematics.parallel.dealt_order): neither
+    the runs, the order nor the thread count changes a value, and the progress reaches 1 in steps."""
+    import numba
+
+    from paraspace.kinematics import dexterity_sweep
+
+    design, voxel, orientation = CASES[1]
+    res = compute_workspace(design, WorkspaceSettings(voxel=voxel, orientation=orientation))
+    axes = res.grid.axes()
+    seen: list[float] = []
+    ref = neighbour_field(design, res.occupancy, axes, orientation, progress=lambda f, _m: seen.append(f))
+    ref_sweep = dexterity_sweep.continuation_field(design, res.occupancy, axes, orientation)
+    assert len(seen) > 1 and seen == sorted(seen) and seen[-1] == 1.0
+    for planes in (1, 3):
+        monkeypatch.setattr(dexterity_sweep, "PLANES", planes)
+        for threads in (1, numba.config.NUMBA_NUM_THREADS):
+            numba.set_num_threads(threads)
+            try:
+                got = neighbour_field(design, res.occupancy, axes, orientation)
+                got_sweep = dexterity_sweep.continuation_field(design, res.occupancy, axes, orientation)
+            finally:
+                numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+            for a, b in zip(got + got_sweep, ref + ref_sweep):
+                assert np.array_equal(a, b), (planes, threads)
