@@ -76,6 +76,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -87,6 +88,7 @@ from .interference import _pose_clear, pose_scratch, segment_closest, segment_di
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
+from .slices import strided
 from .summed_volume import box_count, summed_volume
 
 __all__ = ["interference_free_grid", "TOP"]
@@ -439,18 +441,25 @@ def _block_scratch(n):
 
 @njit(parallel=True, cache=True, nogil=True)
 def _blocks_kernel(b0, bn, pskip, par, skip, sat, where, xs, ys, zs, h, eps, margin, u, cos_t, sin_t, arc, hb, rho_lo,
-                   rho_hi, lmin2, lmax2, jc, dmin, state, out):
+                   rho_hi, lmin2, lmax2, jc, dmin, state, out, threads):
     """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED, with the
     samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children):
     block ``b`` starts from its parent's marks ``pskip[par[b]]``, which a single voxel reads in place
     and a larger block copies into ``skip[b]`` before its tests add to them (so the rows of single
     voxels are never written). Parallel over runs of :data:`CHUNK` blocks, each with one set of
     scratch (an allocation per block or voxel cost a call to the allocator and atomic reference
-    counts each); every table is read in place, by index."""
+    counts each); every table is read in place, by index. The runs are visited in the strided order
+    of :mod:`kinematics.slices` for the launch's ``threads``: the undecided blocks gather along the
+    workspace's boundary, and numba gives each thread a contiguous slice of the launch."""
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     nb = b0.shape[0]
     n = cos_t.shape[1]
-    for c in prange((nb + CHUNK - 1) // CHUNK):
+    runs = (nb + CHUNK - 1) // CHUNK
+    per = (runs + threads - 1) // threads
+    for pos in prange(threads * per):
+        c = strided(pos, per, threads)
+        if c >= runs:
+            continue
         sel = np.empty((3, 6))
         wit, bp, pieces, pick, cnt = pose_scratch(n)
         stack, ks, hull, bx, by, bz, nk, cen, rad = _block_scratch(n)
@@ -531,7 +540,8 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
             with KERNEL_LOCK:
                 _blocks_kernel(b0[s:s + step], bn[s:s + step], pskip, par[s:s + step], skip[s:s + step], sat, mask,
                                xs, ys, zs, float(h), eps, margin, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo,
-                               tab.rho_hi, tab.lmin2, tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out)
+                               tab.rho_hi, tab.lmin2, tab.lmax2, jc, float(joints.min_distance), state[s:s + step], out,
+                               numba.get_num_threads())
         with KERNEL_LOCK:
             b0, bn, par = _split_undecided(b0, bn, state)
         pskip = skip

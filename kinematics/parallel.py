@@ -26,8 +26,10 @@ contiguous slice of the chunks, so with any chunk size a launch whose costly ite
 waits for the thread that got them (measured, 2 threads: 64 iterations whose first 32 hold all the
 work take 95 ms with chunks of 0, 1 or 4 under ``omp`` and ``workqueue``, 51 ms with chunks of 1
 under ``tbb``, 48 ms with the work interleaved; ``tests/test_parallel.py`` checks the slices). A
-launch over items of known unequal cost therefore orders them with :func:`dealt_order`
-(:func:`dealt_launch`), which balances the slices under every layer. (Until issue 24's last round
+launch over items of known unequal cost therefore orders them with
+:func:`kinematics.slices.dealt_order` (:func:`dealt_launch`), and one over items of unknown cost that
+sit together in space visits them strided (:func:`kinematics.slices.strided`): both balance the
+slices under every layer. (Until issue 24's last round
 this paragraph said the chunks balanced the threads under ``omp``; they never did.)
 
 Busy machine: Linux schedules each login session as one group (``sched_autogroup``) and shares the
@@ -180,32 +182,14 @@ class _KernelLock:
 KERNEL_LOCK = _KernelLock()
 
 
-def dealt_order(costs: np.ndarray, threads: int) -> np.ndarray:
-    """The order in which to launch items of estimated ``costs`` so that ``threads`` equal contiguous
-    slices of it (how numba's ``omp`` and ``workqueue`` layers hand a launch out, module docstring,
-    "Static slices") carry nearly equal costs: the items by cost, largest first, dealt to the slices
-    back and forth (``0 .. T-1``, then ``T-1 .. 0``, ...), each slice padded with ``-1`` (no item) to
-    the same length. Returns int64 indices into ``costs`` and ``-1`` pads, ``T * ceil(n / T)`` of
-    them."""
-    c = np.asarray(costs, float).ravel()
-    t = max(1, int(threads))
-    if c.size == 0:
-        return np.zeros(0, np.int64)
-    q = -(-c.size // t)
-    rank = np.argsort(-c, kind="stable")
-    rounds, pos = np.divmod(np.arange(c.size), t)
-    slot = np.where(rounds % 2 == 0, pos, t - 1 - pos)
-    out = np.full((t, q), -1, np.int64)
-    out[slot, rounds] = rank
-    return out.ravel()
-
-
 @contextlib.contextmanager
 def dealt_launch(costs: np.ndarray) -> Iterator[np.ndarray]:
     """Hold :data:`KERNEL_LOCK` for one launch over items of estimated ``costs``, yielding the order
     to launch them in (:func:`dealt_order` for the launch's thread count; the kernel skips ``-1``),
     with numba's even split into one slice per thread."""
     import numba
+
+    from .slices import dealt_order  # numba's decorators: imported with numba, as above
 
     with KERNEL_LOCK:
         order = dealt_order(costs, numba.get_num_threads())

@@ -12,7 +12,7 @@ import pytest
 from paraspace.kinematics import parallel
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.orientation import OrientationSettings, orientation_workspace
-from paraspace.kinematics.parallel import KERNEL_LOCK, dealt_launch, dealt_order, kernel_launch
+from paraspace.kinematics.parallel import KERNEL_LOCK, dealt_launch, kernel_launch
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
 
@@ -39,28 +39,6 @@ def test_kernel_launch_chunks_follow_the_size(monkeypatch) -> None:
             assert numba.get_parallel_chunksize() == want
             assert KERNEL_LOCK.locked()
     assert not KERNEL_LOCK.locked() and numba.get_parallel_chunksize() == 0
-
-
-@pytest.mark.parametrize("n, threads", [(0, 2), (1, 3), (7, 2), (8, 2), (13, 4), (64, 16), (150, 2), (5, 1)])
-def test_dealt_order_is_a_padded_permutation_with_slices_within_one_item(n: int, threads: int) -> None:
-    rng = np.random.default_rng(n * 31 + threads)
-    for costs in (rng.random(n), np.arange(n, dtype=float), np.r_[np.zeros(n // 2), np.full(n - n // 2, 5.0)]):
-        order = dealt_order(costs, threads)
-        q = -(-n // threads)
-        assert order.size == threads * q and order.dtype == np.int64
-        assert sorted(order[order >= 0].tolist()) == list(range(n))
-        slices = order.reshape(threads, q) if n else np.zeros((threads, 0), np.int64)
-        for row in slices:  # pads only at the end of a slice
-            assert not np.any(np.diff((row < 0).astype(int)) < 0)
-        sums = np.array([costs[row[row >= 0]].sum() for row in slices])
-        # dealt back and forth from the largest, two slices differ by at most the largest item
-        assert sums.max() - sums.min() <= (costs.max() if n else 0.0) + 1e-9
-    # a ramp (the dexterity field's planes at the edge of the workspace): the grid order's equal
-    # slices are unbalanced, the dealt ones are not
-    ramp = np.arange(16, dtype=float)
-    grid = ramp.reshape(2, 8).sum(axis=1)
-    dealt = [ramp[row].sum() for row in dealt_order(ramp, 2).reshape(2, 8)]
-    assert grid[1] - grid[0] == 64.0 and dealt[0] == dealt[1]
 
 
 @numba.njit(parallel=True)
