@@ -276,7 +276,7 @@ def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
 
 @njit(cache=True, inline="always")
 def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, ST, D,
-                         thr, CS, T, py, pz, need):
+                         thr, CS, T, py, pz, need, c):
     """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the
     voxel ``(py, pz)`` of the plane, from what ``T[:, k]`` keeps of point ``k``'s last computation
     (its margin ``m``, the gradient in ``y`` and ``z`` of the term that was the margin, that term's
@@ -294,23 +294,25 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
     margin returned is a value ``<= thr`` (``-inf`` when every point was skipped). ``CS[a]``: the
     cosine and sine of ``gamma + eta`` of row ``a`` (:func:`_scan_rows`). Inlined, with
     :func:`kinematics.dexterity_sweep._inverse_condition`, for the reference counts of its array
-    arguments and of the views the kernel passes (measured there)."""
+    arguments (measured there); the kernel's tables are passed whole with the chain ``c`` (``ST[c]``,
+    ``CS[c]``, ``T[c]``), since a view of one costs two atomic reference counts per chain and voxel."""
     n_e = 1 if e_hi <= e_lo else _CE
     n_r = 1 if r_hi <= r_lo else _CR
     n = n_e * n_r
-    valid = ST[0] == 1.0
+    valid = ST[c, 0] == 1.0
     t = thr - _SLACK - D
     t1 = thr - _SLACK
     left = n
     if valid:
         left = 0
         for k in range(n):
-            room = T[3, k] - (D - T[7, k])
-            ddy = py - T[5, k]
-            ddz = pz - T[6, k]
+            room = T[c, 3, k] - (D - T[c, 7, k])
+            ddy = py - T[c, 5, k]
+            ddz = pz - T[c, 6, k]
             # bound >= t1 with the curvature term's division multiplied out (room > 0)
-            below = (t1 - T[0, k] - T[1, k] * ddy - T[2, k] * ddz) * (2.0 * room)
-            need[k] = (T[0, k] - T[7, k] >= t) & ((room <= 0.0) | (below <= T[4, k] * (ddy * ddy + ddz * ddz)))
+            below = (t1 - T[c, 0, k] - T[c, 1, k] * ddy - T[c, 2, k] * ddz) * (2.0 * room)
+            need[k] = (T[c, 0, k] - T[c, 7, k] >= t) & ((room <= 0.0)
+                                                        | (below <= T[c, 4, k] * (ddy * ddy + ddz * ddz)))
             left += need[k]
     best, be, br = -np.inf, e_lo, r_lo
     for k in range(n):
@@ -323,13 +325,14 @@ def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, 
         b = k - a * n_r
         e = _lin(e_lo, e_hi, n_e, a)
         r = _lin(r_lo, r_hi, n_r, b)
-        m, gy, gz, ll, convex = _margin_grad(bx0, by0, bz0, bx1, by1, bz1, CS[a, 0], CS[a, 1], r, hb, lmin, lmax)
-        T[0, k], T[1, k], T[2, k], T[3, k] = m, gy, gz, ll
-        T[4, k] = 1.0 if convex else 0.0
-        T[5, k], T[6, k], T[7, k] = py, pz, D
+        m, gy, gz, ll, convex = _margin_grad(bx0, by0, bz0, bx1, by1, bz1, CS[c, a, 0], CS[c, a, 1], r, hb, lmin,
+                                             lmax)
+        T[c, 0, k], T[c, 1, k], T[c, 2, k], T[c, 3, k] = m, gy, gz, ll
+        T[c, 4, k] = 1.0 if convex else 0.0
+        T[c, 5, k], T[c, 6, k], T[c, 7, k] = py, pz, D
         if m > best:
             best, be, br = m, e, r
-    ST[0] = 1.0
+    ST[c, 0] = 1.0
     return be, br, best
 
 
@@ -390,8 +393,8 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
                             ce, cr, cm = _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo,
-                                                              r_hi, hb, lmin, lmax, CST[c], D, mg,
-                                                              CCS[c], CT[c], py, pz, CNEED)
+                                                              r_hi, hb, lmin, lmax, CST, D, mg,
+                                                              CCS, CT, py, pz, CNEED, c)
                         else:
                             ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                                       lmin, lmax)
