@@ -64,7 +64,8 @@ largest 0.86 / 1.13 / 1.11; ``|delta 1/kappa|`` median <= 4.8e-6, 99 % <= 1.2e-3
 at least :data:`SAMPLE_MIN` and at most :data:`SAMPLE_MAX`, all when fewer; a sample of 2,000 misses
 a share ``p`` of voxels out of tolerance with probability ``(1 - p)^2000``, 13 % for ``p`` = 0.1 %)
 is run through the full search
-(:func:`kinematics.dexterity.resolved_carriages` and numpy's SVD); the result reports the sample
+(:func:`kinematics.dexterity.resolved_carriages`, ``1/kappa`` by the field's own compiled eigenvalues:
+:func:`kinematics.dexterity_sweep.inverse_condition_at`); the result reports the sample
 size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI difference on the sample,
 and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
 prints. A check that passes on the sample does not prove the bound at every voxel.

@@ -55,7 +55,7 @@ from numba import njit, prange
 from .carriage_search import best_carriage, work_arrays
 from .design import Design
 from .geometry import LEG_SIGN, platform_points_local
-from .parallel import dealt_launch
+from .parallel import dealt_launch, kernel_launch
 from .progress import CancelToken, Reporter, check
 from .rotation import euler_rate_matrix, euler_zyx_deg
 
@@ -432,6 +432,35 @@ def by_planes(costs: np.ndarray, launch: Callable[[np.ndarray], None], progress:
             launch(np.where(order >= 0, order + i0, -1))
         if progress is not None:
             progress(i1 / nx, "dexterity")
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _at_poses_kernel(points, u, R2, rho, eta, hb, inv_L, out):
+    """``out[p]``: :func:`_inverse_condition` at position ``points[p]`` with the chains' ``rho[p]`` and
+    ``eta[p]`` (radians)."""
+    for p in prange(points.shape[0]):
+        A = np.empty((6, 18))
+        G = np.empty((6, 6))
+        out[p] = _inverse_condition(points[p, 0], points[p, 1], points[p, 2], u, R2, rho[p], eta[p], hb, inv_L,
+                                    A, G)
+
+
+def inverse_condition_at(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np.ndarray,
+                         orientation: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """``1/kappa`` at positions ``points`` (N, 3) of one orientation with per-point carriages ``d``
+    and ``eta_deg`` (N, 3 each), by the fields' compiled eigenvalues (:func:`_inverse_condition`; within
+    :data:`TOL_REL` and :data:`TOL_ABS` of :func:`kinematics.dexterity.inverse_condition_batch`'s SVD,
+    about 10x faster on 2,000 points)."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    n = pts.shape[0]
+    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
+    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
+    u, R2, hb, inv_L = _constants(design, orientation)
+    out = np.zeros(n)
+    if n:
+        with kernel_launch(n):
+            _at_poses_kernel(pts, u, R2, rho, eta, float(hb), float(inv_L), out)
+    return out
 
 
 def continuation_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],

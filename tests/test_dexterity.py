@@ -214,6 +214,23 @@ def test_sweep_field_is_the_full_search(design, voxel, orientation):
     np.testing.assert_allclose(f.inverse_condition[occ], g.inverse_condition[occ], rtol=TOL_REL, atol=TOL_ABS)
     with pytest.raises(ParameterError, match="search"):
         dexterity_field(res, 0.005, search="local")
+    # 1/kappa at given poses (the neighbour search's check) by the compiled eigenvalues: the sweep's
+    # numbers at its poses (to the rounding of d = r - rho and of degrees), and within the tolerance
+    # of the SVD at random poses
+    from paraspace.kinematics.dexterity_sweep import inverse_condition_at
+
+    at = inverse_condition_at(design, pts, d, eta, orientation)
+    assert np.all(np.abs(at - vals) <= TOL_REL * vals + TOL_ABS + 1e-16 / np.maximum(vals, 1e-12))
+    assert np.median(np.abs(at - vals) / vals) < 1e-12
+    rng = np.random.default_rng(11)
+    k = rng.choice(len(pts), min(300, len(pts)), replace=False)
+    lo, hi = design.eta_limits
+    d_r = rng.uniform(0.0, design.d_s, (k.size, 3))
+    e_r = rng.uniform(lo, hi, (k.size, 3))
+    at = inverse_condition_at(design, pts[k], d_r, e_r, orientation)
+    svd = inverse_condition_batch(design, pts[k], d_r, e_r, orientation)
+    assert np.all(np.abs(at - svd) <= TOL_REL * svd + TOL_ABS + 1e-16 / np.maximum(svd, 1e-12))
+    assert inverse_condition_at(design, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
 
 
 def _spectra(rng):
