@@ -65,9 +65,9 @@ from numba import njit, prange
 
 from .carriage_search import _margin_cs, resolve_kernel
 from .design import Design, ParameterError
-from .dexterity_neighbour import MARGIN_TOLERANCE, SampleCheck, chain_margins, compare, neighbour_field, sample_indices
-from .dexterity_sweep import _constants, continuation_field, inverse_condition_at
-from .parallel import KERNEL_LOCK
+from .dexterity_neighbour import MARGIN_TOLERANCE, SampleCheck, chain_margins, compare, neighbour_values, sample_indices
+from .dexterity_sweep import _constants, continuation_field, inverse_condition_at, plane_offsets
+from .parallel import KERNEL_LOCK, kernel_launch
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
 from .redundancy import resolve_redundancy
@@ -393,6 +393,26 @@ def _sample_check(design: Design, occ: np.ndarray, axes: Sequence[np.ndarray], v
                    margin_tolerance)
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _scatter_kernel(occ, offset, vals, kappa_min, field, well):
+    """``field``: ``vals`` (over the reachable voxels of ``occ`` in C order; ``offset[i]`` the index of
+    plane ``i``'s first) at the reachable voxels, NaN elsewhere; ``well``: ``field >= kappa_min``
+    there, False elsewhere (one parallel pass instead of numpy's two masked assignments)."""
+    nx, ny, nz = occ.shape
+    for i in prange(nx):
+        m = offset[i]
+        for j in range(ny):
+            for k in range(nz):
+                if occ[i, j, k]:
+                    v = vals[m]
+                    field[i, j, k] = v
+                    well[i, j, k] = v >= kappa_min
+                    m += 1
+                else:
+                    field[i, j, k] = np.nan
+                    well[i, j, k] = False
+
+
 def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str = "resolved", *,
                     n_eta: int = 7, n_d: int = 6, sweeps: int = 2, progress: ProgressFn | None = None,
                     cancel: CancelToken = None, search: str = SEARCHES[0],
@@ -417,7 +437,7 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
     orientation = result.settings.orientation
     sample = None
     if mode == "resolved" and search == "neighbour":
-        vals, _d, _eta, margins = neighbour_field(design, occ, result.grid.axes(), orientation, rep, cancel)
+        vals, margins = neighbour_values(design, occ, result.grid.axes(), orientation, rep, cancel)
         check(cancel)
         sample = _sample_check(design, occ, result.grid.axes(), vals, margins, orientation, margin_tolerance)
     elif mode == "resolved" and search == "sweep":
@@ -436,15 +456,18 @@ def dexterity_field(result: WorkspaceResult, kappa_min: float = 0.1, mode: str =
                 vals[s:s + step] = best_inverse_condition_batch(design, p, orientation, n_eta, n_d, sweeps,
                                                                 cancel)[0]
             rep(min(1.0, (s + step) / max(pts.shape[0], 1)), "dexterity")
-    field = np.full(occ.shape, np.nan)
-    field[occ] = vals
-    well = np.zeros(occ.shape, bool)
-    well[occ] = vals >= kappa_min
+    field = np.empty(occ.shape)
+    well = np.empty(occ.shape, bool)
+    occ_c = np.ascontiguousarray(occ)
+    with kernel_launch(occ.shape[0]):
+        _scatter_kernel(occ_c, plane_offsets(occ_c)[0], np.ascontiguousarray(vals, float), float(kappa_min), field,
+                        well)
     vv = result.grid.voxel_volume
     n = vals.size
     return DexterityField(
         inverse_condition=field, gci=float(vals.mean()) if n else float("nan"), kappa_min=kappa_min,
-        well_conditioned=well, well_conditioned_volume=float(well.sum()) * vv, volume=n * vv, mode=mode,
+        well_conditioned=well, well_conditioned_volume=float(np.count_nonzero(vals >= kappa_min)) * vv,
+        volume=n * vv, mode=mode,
         seconds=time.perf_counter() - t0, minimum=float(vals.min()) if n else float("nan"),
         maximum=float(vals.max()) if n else float("nan"),
         search=search if mode == "resolved" else "full", check=sample)

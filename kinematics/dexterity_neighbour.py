@@ -497,6 +497,24 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     reference of the tests). ``mirror``: where :func:`mirror_rows` holds, search the rows up to
     ``y = 0`` only and give every other voxel its mirror voxel's pose, mirrored (the same arrays on
     those rows as ``mirror=False``)."""
+    out, rho, eta, margin = _search(design, occupancy, axes, orientation, progress, cancel, bounded, mirror)
+    return out, design.r - rho, np.degrees(eta) + 0.0, margin
+
+
+def neighbour_values(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray],
+                     orientation: Sequence[float] = (0.0, 0.0, 0.0), progress: Reporter | None = None,
+                     cancel: CancelToken = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`neighbour_field`'s ``(inverse_condition, margins)`` alone (the dexterity field's needs:
+    the carriage poses in ``d`` and degrees cost 8 ms at h = 2)."""
+    out, _rho, _eta, margin = _search(design, occupancy, axes, orientation, progress, cancel, True, True)
+    return out, margin
+
+
+def _search(design: Design, occupancy: np.ndarray, axes: Sequence[np.ndarray], orientation: Sequence[float],
+            progress: Reporter | None, cancel: CancelToken, bounded: bool, mirror: bool
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The neighbour search: ``(inverse_condition, rho, eta_rad, margins)`` over the reachable voxels
+    of ``occupancy`` in C order (:func:`neighbour_field`)."""
     ny_eval = mirror_rows(design, occupancy, axes, orientation) if mirror else None
     occ = np.ascontiguousarray(np.asarray(occupancy, bool))
     offset, n = plane_offsets(occ)
@@ -514,7 +532,7 @@ def neighbour_field(design: Design, occupancy: np.ndarray, axes: Sequence[np.nda
     if ny_eval is not None:
         with kernel_launch(occ.shape[0]):
             _mirror_fill_kernel(occ, ny_eval, offset, _MIRROR_CHAINS, out, rho, eta, margin)
-    return out, design.r - rho, np.degrees(eta) + 0.0, margin
+    return out, rho, eta, margin
 
 
 def sample_indices(n: int, fraction: float = SAMPLE_FRACTION, minimum: int = SAMPLE_MIN,
