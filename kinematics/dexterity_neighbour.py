@@ -84,7 +84,8 @@ session, on fresh numba caches; 20.15x in ``benchmarks/bench_workspace.py --thro
 2.1; a later round made the engine 5-11 % faster and this field 6-9 % faster, 521-554 ms: 21.7-23.0x
 the engine's 23-24 ms, above the 20x target; then 0.95-0.96 of that with the climb's step sines
 taken once per field and the planes dealt to the threads, :mod:`kinematics.slices`: 510 ms, 21.6x
-the engine's 24 ms at load 1.07); it was
+the engine's 24 ms at load 1.07; then, with the scan's tables passed whole, the check's ``1/kappa``
+compiled and the field written in one pass, 501 ms, 20.7x at load 1.33); it was
 73-102x before the mirror, the 6 x 6 ``1/kappa``, the stricter restart trigger and the scan's
 first-order bounds (measured one by one in issue 24's closing notes). The exact sweep is 297x and
 the full search 325x in the same run.
