@@ -66,7 +66,7 @@ from numba import njit, prange
 from .carriage_search import _margin_cs, resolve_kernel
 from .design import Design, ParameterError
 from .dexterity_neighbour import MARGIN_TOLERANCE, SampleCheck, chain_margins, compare, neighbour_values, sample_indices
-from .dexterity_sweep import _constants, continuation_field, inverse_condition_at, plane_offsets
+from .dexterity_sweep import _constants, continuation_field, inverse_condition_at, plane_offsets, pose_inputs
 from .parallel import KERNEL_LOCK, kernel_launch
 from .pose import Pose
 from .progress import CancelToken, ProgressFn, Reporter, check
@@ -183,11 +183,8 @@ def inverse_condition_batch(design: Design, points: np.ndarray, d: np.ndarray, e
                             orientation: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
     """``1/kappa`` of eq. (26)'s ``J`` at positions ``points`` (N, 3) of one orientation with
     per-point carriages ``d`` (N, 3) and ``eta_deg`` (N, 3); batched (see the module docstring)."""
-    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    pts, rho, eta, u, R2, hb, inv_L = pose_inputs(design, points, d, eta_deg, orientation)
     n = pts.shape[0]
-    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
-    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
-    u, R2, hb, inv_L = _constants(design, orientation)
     out = np.zeros(n)
     for s in range(0, n, CHUNK):
         sl = slice(s, min(n, s + CHUNK))

@@ -445,17 +445,26 @@ def _at_poses_kernel(points, u, R2, rho, eta, hb, inv_L, out):
                                     A, G)
 
 
+def pose_inputs(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np.ndarray,
+                orientation: Sequence[float]) -> tuple:
+    """The kernels' inputs for positions ``points`` (N, 3) with per-point carriages ``d`` and
+    ``eta_deg`` (N, 3 each): ``(points, rho, eta_rad, u, R2, hb, inv_L)``, contiguous float64."""
+    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    n = pts.shape[0]
+    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
+    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
+    u, R2, hb, inv_L = _constants(design, orientation)
+    return pts, rho, eta, u, R2, hb, inv_L
+
+
 def inverse_condition_at(design: Design, points: np.ndarray, d: np.ndarray, eta_deg: np.ndarray,
                          orientation: Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
     """``1/kappa`` at positions ``points`` (N, 3) of one orientation with per-point carriages ``d``
     and ``eta_deg`` (N, 3 each), by the fields' compiled eigenvalues (:func:`_inverse_condition`; within
     :data:`TOL_REL` and :data:`TOL_ABS` of :func:`kinematics.dexterity.inverse_condition_batch`'s SVD,
     about 10x faster on 2,000 points)."""
-    pts = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 3))
+    pts, rho, eta, u, R2, hb, inv_L = pose_inputs(design, points, d, eta_deg, orientation)
     n = pts.shape[0]
-    rho = np.ascontiguousarray(design.r - np.asarray(d, float).reshape(n, 3))
-    eta = np.ascontiguousarray(np.radians(np.asarray(eta_deg, float).reshape(n, 3)))
-    u, R2, hb, inv_L = _constants(design, orientation)
     out = np.zeros(n)
     if n:
         with kernel_launch(n):
