@@ -419,7 +419,7 @@ def by_planes(costs: np.ndarray, launch: Callable[[np.ndarray], None], progress:
               cancel: CancelToken) -> None:
     """Call ``launch(planes)`` on the x planes in runs of ``PLANES`` per thread, checking ``cancel``
     before each run and reporting the share done after it. ``planes`` is the run's planes in
-    :func:`kinematics.parallel.dealt_order` for their ``costs`` (:func:`plane_costs`), ``-1`` where
+    :func:`kinematics.slices.dealt_order` for their ``costs`` (:func:`plane_costs`), ``-1`` where
     none: the threads' slices of a launch carry nearly equal work (numba hands a launch out in equal
     contiguous slices, so planes in grid order left the thread with the larger planes of a run of
     unequal ones working alone)."""

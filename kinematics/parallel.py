@@ -29,8 +29,8 @@ under ``tbb``, 48 ms with the work interleaved; ``tests/test_parallel.py`` check
 launch over items of known unequal cost therefore orders them with
 :func:`kinematics.slices.dealt_order` (:func:`dealt_launch`), and one over items of unknown cost that
 sit together in space visits them strided (:func:`kinematics.slices.strided`): both balance the
-slices under every layer. (Until issue 24's last round
-this paragraph said the chunks balanced the threads under ``omp``; they never did.)
+slices under every layer. (Until issue 24's last round this paragraph said the chunks balanced the
+threads under ``omp``; they never did.)
 
 Busy machine: Linux schedules each login session as one group (``sched_autogroup``) and shares the
 CPU fairly between the groups, so when the other sessions already keep every core busy a second
@@ -185,11 +185,11 @@ KERNEL_LOCK = _KernelLock()
 @contextlib.contextmanager
 def dealt_launch(costs: np.ndarray) -> Iterator[np.ndarray]:
     """Hold :data:`KERNEL_LOCK` for one launch over items of estimated ``costs``, yielding the order
-    to launch them in (:func:`dealt_order` for the launch's thread count; the kernel skips ``-1``),
-    with numba's even split into one slice per thread."""
+    to launch them in (:func:`kinematics.slices.dealt_order` for the launch's thread count; the
+    kernel skips ``-1``), with numba's even split into one slice per thread."""
     import numba
 
-    from .slices import dealt_order  # numba's decorators: imported with numba, as above
+    from .slices import dealt_order  # imported here: kinematics.slices imports numba, as the lines above do
 
     with KERNEL_LOCK:
         order = dealt_order(costs, numba.get_num_threads())

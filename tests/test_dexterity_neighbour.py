@@ -191,7 +191,7 @@ def test_no_mirror_where_it_does_not_hold(design, orientation, flip):
 
 
 def test_the_field_is_independent_of_the_launches_and_threads(monkeypatch):
-    """The planes are launched in runs, in a dealt order (kinematics.parallel.dealt_order): neither
+    """The planes are launched in runs, in a dealt order (kinematics.slices.dealt_order): neither
     the runs, the order nor the thread count changes a value, and the progress reaches 1 in steps."""
     import numba
 

@@ -48,7 +48,7 @@ def _thread_of(out):
 
 
 def test_a_dealt_launch_runs_one_slice_per_thread() -> None:
-    """The layout :func:`dealt_order` is made for: with the ``omp`` or ``workqueue`` layer a launch's
+    """The layout :func:`kinematics.slices.dealt_order` is made for: with the ``omp`` or ``workqueue`` layer a launch's
     iterations run in equal contiguous slices, one per thread, however the chunks are set (so the
     chunks do not balance unequal iterations there; module docstring, "Static slices")."""
     if numba.config.NUMBA_NUM_THREADS < 2:
