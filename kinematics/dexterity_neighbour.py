@@ -17,7 +17,14 @@ chosen at the voxel before it and **climbs coarse to fine**: at the steps ``s0``
 it moves ``eta`` by one step while the *profile* ``max_rho m_i(eta, rho)`` strictly grows, each
 profile value found by the same 1-D ascent in ``rho`` from the current ``rho`` (so a ridge of the
 margin in any direction is followed, which an ascent over the 8 grid neighbours is not); it stops at
-a local maximum of ``m_i`` on the full search's finest spacing. The margin can have several local
+a local maximum of ``m_i`` on the full search's finest spacing. **Start level**: a chain whose pose
+moved by less than one coarse step (``max(|delta eta| / de, |delta rho| / dr) < 1``) from the voxel
+before the previous one to the previous one starts at ``s0/5`` (its optimum moves little from voxel
+to voxel there, and the coarse level's probes, 16 of a climb's 37 margins when nothing moves, find
+nothing); one that moved further, or the first climb of a plane, starts at ``s0``. (Issue 24's
+last round: every climb started at ``s0``; at ``h = 2`` a climb took 56 margins on average, now 47.
+Starting every climb at ``s0/5`` took 57: the climbs that must travel walk at the fine step, 355
+margins at the 99th percentile.) The margin can have several local
 maxima, and the one followed from the neighbour can be overtaken by another: so a second climb
 starts from the best point of a 13 x 11 scan of the strokes when that point's margin exceeds the
 first climb's maximum, and the larger of the two maxima is kept (the neighbour's on a tie). (Until
@@ -54,11 +61,12 @@ flat ridges (about a quarter of the carriage grid within 2 mm of the maximum) al
 changes. The run-time check therefore reports, on its sample, the largest ``|1/kappa - 1/kappa_full|``
 and the difference of the sample's GCI as well. Measured at ``h = 4`` against the full search at
 every voxel (three designs: the default, ``a=30, b=20, eta_s=60`` at orientation (8, -5, 3) and
-``d_s=80, eta_s=45``; 80,018 / 83,850 / 141,086 voxels): margin gap median <= 0.002, 99 % <= 0.27,
-largest 0.86 / 1.13 / 1.11; ``|delta 1/kappa|`` median <= 4.8e-6, 99 % <= 1.2e-3, largest 3.9e-3 /
-1.1e-2 / 6.6e-3 (1/kappa itself is up to about 0.012); GCI -4.7e-6 / 8.2e-6 / -1.2e-5 (0.16 %,
-0.41 %, 0.47 %). (With the former trigger of the second climb: gap 99 % <= 0.09, largest 0.58 /
-1.72 / 1.25; GCI 0.2 %, 0.02 %, 0.5 %.)
+``d_s=80, eta_s=45``; 80,018 / 83,850 / 141,086 voxels): margin gap median <= 0.0024, 99 % 0.15 /
+0.17 / 0.28, largest 0.90 / 1.12 / 1.10; ``|delta 1/kappa|`` median <= 5.5e-6, 99 % <= 1.3e-3,
+largest 3.9e-3 / 1.1e-2 / 6.6e-3 (1/kappa itself is up to about 0.012); the GCI -0.16 %, +0.28 %,
+-0.41 %. (Every climb from ``s0``: gap 99 % 0.14 / 0.16 / 0.27, largest 0.86 / 1.13 / 1.10, GCI
+-0.16 %, +0.41 %, -0.47 %; with the former trigger of the second climb: gap 99 % <= 0.09, largest
+0.58 / 1.72 / 1.25; GCI 0.2 %, 0.02 %, 0.5 %.)
 
 **Run-time check**: a fixed, seeded sample of the reachable voxels (:data:`SAMPLE_FRACTION` of them,
 at least :data:`SAMPLE_MIN` and at most :data:`SAMPLE_MAX`, all when fewer; a sample of 2,000 misses
@@ -70,7 +78,7 @@ size, the largest margin gap, the largest ``|delta 1/kappa|`` and the GCI differ
 and, when the largest gap exceeds ``epsilon``, ``tolerance_held = False`` with a message the CLI
 prints. A check that passes on the sample does not prove the bound at every voxel.
 
-Cost: per chain and voxel, a climb of about 44 margins and a restart scan of about 4.4 (the 13 x 11
+Cost: per chain and voxel, a climb of about 47 margins and a restart scan of about 4.4 (the 13 x 11
 scan's points are skipped when either of two upper bounds of their margin is below the trigger: the
 Lipschitz bound above, and the first-order bound of the term that was the margin when last computed,
 its gradient times the move since plus the leg's curvature bound; both are taken for all 143 points
@@ -177,10 +185,11 @@ def _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, 
 
 
 @njit(cache=True)
-def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r, trig):
+def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e, r, trig, start):
     """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
     in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
-    ridge in any direction is followed). Returns ``(rho, eta_rad, margin)``. The cosine and sine of
+    ridge in any direction is followed), from level ``start`` (0: the step ``s0``; 1: ``s0/5``) to
+    the finest. Returns ``(rho, eta_rad, margin)``. The cosine and sine of
     ``gamma + eta`` at a step of ``eta`` come from those at the current ``eta`` by the angle-addition
     formulas (computed directly where the step is cut at a stroke end); those of the step at each
     level are ``trig`` (:func:`_step_trig`: the same for every climb of a field, so taken once)."""
@@ -189,8 +198,11 @@ def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin
     e = _clamp(e, e_lo, e_hi)
     r = _clamp(r, r_lo, r_hi)
     c, s = math.cos(gamma + e), math.sin(gamma + e)
-    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS)
-    for lev in range(_LEVELS):
+    for _lev in range(start):
+        se /= _ZOOM
+        sr /= _ZOOM
+    r, m = _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, _LEVELS - start)
+    for lev in range(start, _LEVELS):
         if se > 0.0:
             cd, sd = trig[2 * lev], trig[2 * lev + 1]
             direction = 0.0
@@ -363,6 +375,11 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         for c in range(3):
             _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
         trig = _step_trig(e_lo, e_hi)
+        # each chain's last move in coarse steps (the larger of eta's and rho's); a plane's first
+        # climbs start at the coarse level
+        moved = np.full(3, np.inf)
+        inv_se = (_NE - 1) / (e_hi - e_lo) if e_hi > e_lo else 0.0
+        inv_sr = (_NR - 1) / (r_hi - r_lo) if r_hi > r_lo else 0.0
         index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
         first = True
@@ -389,8 +406,11 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                         mg = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(g + e), math.sin(g + e), r, hb,
                                         lmin, lmax)
                     else:
+                        # a chain whose pose moved less than one coarse step at the voxel before
+                        # starts at the second level (module docstring)
+                        start = 0 if moved[c] >= 1.0 else 1
                         r, e, mg = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
-                                          eta[c], rho[c], trig)
+                                          eta[c], rho[c], trig, start)
                         # a second start at the best of a coarse scan of the strokes: another local
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
@@ -402,9 +422,11 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                                                       lmin, lmax)
                         if cm > mg:
                             r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
-                                                lmax, ce, cr, trig)
+                                                lmax, ce, cr, trig, 0)
                             if m2 > mg:
                                 r, e, mg = r2, e2, m2
+                    if not first:
+                        moved[c] = max(abs(e - eta[c]) * inv_se, abs(r - rho[c]) * inv_sr)
                     rho[c] = r
                     eta[c] = e
                     rho_out[m, c] = r

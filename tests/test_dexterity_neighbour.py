@@ -215,3 +215,41 @@ def test_the_field_is_independent_of_the_launches_and_threads(monkeypatch):
                 numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
             for a, b in zip(got + got_sweep, ref + ref_sweep):
                 assert np.array_equal(a, b), (planes, threads)
+
+
+@pytest.mark.parametrize("start", [0, 1])
+def test_a_climb_from_either_start_level_ends_at_a_local_maximum_on_the_finest_spacing(start):
+    """The climb (from the coarse step or, as a chain that moved little does, from the second level)
+    stops where no finest-spacing move in rho, and no finest move in eta with rho re-climbed at the
+    finest step, gives more margin; the margin it returns is the margin at its pose. (The climb takes
+    the cosine and sine of its steps in eta by the angle-addition formulas, so its margins differ
+    from those at math.cos and math.sin by rounding: 1e-9 absolute.)"""
+    from paraspace.kinematics import dexterity_neighbour as nb
+    from paraspace.kinematics.carriage_search import _NE, _NR, _margin_cs
+    from paraspace.kinematics.dexterity_sweep import _constants
+
+    design = Design()
+    u, _R2, hb, _inv_L = _constants(design, (0.0, 0.0, 0.0))
+    e_lo, e_hi = (math.radians(v) for v in design.eta_limits)
+    r_lo, r_hi = design.rho_limits
+    se = (e_hi - e_lo) / (_NE - 1) / 25.0
+    sr = (r_hi - r_lo) / (_NR - 1) / 25.0
+    trig = nb._step_trig(e_lo, e_hi)
+    lmin, lmax = float(design.l_min), float(design.l_max)
+    res = compute_workspace(design, WorkspaceSettings(voxel=12.0))
+    pts = res.grid.points()[res.occupancy]
+    rng = np.random.default_rng(5)
+    for p in pts[rng.choice(len(pts), 40, replace=False)]:
+        for c in range(3):
+            g = 2.0 * math.pi * c / 3.0
+            b = [*(p + u[c, 0]), *(p + u[c, 1])]
+            e0, r0 = rng.uniform(e_lo, e_hi), rng.uniform(r_lo, r_hi)
+            r, e, m = nb._climb(*b, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e0, r0, trig, start)
+            assert e_lo <= e <= e_hi and r_lo <= r <= r_hi
+            cs = math.cos(g + e), math.sin(g + e)
+            assert m == pytest.approx(_margin_cs(*b, *cs, r, hb, lmin, lmax), abs=1e-9)
+            for rr in (min(r + sr, r_hi), max(r - sr, r_lo)):
+                assert _margin_cs(*b, *cs, rr, hb, lmin, lmax) <= m + 1e-9
+            for ee in (min(e + se, e_hi), max(e - se, e_lo)):
+                _r, mm = nb._profile(*b, math.cos(g + ee), math.sin(g + ee), hb, lmin, lmax, r_lo, r_hi, r, sr, 1)
+                assert mm <= m + 1e-9
