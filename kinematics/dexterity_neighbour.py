@@ -93,7 +93,10 @@ session, on fresh numba caches; 20.15x in ``benchmarks/bench_workspace.py --thro
 the engine's 23-24 ms, above the 20x target; then 0.95-0.96 of that with the climb's step sines
 taken once per field and the planes dealt to the threads, :mod:`kinematics.slices`: 510 ms, 21.6x
 the engine's 24 ms at load 1.07; then, with the scan's tables passed whole, the check's ``1/kappa``
-compiled and the field written in one pass, 501 ms, 20.7x at load 1.33); it was
+compiled and the field written in one pass, 501 ms, 20.7x at load 1.33; then, with the climb's
+start level chosen by the chain's last move (0.92-0.93 alone) and 1/kappa taking the climb's own
+cosines (0.98-1.0 alone), 540 -> 482 ms, 21.3x -> 19.1x the engine's 25.3 ms, before and after
+alternating in one process at load 1.15); it was
 73-102x before the mirror, the 6 x 6 ``1/kappa``, the stricter restart trigger and the scan's
 first-order bounds (measured one by one in issue 24's closing notes). The exact sweep is 297x and
 the full search 325x in the same run.
@@ -189,10 +192,11 @@ def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin
     """Coarse-to-fine ascent of the chain margin from ``(eta, rho) = (e, r)`` (module docstring):
     in ``eta`` over the profile ``max_rho m`` (each ``rho`` re-climbed from the current one, so a
     ridge in any direction is followed), from level ``start`` (0: the step ``s0``; 1: ``s0/5``) to
-    the finest. Returns ``(rho, eta_rad, margin)``. The cosine and sine of
-    ``gamma + eta`` at a step of ``eta`` come from those at the current ``eta`` by the angle-addition
-    formulas (computed directly where the step is cut at a stroke end); those of the step at each
-    level are ``trig`` (:func:`_step_trig`: the same for every climb of a field, so taken once)."""
+    the finest. Returns ``(rho, eta_rad, margin, cos, sin)`` (the last two: of ``gamma + eta``, as
+    the climb holds them; 1/kappa takes them). The cosine and sine of ``gamma + eta`` at a step of
+    ``eta`` come from those at the current ``eta`` by the angle-addition formulas (computed directly
+    where the step is cut at a stroke end); those of the step at each level are ``trig``
+    (:func:`_step_trig`: the same for every climb of a field, so taken once)."""
     se = (e_hi - e_lo) / (_NE - 1) if e_hi > e_lo else 0.0
     sr = (r_hi - r_lo) / (_NR - 1) if r_hi > r_lo else 0.0
     e = _clamp(e, e_lo, e_hi)
@@ -228,7 +232,7 @@ def _climb(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin
                     break
         se /= _ZOOM
         sr /= _ZOOM
-    return r, e, m
+    return r, e, m, c, s
 
 
 @njit(cache=True)
@@ -372,6 +376,7 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
         CCS = np.empty((3, _CE, 2))
         CT = np.empty((3, 8, _CE * _CR))
         CNEED = np.empty(_CE * _CR, np.bool_)
+        CSV = np.empty((3, 2))  # the chains' carriage angles' cosines and sines, for 1/kappa
         for c in range(3):
             _scan_rows(2.0 * math.pi * c / 3.0, e_lo, e_hi, CCS[c])
         trig = _step_trig(e_lo, e_hi)
@@ -403,14 +408,14 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                     if first:  # no previous pose: the full search
                         r, e = best_carriage(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                              lmin, lmax, CS, UB, True)
-                        mg = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(g + e), math.sin(g + e), r, hb,
-                                        lmin, lmax)
+                        cc, ss = math.cos(g + e), math.sin(g + e)
+                        mg = _margin_cs(bx0, by0, bz0, bx1, by1, bz1, cc, ss, r, hb, lmin, lmax)
                     else:
                         # a chain whose pose moved less than one coarse step at the voxel before
                         # starts at the second level (module docstring)
                         start = 0 if moved[c] >= 1.0 else 1
-                        r, e, mg = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax,
-                                          eta[c], rho[c], trig, start)
+                        r, e, mg, cc, ss = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
+                                                  lmin, lmax, eta[c], rho[c], trig, start)
                         # a second start at the best of a coarse scan of the strokes: another local
                         # maximum may have overtaken the one followed from the neighbour
                         if bounded:
@@ -421,19 +426,20 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                             ce, cr, cm = _coarse_best(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                                       lmin, lmax)
                         if cm > mg:
-                            r2, e2, m2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb, lmin,
-                                                lmax, ce, cr, trig, 0)
+                            r2, e2, m2, c2, s2 = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi,
+                                                        hb, lmin, lmax, ce, cr, trig, 0)
                             if m2 > mg:
-                                r, e, mg = r2, e2, m2
+                                r, e, mg, cc, ss = r2, e2, m2, c2, s2
                     if not first:
                         moved[c] = max(abs(e - eta[c]) * inv_se, abs(r - rho[c]) * inv_sr)
                     rho[c] = r
                     eta[c] = e
+                    CSV[c, 0], CSV[c, 1] = cc, ss
                     rho_out[m, c] = r
                     eta_out[m, c] = e
                     margin_out[m, c] = mg
                 first = False
-                out[m] = _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G)
+                out[m] = _inverse_condition(px, py, pz, u, R2, rho, CSV, hb, inv_L, A, G)
 
 
 @njit(parallel=True, cache=True, nogil=True)

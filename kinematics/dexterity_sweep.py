@@ -225,9 +225,20 @@ def _gram(A, G):
 
 
 @njit(cache=True, inline="always")
-def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
+def _carriage_trig(eta, CSV):
+    """``CSV[i] = (cos, sin)`` of chain ``i``'s carriage angle ``varpi_i = 2 pi i / 3 + eta_i``, as
+    :func:`_inverse_condition` takes them."""
+    for i in range(3):
+        varpi = 2.0 * math.pi * i / 3.0 + eta[i]
+        CSV[i, 0], CSV[i, 1] = math.cos(varpi), math.sin(varpi)
+
+
+@njit(cache=True, inline="always")
+def _inverse_condition(px, py, pz, u, R2, rho, CSV, hb, inv_L, A, G):
     """``1/kappa`` of ``J_h^{-1} J_q`` at one position and carriage pose (module docstring; the
-    matrices of :func:`kinematics.dexterity._assemble_kernel`). Work arrays: ``A`` (6, 18) (columns
+    matrices of :func:`kinematics.dexterity._assemble_kernel`), the carriage angles given by their
+    cosines and sines ``CSV`` (3, 2; :func:`_carriage_trig`, or the neighbour search's climb's own,
+    which saves three sines and cosines a voxel). Work arrays: ``A`` (6, 18) (columns
     0-5 ``J_h`` then ``Q``, 6-7 the rail and arc entries of ``J_q``, 8-9 the tridiagonal form), ``G``
     (6, 6). Inlined into the kernels (once per voxel; numba takes two atomic reference counts per
     array argument of a call whose body loops): with :func:`kinematics.dexterity_neighbour.
@@ -238,8 +249,7 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
     # per chain) = L L^T (Cholesky). J's singular values are those of J_h^{-1} L, the inverses of
     # those of Q = L^{-1} J_h: kappa(J) = kappa(Q), from the eigenvalues of G = Q^T Q (6 x 6).
     for i in range(3):
-        varpi = 2.0 * math.pi * i / 3.0 + eta[i]
-        c, s = math.cos(varpi), math.sin(varpi)
+        c, s = CSV[i, 0], CSV[i, 1]
         for j in range(2):
             row = 2 * i + j
             lat = hb if j == 0 else -hb
@@ -247,8 +257,8 @@ def _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G):
             vx = px + ux - (c * rho[i] - s * lat)
             vy = py + uy - (s * rho[i] + c * lat)
             vz = pz + uz
-            n = math.sqrt(vx * vx + vy * vy + vz * vz)
-            sx, sy, sz = vx / n, vy / n, vz / n
+            inv_n = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+            sx, sy, sz = vx * inv_n, vy * inv_n, vz * inv_n
             cx = uy * sz - uz * sy
             cy = uz * sx - ux * sz
             cz = ux * sy - uy * sx
@@ -343,6 +353,7 @@ def _sweep_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi
         eta = np.zeros(3)
         A = np.empty((6, 18))
         G = np.empty((6, 6))
+        CSV = np.empty((3, 2))
         index = plane_index(occ, i, ny, offset[i])
         px = xs[i]
         for j in range(ny):
@@ -362,7 +373,8 @@ def _sweep_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, r_hi
                 for c in range(3):
                     rho_out[m, c] = rho[c]
                     eta_out[m, c] = eta[c]
-                out[m] = _inverse_condition(px, py, pz, u, R2, rho, eta, hb, inv_L, A, G)
+                _carriage_trig(eta, CSV)
+                out[m] = _inverse_condition(px, py, pz, u, R2, rho, CSV, hb, inv_L, A, G)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -441,7 +453,9 @@ def _at_poses_kernel(points, u, R2, rho, eta, hb, inv_L, out):
     for p in prange(points.shape[0]):
         A = np.empty((6, 18))
         G = np.empty((6, 6))
-        out[p] = _inverse_condition(points[p, 0], points[p, 1], points[p, 2], u, R2, rho[p], eta[p], hb, inv_L,
+        CSV = np.empty((3, 2))
+        _carriage_trig(eta[p], CSV)
+        out[p] = _inverse_condition(points[p, 0], points[p, 1], points[p, 2], u, R2, rho[p], CSV, hb, inv_L,
                                     A, G)
 
 

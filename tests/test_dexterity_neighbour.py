@@ -244,9 +244,10 @@ def test_a_climb_from_either_start_level_ends_at_a_local_maximum_on_the_finest_s
             g = 2.0 * math.pi * c / 3.0
             b = [*(p + u[c, 0]), *(p + u[c, 1])]
             e0, r0 = rng.uniform(e_lo, e_hi), rng.uniform(r_lo, r_hi)
-            r, e, m = nb._climb(*b, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e0, r0, trig, start)
+            r, e, m, cos_e, sin_e = nb._climb(*b, g, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, e0, r0, trig, start)
             assert e_lo <= e <= e_hi and r_lo <= r <= r_hi
             cs = math.cos(g + e), math.sin(g + e)
+            assert abs(cos_e - cs[0]) <= 1e-12 and abs(sin_e - cs[1]) <= 1e-12  # what 1/kappa takes
             assert m == pytest.approx(_margin_cs(*b, *cs, r, hb, lmin, lmax), abs=1e-9)
             for rr in (min(r + sr, r_hi), max(r - sr, r_lo)):
                 assert _margin_cs(*b, *cs, rr, hb, lmin, lmax) <= m + 1e-9
