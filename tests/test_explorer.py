@@ -854,10 +854,22 @@ def test_tilt_and_torsion_plot_at_the_current_position(explorer, browsers):
     assert "tilt in every direction" in s.tilt.text.content
 
 
-def test_total_orientation_workspace_shown_on_request(explorer, browsers):
+def test_total_orientation_workspace_shown_on_request(explorer, browsers, monkeypatch):
+    """The result appears with its shell: a shell slow to build (1 s more here) is on screen when the
+    result is set (the panel set the result before building the shell, and a CI run read no shell)."""
+    import time
+
     from paraspace.app.explorer.dexterous_panel import DEXTEROUS_VOXEL
+    from paraspace.kinematics import shell
     from paraspace.kinematics.dexterous import total_orientation_workspace
 
+    build = shell.workspace_shell
+
+    def slow_shell(*args, **kwargs):
+        time.sleep(1.0)
+        return build(*args, **kwargs)
+
+    monkeypatch.setattr(shell, "workspace_shell", slow_shell)
     b = browsers("voxel=6")
     s = b.session
     b.set(s.dexterous.tilt, 10.0)

@@ -111,28 +111,33 @@ class DexterousPanel:
         self.text.content = "computing..."
 
     def _draw(self, res: Any) -> None:
+        """Show ``res``: its shell (built first, the slow part), then its text, then ``result`` last,
+        so that a set ``result`` means the panel shows it (a test read the handle between the two
+        once on CI)."""
         from paraspace.kinematics.shell import smooth_for_display, workspace_shell
 
-        self.result = res
         s = res.summary()
         frac = s["fraction_of_position"]
-        self.text.content = md_text(
+        text = md_text(
             f"tilt <= {res.tilt:g} deg, torsion within ±{res.torsion:g} deg ({s['orientations']} orientations, "
             f"step {res.step:g} deg): V = {significant(s['volume'], 4)} units³, "
             f"{100 * frac:.1f} % of the position workspace at h = {DEXTEROUS_VOXEL:g}" if frac is not None
             else "empty position workspace")
+        glb = None
+        if res.voxels:
+            # drawn like the position shell: re-meshed, smoothed for display (no h = 6 staircase) and
+            # translucent, so that the legs and the position shell stay visible through it
+            mesh: trimesh.Trimesh = workspace_shell(res.result, max_faces=30000, color_by_z=False,
+                                                    reduction="remesh", volume_rtol=1e-2)
+            mesh = smooth_for_display(mesh, volume=res.result.volume)
+            mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))  # type: ignore[union-attr]
+            glb = glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), OPACITY)
         self._remove()
-        if res.voxels == 0:
-            return
-        # drawn like the position shell: re-meshed, smoothed for display (no h = 6 staircase) and
-        # translucent, so that the legs and the position shell stay visible through it
-        mesh: trimesh.Trimesh = workspace_shell(res.result, max_faces=30000, color_by_z=False, reduction="remesh",
-                                                volume_rtol=1e-2)
-        mesh = smooth_for_display(mesh, volume=res.result.volume)
-        mesh.visual.vertex_colors = np.tile(np.array(COLOR, np.uint8), (len(mesh.vertices), 1))  # type: ignore[union-attr]
-        glb = glb_with_material(cast(bytes, mesh.export(file_type="glb", include_normals=True)), OPACITY)
-        self.handle = self.scene.add_glb(self.NODE, glb, cast_shadow=False, receive_shadow=False)
-        self.hide.disabled = False
+        if glb is not None:
+            self.handle = self.scene.add_glb(self.NODE, glb, cast_shadow=False, receive_shadow=False)
+            self.hide.disabled = False
+        self.text.content = text
+        self.result = res
 
     def _remove(self) -> None:
         remove_node(self.handle)
