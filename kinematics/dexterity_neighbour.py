@@ -96,7 +96,8 @@ the engine's 24 ms at load 1.07; then, with the scan's tables passed whole, the 
 compiled and the field written in one pass, 501 ms, 20.7x at load 1.33; then, with the climb's
 start level chosen by the chain's last move (0.92-0.93 alone) and 1/kappa taking the climb's own
 cosines (0.98-1.0 alone), 540 -> 482 ms, 21.3x -> 19.1x the engine's 25.3 ms, before and after
-alternating in one process at load 1.15); it was
+alternating in one process at load 1.15, and 20.8-22.4x in three runs of the benchmark's row at load
+1.5-1.8, whose engine is now timed in runs that follow an engine run; above the 20x target); it was
 73-102x before the mirror, the 6 x 6 ``1/kappa``, the stricter restart trigger and the scan's
 first-order bounds (measured one by one in issue 24's closing notes). The exact sweep is 297x and
 the full search 325x in the same run.
