@@ -429,8 +429,11 @@ def test_typing_never_applies_a_prefix(browser: Browser, explorer: Explorer) -> 
         watcher.join(5)
         prefixes = {float(typed[:n]) for n in range(1, len(typed))}
         assert not prefixes & set(seen), f"{key} took a prefix of {typed!r}: {seen}"
-        link = page.evaluate("() => location.search")
-        assert f"{key}={applied:g}" in link, link
+        # the address bar follows the state; under CI's load its sync took longer than the pause once
+        # (the link still held a = 50 after 1.5 s), so it is waited for, and no URL on the way may
+        # have held a prefix
+        link = wait_for(lambda key=key, applied=applied: (lambda q: q if f"{key}={applied:g}" in q else None)(
+            page.evaluate("() => location.search")), 30, f"the link to hold {key} = {applied:g}")
         assert not any(f"{key}={p:g}&" in u for u in urls + [link] for p in prefixes), urls
     text = page.locator("body").inner_text()
     assert "d_s = 120 is invalid; valid range [0, r=100]. The design keeps d_s = 50." in text, text[-800:]
