@@ -447,8 +447,8 @@ class ComparePanel:
         if label == self.other_mechanism:
             return
         self.other_mechanism = label
+        self.refresh()  # the table first: once the ghosts are hidden, the table says why
         self._show_ghosts()
-        self.refresh()
 
     def refresh(self) -> None:
         """Redraw the table (the session calls it when the current design's measures arrive)."""
