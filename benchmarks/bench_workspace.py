@@ -846,7 +846,7 @@ def dexterity_rows(design: Design, runs: int = 1, fast_runs: int = 5) -> None:
     first: list = []
     steady: list = []
 
-    def engine():
+    def engine_thrice():
         ts = []
         for _ in range(3):
             t = time.perf_counter()
@@ -855,19 +855,18 @@ def dexterity_rows(design: Design, runs: int = 1, fast_runs: int = 5) -> None:
         first.append(ts[0])
         steady.extend(ts[1:])
 
-    _alternating({"engine": engine, "neighbour": neighbour}, 1)  # warm both
+    _alternating({"engine": engine_thrice, "neighbour": neighbour}, 1)  # warm both
     first.clear()
     steady.clear()
-    fast = _alternating({"engine": engine, "neighbour": neighbour}, fast_runs)
+    fast = _alternating({"engine": engine_thrice, "neighbour": neighbour}, fast_runs)
     slow = _alternating({"engine": lambda: compute_workspace(design, ws),
                          "sweep": lambda: box.setdefault("s", dexterity_field(res, 0.005, search="sweep")),
                          "full": lambda: dexterity_field(res, 0.005, search="full")}, runs)
-    engine_t = statistics.median(steady)
+    engine = statistics.median(steady)
     print(f"  target 3, dexterity field h=2, {res.voxels:,} voxels (load average {os.getloadavg()[0]:.2f}; "
-          f"engine {engine_t * 1e3:.0f} ms: median of its {len(steady)} runs that follow an engine run, "
+          f"engine {engine * 1e3:.0f} ms: median of its {len(steady)} runs that follow an engine run, "
           f"{statistics.median(first) * 1e3:.0f} ms the first after a field, {slow['engine'] * 1e3:.0f} ms "
           f"beside the slow rows; neighbour {fast_runs} runs, sweep and full {runs} run(s) each):")
-    engine = engine_t
     f, s_ = box["f"], box["s"]
     c = f.check
     _row("neighbour: local climb from the neighbour's pose", fast["neighbour"], engine,
