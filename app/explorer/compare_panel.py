@@ -214,6 +214,13 @@ class ComparePanel:
         #: the selected mechanism's label while it is not the paper's: the pins (paper designs) stay
         #: pinned and in the link, but their ghosts and table wait until the paper's mechanism is back
         self.other_mechanism: str | None = None
+        #: refreshes run on several threads (GUI callbacks, the ends of pins' jobs, the session when the
+        #: current design's measures arrive): each takes a number with its snapshot, and one whose
+        #: snapshot is older than the last one written writes nothing, so a late refresh of an older
+        #: state never puts back an older table (as the Numbers panel)
+        self._taken = 0
+        self._written = 0
+        self._write_lock = threading.Lock()
         gui.add_markdown(f"Pin up to {MAX_PINS} designs: each keeps its workspace as a ghost in its own colour "
                          "(height contours over a faint surface) and its numbers beside the current design's.")
         self.pin_button = gui.add_button("Pin this design", icon=viser.Icon.PIN)
@@ -297,7 +304,7 @@ class ComparePanel:
             self.pins = new_pins
         if tuple(self.hooks.get_state().pins) != designs:
             self.hooks.set_pins(designs)
-        self._update_controls()
+        self.refresh()  # the controls and titles of the new pins before their jobs start
         for p in new_pins:
             if p.bundle is None and (p.job is None or p.job.is_final):
                 self._compute(p)
@@ -382,10 +389,9 @@ class ComparePanel:
         self.hooks.load_design(design)
 
     # ----- display ------------------------------------------------------------------------------
-    def _update_controls(self) -> None:
-        with self.lock:
-            n = len(self.pins)
-            designs = [p.design for p in self.pins]
+    def _update_controls(self, designs: Sequence[Design]) -> None:
+        """The pin and unpin controls and the pins' titles for the pins ``designs``."""
+        n = len(designs)
         options = tuple(f"pin {k + 1}" for k in range(max(n, 1)))
         self.unpin_choice.options = options
         if self.unpin_choice.value not in options:
@@ -394,7 +400,6 @@ class ComparePanel:
         self.pin_button.disabled = n >= MAX_PINS
         if n == 0:
             self.title.content = "*nothing pinned*"
-            self.table.content = ""
             return
         self.title.content = "  \n".join(
             f"**Pin {k + 1}** ({PIN_COLOURS[k % len(PIN_COLOURS)][0]}): {md_text(design_text(d))}"
@@ -444,38 +449,50 @@ class ComparePanel:
 
     def set_mechanism(self, label: str | None) -> None:
         """The selected mechanism (its label, ``None`` for the paper's): the ghosts hide or show again."""
-        if label == self.other_mechanism:
-            return
-        self.other_mechanism = label
+        with self.lock:
+            if label == self.other_mechanism:
+                return
+            self.other_mechanism = label
         self.refresh()  # the table first: once the ghosts are hidden, the table says why
         self._show_ghosts()
 
     def refresh(self) -> None:
-        """Redraw the table (the session calls it when the current design's measures arrive)."""
-        self._update_controls()
+        """Redraw the controls, the titles and the table (the session calls it when the current
+        design's measures arrive). The text is built from one snapshot and written only if no
+        refresh of a newer snapshot has written before it."""
         with self.lock:
+            self._taken += 1
+            ticket = self._taken
             pins = list(self.pins)
+            other = self.other_mechanism
+        table = self._table_text(pins, other)
+        with self._write_lock:
+            if ticket < self._written:
+                return
+            self._written = ticket
+            self._update_controls([p.design for p in pins])
+            self.table.content = table
+
+    def _table_text(self, pins: Sequence[Pin], other: str | None) -> str:
+        """The table's text for the pins ``pins`` with the mechanism ``other`` selected (``None``: the
+        paper's) and the current design as the session has it now."""
         if not pins:
-            return
-        if self.other_mechanism is not None:
+            return ""
+        if other is not None:
             which = f"The {len(pins)} pinned designs are" if len(pins) > 1 else "The pinned design is"
-            self.table.content = (f"*{which} of the "
-                                  f"paper's mechanism, not the {md_text(self.other_mechanism)} mechanism: "
-                                  "shown again when the Mechanism is paper.*")
-            return
+            return (f"*{which} of the paper's mechanism, not the {md_text(other)} mechanism: "
+                    "shown again when the Mechanism is paper.*")
         if any(p.bundle is None or p.bundle.measures is None for p in pins):
-            self.table.content = "*pinned designs: computing...*"
-            return
+            return "*pinned designs: computing...*"
         current = self.hooks.current_bundle()
         if current is None or current.measures is None:
-            self.table.content = "*current design: computing...*"
-            return
+            return "*current design: computing...*"
         indices = [p.indices for p in pins] + [self.hooks.current_indices()]
         ok = all(i is not None for i in indices)
-        self.table.content = (f"current: {md_text(design_text(current.result.design))}\n\n"
-                              + comparison_table([p.bundle for p in pins if p.bundle is not None], current,
-                                                 indices if ok else None)  # type: ignore[arg-type]
-                              + ("" if ok else "\n\n*TI₁, TI₂: computing...*"))
+        return (f"current: {md_text(design_text(current.result.design))}\n\n"
+                + comparison_table([p.bundle for p in pins if p.bundle is not None], current,
+                                   indices if ok else None)  # type: ignore[arg-type]
+                + ("" if ok else "\n\n*TI₁, TI₂: computing...*"))
 
     def draw_views(self) -> None:
         """The small-multiples grid: every pinned design's shell and the current one in the four
