@@ -292,29 +292,63 @@ def _block_sums_kernel(s, k, out):
                                 + s[a0, b0, c1] + s[a0, b1, c0] + s[a1, b0, c0] - s[a0, b0, c0])
 
 
-class _BlockMeans:
-    """The block means of :func:`_block_mean` for every block size ``k`` from one table.
+#: Block sizes :class:`_BlockMeans` counts directly before it builds a summed-volume table.
+_DIRECT_SIZES = 2
 
-    A binary field (``binary=True``: values 0 and 1 only, the unsmoothed occupancy) is summed once
-    into its summed-volume table; the mean of each k^3 block is then its voxel count (eight
-    look-ups) over ``k^3``, the same float32 numbers as :func:`_block_mean` (whose float32 sums of
-    0 and 1 are exact integers) at a cost that falls like ``k^-3`` instead of one pass over the
-    field per block size tried. Another field falls back to :func:`_block_mean`.
+
+@njit(parallel=True, cache=True, nogil=True)
+def _block_counts_kernel(field, k, out):
+    """Nonzero voxels of ``field`` in the k^3 blocks of :func:`_block_mean`'s layout, in one pass
+    over the field: block ``b`` covers fine indices ``(b - 1) k .. b k - 1``, clipped to the field."""
+    n0, n1, n2 = field.shape
+    m0, m1, m2 = out.shape
+    for a in prange(m0):
+        for b in range(m1):
+            for c in range(m2):
+                out[a, b, c] = 0
+        for x in range(max((a - 1) * k, 0), min(a * k, n0)):
+            for y in range(n1):
+                by = y // k + 1
+                for cb in range(m2 - 2):
+                    z0 = cb * k
+                    cnt = 0
+                    for z in range(z0, min(z0 + k, n2)):
+                        cnt += field[x, y, z] != 0
+                    out[a, by, cb + 1] += cnt
+
+
+class _BlockMeans:
+    """The block means of :func:`_block_mean` for the block sizes ``k`` asked, from voxel counts.
+
+    A binary field (``binary=True``: values 0 and 1 only, the unsmoothed occupancy) has the mean of
+    each k^3 block as its voxel count over ``k^3``: the same float32 numbers as :func:`_block_mean`
+    (whose float32 sums of 0 and 1 are exact integers). The first :data:`_DIRECT_SIZES` sizes asked
+    are counted in one parallel pass over the field each (:func:`_block_counts_kernel`); from the
+    next size on, the counts come from the field's summed-volume table, built once (eight look-ups a
+    block). The display shell asks for one or two sizes; at h = 1 (20.8 M voxels, a uint8 field, 2
+    cores) a direct count took 10 ms a size and the table 29 ms, then 2 ms a size (issue 24, target 9).
+    Another field falls back to :func:`_block_mean`.
     """
 
     def __init__(self, field: np.ndarray, binary: bool) -> None:
         self.field = field
         self.binary = binary
-        self.table: np.ndarray | None = None  # built on the first call
+        self.sizes = 0  # sizes asked so far
+        self.table: np.ndarray | None = None  # built at the first size past _DIRECT_SIZES
 
     def __call__(self, k: int) -> np.ndarray:
         if not self.binary:
             return _block_mean(self.field, k)
-        if self.table is None:
-            self.table = summed_volume(self.field)
+        self.sizes += 1
         counts = np.empty([int(math.ceil(n / k)) + 2 for n in self.field.shape], np.int32)
-        with KERNEL_LOCK:
-            _block_sums_kernel(self.table, k, counts)
+        if self.sizes <= _DIRECT_SIZES:
+            with KERNEL_LOCK:
+                _block_counts_kernel(np.ascontiguousarray(self.field), k, counts)
+        else:
+            if self.table is None:
+                self.table = summed_volume(self.field)
+            with KERNEL_LOCK:
+                _block_sums_kernel(self.table, k, counts)
         return counts.astype(np.float32) / np.float32(k ** 3)
 
 

@@ -330,10 +330,12 @@ def test_explorer_display_shell_encloses_the_voxel_volume_and_stays_close_to_the
         assert float(np.median(dist)) < res.grid.h and float(dist.max()) < 3.0 * res.grid.h
 
 
-def test_block_means_from_one_table_equal_the_per_size_means_and_the_same_display_shell(monkeypatch):
-    """Issue 24 target 9: the block re-mesh sums the binary field once (summed-volume table) and reads
-    every block size from it; the means are bit-identical to the strided adds of ``_block_mean`` for
-    every k tried, on several designs and a random field, and the explorer's display shell is the same."""
+def test_block_means_from_counts_equal_the_per_size_means_and_the_same_display_shell(monkeypatch):
+    """Issue 24 target 9: the block re-mesh counts the binary field's voxels per block, the first
+    sizes asked in a pass over the field each, the later ones from one summed-volume table; the means
+    are bit-identical to the strided adds of ``_block_mean`` for every k tried (both ways), on several
+    designs and a random field, as float32 and as the display shell's uint8, and the explorer's
+    display shell is the same."""
     import paraspace.kinematics.shell as shell_mod
     from paraspace.app.explorer.workspace_job import FULL_FACES, make_shell
 
@@ -341,10 +343,13 @@ def test_block_means_from_one_table_equal_the_per_size_means_and_the_same_displa
     fields = [np.pad(compute_workspace(d, WorkspaceSettings(voxel=5.0)).occupancy.astype(np.float32), 1)
               for d in (Design(), Design(a=10), Design(l_s=20))]
     fields.append(np.pad((rng.random((23, 17, 30)) < 0.4).astype(np.float32), 1))
+    assert shell_mod._MAX_BLOCK > shell_mod._DIRECT_SIZES + 1  # both ways are exercised below
     for field in fields:
-        means = shell_mod._BlockMeans(field, binary=True)
-        for k in range(2, shell_mod._MAX_BLOCK + 1):
-            assert np.array_equal(means(k), shell_mod._block_mean(field, k)), k
+        for as_type in (np.float32, np.uint8):
+            means = shell_mod._BlockMeans(field.astype(as_type), binary=True)
+            for k in (*range(2, shell_mod._MAX_BLOCK + 1), 3):  # 3 again: from the table
+                assert np.array_equal(means(k), shell_mod._block_mean(field, k)), (k, as_type)
+            assert means.table is not None
     res = compute_workspace(Design(a=10), WorkspaceSettings(voxel=4.0))
     fast = make_shell(res, FULL_FACES // 20)
     monkeypatch.setattr(shell_mod._BlockMeans, "__call__", lambda self, k: shell_mod._block_mean(self.field, k))
