@@ -142,6 +142,10 @@ _LEVELS = 3
 #: The coarse scan of the second start: _CE x _CR points on the strokes; it is climbed from when its
 #: best margin exceeds the neighbour's climb's maximum.
 _CE, _CR = 13, 11
+#: The start level's rule (module docstring): a chain whose pose moved by less than
+#: ``_NEAR_MOVE`` coarse steps at the voxel before starts its climb at level ``_NEAR_START``
+#: (``s0/5``); one that moved further, or a plane's first climb, at level 0 (``s0``).
+_NEAR_MOVE, _NEAR_START = 1.0, 1
 #: Moves allowed per level (a safeguard; a climb on a stroke grid never needs this many).
 _MAX_MOVES = 100000
 
@@ -414,7 +418,7 @@ def _neighbour_kernel(occ, planes, offset, xs, ys, zs, u, R2, e_lo, e_hi, r_lo, 
                     else:
                         # a chain whose pose moved less than one coarse step at the voxel before
                         # starts at the second level (module docstring)
-                        start = 0 if moved[c] >= 1.0 else 1
+                        start = 0 if moved[c] >= _NEAR_MOVE else _NEAR_START
                         r, e, mg, cc, ss = _climb(bx0, by0, bz0, bx1, by1, bz1, g, e_lo, e_hi, r_lo, r_hi, hb,
                                                   lmin, lmax, eta[c], rho[c], trig, start)
                         # a second start at the best of a coarse scan of the strokes: another local

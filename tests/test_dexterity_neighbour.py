@@ -18,6 +18,7 @@ from paraspace.kinematics.dexterity_neighbour import (
     MARGIN_TOLERANCE,
     SAMPLE_MAX,
     SAMPLE_MIN,
+    _NEAR_START,
     chain_margins,
     compare,
     mirror_rows,
@@ -217,7 +218,7 @@ def test_the_field_is_independent_of_the_launches_and_threads(monkeypatch):
                 assert np.array_equal(a, b), (planes, threads)
 
 
-@pytest.mark.parametrize("start", [0, 1])
+@pytest.mark.parametrize("start", sorted({0, _NEAR_START}))  # the levels the field starts from
 def test_a_climb_from_either_start_level_ends_at_a_local_maximum_on_the_finest_spacing(start):
     """The climb (from the coarse step or, as a chain that moved little does, from the second level)
     stops where no finest-spacing move in rho, and no finest move in eta with rho re-climbed at the
