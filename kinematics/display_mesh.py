@@ -169,7 +169,7 @@ def display_shell(result: WorkspaceResult, max_faces: int = DISPLAY_FACES, remes
     import fast_simplification
     import trimesh
 
-    from .shell import _MAX_BLOCK, HALF_LEVEL, _BlockMeans, _mc, _mixed_cells, _volume_preserving, viridis
+    from .shell import _MAX_BLOCK, DIRECT_SIZES, HALF_LEVEL, _BlockMeans, _mc, _mixed_cells, _volume_preserving, viridis
 
     budget = _validate_faces("max_faces", max_faces)
     cap = REMESH_FACTOR * budget if remesh_faces is None else _validate_faces("remesh_faces", remesh_faces)
@@ -185,7 +185,7 @@ def display_shell(result: WorkspaceResult, max_faces: int = DISPLAY_FACES, remes
     # quarter of the bytes of the float32 field that marching cubes at k = 1 takes (built only then)
     field = np.zeros(tuple(n + 2 for n in occ.shape), np.uint8)
     field[1:-1, 1:-1, 1:-1] = occ
-    means = _BlockMeans(field, binary=True)
+    means = _BlockMeans(field, binary=True, direct=DIRECT_SIZES)
     origin = np.asarray(result.grid.origin, dtype=float)
     mixed1 = _mixed_cells(field, HALF_LEVEL)
     # mixed cells fall like 1/k^2: start near the first block size that can fit

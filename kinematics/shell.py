@@ -292,8 +292,8 @@ def _block_sums_kernel(s, k, out):
                                 + s[a0, b0, c1] + s[a0, b1, c0] + s[a1, b0, c0] - s[a0, b0, c0])
 
 
-#: Block sizes :class:`_BlockMeans` counts directly before it builds a summed-volume table.
-_DIRECT_SIZES = 2
+#: Block sizes the display shell's :class:`_BlockMeans` counts directly before it builds a table.
+DIRECT_SIZES = 2
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -322,26 +322,29 @@ class _BlockMeans:
 
     A binary field (``binary=True``: values 0 and 1 only, the unsmoothed occupancy) has the mean of
     each k^3 block as its voxel count over ``k^3``: the same float32 numbers as :func:`_block_mean`
-    (whose float32 sums of 0 and 1 are exact integers). The first :data:`_DIRECT_SIZES` sizes asked
-    are counted in one parallel pass over the field each (:func:`_block_counts_kernel`); from the
-    next size on, the counts come from the field's summed-volume table, built once (eight look-ups a
-    block). The display shell asks for one or two sizes; at h = 1 (20.8 M voxels, a uint8 field, 2
-    cores) a direct count took 10 ms a size and the table 29 ms, then 2 ms a size (issue 24, target 9).
-    Another field falls back to :func:`_block_mean`.
+    (whose float32 sums of 0 and 1 are exact integers). The first ``direct`` sizes asked are counted
+    in one parallel pass over the field each (:func:`_block_counts_kernel`); the later ones come from
+    the field's summed-volume table, built once (eight look-ups a block). Which is cheaper depends on
+    how many sizes the caller asks and on the field's bytes: at h = 1 (20.8 M voxels, 2 cores) a
+    direct count of a uint8 field took 10 ms a size (of a float32 field 23-36 ms) and the table 29-35
+    ms, then 2 ms a size. The display shell asks for one or two sizes of a uint8 field (``direct =``
+    :data:`DIRECT_SIZES`); the block re-mesh of :func:`workspace_shell` tries k = 2, 3, 4, ... of a
+    float32 field (``direct = 0``, the table only). Another field falls back to :func:`_block_mean`.
     """
 
-    def __init__(self, field: np.ndarray, binary: bool) -> None:
+    def __init__(self, field: np.ndarray, binary: bool, direct: int = 0) -> None:
         self.field = field
         self.binary = binary
+        self.direct = direct
         self.sizes = 0  # sizes asked so far
-        self.table: np.ndarray | None = None  # built at the first size past _DIRECT_SIZES
+        self.table: np.ndarray | None = None  # built at the first size past the direct ones
 
     def __call__(self, k: int) -> np.ndarray:
         if not self.binary:
             return _block_mean(self.field, k)
         self.sizes += 1
         counts = np.empty([int(math.ceil(n / k)) + 2 for n in self.field.shape], np.int32)
-        if self.sizes <= _DIRECT_SIZES:
+        if self.sizes <= self.direct:
             with KERNEL_LOCK:
                 _block_counts_kernel(np.ascontiguousarray(self.field), k, counts)
         else:

@@ -343,13 +343,13 @@ def test_block_means_from_counts_equal_the_per_size_means_and_the_same_display_s
     fields = [np.pad(compute_workspace(d, WorkspaceSettings(voxel=5.0)).occupancy.astype(np.float32), 1)
               for d in (Design(), Design(a=10), Design(l_s=20))]
     fields.append(np.pad((rng.random((23, 17, 30)) < 0.4).astype(np.float32), 1))
-    assert shell_mod._MAX_BLOCK > shell_mod._DIRECT_SIZES + 1  # both ways are exercised below
     for field in fields:
         for as_type in (np.float32, np.uint8):
-            means = shell_mod._BlockMeans(field.astype(as_type), binary=True)
-            for k in (*range(2, shell_mod._MAX_BLOCK + 1), 3):  # 3 again: from the table
-                assert np.array_equal(means(k), shell_mod._block_mean(field, k)), (k, as_type)
-            assert means.table is not None
+            for direct in (0, shell_mod.DIRECT_SIZES, shell_mod._MAX_BLOCK):  # the table, both, direct only
+                means = shell_mod._BlockMeans(field.astype(as_type), binary=True, direct=direct)
+                for k in (*range(2, shell_mod._MAX_BLOCK + 1), 3):  # 3 again
+                    assert np.array_equal(means(k), shell_mod._block_mean(field, k)), (k, as_type, direct)
+                assert (means.table is None) == (direct >= shell_mod._MAX_BLOCK)
     res = compute_workspace(Design(a=10), WorkspaceSettings(voxel=4.0))
     fast = make_shell(res, FULL_FACES // 20)
     monkeypatch.setattr(shell_mod._BlockMeans, "__call__", lambda self, k: shell_mod._block_mean(self.field, k))
