@@ -240,7 +240,7 @@ def shell_rows(design: Design, runs: int = 5) -> None:
     print(f"  target 9, make_shell h=1 (load average {os.getloadavg()[0]:.2f}; engine {med['engine'] * 1e3:.0f} ms):")
     _row(f"make_shell, display shell {shown.metadata['paraspace']['display_faces_from']:,} -> {len(shown.faces):,} faces",
          med["display"], med["engine"], "(target <= 2x; what the explorer and the API build)")
-    _row("make_shell, 60k re-mesh, block means counted", med["new"], med["engine"], "(before the display shell)")
+    _row("make_shell, 60k re-mesh, block means from one table", med["new"], med["engine"], "(before the display shell)")
     _row("make_shell, 60k re-mesh, block means per size (before)", med["old"], med["engine"])
 
 
