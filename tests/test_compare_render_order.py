@@ -74,3 +74,14 @@ def test_refreshes_after_it_still_write(panel, monkeypatch):
     panel.pins = []
     panel.refresh()
     assert panel.table.content == "" and panel.title.content == "*nothing pinned*"
+
+
+def test_another_mechanism_keeps_the_pin_button_disabled_through_refreshes(panel):
+    """The mechanism's note disables "Pin this design" for another mechanism; a later refresh (the
+    current design's measures arriving) must not enable it again, and the paper's mechanism does."""
+    panel.set_mechanism("delta")
+    assert panel.pin_button.disabled
+    panel.refresh()  # e.g. the session, when the current design's measures arrive
+    assert panel.pin_button.disabled
+    panel.set_mechanism(None)
+    assert not panel.pin_button.disabled

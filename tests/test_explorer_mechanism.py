@@ -326,9 +326,11 @@ def test_pins_of_the_paper_design_wait_while_another_mechanism_is_selected(explo
     # paper's table that ended late (CI read it once, with the ghost already hidden) fails only if it stays
     wait_for(lambda: "The pinned design is of the paper's mechanism, not the 6-pss mechanism"
              in s.compare.table.content.replace("\\", ""), 10, "the table saying why")
+    assert s.compare.pin_button.disabled  # the mechanism's note: its designs cannot be pinned yet
     assert [d.a for d in s.state.pins] == [70.0]
     wait_for(lambda: "pin=70," in urllib.parse.unquote(b.search) and "mech=6-pss" in b.search, 5, "the link")
     b.set(s.panels.mechanism.selector, "paper")
     wait_for(lambda: s.state.mechanism is None, 30, "back to the paper")
     wait_idle(explorer, s, 240)
     wait_for(lambda: s.compare.handle is not None and "| volume" in s.compare.table.content, 30, "the ghost back")
+    assert not s.compare.pin_button.disabled

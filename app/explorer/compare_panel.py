@@ -389,15 +389,16 @@ class ComparePanel:
         self.hooks.load_design(design)
 
     # ----- display ------------------------------------------------------------------------------
-    def _update_controls(self, designs: Sequence[Design]) -> None:
-        """The pin and unpin controls and the pins' titles for the pins ``designs``."""
+    def _update_controls(self, designs: Sequence[Design], other: str | None) -> None:
+        """The pin and unpin controls and the pins' titles for the pins ``designs``, with the mechanism
+        ``other`` selected (``None``: the paper's; another one cannot be pinned, as its note says)."""
         n = len(designs)
         options = tuple(f"pin {k + 1}" for k in range(max(n, 1)))
         self.unpin_choice.options = options
         if self.unpin_choice.value not in options:
             self.unpin_choice.value = options[-1]
         self.unpin_choice.disabled = self.unpin_button.disabled = self.unpin_all_button.disabled = n == 0
-        self.pin_button.disabled = n >= MAX_PINS
+        self.pin_button.disabled = n >= MAX_PINS or other is not None
         if n == 0:
             self.title.content = "*nothing pinned*"
             return
@@ -470,7 +471,7 @@ class ComparePanel:
             if ticket < self._written:
                 return
             self._written = ticket
-            self._update_controls([p.design for p in pins])
+            self._update_controls([p.design for p in pins], other)
             self.table.content = table
 
     def _table_text(self, pins: Sequence[Pin], other: str | None) -> str:
