@@ -156,7 +156,8 @@ def _measures_and_shells() -> None:
     RunComponents(np.ones((2, 2, 2), bool)).mask(np.ones(1, bool))  # the pieces' mask: only with fragments
     workspace_shell(res)
     display_shell(res)
-    # over their face budgets (as every real grid is): the re-mesh from the block means' table
+    # over their face budgets (as every real grid is): the block re-mesh, its block means from the
+    # summed-volume table (workspace_shell) and counted over a uint8 occupancy (display_shell)
     workspace_shell(res, max_faces=24, reduction="remesh")
     display_shell(res, max_faces=24)
 
