@@ -44,6 +44,14 @@ it). With one other busy process on a 2-core machine both threads stay (under ``
 slice, "Static slices" below, so the thread that shares its core finishes last).
 ``LOAD_RULE = False`` turns the rule off; without ``/proc/loadavg`` every thread is used.
 
+Background launches (:meth:`_KernelLock.background`): the warm-up compiles every kernel on first
+call, inside the lock, for minutes on a cold cache; a plain lock is not fair (the thread that
+releases it takes it back before a waiting thread wakes), so a job started meanwhile waited for the
+whole warm-up (measured on a fresh install, 2 cores: the explorer's first display shell waited
+147 s for the lock, its first measures another 90 s). A thread inside ``background()`` takes the
+lock only while no other thread waits for it: a waiting job gets it as soon as the launch (or
+compile) in progress ends.
+
 Thread count set after import (:func:`adopt_thread_env`): numba reads ``NUMBA_NUM_THREADS`` when
 it is imported and again before each compilation, and refuses a change once its threads are
 running. A Dask worker gets its environment (one thread: ``kinematics.distributed.WORKER_ENV``)
@@ -135,15 +143,42 @@ def _set_chunk(n: int) -> int:
 class _KernelLock:
     """A :class:`threading.Lock` whose ``with`` block launches with :data:`DEFAULT_CHUNK`-sized
     chunks and :func:`launch_threads` threads in the holding thread (module docstring); both are
-    per-thread numba settings, restored on release."""
+    per-thread numba settings, restored on release. A thread inside :meth:`background` yields the
+    lock to every thread waiting for it (module docstring, *Background launches*)."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._previous = 0
         self._threads = 1
+        self._waiting = 0  # foreground threads waiting for the lock
+        self._turn = threading.Condition(threading.Lock())
+        self._local = threading.local()
+
+    @contextlib.contextmanager
+    def background(self) -> Iterator[None]:
+        """The current thread's launches in the block wait while another thread waits for the lock."""
+        before = getattr(self._local, "background", False)
+        self._local.background = True
+        try:
+            yield
+        finally:
+            self._local.background = before
 
     def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
-        return self._lock.acquire(blocking, timeout)
+        if getattr(self._local, "background", False):
+            with self._turn:
+                while self._waiting:
+                    self._turn.wait()
+            return self._lock.acquire(blocking, timeout)
+        with self._turn:
+            self._waiting += 1
+        try:
+            return self._lock.acquire(blocking, timeout)
+        finally:
+            with self._turn:
+                self._waiting -= 1
+                if not self._waiting:
+                    self._turn.notify_all()
 
     def release(self) -> None:
         self._lock.release()
@@ -154,7 +189,7 @@ class _KernelLock:
     def __enter__(self) -> _KernelLock:
         import numba
 
-        self._lock.acquire()
+        self.acquire()
         try:
             self._previous = _set_chunk(DEFAULT_CHUNK)
             self._threads = numba.get_num_threads()

@@ -34,6 +34,7 @@ import numpy as np
 
 from .design import Design
 from .joints import Joints
+from .parallel import KERNEL_LOCK
 from .pose import Pose
 
 __all__ = ["STEPS", "warm_up", "is_warm", "run_unclaimed", "steps_done"]
@@ -227,7 +228,8 @@ def warm_up() -> float:
     with _lock:
         if _warm:
             return 0.0
-        for _name, step in STEPS:
-            step()
+        with KERNEL_LOCK.background():  # a request's launches go first (kinematics/parallel.py)
+            for _name, step in STEPS:
+                step()
         _warm = True
     return time.perf_counter() - t0
