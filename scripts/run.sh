@@ -24,5 +24,5 @@ else
   .venv/bin/python -m pip install -q .
   echo "$want" > .venv/.paraspace-installed
 fi
-echo "[3/3] starting the explorer (the first start compiles the numerical kernels: about 3 minutes on 2 cores; the first workspace waits for them)"
+echo "[3/3] starting the explorer (the first start compiles the numerical kernels: about 3 minutes on 2 cores; the first workspace waits for its own, about 2 minutes)"
 exec .venv/bin/paraspace serve "$@"
