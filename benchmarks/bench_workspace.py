@@ -1206,13 +1206,11 @@ def stage_rows(design: Design, h: float = 0.5, runs: int = 5) -> None:
 
 #: The groups of rows of ``--throughput``, in the order they run (``--rows`` picks some).
 THROUGHPUT_ROWS = {
-    "shell": lambda d: shell_rows(d), "evaluation": lambda d: evaluation_rows(d),
-    "measures": lambda d: measure_rows(d), "meas1": lambda d: measure_meas1_rows(d),
-    "measure-stages": lambda d: measure_stage_rows(d), "feature-filter": lambda d: feature_filter_rows(d),
-    "tail": lambda d: tail_rows(d), "display": lambda d: display_rows(d),
-    "optimizer": lambda d: optimizer_cluster_rows(), "interference": lambda d: interference_rows(d),
-    "stages": lambda d: stage_rows(d), "total-orientation": lambda d: total_orientation_rows(d),
-    "bracket": lambda d: bracket_rows(d), "dexterity": lambda d: dexterity_rows(d),
+    "shell": shell_rows, "evaluation": evaluation_rows, "measures": measure_rows, "meas1": measure_meas1_rows,
+    "measure-stages": measure_stage_rows, "feature-filter": feature_filter_rows, "tail": tail_rows,
+    "display": display_rows, "optimizer": lambda _design: optimizer_cluster_rows(),
+    "interference": interference_rows, "stages": stage_rows, "total-orientation": total_orientation_rows,
+    "bracket": bracket_rows, "dexterity": dexterity_rows,
 }
 
 
