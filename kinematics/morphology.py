@@ -15,7 +15,11 @@ Computation (:func:`_dilate_packed_kernel`; exact, tested against ``scipy.ndimag
 distance-based :func:`ball_dilate_reference`): the set is packed 64 voxels to a word along z, and
 the ball is the union over its ``(di, dj)`` offsets of the z runs ``|dk| <= floor(sqrt(r^2 - di^2 -
 dj^2))``; the set dilated along z by each run length (by shifts of whole words) is moved by each
-offset and or-ed in. A set symmetric under ``j -> n_y - 1 - j`` is computed on half its rows. The
+offset and or-ed in. The words are laid out ``[i, q, j]`` (the word index ``q`` along z before
+``j``), so that every loop of the dilation runs over ``j`` on a contiguous row of words, without a
+branch: the compiler puts it in vector lanes (at h = 1 a dilation took 16 ms in the ``[i, j, q]``
+layout, whose inner loop was the 3 words of a z column, and 5 ms in this one). A set symmetric
+under ``j -> n_y - 1 - j`` is computed on half its rows. The
 filter packs the set once for its four dilations (an erosion is a not of the words around a
 dilation), padding it in the same parallel pass, and unpacks the result without its padding: no
 serial pass over the grid (no ``np.pad``, no ``np.array_equal`` for the mirror test).
@@ -79,24 +83,25 @@ def _ball_dilate_kernel(m, w, r2, d1, d2, out):
 
 @njit(parallel=True, cache=True, nogil=True)
 def _pack_kernel(m, p, P):
-    """``P[i, j, q]``: bit ``t`` is voxel ``(i - p, j - p, 64 q + t - p)`` of ``m`` (``m`` padded with
-    ``p`` empty voxels on every side, in the same pass; the bits past the padded ``nz`` are 0)."""
+    """``P[i, q, j]``: bit ``t`` is voxel ``(i - p, j - p, 64 q + t - p)`` of ``m`` (``m`` padded with
+    ``p`` empty voxels on every side, in the same pass; the bits past the padded ``nz`` are 0). The
+    word index comes before ``j`` so that each ``(i, q)`` is a contiguous row over ``j``, the
+    direction the dilation's loops run in (vector lanes)."""
     nx, ny, nz = m.shape
-    NX, NY, nw = P.shape
+    NX, nw, NY = P.shape
     zero = np.uint64(0)
     for I in prange(NX):
         i = I - p
-        for J in range(NY):
-            j = J - p
-            inside = 0 <= i < nx and 0 <= j < ny
-            for q in range(nw):
+        for q in range(nw):
+            k0 = max(64 * q - p, 0)
+            k1 = min(64 * q + 64 - p, nz)
+            for J in range(NY):
+                j = J - p
                 word = zero
-                if inside:
-                    k0 = max(64 * q - p, 0)
-                    k1 = min(64 * q + 64 - p, nz)
+                if 0 <= i < nx and 0 <= j < ny:
                     for k in range(k0, k1):
                         word |= np.uint64(m[i, j, k]) << np.uint64(k + p - 64 * q)
-                P[I, J, q] = word
+                P[I, q, J] = word
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -108,7 +113,7 @@ def _unpack_kernel(P, p, out):
         for j in range(ny):
             for k in range(nz):
                 b = k + p
-                out[i, j, k] = ((P[i + p, j + p, b >> 6] >> np.uint64(b & 63)) & one) != np.uint64(0)
+                out[i, j, k] = ((P[i + p, b >> 6, j + p] >> np.uint64(b & 63)) & one) != np.uint64(0)
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -141,12 +146,13 @@ def is_mirror_symmetric(mask: np.ndarray) -> bool:
 @njit(parallel=True, cache=True, nogil=True)
 def _not_kernel(P, last):
     """The complement of a packed set, in place (``last``: the valid bits of each row's last word)."""
-    nx, ny, nw = P.shape
+    nx, nw, ny = P.shape
     for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw - 1):
-                P[i, j, q] = ~P[i, j, q]
-            P[i, j, nw - 1] = ~P[i, j, nw - 1] & last
+        for q in range(nw):
+            Pq = P[i, q]
+            mask = last if q == nw - 1 else ~np.uint64(0)
+            for j in range(ny):
+                Pq[j] = ~Pq[j] & mask
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -156,30 +162,38 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, Z, R):
     z by ``[-a, a]`` (that of ``a - 1`` or-ed with ``P`` moved ``a`` bits each way across the words),
     then or-ed into ``R`` moved by every offset whose run is ``a``. With ``half`` (``P`` symmetric
     under ``j -> ny - 1 - j``, so ``R`` is too) only the rows ``j >= ny // 2`` are or-ed, the others
-    copied. Bits past ``nz`` are cleared (``last``). ``Z``: work array shaped like ``P``."""
-    nx, ny, nw = P.shape
+    copied. Bits past ``nz`` are cleared (``last``). ``Z``: work array shaped like ``P``. Every
+    inner loop runs over ``j`` on contiguous rows ``[i, q, :]`` without a branch (vector lanes)."""
+    nx, nw, ny = P.shape
     j0 = ny // 2 if half else 0
     zero = np.uint64(0)
     n = DI.shape[0]
     for i in prange(nx):
-        for j in range(ny):
-            for q in range(nw):
-                R[i, j, q] = zero
-    for a in range(w + 1):
-        for i in prange(nx):
+        for q in range(nw):
+            Rq = R[i, q]
             for j in range(ny):
-                for q in range(nw):
-                    if a == 0:
-                        v = P[i, j, q]
-                    else:
-                        up = P[i, j, q] << np.uint64(a)
-                        if q > 0:
-                            up |= P[i, j, q - 1] >> np.uint64(64 - a)
-                        dn = P[i, j, q] >> np.uint64(a)
-                        if q + 1 < nw:
-                            dn |= P[i, j, q + 1] << np.uint64(64 - a)
-                        v = Z[i, j, q] | up | dn
-                    Z[i, j, q] = v
+                Rq[j] = zero
+    for a in range(w + 1):
+        ua = np.uint64(a)
+        ub = np.uint64(64 - a)
+        for i in prange(nx):
+            for q in range(nw):
+                Zq = Z[i, q]
+                Pq = P[i, q]
+                if a == 0:
+                    for j in range(ny):
+                        Zq[j] = Pq[j]
+                    continue
+                for j in range(ny):
+                    Zq[j] |= (Pq[j] << ua) | (Pq[j] >> ua)
+                if q > 0:
+                    Pm = P[i, q - 1]
+                    for j in range(ny):
+                        Zq[j] |= Pm[j] >> ub
+                if q + 1 < nw:
+                    Pp = P[i, q + 1]
+                    for j in range(ny):
+                        Zq[j] |= Pp[j] << ub
         for i in prange(nx):
             for e in range(n):
                 if A[e] != a:
@@ -188,16 +202,24 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, Z, R):
                 if ii < 0 or ii >= nx:
                     continue
                 dj = DJ[e]
-                for j in range(max(j0, -dj), min(ny, ny - dj)):
-                    for q in range(nw):
-                        R[i, j, q] |= Z[ii, j + dj, q]
-    for i in prange(nx):
-        for j in range(j0, ny):
-            R[i, j, nw - 1] &= last
-        if half:
-            for j in range(j0):
+                lo = max(j0, -dj)
+                hi = min(ny, ny - dj)
+                if hi <= lo:
+                    continue
                 for q in range(nw):
-                    R[i, j, q] = R[i, ny - 1 - j, q]
+                    Rv = R[i, q, lo:hi]
+                    Zv = Z[ii, q, lo + dj:hi + dj]
+                    for t in range(hi - lo):
+                        Rv[t] |= Zv[t]
+    for i in prange(nx):
+        Rl = R[i, nw - 1]
+        for j in range(j0, ny):
+            Rl[j] &= last
+        if half:
+            for q in range(nw):
+                Rq = R[i, q]
+                for j in range(j0):
+                    Rq[j] = Rq[ny - 1 - j]
 
 
 def _ball_offsets(r2: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -226,7 +248,7 @@ class _Packed:
         self.w = int(np.floor(radius_voxels + 1e-9))
         self.offsets = _ball_offsets(int(np.floor(radius_voxels * radius_voxels + 1e-9)), self.w)
         self.symmetric = bool(symmetric)
-        self.P = np.empty((nx, ny, nw), np.uint64)
+        self.P = np.empty((nx, nw, ny), np.uint64)
         self.Z = np.empty_like(self.P)
         self.R = np.empty_like(self.P)
         with KERNEL_LOCK:
