@@ -9,10 +9,10 @@ with skimage's coefficients for 26-adjacency (``EULER_COEFS3D_26``), reversed (t
 the complement) for 6-adjacency. The empty configuration's coefficient is 0, so windows that hold no
 voxel of ``W`` add nothing.
 
-Computation (:func:`_euler_hist_kernel`): one parallel pass that counts the configurations per x
-slice; along z each window reads four new voxels (the rest is the previous window's far layer), and
-only the windows that meet the span of their four columns are read (the same integer as skimage,
-tested).
+Computation (:func:`_euler_sum_kernel`): one parallel pass that sums the coefficients per x
+slice; along z each window's configuration is its near layer's four voxels (the window before's far
+layer) and four new ones, and only the windows that meet the span of their four columns are read
+(the same integer as skimage, tested).
 """
 
 from __future__ import annotations
@@ -28,38 +28,38 @@ _EULER_26 = np.asarray(_EULER_COEFS3D_26, dtype=np.int64)
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _euler_hist_kernel(occ, hist):
-    """``hist[i, c]``: 2x2x2 windows of low corner x index ``i - 1`` with configuration ``c``, over
-    every window that meets the grid (voxels outside it empty); bits as skimage's convolution
-    gives them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the
-    window is bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). Along z each window's configuration is the
-    previous one's far layer moved to the near layer (bits 0, 1, 4, 5 shifted by 2) and four new
-    voxels, so each window reads four voxels; and only the windows that meet the span of their four
-    columns (from the lowest to the highest set voxel of any of them) are read: the others hold no
-    set voxel and are counted as configuration 0 without a read."""
+def _euler_sum_kernel(occ, coefs, sums):
+    """``sums[i]``: ``sum coefs[c]`` over the 2x2x2 windows of low corner x index ``i - 1``, over
+    every window that meets the grid (voxels outside it empty); bits as skimage's convolution gives
+    them (``1`` the window's far corner, ``128`` its low corner: voxel ``(a, b, e)`` of the window is
+    bit ``4 (1 - a) + (1 - b) + 2 (1 - e)``). A window's configuration is its near layer's four bits
+    moved up by 2 and its far layer's four, ``c(k) = 4 f(k) + f(k + 1)`` with ``f(z)`` the four
+    columns' voxels at height ``z`` (bits 32, 16, 2, 1), so each column of windows is two loops
+    without a branch or a carried dependence: the layers ``f``, then the coefficients summed (no
+    histogram, whose repeated bins inside the solid serialise on one memory word). Only the windows
+    that meet the span of their four columns (from the lowest to the highest set voxel of any of
+    them) are read: the others hold no set voxel and are counted with ``coefs[0]`` without a read."""
     n0, n1, n2 = occ.shape
     kb = np.empty((n0, n1), np.int64)  # lowest set z of each column (n2: none)
     kt = np.empty((n0, n1), np.int64)  # highest (-1: none)
     for i in prange(n0):
         for j in range(n1):
+            row = occ[i, j]
             lo = n2
-            for k in range(n2):
-                if occ[i, j, k]:
-                    lo = k
-                    break
             hi = -1
-            if lo < n2:
-                for k in range(n2 - 1, lo - 1, -1):
-                    if occ[i, j, k]:
-                        hi = k
-                        break
+            for k in range(n2):  # no branch: vector lanes
+                o = row[k]
+                lo = min(lo, k if o else n2)
+                hi = max(hi, k if o else -1)
             kb[i, j] = lo
             kt[i, j] = hi
+    empty = np.zeros(n2, np.bool_)
     for ii in prange(n0 + 1):
         i = ii - 1
         x0 = i >= 0
         x1 = i + 1 < n0
-        row = np.zeros(256, np.int64)
+        f = np.zeros(n2 + 2, np.int64)
+        s = 0
         for j in range(-1, n1):
             y0 = j >= 0
             y1 = j + 1 < n1
@@ -82,26 +82,23 @@ def _euler_hist_kernel(occ, hist):
                 lo = min(lo, kb[i + 1, j + 1])
                 hi = max(hi, kt[i + 1, j + 1])
             if hi < 0:
-                row[0] += n2 + 1
+                s += coefs[0] * (n2 + 1)
                 continue
-            row[0] += n2 + 1 - (hi - lo + 2)  # the windows below lo - 1 and above hi
-            code = 0
-            for k in range(lo - 1, hi + 1):
-                z = k + 1
-                far = 0
-                if z < n2:
-                    if c00 and occ[i, j, z]:
-                        far |= 32
-                    if c01 and occ[i, j + 1, z]:
-                        far |= 16
-                    if c10 and occ[i + 1, j, z]:
-                        far |= 2
-                    if c11 and occ[i + 1, j + 1, z]:
-                        far |= 1
-                code = ((code & 0x33) << 2) | far
-                row[code] += 1
-        for c in range(256):
-            hist[ii, c] = row[c]
+            m = hi - lo + 2  # the windows k = lo - 1 .. hi
+            s += coefs[0] * (n2 + 1 - m)
+            r00 = occ[i, j] if c00 else empty
+            r01 = occ[i, j + 1] if c01 else empty
+            r10 = occ[i + 1, j] if c10 else empty
+            r11 = occ[i + 1, j + 1] if c11 else empty
+            # f[t] = f(lo - 1 + t): 0 below lo and above hi (every column empty there)
+            f[0] = 0
+            f[m] = 0
+            for z in range(lo, hi + 1):
+                f[z - lo + 1] = ((np.int64(r00[z]) << 5) | (np.int64(r01[z]) << 4) | (np.int64(r10[z]) << 1)
+                                 | np.int64(r11[z]))
+            for t in range(m):
+                s += coefs[(f[t] << 2) | f[t + 1]]
+        sums[ii] = s
 
 
 def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
@@ -110,7 +107,7 @@ def euler_characteristic(occupancy: np.ndarray, connectivity: int = 1) -> int:
     the empty configuration's coefficient is 0)."""
     occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
     coefs = _EULER_26[::-1] if connectivity == 1 else _EULER_26
-    hist = np.zeros((occ.shape[0] + 1, 256), np.int64)
+    sums = np.zeros(occ.shape[0] + 1, np.int64)
     with KERNEL_LOCK:
-        _euler_hist_kernel(occ, hist)
-    return int(0.125 * int(coefs @ hist.sum(axis=0)))
+        _euler_sum_kernel(occ, np.ascontiguousarray(coefs), sums)
+    return int(0.125 * int(sums.sum()))

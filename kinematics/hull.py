@@ -95,14 +95,14 @@ def _column_ends_kernel(occ, kbot, ktop):
     nx, ny, nz = occ.shape
     for i in prange(nx):
         for j in range(ny):
-            lo = -1
+            row = occ[i, j]
+            lo = nz
             hi = -1
-            for k in range(nz):
-                if occ[i, j, k]:
-                    if lo < 0:
-                        lo = k
-                    hi = k
-            kbot[i, j] = lo
+            for k in range(nz):  # no branch: vector lanes
+                o = row[k]
+                lo = min(lo, k if o else nz)
+                hi = max(hi, k if o else -1)
+            kbot[i, j] = lo if hi >= 0 else -1
             ktop[i, j] = hi
 
 

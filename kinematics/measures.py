@@ -426,17 +426,24 @@ def _covered_kernel(occ, within, use_within, out):
     for i in prange(nx):
         c = 0
         for j in range(ny):
+            row = occ[i, j]
+            orow = out[i, j]
             top = -1
             for k in range(nz - 1, -1, -1):
-                if occ[i, j, k]:
+                if row[k]:
                     top = k
                     break
-            for k in range(nz):
-                v = k < top and not occ[i, j, k]
-                if use_within:
-                    v = v and within[i, j, k]
-                out[i, j, k] = v
-                c += v
+            if use_within:
+                wrow = within[i, j]
+                for k in range(nz):  # no branch: vector lanes
+                    v = (k < top) & (not row[k]) & wrow[k]
+                    orow[k] = v
+                    c += v
+            else:
+                for k in range(nz):
+                    v = (k < top) & (not row[k])
+                    orow[k] = v
+                    c += v
         counts[i] = c
     return counts.sum()
 
@@ -449,16 +456,16 @@ def _column_gaps_kernel(occ, gaps):
     for i in prange(nx):
         g = 0
         for j in range(ny):
-            lo = -1
+            row = occ[i, j]
+            lo = nz
             hi = -1
             cnt = 0
-            for k in range(nz):
-                if occ[i, j, k]:
-                    if lo < 0:
-                        lo = k
-                    hi = k
-                    cnt += 1
-            if lo >= 0:
+            for k in range(nz):  # no branch: vector lanes
+                o = row[k]
+                lo = min(lo, k if o else nz)
+                hi = max(hi, k if o else -1)
+                cnt += o
+            if hi >= 0:
                 g += hi - lo + 1 - cnt
         gaps[i] = g
 

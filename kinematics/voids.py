@@ -61,55 +61,61 @@ def _enclosed_ext_kernel(occ, out, ext):
     (strictly between the first and the last reachable voxel of each of their three axis lines);
     and each x slice's extent of these candidates, ``ext[i] = (j_lo, j_hi, k_lo, k_hi)``
     (inclusive; ``j_hi = -1``: none in slice ``i``), so their bounding box needs no serial pass over
-    the grid. Both passes are parallel: the
-    x ends per ``(j, k)`` over y slices, the rest over x slices."""
+    the grid. Both passes are parallel: the x ends per ``(j, k)`` over y slices, the rest over x
+    slices. Every inner loop runs over ``k`` on a contiguous row, without a branch (the ends and
+    extents as minima and maxima of selections), so the compiler puts it in vector lanes."""
     n0, n1, n2 = occ.shape
-    fx = np.empty((n1, n2), np.int64)
-    lx = np.empty((n1, n2), np.int64)
+    N0, N1, M1 = np.int32(n0), np.int32(n1), np.int32(-1)
+    fx = np.empty((n1, n2), np.int32)
+    lx = np.empty((n1, n2), np.int32)
     for j in prange(n1):
+        fxj = fx[j]
+        lxj = lx[j]
         for k in range(n2):
-            fx[j, k] = n0
-            lx[j, k] = -1
+            fxj[k] = N0
+            lxj[k] = M1
         for i in range(n0):
+            i32 = np.int32(i)
+            row = occ[i, j]
             for k in range(n2):
-                if occ[i, j, k]:
-                    if fx[j, k] == n0:
-                        fx[j, k] = i
-                    lx[j, k] = i
+                o = row[k]
+                fxj[k] = min(fxj[k], i32 if o else N0)
+                lxj[k] = i32 if o else lxj[k]
     for i in prange(n0):
-        fy = np.full(n2, n1, np.int64)
-        ly = np.full(n2, -1, np.int64)
+        fy = np.full(n2, n1, np.int32)
+        ly = np.full(n2, -1, np.int32)
         for j in range(n1):
+            j32 = np.int32(j)
+            row = occ[i, j]
             for k in range(n2):
-                if occ[i, j, k]:
-                    if fy[k] == n1:
-                        fy[k] = j
-                    ly[k] = j
+                o = row[k]
+                fy[k] = min(fy[k], j32 if o else N1)
+                ly[k] = j32 if o else ly[k]
         jlo, jhi, klo, khi = n1, -1, n2, -1
         for j in range(n1):
+            row = occ[i, j]
             fz = n2
-            for k in range(n2):
-                if occ[i, j, k]:
-                    fz = k
-                    break
             lz = -1
-            for k in range(n2 - 1, fz, -1):
-                if occ[i, j, k]:
-                    lz = k
-                    break
             for k in range(n2):
-                out[i, j, k] = False
-            for k in range(fz + 1, lz):  # only strictly between the column's ends
-                v = not occ[i, j, k] and fy[k] < j < ly[k] and fx[j, k] < i < lx[j, k]
-                out[i, j, k] = v
-                if v:
-                    if jlo == n1:
-                        jlo = j
-                    jhi = j
-                    if k < klo:
-                        klo = k
-                    if k > khi:
-                        khi = k
+                o = row[k]
+                fz = min(fz, k if o else n2)
+                lz = max(lz, k if o else -1)
+            orow = out[i, j]
+            fxj = fx[j]
+            lxj = lx[j]
+            rlo, rhi = n2, -1
+            for k in range(n2):
+                v = ((not row[k]) & (fz < k) & (k < lz) & (fy[k] < j) & (j < ly[k]) & (fxj[k] < i)
+                     & (i < lxj[k]))
+                orow[k] = v
+                rlo = min(rlo, k if v else n2)
+                rhi = max(rhi, k if v else -1)
+            if rhi >= 0:
+                if jlo == n1:
+                    jlo = j
+                jhi = j
+                klo = min(klo, rlo)
+                khi = max(khi, rhi)
         ext[i, 0] = jlo
         ext[i, 1] = jhi
         ext[i, 2] = klo
