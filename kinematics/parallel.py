@@ -66,6 +66,7 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -165,11 +166,22 @@ class _KernelLock:
             self._local.background = before
 
     def acquire(self, blocking: bool = True, timeout: float = -1) -> bool:
+        """As :meth:`threading.Lock.acquire`; a background thread first waits while another thread
+        waits for the lock (``blocking=False``: returns False at once then; ``timeout``: waits at most
+        that long in all)."""
         if getattr(self._local, "background", False):
+            deadline = time.monotonic() + timeout if blocking and timeout >= 0 else None
             with self._turn:
                 while self._waiting:
-                    self._turn.wait()
-            return self._lock.acquire(blocking, timeout)
+                    if not blocking:
+                        return False
+                    left = None if deadline is None else deadline - time.monotonic()
+                    if left is not None and left <= 0:
+                        return False
+                    self._turn.wait(left)
+            if deadline is None:
+                return self._lock.acquire(blocking)
+            return self._lock.acquire(True, max(deadline - time.monotonic(), 0.0))
         with self._turn:
             self._waiting += 1
         try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 import numba
 import numpy as np
@@ -227,3 +228,45 @@ def test_a_waiting_thread_goes_before_a_background_thread_that_takes_the_lock_ba
         bg.join(10.0)
     assert not bg.is_alive()
     assert not getattr(lock._local, "background", False)  # this thread was never a background one
+
+
+def test_a_background_thread_that_may_not_wait_does_not_wait() -> None:
+    """``acquire(blocking=False)`` (or with a timeout) in a background thread answers at once (or by
+    its timeout) while a foreground thread waits for the lock, and takes the lock when nobody waits:
+    the yielding of :meth:`_KernelLock.background` never makes a non-blocking call block."""
+    lock = parallel._KernelLock()
+    holder_in, release = threading.Event(), threading.Event()
+    results: dict = {}
+
+    def holder() -> None:
+        with lock:
+            holder_in.set()
+            release.wait(10.0)
+
+    def background(key: str, **kw: Any) -> None:
+        with lock.background():
+            t = time.monotonic()
+            got = lock.acquire(**kw)
+            results[key] = (got, time.monotonic() - t)
+            if got:
+                lock.release()
+
+    background("free", blocking=False)  # nobody holds it, nobody waits: taken
+    assert results["free"][0]
+    h = threading.Thread(target=holder)
+    h.start()
+    assert holder_in.wait(10.0)
+    waiter = threading.Thread(target=lambda: (lock.acquire(), lock.release()))
+    waiter.start()  # a foreground thread waiting for the lock
+    deadline = time.monotonic() + 10.0
+    while not lock._waiting and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert lock._waiting == 1
+    background("now", blocking=False)
+    background("timeout", timeout=0.3)
+    assert results["now"][0] is False and results["now"][1] < 0.2
+    assert results["timeout"][0] is False and 0.25 <= results["timeout"][1] < 2.0
+    release.set()
+    h.join(10.0)
+    waiter.join(10.0)
+    assert not lock.locked()
