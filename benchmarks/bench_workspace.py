@@ -280,6 +280,22 @@ def _patched(*patches):
                 setattr(module, k, v)
 
 
+def _grid_euler(components: type, euler) -> type:
+    """``components`` (a class like :class:`~kinematics.run_components.RunComponents`) whose
+    ``euler_characteristic`` is ``euler(occupancy, connectivity)`` over the grid: the measures take
+    the Euler number from their components' runs now, and the former paths from the grid."""
+
+    class GridEuler(components):
+        def __init__(self, occupancy, connectivity: int = 1) -> None:
+            super().__init__(occupancy, connectivity)
+            self._occupancy = occupancy
+
+        def euler_characteristic(self, connectivity: int = 1) -> int:
+            return euler(self._occupancy, connectivity)
+
+    return GridEuler
+
+
 @contextlib.contextmanager
 def _former_measures():
     """kinematics.measures on its former path (before issue 24): skimage's Euler number, voids by
@@ -288,7 +304,6 @@ def _former_measures():
     tests' slow path)."""
     import numpy as np
     from scipy import ndimage as ndi
-    from skimage.measure import euler_number
 
     from paraspace.kinematics import measures as mod
 
@@ -302,13 +317,11 @@ def _former_measures():
         u = np.logical_or.accumulate(occ[:, :, ::-1], axis=2)[:, :, ::-1] & ~occ
         return u & (hull(occ, raster=False) if hull_ is None else hull_)
 
-    patch = {"euler_characteristic": lambda occ, conn=1: int(euler_number(occ, connectivity=conn)),
-             "_voids": voids,
+    patch = {"_voids": voids,
              "hull_mask": lambda occ, raster=False: hull(occ, raster=False),
              "feature_filter": morph_mod.feature_filter_reference,
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
-             "RunComponents": LabelledComponents,
-             "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
+             "RunComponents": LabelledComponents}  # components by a labelled grid, the Euler number by skimage
     with _patched((mod, patch)):
         yield
 
@@ -377,7 +390,7 @@ def _measures_before_meas1():
     patch = {"_voids": voids_mod._voids_labelled_candidates,
              "_void_set": lambda occ, conn: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
-             "euler_characteristic": euler}
+             "RunComponents": _grid_euler(mod.RunComponents, euler)}
     with _patched((mod, patch), (voids_mod, {"_void_set": patch["_void_set"]})):  # the sealed cavity's too
         yield
 
@@ -606,10 +619,10 @@ def _measures_before_meas2():
         return ~out if complement else out
 
     reference_filter = morph_mod.feature_filter_reference
-    patch = {"RunComponents": LabelledComponents, "euler_characteristic": euler,
-             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, cancel, dilate=dilate_before),
-             "count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
-    with _patched((mod, patch), (voids_mod, {"count_components": patch["count_components"]}),
+    patch = {"RunComponents": _grid_euler(LabelledComponents, euler),
+             "feature_filter": lambda occ, r, cancel=None: reference_filter(occ, r, cancel, dilate=dilate_before)}
+    labelled_count = {"count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
+    with _patched((mod, patch), (voids_mod, labelled_count),
                   (void_flood, {"_seed_kernel": void_flood._seed_kernel_reference})):
         yield
 

@@ -233,12 +233,11 @@ import numpy as np
 from numba import njit, prange
 from scipy import ndimage as ndi
 
-from .euler import euler_characteristic
 from .hull import hull_mask
 from .morphology import feature_filter
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
-from .run_components import RunComponents, count_components
+from .run_components import RunComponents
 from .serialize import jsonable
 from .void_flood import _contiguous
 from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_mask
@@ -487,8 +486,8 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
         return 0, 0
     voids, box = _void_set(occ, connectivity)
     filled = occ if box is None else occ | voids  # no void (the usual case): the solid itself
-    b0 = count_components(filled, connectivity)
-    return b0, int(b0 - euler_characteristic(filled, connectivity))
+    runs = RunComponents(filled, connectivity)  # b0 and chi from the same runs
+    return runs.count, int(runs.count - runs.euler_characteristic(connectivity))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -636,9 +635,13 @@ class _Steps:
             self._memo[name] = getattr(self, "_" + name)()
         return self._memo[name]
 
+    def _runs(self):
+        """The solid's runs along z and their components (for the labels and the Euler number)."""
+        return RunComponents(self.occ, self.o["connectivity"])
+
     def _labels(self):
-        occ, n, conn = self.occ, self.n, self.o["connectivity"]
-        comps = RunComponents(occ, conn)
+        occ, n = self.occ, self.n
+        comps = self.get("runs")
         components, sizes = comps.count, comps.sizes
         largest = float(sizes.max() / n)
         is_piece = sizes >= self.o["piece_fraction"] * n
@@ -652,7 +655,7 @@ class _Steps:
         return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
 
     def _chi_w(self):
-        return euler_characteristic(self.occ, self.o["connectivity"])
+        return self.get("runs").euler_characteristic(self.o["connectivity"])
 
     def _filled(self):
         """``(b0(F), chi(F))`` of the filled solid."""
@@ -660,7 +663,8 @@ class _Steps:
         voids_m, n_voids, _ = self.get("voids")
         if n_voids:
             filled = self.occ | voids_m
-            return count_components(filled, conn), euler_characteristic(filled, conn)
+            runs = RunComponents(filled, conn)
+            return runs.count, runs.euler_characteristic(conn)
         return self.get("labels")[0], self.get("chi_w")
 
     def _hull(self):

@@ -167,6 +167,13 @@ class RunComponents:
         #: voxels of each component (``len(sizes)`` components)
         self.sizes = size[self._roots]
 
+    def euler_characteristic(self, connectivity: int = 1) -> int:
+        """:func:`kinematics.euler.euler_characteristic` of the set, from its runs (the same integer;
+        :func:`kinematics.euler.euler_characteristic_of_runs`)."""
+        from .euler import euler_characteristic_of_runs
+
+        return euler_characteristic_of_runs(self._offs, self._rs, self._re, self.shape, connectivity)
+
     @property
     def count(self) -> int:
         """``b0``: the number of components."""
@@ -197,6 +204,13 @@ class LabelledComponents:
     def mask(self, keep: np.ndarray) -> np.ndarray:
         """The union of the components ``keep`` (bool per component) selects."""
         return np.concatenate([[False], keep])[self._lab]
+
+    def euler_characteristic(self, connectivity: int = 1) -> int:
+        """``skimage.measure.euler_number`` of the set (the definition of
+        :meth:`RunComponents.euler_characteristic`)."""
+        from skimage.measure import euler_number
+
+        return int(euler_number(self._lab > 0, connectivity=connectivity))
 
 
 def count_components(occupancy: np.ndarray, connectivity: int = 1) -> int:

@@ -16,7 +16,7 @@ from paraspace.kinematics import voids as voids_mod
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
 from paraspace.kinematics.measures import box_contact_fraction, measure_workspace, touched_faces
-from paraspace.kinematics.run_components import LabelledComponents
+from paraspace.kinematics.run_components import LabelledComponents, RunComponents
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
 H = 1.0
@@ -376,11 +376,11 @@ def test_each_measure_alone_equals_the_full_measurement_and_computes_only_its_st
 
 
 def _slow_measures(monkeypatch):
-    """Patch kinematics.measures back to its former path: skimage's Euler number, voids by labelling
+    """Patch kinematics.measures back to its former path: components by a labelled grid and skimage's
+    Euler number (:class:`LabelledComponents`), voids by labelling
     the whole padded complement, int32 dilations of the whole grid, every hull facet at every
     column, column gaps and cover by cumulative ors."""
     from scipy import ndimage as ndi
-    from skimage.measure import euler_number
 
     from paraspace.kinematics import measures as mod
 
@@ -396,7 +396,8 @@ def _slow_measures(monkeypatch):
             return u
         return u & (mod.hull_mask(occ, raster=False) if hull is None else hull)
 
-    monkeypatch.setattr(mod, "euler_characteristic", lambda occ, conn=1: int(euler_number(occ, connectivity=conn)))
+    # components by scipy's labelled grid, the Euler number by skimage (LabelledComponents)
+    monkeypatch.setattr(mod, "RunComponents", LabelledComponents)
     monkeypatch.setattr(mod, "_voids", voids)
     monkeypatch.setattr(mod, "feature_filter", morph_mod.feature_filter_reference)
     hull = mod.hull_mask
@@ -494,6 +495,9 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
         occ[:, :, :rng.integers(0, occ.shape[2] + 1)] = False
         for conn in (1, 3):
             assert euler_mod.euler_characteristic(occ, conn) == int(euler_number(occ, connectivity=conn))
+            # and from the runs: an event sweep per column of windows (runs that start or end at the
+            # same height in two columns, columns full to the top, empty columns)
+            assert RunComponents(occ, conn).euler_characteristic(conn) == int(euler_number(occ, connectivity=conn))
 
     from scipy import ndimage as ndi
 
@@ -522,9 +526,9 @@ def test_run_components_and_separable_seeds_equal_the_former_path(monkeypatch):
                {"piece_fraction": 0.0})
     fast = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast[-6]["fragments"] == 3 and fast[-6]["voids"] == 1  # the specks and the void were seen
-    monkeypatch.setattr(mod, "RunComponents", LabelledComponents)
-    for module in (mod, voids_mod):  # the voids are counted in kinematics.voids
-        monkeypatch.setattr(module, "count_components", lambda occ, conn=1: LabelledComponents(occ, conn).count)
+    monkeypatch.setattr(mod, "RunComponents", LabelledComponents)  # components and Euler numbers
+    # the voids are counted in kinematics.voids
+    monkeypatch.setattr(voids_mod, "count_components", lambda occ, conn=1: LabelledComponents(occ, conn).count)
     monkeypatch.setattr(void_flood, "_seed_kernel", void_flood._seed_kernel_reference)
     slow = [measure_workspace(res, **kw).to_dict() for res in results for kw in options]
     assert fast == slow
