@@ -307,7 +307,7 @@ def _former_measures():
 
     from paraspace.kinematics import measures as mod
 
-    def voids(occ, conn):
+    def voids(occ, conn, runs=None):  # the set's runs are not used on this path
         v = voids_mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
@@ -387,8 +387,8 @@ def _measures_before_meas1():
         return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
     hull = mod.hull_mask
-    patch = {"_voids": voids_mod._voids_labelled_candidates,
-             "_void_set": lambda occ, conn: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
+    patch = {"_voids": lambda occ, conn, runs=None: voids_mod._voids_labelled_candidates(occ, conn),
+             "_void_set": lambda occ, conn, runs=None: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "RunComponents": _grid_euler(mod.RunComponents, euler)}
     with _patched((mod, patch), (voids_mod, {"_void_set": patch["_void_set"]})):  # the sealed cavity's too

@@ -484,9 +484,10 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     occ = np.asarray(occupancy, dtype=bool)
     if not occ.any():
         return 0, 0
-    voids, box = _void_set(occ, connectivity)
-    filled = occ if box is None else occ | voids  # no void (the usual case): the solid itself
-    runs = RunComponents(filled, connectivity)  # b0 and chi from the same runs
+    runs = RunComponents(occ, connectivity)  # the voids' candidates, b0 and chi from the same runs
+    voids, box = _void_set(occ, connectivity, runs.runs)
+    if box is not None:  # a void (rare): the filled solid's own runs
+        runs = RunComponents(occ | voids, connectivity)
     return runs.count, int(runs.count - runs.euler_characteristic(connectivity))
 
 
@@ -651,7 +652,7 @@ class _Steps:
         return components, largest, n_pieces, fragment_fraction, piece_set
 
     def _voids(self):
-        voids_m, n_voids = _voids(self.occ, self.o["connectivity"])
+        voids_m, n_voids = _voids(self.occ, self.o["connectivity"], self.get("runs").runs)
         return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
 
     def _chi_w(self):
@@ -686,7 +687,8 @@ class _Steps:
         """``(open_cavity_ratio, sealed_cavity_volume)``."""
         under, n_under = self.get("under")
         if n_under:
-            sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None)
+            sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None,
+                                 runs=self.get("runs").runs)
         else:
             sealed = self.get("voids")[0]
         if under.size:

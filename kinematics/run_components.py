@@ -175,6 +175,12 @@ class RunComponents:
         return euler_characteristic_of_runs(self._offs, self._rs, self._re, self.shape, connectivity)
 
     @property
+    def runs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(offs, rs, re)``: column ``(i, j)`` holds the runs ``offs[i n1 + j] .. offs[i n1 + j + 1]
+        - 1``, run ``q`` from ``rs[q]`` to ``re[q]`` (inclusive), in increasing z."""
+        return self._offs, self._rs, self._re
+
+    @property
     def count(self) -> int:
         """``b0``: the number of components."""
         return int(len(self.sizes))
@@ -204,6 +210,9 @@ class LabelledComponents:
     def mask(self, keep: np.ndarray) -> np.ndarray:
         """The union of the components ``keep`` (bool per component) selects."""
         return np.concatenate([[False], keep])[self._lab]
+
+    #: No runs along z: the callers that take them (the voids' candidates) read the grid instead.
+    runs = None
 
     def euler_characteristic(self, connectivity: int = 1) -> int:
         """``skimage.measure.euler_number`` of the set (the definition of

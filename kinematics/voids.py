@@ -123,6 +123,100 @@ def _enclosed_ext_kernel(occ, out, ext):
 
 
 @njit(parallel=True, cache=True, nogil=True)
+def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
+    """:func:`_enclosed_ext_kernel`'s ``out`` and ``ext`` from the set's runs along z (column ``(i,
+    j)`` holds the runs ``offs[i n1 + j] .. offs[i n1 + j + 1] - 1``, from ``rs`` to ``re``; those of
+    :class:`kinematics.run_components.RunComponents`). The x and y ends are written over the runs'
+    voxels only, and a candidate lies in a gap between two runs of its column (unreachable and
+    strictly between the column's first and last reachable voxel), so only the gaps are tested: the
+    reads grow with the set's voxels and its gaps, not with the grid (which is only cleared)."""
+    fx = np.empty((n1, n2), np.int32)
+    lx = np.empty((n1, n2), np.int32)
+    for j in prange(n1):
+        fxj = fx[j]
+        lxj = lx[j]
+        for k in range(n2):
+            fxj[k] = n0
+            lxj[k] = -1
+        for i in range(n0):
+            i32 = np.int32(i)
+            c = i * n1 + j
+            for q in range(offs[c], offs[c + 1]):
+                fv = fxj[rs[q]:re[q] + 1]
+                lv = lxj[rs[q]:re[q] + 1]
+                for t in range(fv.shape[0]):  # i grows: the first write is the least, the last the greatest
+                    fv[t] = min(fv[t], i32)
+                    lv[t] = i32
+    for i in prange(n0):
+        fy = np.full(n2, n1, np.int32)
+        ly = np.full(n2, -1, np.int32)
+        for j in range(n1):
+            j32 = np.int32(j)
+            c = i * n1 + j
+            for q in range(offs[c], offs[c + 1]):
+                fv = fy[rs[q]:re[q] + 1]
+                lv = ly[rs[q]:re[q] + 1]
+                for t in range(fv.shape[0]):
+                    fv[t] = min(fv[t], j32)
+                    lv[t] = j32
+        jlo, jhi, klo, khi = n1, -1, n2, -1
+        for j in range(n1):
+            orow = out[i, j]
+            for k in range(n2):
+                orow[k] = False
+            c = i * n1 + j
+            fxj = fx[j]
+            lxj = lx[j]
+            rlo, rhi = n2, -1
+            for q in range(offs[c], offs[c + 1] - 1):  # the gap between runs q and q + 1
+                for k in range(re[q] + 1, rs[q + 1]):
+                    v = (fy[k] < j) & (j < ly[k]) & (fxj[k] < i) & (i < lxj[k])
+                    orow[k] = v
+                    rlo = min(rlo, k if v else n2)
+                    rhi = max(rhi, k if v else -1)
+            if rhi >= 0:
+                if jlo == n1:
+                    jlo = j
+                jhi = j
+                klo = min(klo, rlo)
+                khi = max(khi, rhi)
+        ext[i, 0] = jlo
+        ext[i, 1] = jhi
+        ext[i, 2] = klo
+        ext[i, 3] = khi
+
+
+@njit(cache=True, nogil=True)
+def _floored_runs(offs, rs, re):
+    """The runs of the set on its base layer (:func:`_floored_kernel`: one layer below ``k = 0``,
+    every voxel set) from the set's runs: each run moved up by one, and the base voxel joined to a
+    run that starts at ``k = 0`` or a run of its own."""
+    n = offs.shape[0] - 1
+    offs2 = np.empty(n + 1, np.int64)
+    offs2[0] = 0
+    for c in range(n):
+        a, b = offs[c], offs[c + 1]
+        offs2[c + 1] = offs2[c] + (b - a) + (0 if b > a and rs[a] == 0 else 1)
+    rs2 = np.empty(offs2[n], np.int64)
+    re2 = np.empty(offs2[n], np.int64)
+    for c in range(n):
+        a, b = offs[c], offs[c + 1]
+        p = offs2[c]
+        rs2[p] = 0
+        if b > a and rs[a] == 0:
+            re2[p] = re[a] + 1
+            a += 1
+        else:
+            re2[p] = 0
+        p += 1
+        for q in range(a, b):
+            rs2[p] = rs[q] + 1
+            re2[p] = re[q] + 1
+            p += 1
+    return offs2, rs2, re2
+
+
+@njit(parallel=True, cache=True, nogil=True)
 def _paste_kernel(sub, lo0, lo1, lo2, out):
     """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
     slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
@@ -176,17 +270,22 @@ def _open_labels_kernel(cand, lab, occ, full, n_labels):
     return opened
 
 
-def _candidates_box(occupancy: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple] | None:
+def _candidates_box(occupancy: np.ndarray, runs: tuple | None = None) -> tuple[np.ndarray, np.ndarray, tuple] | None:
     """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
-    (:func:`_enclosed_ext_kernel`) and their bounding box grown by one voxel (the neighbours the tests
-    look at; candidates never lie on the grid's edge), or ``None`` when there is no candidate."""
+    (:func:`_enclosed_ext_kernel`, or :func:`_enclosed_runs_kernel` from ``runs``, the set's runs
+    ``(offs, rs, re)`` when the caller holds them: the same voxels) and their bounding box grown by
+    one voxel (the neighbours the tests look at; candidates never lie on the grid's edge), or
+    ``None`` when there is no candidate."""
     occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
     if not occ.size:
         return None
     cand = np.empty(occ.shape, np.bool_)
     ext = np.empty((occ.shape[0], 4), np.int64)
     with KERNEL_LOCK:
-        _enclosed_ext_kernel(occ, cand, ext)
+        if runs is None:
+            _enclosed_ext_kernel(occ, cand, ext)
+        else:
+            _enclosed_runs_kernel(*runs, *occ.shape, cand, ext)
     rows = np.flatnonzero(ext[:, 1] >= 0)
     if not rows.size:
         return None
@@ -215,11 +314,12 @@ def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tupl
     return voids, int(keep.sum())
 
 
-def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tuple | None]:
+def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, tuple | None]:
     """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
-    (:func:`_enclosed_ext_kernel`) less the flood of :mod:`kinematics.void_flood` from those that leak,
-    which never visits a sealed cavity; ``box`` bounds the voids (``None``: no void)."""
-    found = _candidates_box(occupancy)
+    (:func:`_candidates_box`; ``runs``: the set's runs, when the caller holds them) less the flood of
+    :mod:`kinematics.void_flood` from those that leak, which never visits a sealed cavity; ``box``
+    bounds the voids (``None``: no void)."""
+    found = _candidates_box(occupancy, runs)
     if found is None:
         return np.zeros(np.shape(occupancy), np.bool_), None
     occ, cand, box = found
@@ -233,7 +333,7 @@ def _void_set(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, tup
     return voids, box
 
 
-def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
+def _voids(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, int]:
     """``(void_mask, number of voids)`` without labelling the whole complement.
 
     An unreachable voxel with no reachable voxel on one side along some axis is joined to the
@@ -242,9 +342,10 @@ def _voids(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
     are joined within the candidates to one with a dual neighbour that is unreachable and not a
     candidate (:func:`_void_set`); only the voids left are counted, as components of runs
     (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
-    candidate components are not adjacent).
+    candidate components are not adjacent). ``runs``: the set's runs ``(offs, rs, re)``, when the
+    caller holds them (:func:`_candidates_box`).
     """
-    voids, box = _void_set(occupancy, connectivity)
+    voids, box = _void_set(occupancy, connectivity, runs)
     if box is None:
         return voids, 0
     return voids, count_components(voids[box], dual_connectivity(connectivity))
@@ -256,17 +357,22 @@ def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
     return _void_set(occupancy, connectivity)[0]
 
 
-def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True) -> np.ndarray:
+def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True,
+                runs: tuple | None = None) -> np.ndarray:
     """Unreachable voxels enclosed by the workspace together with the base plane.
 
     The voids of ``W u P`` where ``P`` is a solid layer just below the grid's bottom face
     (``floor=True``) -- the plane the workspace stands on; with ``floor=False`` the voids of ``W``.
+    ``runs``: the runs ``(offs, rs, re)`` of ``W``, when the caller holds them (the candidates from
+    them, :func:`_candidates_box`; the same set).
     """
     occ = np.asarray(occupancy, dtype=bool)
     if not floor:
-        return void_mask(occ, connectivity)
+        return _void_set(occ, connectivity, runs)[0]
     floored = np.empty(occ.shape[:2] + (occ.shape[2] + 1,), np.bool_)
     if floored.size:
         with KERNEL_LOCK:
             _floored_kernel(np.ascontiguousarray(occ), floored)
-    return void_mask(floored, connectivity)[:, :, 1:]
+            if runs is not None:
+                runs = _floored_runs(*runs)
+    return _void_set(floored, connectivity, runs)[0][:, :, 1:]

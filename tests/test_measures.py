@@ -384,7 +384,7 @@ def _slow_measures(monkeypatch):
 
     from paraspace.kinematics import measures as mod
 
-    def voids(occ, conn):
+    def voids(occ, conn, runs=None):  # the set's runs are not used on this path
         v = voids_mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
@@ -547,7 +547,8 @@ def _enclosed_by_definition(occ: np.ndarray) -> np.ndarray:
 
 def test_parallel_cavities_kernels_equal_the_former_passes():
     """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
-    their per-slice extents, the grid on its base layer, the seed count that skips an empty flood,
+    their per-slice extents (from the grid and from its runs), the grid on its base layer (and its
+    runs), the seed count that skips an empty flood,
     the box's copy and paste, the open/sealed counts -- and the per-slice count and extent of the
     grid (the measures' bounds and crop) give exactly their definitions or the former serial passes
     (the candidates from cumulative ors along each axis, numpy's ``any`` box, ``concatenate``,
@@ -590,6 +591,15 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     ext = np.empty((grid.shape[0], 4), np.int64)
                     voids_mod._enclosed_ext_kernel(grid, new, ext)
                     assert np.array_equal(new, old)
+                    # from the runs: the same candidates and slice extents; the floored grid's runs
+                    # built from the set's equal its own
+                    runs = RunComponents(grid).runs
+                    from_runs, ext_runs = np.ones(grid.shape, bool), np.empty_like(ext)
+                    voids_mod._enclosed_runs_kernel(*runs, *grid.shape, from_runs, ext_runs)
+                    assert np.array_equal(from_runs, old) and np.array_equal(ext_runs, ext)
+                    if grid is floored:
+                        built = voids_mod._floored_runs(*RunComponents(occ).runs)
+                        assert all(np.array_equal(a, b) for a, b in zip(built, runs))
                     found = voids_mod._candidates_box(grid)
                     if not old.any():
                         assert found is None
@@ -622,6 +632,9 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                         ref = (voids_mod.void_mask_labelled(floored, conn)[:, :, 1:] if floor
                                else voids_mod.void_mask_labelled(occ, conn))
                         assert np.array_equal(sealed, ref)
+                        if occ.size:  # with the set's runs: the same set
+                            with_runs = voids_mod.sealed_mask(occ, conn, floor=floor, runs=RunComponents(occ).runs)
+                            assert np.array_equal(with_runs, ref)
                         under = rng.random(occ.shape) < 0.5
                         if occ.size:
                             counts = mod._open_sealed_counts_kernel(under, sealed)
