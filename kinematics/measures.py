@@ -711,7 +711,9 @@ class _Steps:
 
     def _stable(self):
         """``(stable_components, stable_genus, stable_volume_fraction)``."""
-        stable = feature_filter(self.get("labels")[4], self.o["r"] / self.o["h"], self.cancel)
+        piece_set = self.get("labels")[4]
+        runs = self.get("runs").runs if piece_set is self.occ else None  # the solid's runs, no fragment dropped
+        stable = feature_filter(piece_set, self.o["r"] / self.o["h"], self.cancel, runs)
         check(self.cancel)
         stable_components, stable_genus = filled_genus(stable, self.o["connectivity"])
         return stable_components, stable_genus, float(int(np.count_nonzero(stable)) / self.n)

@@ -108,6 +108,35 @@ def _pack_kernel(m, p, P):
 
 
 @njit(parallel=True, cache=True, nogil=True)
+def _pack_runs_kernel(offs, rs, re, n0, n1, p, P):
+    """:func:`_pack_kernel`'s ``P`` from the set's runs along z (column ``(i, j)`` holds the runs
+    ``offs[i n1 + j] .. offs[i n1 + j + 1] - 1``, from ``rs`` to ``re``; those of
+    :class:`kinematics.run_components.RunComponents`): each run sets the bits of its voxels, a
+    word's range at a time, so the work grows with the runs, not with the voxels."""
+    NX, nw, NY = P.shape
+    zero = np.uint64(0)
+    ones = ~zero
+    for I in prange(NX):
+        for q in range(nw):
+            Pq = P[I, q]
+            for J in range(NY):
+                Pq[J] = zero
+        i = I - p
+        if i < 0 or i >= n0:
+            continue
+        for j in range(n1):
+            c = i * n1 + j
+            for r in range(offs[c], offs[c + 1]):
+                a = rs[r] + p
+                b = re[r] + p
+                for q in range(a >> 6, (b >> 6) + 1):
+                    lo = max(a - 64 * q, 0)
+                    hi = min(b - 64 * q, 63)
+                    word = ones >> np.uint64(63 - hi + lo)  # hi - lo + 1 ones
+                    P[I, q, j + p] |= word << np.uint64(lo)
+
+
+@njit(parallel=True, cache=True, nogil=True)
 def _unpack_kernel(P, p, out):
     """The inverse of :func:`_pack_kernel`: ``out`` is the packed set less its padding ``p`` (each
     word's bits written to its part of the z column, in order)."""
@@ -264,9 +293,11 @@ class _Packed:
     :func:`_dilate_packed_kernel` (its two work arrays and the ball's offsets), dilated and
     complemented in place of the arrays it holds; :meth:`unpack` drops the padding again.
     ``symmetric=None``: whether the set is mirror-symmetric is read from the packed words
-    (:func:`_packed_mirror_kernel`, 64 voxels per comparison)."""
+    (:func:`_packed_mirror_kernel`, 64 voxels per comparison). ``runs``: the set's runs ``(offs, rs,
+    re)``, when the caller holds them (packed from them, :func:`_pack_runs_kernel`: the same words)."""
 
-    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool | None, pad: int = 0) -> None:
+    def __init__(self, m: np.ndarray, radius_voxels: float, symmetric: bool | None, pad: int = 0,
+                 runs: tuple | None = None) -> None:
         m = np.ascontiguousarray(m, dtype=np.bool_)
         self.shape, self.pad = m.shape, int(pad)
         nx, ny, nz = (n + 2 * self.pad for n in m.shape)
@@ -279,7 +310,10 @@ class _Packed:
         self.Z = np.empty_like(self.P)
         self.R = np.empty_like(self.P)
         with KERNEL_LOCK:
-            _pack_kernel(m, self.pad, self.P)
+            if runs is None:
+                _pack_kernel(m, self.pad, self.P)
+            else:
+                _pack_runs_kernel(*runs, m.shape[0], m.shape[1], self.pad, self.P)
             self.symmetric = bool(_packed_mirror_kernel(self.P)) if symmetric is None else bool(symmetric)
 
     def dilate(self, complement: bool = False) -> None:
@@ -383,23 +417,26 @@ def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken
     return g.unpack()
 
 
-def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None) -> np.ndarray:
+def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None,
+                   runs: tuple | None = None) -> np.ndarray:
     """``S_r = close_r(open_r(W))`` with the digital Euclidean ball of radius ``radius_voxels``.
 
     The opening drops material thinner than about ``2 r`` (knife-edged sheets, specks, thin
     bridges); the closing then fills gaps, slots and tunnels narrower than about ``2 r``. The grid
     is padded with empty voxels first (the box is no obstacle to either operation), and packed once
-    along z for the four dilations (:func:`_dilate_packed_kernel`). Raises
+    along z for the four dilations (:func:`_dilate_packed_kernel`; from ``runs``, the set's runs
+    ``(offs, rs, re)``, when the caller holds them: the same set). Raises
     :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
     """
     if np.floor(radius_voxels + 1e-9) >= 64:
         return feature_filter_reference(occupancy, radius_voxels, cancel, dilate=ball_dilate)
-    return _open_close(occupancy, radius_voxels, cancel, _Packed)
+    return _open_close(occupancy, radius_voxels, cancel,
+                       lambda m, r, sym, pad: _Packed(m, r, sym, pad, runs=runs))
 
 
-def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None, *,
-                             dilate=ball_dilate_reference) -> np.ndarray:
-    """:func:`feature_filter` (the same signature, so it can stand in for it) as four dilations of
+def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None,
+                             runs: tuple | None = None, *, dilate=ball_dilate_reference) -> np.ndarray:
+    """:func:`feature_filter` (the same signature, so it can stand in for it; ``runs`` unused) as four dilations of
     boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature; by default
     :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
     return _open_close(occupancy, radius_voxels, cancel, lambda m, r, sym, pad: _Grids(m, r, sym, pad, dilate))

@@ -108,6 +108,29 @@ def test_feature_filter_padded_across_words_equals_scipy(rv):
                 assert np.array_equal(feature_filter(g, rv), scipy_feature_filter(g, rv)), (nz, q)
 
 
+@pytest.mark.parametrize("rv", [1.4, 5.2])
+def test_feature_filter_packed_from_runs_equals_the_grid(rv):
+    """The filter packed from the set's runs (a word's range of bits per run: runs that start or end
+    on a word's edge, span several words, fill a whole row, one voxel long) gives the words and the
+    set that packing the grid gives, symmetric and not."""
+    from paraspace.kinematics import morphology
+    from paraspace.kinematics.run_components import RunComponents
+
+    rng = np.random.default_rng(11)
+    p = int(np.floor(rv + 1e-9)) + 1
+    for nz in (1, 64 - 2 * p - 1, 64 - 2 * p, 64 - 2 * p + 1, 128 - 2 * p + 3, 200):
+        for q in (0.1, 0.5, 0.95):
+            m = rng.random((6, 7, nz)) < q
+            m[0, 0, :] = True  # a run the length of the row
+            for g in (m, m | m[:, ::-1]):
+                runs = RunComponents(g).runs
+                from_grid = morphology._Packed(g, rv, None, p)
+                from_runs = morphology._Packed(g, rv, None, p, runs=runs)
+                assert np.array_equal(from_grid.P, from_runs.P), (nz, q)
+                assert from_grid.symmetric == from_runs.symmetric
+                assert np.array_equal(feature_filter(g, rv, runs=runs), scipy_feature_filter(g, rv)), (nz, q)
+
+
 def test_mirror_test_equals_array_equal():
     rng = np.random.default_rng(3)
     for shape in ((5, 1, 3), (6, 2, 4), (7, 9, 5), (4, 10, 66)):
