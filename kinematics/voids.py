@@ -55,6 +55,34 @@ def void_mask_labelled(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarr
     return voids[1:-1, 1:-1, 1:-1]
 
 
+@njit(cache=True, inline="always")
+def _no_ends(first, last, n):
+    """A row of first and last indices along an axis of length ``n`` with no set voxel yet."""
+    for k in range(first.shape[0]):
+        first[k] = n
+        last[k] = -1
+
+
+@njit(cache=True, inline="always")
+def _no_extent(e, n1, n2):
+    """A slice's candidate extent ``e = (j_lo, j_hi, k_lo, k_hi)`` with no candidate (``j_hi = -1``)."""
+    e[0] = n1
+    e[1] = -1
+    e[2] = n2
+    e[3] = -1
+
+
+@njit(cache=True, inline="always")
+def _add_row(e, j, rlo, rhi):
+    """Grow the slice extent ``e`` by row ``j``'s candidates, ``rlo .. rhi`` along z (none when
+    ``rhi < 0``); the rows come in increasing ``j``."""
+    if rhi >= 0:
+        e[0] = min(e[0], j)
+        e[1] = j
+        e[2] = min(e[2], rlo)
+        e[3] = max(e[3], rhi)
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _enclosed_ext_kernel(occ, out, ext):
     """``out``: unreachable voxels with reachable ones on both sides along x, along y and along z
@@ -65,15 +93,13 @@ def _enclosed_ext_kernel(occ, out, ext):
     slices. Every inner loop runs over ``k`` on a contiguous row, without a branch (the ends and
     extents as minima and maxima of selections), so the compiler puts it in vector lanes."""
     n0, n1, n2 = occ.shape
-    N0, N1, M1 = np.int32(n0), np.int32(n1), np.int32(-1)
+    N0, N1 = np.int32(n0), np.int32(n1)
     fx = np.empty((n1, n2), np.int32)
     lx = np.empty((n1, n2), np.int32)
     for j in prange(n1):
         fxj = fx[j]
         lxj = lx[j]
-        for k in range(n2):
-            fxj[k] = N0
-            lxj[k] = M1
+        _no_ends(fxj, lxj, n0)
         for i in range(n0):
             i32 = np.int32(i)
             row = occ[i, j]
@@ -91,7 +117,7 @@ def _enclosed_ext_kernel(occ, out, ext):
                 o = row[k]
                 fy[k] = min(fy[k], j32 if o else N1)
                 ly[k] = j32 if o else ly[k]
-        jlo, jhi, klo, khi = n1, -1, n2, -1
+        _no_extent(ext[i], n1, n2)
         for j in range(n1):
             row = occ[i, j]
             fz = n2
@@ -110,16 +136,7 @@ def _enclosed_ext_kernel(occ, out, ext):
                 orow[k] = v
                 rlo = min(rlo, k if v else n2)
                 rhi = max(rhi, k if v else -1)
-            if rhi >= 0:
-                if jlo == n1:
-                    jlo = j
-                jhi = j
-                klo = min(klo, rlo)
-                khi = max(khi, rhi)
-        ext[i, 0] = jlo
-        ext[i, 1] = jhi
-        ext[i, 2] = klo
-        ext[i, 3] = khi
+            _add_row(ext[i], j, rlo, rhi)
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -135,9 +152,7 @@ def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
     for j in prange(n1):
         fxj = fx[j]
         lxj = lx[j]
-        for k in range(n2):
-            fxj[k] = n0
-            lxj[k] = -1
+        _no_ends(fxj, lxj, n0)
         for i in range(n0):
             i32 = np.int32(i)
             c = i * n1 + j
@@ -159,7 +174,7 @@ def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
                 for t in range(fv.shape[0]):
                     fv[t] = min(fv[t], j32)
                     lv[t] = j32
-        jlo, jhi, klo, khi = n1, -1, n2, -1
+        _no_extent(ext[i], n1, n2)
         for j in range(n1):
             orow = out[i, j]
             for k in range(n2):
@@ -174,16 +189,7 @@ def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
                     orow[k] = v
                     rlo = min(rlo, k if v else n2)
                     rhi = max(rhi, k if v else -1)
-            if rhi >= 0:
-                if jlo == n1:
-                    jlo = j
-                jhi = j
-                klo = min(klo, rlo)
-                khi = max(khi, rhi)
-        ext[i, 0] = jlo
-        ext[i, 1] = jhi
-        ext[i, 2] = klo
-        ext[i, 3] = khi
+            _add_row(ext[i], j, rlo, rhi)
 
 
 @njit(cache=True, nogil=True)
