@@ -24,20 +24,22 @@ def server():
     srv.stop()
 
 
-def _bundle(design: Design) -> types.SimpleNamespace:
-    return types.SimpleNamespace(result=types.SimpleNamespace(design=design), measures=object(), mesh=None)
+def _bundle(design: Design | None, mechanism: str | None = None) -> types.SimpleNamespace:
+    return types.SimpleNamespace(result=types.SimpleNamespace(design=design), measures=object(), mesh=None,
+                                 mechanism=mechanism)
 
 
 @pytest.fixture
 def panel(server):
     jobs = JobManager(max_workers=1)
-    current = _bundle(Design(a=60.0))
+    current = {"bundle": _bundle(Design(a=60.0))}
     hooks = CompareHooks(get_state=lambda: None, set_pins=lambda _d: None, bundle_for=lambda _s: None,
-                         compute_bundle=lambda *_a: None, current_bundle=lambda: current,
+                         compute_bundle=lambda *_a: None, current_bundle=lambda: current["bundle"],
                          load_design=lambda _d: None, notify=lambda *_a: None)
     p = ComparePanel(server.gui, server.scene, jobs, "client", hooks)
     pinned = Design()
     p.pins = [Pin(pinned, (255, 0, 0, 255), bundle=_bundle(pinned))]
+    p.current = current  # the test may put another mechanism's shell on screen
     yield p
     jobs.shutdown(wait=False)
 
@@ -85,3 +87,21 @@ def test_another_mechanism_keeps_the_pin_button_disabled_through_refreshes(panel
     assert panel.pin_button.disabled
     panel.set_mechanism(None)
     assert not panel.pin_button.disabled
+
+
+def test_back_on_the_paper_with_another_mechanisms_shell_still_on_screen(panel, monkeypatch):
+    """Seen in CI: the paper's mechanism selected again while the other mechanism's shell (whose result
+    has no paper design) was still on screen; the table raised in the callback, and the ghosts never
+    came back. Its column now waits for the paper's shell, and the ghosts are shown again."""
+    monkeypatch.setattr(compare_panel, "comparison_table", lambda pinned, current, indices: "the paper's comparison")
+    panel.set_mechanism("6-pss")
+    panel.current["bundle"] = _bundle(None, mechanism="6-pss")  # the other mechanism's shell on screen
+    shown = []
+    monkeypatch.setattr(panel, "_show_ghosts", lambda: shown.append(panel.other_mechanism))
+    panel.set_mechanism(None)
+    assert panel.table.content == "*current design: computing...*"
+    assert shown == [None]  # the ghosts follow the selection at once
+    panel.current["bundle"] = _bundle(Design(a=60.0))  # the paper's shell and measures arrive
+    panel.refresh()
+    text = panel.table.content.replace("\\", "")  # markdown escapes
+    assert "the paper's comparison" in text and "current: a 60, b 14" in text

@@ -283,6 +283,36 @@ def test_stop_goes_back_to_the_mechanism_on_screen_and_stale_jobs_are_dropped(ex
     assert s.bundle.mechanism.preset == "6-pss" and s.bundle.result.volume == direct_volume(preset("6-pss"))
 
 
+def test_a_selection_arriving_while_stop_rewrites_the_controls_is_applied(explorer, browsers, monkeypatch):
+    """Stop 40's CI: viser runs a session's callbacks on threads, and the selector's callback read the
+    selector's value when it ran. A Stop that was still writing the shown mechanism's controls put
+    "6-pups" back into the selector between the user's "6-pss" and its callback: the callback applied
+    6-pups, and the user's selection was lost. The callbacks here are held until Stop's write is done."""
+    import threading
+
+    b = browsers(f"voxel={H:g}&mech=6-pups")
+    s = b.session
+    wait_mechanism(explorer, s)
+    held, release = threading.Semaphore(0), threading.Event()
+
+    def hold() -> None:  # on the callback's thread, before the handler runs
+        held.release()
+        assert release.wait(30)
+
+    monkeypatch.setattr(s.ctx, "_dismiss_link_messages", hold)
+    sel = s.panels.mechanism.selector
+    b.set(sel, "gough-stewart")
+    b.set(sel, "6-pss")
+    assert held.acquire(timeout=30) and held.acquire(timeout=30)  # both callbacks waiting
+    assert sel.value == "6-pss"
+    s.mechanism_controller.show(s.state.mechanism)  # Stop's write of the mechanism on screen
+    assert sel.value == "6-pups"
+    release.set()
+    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == "6-pss", 30, "6-pss")
+    wait_mechanism(explorer, s)
+    assert s.bundle.mechanism.preset == "6-pss" and sel.value == "6-pss"
+
+
 def test_a_file_too_large_for_a_link_is_used_but_not_put_in_the_link(explorer, browsers, monkeypatch):
     from paraspace.app.explorer import mechanism_panel
 

@@ -486,7 +486,10 @@ class ComparePanel:
         if any(p.bundle is None or p.bundle.measures is None for p in pins):
             return "*pinned designs: computing...*"
         current = self.hooks.current_bundle()
-        if current is None or current.measures is None:
+        # the shell on screen may still be another mechanism's (the paper's was selected again and its
+        # workspace is on its way): its column waits for it, as for measures not in yet
+        if (current is None or current.measures is None or current.mechanism is not None
+                or current.result.design is None):
             return "*current design: computing...*"
         indices = [p.indices for p in pins] + [self.hooks.current_indices()]
         ok = all(i is not None for i in indices)

@@ -195,6 +195,8 @@ class MechanismController:
         self.notes = notes
         self.uploaded: MechanismLink | None = ctx.state.mechanism if option_of(ctx.state.mechanism) == FILE_OPTION \
             else None
+        #: the selector's value of the user's newest message, until a callback applies it
+        self.chosen: str | None = None
 
     @property
     def controls(self) -> MechanismControls:
@@ -203,6 +205,15 @@ class MechanismController:
     def wire(self) -> None:
         """Attach the selector, the sliders and the upload button; show the state's mechanism."""
         c, cb = self.controls, self.ctx.callback
+
+        async def record(event: Any) -> None:
+            # viser awaits a coroutine callback on its event loop right after it stored the client's
+            # value, in the order of the messages; the thread callback runs later, when a programmatic
+            # write (Stop's controls, on another thread) may have replaced the value in between
+            if event.client is not None:
+                self.chosen = str(event.target.value)
+
+        c.selector.on_update(record)
         c.selector.on_update(cb(self.on_select))
         for sliders in c.sliders.values():
             for h in sliders.values():
@@ -250,8 +261,11 @@ class MechanismController:
     # ----- input ----------------------------------------------------------------------------------
     def on_select(self) -> None:
         """The selector changed: the paper, a preset at its sliders' values, or the uploaded file."""
-        choice = str(self.controls.selector.value)
         with self.ctx.input_lock:
+            # the user's newest choice (see wire); else the selector's value, which under this lock is
+            # the state's once a callback applied a choice (or a server-side assignment's)
+            choice = self.chosen if self.chosen is not None else str(self.controls.selector.value)
+            self.chosen = None
             if choice == PAPER:
                 self.apply(None)
             elif choice == FILE_OPTION:
