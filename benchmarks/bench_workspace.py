@@ -386,12 +386,17 @@ def _measures_before_meas1():
             euler_hist_windows(occ, hist)
         return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
-    hull = mod.hull_mask
+    def labelled_box(occ, conn, runs=None, shape=None):  # the sealed cavities' voids, on the whole grid
+        voids, n = voids_mod._voids_labelled_candidates(occ, conn)
+        return (voids, tuple(slice(0, m) for m in voids.shape)) if n else None
+
+    hull, sealed_box = mod.hull_mask, voids_mod.sealed_box
     patch = {"_voids": lambda occ, conn, runs=None: voids_mod._voids_labelled_candidates(occ, conn),
              "_void_set": lambda occ, conn, runs=None: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
+             "sealed_box": lambda occ, conn=1, floor=True, runs=None: sealed_box(occ, conn, floor),  # on the grid
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "RunComponents": _grid_euler(mod.RunComponents, euler)}
-    with _patched((mod, patch), (voids_mod, {"_void_set": patch["_void_set"]})):  # the sealed cavity's too
+    with _patched((mod, patch), (voids_mod, {"_void_box": labelled_box})):  # the sealed cavity's too
         yield
 
 

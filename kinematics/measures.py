@@ -240,7 +240,7 @@ from .progress import CancelToken, check
 from .run_components import RunComponents
 from .serialize import jsonable
 from .void_flood import _contiguous
-from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_mask
+from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_box
 from .workspace import WorkspaceResult, _touching_faces
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -337,22 +337,23 @@ def _occ_extent_kernel(occ, ext):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _open_sealed_counts_kernel(under, sealed):
-    """``(|under & ~sealed|, |under & sealed|)`` in one parallel pass over x slices."""
-    n0, n1, n2 = under.shape
-    n_open = np.zeros(n0, np.int64)
-    n_sealed = np.zeros(n0, np.int64)
-    for i in prange(n0):
-        c_under = 0
-        c_sealed = 0
-        for j in range(n1):
-            for k in range(n2):
-                u = under[i, j, k]
-                c_under += u
-                c_sealed += u & sealed[i, j, k]
-        n_open[i] = c_under - c_sealed
-        n_sealed[i] = c_sealed
-    return n_open.sum(), n_sealed.sum()
+def _under_sealed_count_kernel(under, sub, i0, j0, k0):
+    """``|under & sealed|`` with the sealed voxels ``sub`` in a box whose corner is ``(i0, j0, k0)``
+    in ``under``'s grid (:func:`kinematics.voids.sealed_box`; its part inside the grid along z), in
+    one parallel pass over the box's x slices: nothing outside the box is read."""
+    m0, m1, m2 = sub.shape
+    n2 = under.shape[2]
+    lo, hi = max(0, -k0), min(m2, n2 - k0)
+    counts = np.zeros(m0, np.int64)
+    for a in prange(m0):
+        c = 0
+        for b in range(m1):
+            urow = under[i0 + a, j0 + b, k0 + lo:k0 + hi]
+            srow = sub[a, b, lo:hi]
+            for k in range(urow.shape[0]):
+                c += urow[k] & srow[k]
+        counts[a] = c
+    return counts.sum()
 
 
 def touched_faces(occupancy: np.ndarray) -> list[str]:
@@ -686,18 +687,16 @@ class _Steps:
     def _cavities(self):
         """``(open_cavity_ratio, sealed_cavity_volume)``."""
         under, n_under = self.get("under")
-        if n_under:
-            sealed = sealed_mask(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None,
-                                 runs=self.get("runs").runs)
-        else:
-            sealed = self.get("voids")[0]
-        if under.size:
+        if not n_under:  # nothing under the workspace: no open and no sealed cavity there
+            return 0.0, 0.0
+        found = sealed_box(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None,
+                           runs=self.get("runs").runs)
+        n_sealed = 0
+        if found is not None:
             with KERNEL_LOCK:
-                n_open, n_sealed = (int(c) for c in _open_sealed_counts_kernel(under, sealed))
-        else:
-            n_open = n_sealed = 0
-        open_ratio = n_open / (n_under + self.n) if n_under else 0.0
-        return float(open_ratio), n_sealed * self.vv
+                n_sealed = int(_under_sealed_count_kernel(under, found[0], *found[1]))
+        n_open = n_under - n_sealed
+        return float(n_open / (n_under + self.n)), n_sealed * self.vv
 
     def _pieces_filled(self):
         components, _, n_pieces, _, piece_set = self.get("labels")

@@ -29,7 +29,7 @@ from scipy import ndimage as ndi
 
 from .parallel import KERNEL_LOCK
 from .run_components import count_components
-from .void_flood import enclosed_voids
+from .void_flood import _contiguous, enclosed_voids
 
 
 def _structure(connectivity: int) -> np.ndarray:
@@ -140,15 +140,12 @@ def _enclosed_ext_kernel(occ, out, ext):
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
-    """:func:`_enclosed_ext_kernel`'s ``out`` and ``ext`` from the set's runs along z (column ``(i,
-    j)`` holds the runs ``offs[i n1 + j] .. offs[i n1 + j + 1] - 1``, from ``rs`` to ``re``; those of
-    :class:`kinematics.run_components.RunComponents`). The x and y ends are written over the runs'
-    voxels only, and a candidate lies in a gap between two runs of its column (unreachable and
-    strictly between the column's first and last reachable voxel), so only the gaps are tested: the
-    reads grow with the set's voxels and its gaps, not with the grid (which is only cleared)."""
-    fx = np.empty((n1, n2), np.int32)
-    lx = np.empty((n1, n2), np.int32)
+def _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx):
+    """The first and last ``i`` of a reachable voxel on each x line ``(j, k)`` (``n0`` and ``-1``:
+    none), from the set's runs along z (column ``(i, j)`` holds the runs ``offs[i n1 + j] ..
+    offs[i n1 + j + 1] - 1``, from ``rs`` to ``re``; those of
+    :class:`kinematics.run_components.RunComponents`): written over the runs' voxels only, in
+    parallel over y slices."""
     for j in prange(n1):
         fxj = fx[j]
         lxj = lx[j]
@@ -162,26 +159,41 @@ def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
                 for t in range(fv.shape[0]):  # i grows: the first write is the least, the last the greatest
                     fv[t] = min(fv[t], i32)
                     lv[t] = i32
+
+
+@njit(cache=True, inline="always")
+def _y_ends_runs(offs, rs, re, i, n1, fy, ly):
+    """:func:`_x_ends_runs_kernel` along y in slice ``i``: ``fy[k]``, ``ly[k]`` (rows of ``n1``, ``-1``)."""
+    _no_ends(fy, ly, n1)
+    for j in range(n1):
+        j32 = np.int32(j)
+        c = i * n1 + j
+        for q in range(offs[c], offs[c + 1]):
+            fv = fy[rs[q]:re[q] + 1]
+            lv = ly[rs[q]:re[q] + 1]
+            for t in range(fv.shape[0]):
+                fv[t] = min(fv[t], j32)
+                lv[t] = j32
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _enclosed_runs_kernel(offs, rs, re, n1, n2, fx, lx, out, ext):
+    """:func:`_enclosed_ext_kernel`'s ``out`` and ``ext`` from the set's runs along z
+    (:func:`_x_ends_runs_kernel`'s ``fx``, ``lx``): a candidate lies in a gap between two runs of its
+    column (unreachable and strictly between the column's first and last reachable voxel), so only the
+    gaps are tested and written; ``out`` comes cleared (``np.zeros``: the pages no gap touches are
+    never written). The reads and writes grow with the set's voxels and its gaps, not with the grid."""
+    n0 = ext.shape[0]
     for i in prange(n0):
-        fy = np.full(n2, n1, np.int32)
-        ly = np.full(n2, -1, np.int32)
-        for j in range(n1):
-            j32 = np.int32(j)
-            c = i * n1 + j
-            for q in range(offs[c], offs[c + 1]):
-                fv = fy[rs[q]:re[q] + 1]
-                lv = ly[rs[q]:re[q] + 1]
-                for t in range(fv.shape[0]):
-                    fv[t] = min(fv[t], j32)
-                    lv[t] = j32
+        fy = np.empty(n2, np.int32)
+        ly = np.empty(n2, np.int32)
+        _y_ends_runs(offs, rs, re, i, n1, fy, ly)
         _no_extent(ext[i], n1, n2)
         for j in range(n1):
-            orow = out[i, j]
-            for k in range(n2):
-                orow[k] = False
             c = i * n1 + j
             fxj = fx[j]
             lxj = lx[j]
+            orow = out[i, j]
             rlo, rhi = n2, -1
             for q in range(offs[c], offs[c + 1] - 1):  # the gap between runs q and q + 1
                 for k in range(re[q] + 1, rs[q + 1]):
@@ -190,6 +202,20 @@ def _enclosed_runs_kernel(offs, rs, re, n0, n1, n2, out, ext):
                     rlo = min(rlo, k if v else n2)
                     rhi = max(rhi, k if v else -1)
             _add_row(ext[i], j, rlo, rhi)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _paint_box_kernel(offs, rs, re, n1, i0, j0, k0, out):
+    """The set's voxels (its runs) inside the box of ``out`` (a cleared array, its corner at
+    ``(i0, j0, k0)``)."""
+    m0, m1, m2 = out.shape
+    for a in prange(m0):
+        for b in range(m1):
+            c = (i0 + a) * n1 + j0 + b
+            orow = out[a, b]
+            for q in range(offs[c], offs[c + 1]):
+                for k in range(max(rs[q], k0), min(re[q] + 1, k0 + m2)):
+                    orow[k - k0] = True
 
 
 @njit(cache=True, nogil=True)
@@ -224,8 +250,9 @@ def _floored_runs(offs, rs, re):
 
 @njit(parallel=True, cache=True, nogil=True)
 def _paste_kernel(sub, lo0, lo1, lo2, out):
-    """``out[...] = False; out[lo0:, lo1:, lo2:][:sub.shape] = sub`` in one parallel pass over the x
-    slices of ``out`` (a fresh grid: its pages are first touched by the threads)."""
+    """``out[...] = False``, then ``sub`` written with its corner at ``(lo0, lo1, lo2)`` (its part
+    inside ``out`` along z: ``lo2`` may be negative), in one parallel pass over the x slices of
+    ``out`` (a fresh grid: its pages are first touched by the threads)."""
     n0, n1, n2 = out.shape
     m0, m1, m2 = sub.shape
     for i in prange(n0):
@@ -234,7 +261,7 @@ def _paste_kernel(sub, lo0, lo1, lo2, out):
                 out[i, j, k] = False
         if lo0 <= i < lo0 + m0:
             for j in range(m1):
-                for k in range(m2):
+                for k in range(max(0, -lo2), min(m2, n2 - lo2)):
                     out[i, lo1 + j, lo2 + k] = sub[i - lo0, j, k]
 
 
@@ -276,30 +303,65 @@ def _open_labels_kernel(cand, lab, occ, full, n_labels):
     return opened
 
 
-def _candidates_box(occupancy: np.ndarray, runs: tuple | None = None) -> tuple[np.ndarray, np.ndarray, tuple] | None:
-    """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes
-    (:func:`_enclosed_ext_kernel`, or :func:`_enclosed_runs_kernel` from ``runs``, the set's runs
-    ``(offs, rs, re)`` when the caller holds them: the same voxels) and their bounding box grown by
-    one voxel (the neighbours the tests look at; candidates never lie on the grid's edge), or
-    ``None`` when there is no candidate."""
-    occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
-    if not occ.size:
-        return None
-    cand = np.empty(occ.shape, np.bool_)
-    ext = np.empty((occ.shape[0], 4), np.int64)
-    with KERNEL_LOCK:
-        if runs is None:
-            _enclosed_ext_kernel(occ, cand, ext)
-        else:
-            _enclosed_runs_kernel(*runs, *occ.shape, cand, ext)
+def _box_of(ext: np.ndarray) -> tuple | None:
+    """The candidates' bounding box grown by one voxel (the neighbours the tests look at; candidates
+    never lie on the grid's edge) from the slice extents ``ext``, or ``None`` when there is none."""
     rows = np.flatnonzero(ext[:, 1] >= 0)
     if not rows.size:
         return None
     e = ext[rows]
     lo = [int(rows[0]), int(e[:, 0].min()), int(e[:, 2].min())]
     hi = [int(rows[-1]) + 1, int(e[:, 1].max()) + 1, int(e[:, 3].max()) + 1]
-    box = tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
-    return occ, cand, box
+    return tuple(slice(a - 1, b + 1) for a, b in zip(lo, hi))
+
+
+def _candidates_box(occupancy: np.ndarray | None, runs: tuple | None = None,
+                    shape: tuple[int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray, tuple] | None:
+    """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes and the set,
+    both cut to the candidates' bounding box grown by one voxel (:func:`_box_of`; contiguous arrays of
+    its shape), and the box; ``None`` when there is no candidate.
+
+    From the grid ``occupancy`` (:func:`_enclosed_ext_kernel`), or from ``runs``, the set's runs
+    ``(offs, rs, re)``, when the caller holds them (the same voxels; ``occupancy`` may then be ``None``
+    with ``shape`` the grid's): the candidates written only in the runs' gaps
+    (:func:`_enclosed_runs_kernel`) and the set's voxels in the box painted from its runs
+    (:func:`_paint_box_kernel`), so no grid is cleared voxel by voxel and none is built for the set."""
+    if runs is None:
+        occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
+        if not occ.size:
+            return None
+        cand = np.empty(occ.shape, np.bool_)
+        ext = np.empty((occ.shape[0], 4), np.int64)
+        with KERNEL_LOCK:
+            _enclosed_ext_kernel(occ, cand, ext)
+        box = _box_of(ext)
+        if box is None:
+            return None
+        with KERNEL_LOCK:
+            return _contiguous(occ[box]), _contiguous(cand[box]), box
+    if shape is None:
+        assert occupancy is not None, "the grid or its shape"
+        dims = tuple(int(n) for n in np.shape(occupancy))
+    else:
+        dims = tuple(int(n) for n in shape)
+    n0, n1, n2 = dims
+    if not n0 * n1 * n2:
+        return None
+    offs, rs, re = runs
+    fx = np.empty((n1, n2), np.int32)
+    lx = np.empty((n1, n2), np.int32)
+    ext = np.empty((n0, 4), np.int64)
+    cand = np.zeros((n0, n1, n2), np.bool_)
+    with KERNEL_LOCK:
+        _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx)
+        _enclosed_runs_kernel(offs, rs, re, n1, n2, fx, lx, cand, ext)
+    box = _box_of(ext)
+    if box is None:
+        return None
+    occ_box = np.zeros(tuple(b.stop - b.start for b in box), np.bool_)
+    with KERNEL_LOCK:
+        _paint_box_kernel(offs, rs, re, n1, *(b.start for b in box), occ_box)
+        return occ_box, _contiguous(cand[box]), box
 
 
 def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
@@ -308,32 +370,39 @@ def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tupl
     found = _candidates_box(occupancy)
     if found is None:
         return np.zeros(np.shape(occupancy), np.bool_), 0
-    occ, cand, box = found
-    sub = cand[box]
+    occ, sub, box = found
     lab, n = ndi.label(sub, structure=_structure(dual_connectivity(connectivity)))
     with KERNEL_LOCK:
-        opened = _open_labels_kernel(sub, lab, occ[box], dual_connectivity(connectivity) == 3, n)
+        opened = _open_labels_kernel(sub, lab, occ, dual_connectivity(connectivity) == 3, n)
     keep = ~opened
     keep[0] = False
-    voids = np.zeros(occ.shape, np.bool_)
+    voids = np.zeros(np.shape(occupancy), np.bool_)
     voids[box] = keep[lab]
     return voids, int(keep.sum())
 
 
-def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, tuple | None]:
-    """``(void_mask, box)`` of :func:`_voids` without their number: the candidates
-    (:func:`_candidates_box`; ``runs``: the set's runs, when the caller holds them) less the flood of
-    :mod:`kinematics.void_flood` from those that leak, which never visits a sealed cavity; ``box``
-    bounds the voids (``None``: no void)."""
-    found = _candidates_box(occupancy, runs)
+def _void_box(occupancy: np.ndarray | None, connectivity: int, runs: tuple | None = None,
+              shape: tuple[int, int, int] | None = None) -> tuple[np.ndarray, tuple] | None:
+    """``(voids, box)``: the voids inside the box that bounds them (``None``: no void), the
+    candidates (:func:`_candidates_box`, with its ``runs`` and ``shape``) less the flood of
+    :mod:`kinematics.void_flood` from those that leak, which never visits a sealed cavity."""
+    found = _candidates_box(occupancy, runs, shape)
     if found is None:
-        return np.zeros(np.shape(occupancy), np.bool_), None
+        return None
     occ, cand, box = found
     with KERNEL_LOCK:
-        sub, n_void = enclosed_voids(cand[box], occ[box], dual_connectivity(connectivity) == 3)
-    if not n_void:
-        return np.zeros(occ.shape, np.bool_), None
-    voids = np.empty(occ.shape, np.bool_)
+        sub, n_void = enclosed_voids(cand, occ, dual_connectivity(connectivity) == 3)
+    return (sub, box) if n_void else None
+
+
+def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, tuple | None]:
+    """``(void_mask, box)`` of :func:`_voids` without their number (:func:`_void_box` on the grid's
+    shape; ``box`` bounds the voids, ``None``: no void)."""
+    found = _void_box(occupancy, connectivity, runs)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_), None
+    sub, box = found
+    voids = np.empty(np.shape(occupancy), np.bool_)
     with KERNEL_LOCK:
         _paste_kernel(sub, box[0].start, box[1].start, box[2].start, voids)
     return voids, box
@@ -363,6 +432,36 @@ def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
     return _void_set(occupancy, connectivity)[0]
 
 
+def sealed_box(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True,
+               runs: tuple | None = None) -> tuple[np.ndarray, tuple[int, int, int]] | None:
+    """:func:`sealed_mask` inside a box that bounds it: ``(sub, corner)``, the sealed voxels with the
+    box's corner at ``corner`` in the grid (``None``: none). With ``floor`` the box is the floored
+    grid's, one layer lower: its corner's ``k`` may be ``-1`` (that layer is the base, never sealed);
+    only its part inside the grid counts. ``runs``: the set's runs, when the caller holds them (the
+    floored set's runs built from them, :func:`_floored_runs`: no floored grid)."""
+    occ = np.asarray(occupancy, dtype=bool)
+    n0, n1, n2 = occ.shape
+    if not floor:
+        found = _void_box(occ, connectivity, runs)
+        shift = 0
+    else:
+        if runs is not None:
+            floored = None
+            with KERNEL_LOCK:
+                runs = _floored_runs(*runs)
+        else:
+            floored = np.empty((n0, n1, n2 + 1), np.bool_)
+            if floored.size:
+                with KERNEL_LOCK:
+                    _floored_kernel(np.ascontiguousarray(occ), floored)
+        found = _void_box(floored, connectivity, runs, (n0, n1, n2 + 1))
+        shift = 1  # the floored grid's layer k + 1 is the grid's layer k
+    if found is None:
+        return None
+    sub, box = found
+    return sub, (box[0].start, box[1].start, box[2].start - shift)
+
+
 def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True,
                 runs: tuple | None = None) -> np.ndarray:
     """Unreachable voxels enclosed by the workspace together with the base plane.
@@ -372,13 +471,11 @@ def sealed_mask(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True
     ``runs``: the runs ``(offs, rs, re)`` of ``W``, when the caller holds them (the candidates from
     them, :func:`_candidates_box`; the same set).
     """
-    occ = np.asarray(occupancy, dtype=bool)
-    if not floor:
-        return _void_set(occ, connectivity, runs)[0]
-    floored = np.empty(occ.shape[:2] + (occ.shape[2] + 1,), np.bool_)
-    if floored.size:
-        with KERNEL_LOCK:
-            _floored_kernel(np.ascontiguousarray(occ), floored)
-            if runs is not None:
-                runs = _floored_runs(*runs)
-    return _void_set(floored, connectivity, runs)[0][:, :, 1:]
+    found = sealed_box(occupancy, connectivity, floor, runs)
+    if found is None:
+        return np.zeros(np.shape(occupancy), np.bool_)
+    sub, corner = found
+    sealed = np.empty(np.shape(occupancy), np.bool_)
+    with KERNEL_LOCK:
+        _paste_kernel(sub, *corner, sealed)
+    return sealed

@@ -545,6 +545,11 @@ def _enclosed_by_definition(occ: np.ndarray) -> np.ndarray:
     return inside
 
 
+def _between_runs(occ: np.ndarray) -> np.ndarray:
+    """Voxels between the first and the last reachable voxel of their z column (inclusive)."""
+    return np.logical_or.accumulate(occ, axis=2) & np.flip(np.logical_or.accumulate(np.flip(occ, 2), axis=2), 2)
+
+
 def test_parallel_cavities_kernels_equal_the_former_passes():
     """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
     their per-slice extents (from the grid and from its runs), the grid on its base layer (and its
@@ -594,19 +599,35 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     # from the runs: the same candidates and slice extents; the floored grid's runs
                     # built from the set's equal its own
                     runs = RunComponents(grid).runs
-                    from_runs, ext_runs = np.ones(grid.shape, bool), np.empty_like(ext)
-                    voids_mod._enclosed_runs_kernel(*runs, *grid.shape, from_runs, ext_runs)
+                    n0, n1, n2 = grid.shape
+                    fx, lx = np.empty((n1, n2), np.int32), np.empty((n1, n2), np.int32)
+                    voids_mod._x_ends_runs_kernel(*runs, n0, n1, fx, lx)
+                    on = grid.any(axis=0)  # the x ends by their definition (n0, -1 on an empty line)
+                    assert np.array_equal(fx, np.where(on, np.argmax(grid, axis=0), n0))
+                    assert np.array_equal(lx, np.where(on, n0 - 1 - np.argmax(grid[::-1], axis=0), -1))
+                    from_runs, ext_runs = np.zeros(grid.shape, bool), np.empty_like(ext)
+                    voids_mod._enclosed_runs_kernel(*runs, n1, n2, fx, lx, from_runs, ext_runs)
                     assert np.array_equal(from_runs, old) and np.array_equal(ext_runs, ext)
+                    from_runs[...] = True  # only the gaps are written: the rest keeps what was there
+                    voids_mod._enclosed_runs_kernel(*runs, n1, n2, fx, lx, from_runs, ext_runs)
+                    assert np.array_equal(from_runs, old | grid | ~_between_runs(grid))
                     if grid is floored:
                         built = voids_mod._floored_runs(*RunComponents(occ).runs)
                         assert all(np.array_equal(a, b) for a, b in zip(built, runs))
                     found = voids_mod._candidates_box(grid)
+                    from_runs = voids_mod._candidates_box(None, runs, grid.shape)  # type: ignore[assignment]
                     if not old.any():
-                        assert found is None
+                        assert found is None and from_runs is None
                         continue
                     flags = [old.any(axis=a) for a in ((1, 2), (0, 2), (0, 1))]
                     box = tuple(slice(int(np.argmax(f)) - 1, len(f) - int(np.argmax(f[::-1])) + 1) for f in flags)
-                    assert found[2] == box and np.array_equal(found[1], old)
+                    outside = old.copy()
+                    outside[box] = False
+                    assert not outside.any()  # every candidate in the box
+                    for got in (found, from_runs):  # the set and its candidates cut to the box, contiguous
+                        assert got[2] == box
+                        assert np.array_equal(got[1], old[box]) and np.array_equal(got[0], grid[box])
+                        assert got[0].flags.c_contiguous and got[1].flags.c_contiguous
                 if occ.size:
                     out = np.zeros(floored.shape, bool)
                     voids_mod._floored_kernel(occ, out)
@@ -617,6 +638,14 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     pasted, ref = np.ones(occ.shape, bool), np.zeros(occ.shape, bool)
                     ref[cut] = sub
                     voids_mod._paste_kernel(np.ascontiguousarray(sub), *(c.start for c in cut), pasted)
+                    assert np.array_equal(pasted, ref)
+                    # with its corner below the grid's floor along z (the sealed cavities' layer shift)
+                    shift = cut[2].start + 1
+                    pasted[...] = True
+                    ref[...] = False
+                    ref[cut[0], cut[1], :max(cut[2].stop - shift, 0)] = sub[:, :, shift - cut[2].start:]
+                    voids_mod._paste_kernel(np.ascontiguousarray(sub), cut[0].start, cut[1].start,
+                                            cut[2].start - shift, pasted)
                     assert np.array_equal(pasted, ref)
                     ext = np.empty((occ.shape[0], 5), np.int64)
                     mod._occ_extent_kernel(occ, ext)
@@ -636,10 +665,20 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                             with_runs = voids_mod.sealed_mask(occ, conn, floor=floor, runs=RunComponents(occ).runs)
                             assert np.array_equal(with_runs, ref)
                         under = rng.random(occ.shape) < 0.5
-                        if occ.size:
-                            counts = mod._open_sealed_counts_kernel(under, sealed)
-                            assert (int(counts[0]), int(counts[1])) == (
-                                int(np.count_nonzero(under & ~sealed)), int(np.count_nonzero(under & sealed)))
+                        if occ.size:  # the sealed voxels in their box, counted under a random set
+                            for runs in (None, RunComponents(occ).runs):
+                                found = voids_mod.sealed_box(occ, conn, floor=floor, runs=runs)
+                                assert (found is None) == (not ref.any())
+                                if found is None:
+                                    continue
+                                sub, (i0, j0, k0) = found
+                                m0, m1, m2 = sub.shape
+                                assert not sub[:, :, :max(0, -k0)].any()  # the base layer is never sealed
+                                inside = np.zeros(occ.shape, bool)
+                                inside[i0:i0 + m0, j0:j0 + m1, max(k0, 0):k0 + m2] = sub[:, :, max(0, -k0):]
+                                assert np.array_equal(inside, ref)
+                                got = int(mod._under_sealed_count_kernel(under, sub, i0, j0, k0))
+                                assert got == int(np.count_nonzero(under & ref))
             assert voids_mod.sealed_mask(bowl, 1, floor=True).any()
             assert not voids_mod.sealed_mask(bowl, 1, floor=False).any()
             assert voids_mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not voids_mod.sealed_mask(cup, 1).any()
