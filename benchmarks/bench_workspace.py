@@ -386,13 +386,18 @@ def _measures_before_meas1():
             euler_hist_windows(occ, hist)
         return int(0.125 * int(coefs @ hist.sum(axis=0)))
 
-    def labelled_box(occ, conn, runs=None, shape=None):  # the sealed cavities' voids, on the whole grid
+    from paraspace.kinematics.run_components import RunComponents
+
+    def labelled_box(occ, conn, runs=None, shape=None):  # the voids by labelling, on the whole grid
+        if occ is None:  # given by its runs: the grid painted from them
+            comps = RunComponents.of_runs(runs, shape)
+            occ = comps.mask(np.ones(comps.count, np.bool_))
         voids, n = voids_mod._voids_labelled_candidates(occ, conn)
         return (voids, tuple(slice(0, m) for m in voids.shape)) if n else None
 
     hull, sealed_box = mod.hull_mask, voids_mod.sealed_box
     patch = {"_voids": lambda occ, conn, runs=None: voids_mod._voids_labelled_candidates(occ, conn),
-             "_void_set": lambda occ, conn, runs=None: (voids_mod._voids_labelled_candidates(occ, conn)[0], None),
+             "_void_box": labelled_box,  # the filled genus's voids
              "sealed_box": lambda occ, conn=1, floor=True, runs=None: sealed_box(occ, conn, floor),  # on the grid
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "RunComponents": _grid_euler(mod.RunComponents, euler)}

@@ -240,7 +240,7 @@ from .progress import CancelToken, check
 from .run_components import RunComponents
 from .serialize import jsonable
 from .void_flood import _contiguous
-from .voids import _structure, _void_set, _voids, dual_connectivity, sealed_box
+from .voids import _structure, _void_box, _voids, dual_connectivity, sealed_box
 from .workspace import WorkspaceResult, _touching_faces
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -485,11 +485,23 @@ def filled_genus(occupancy: np.ndarray, connectivity: int = 1) -> tuple[int, int
     occ = np.asarray(occupancy, dtype=bool)
     if not occ.any():
         return 0, 0
-    runs = RunComponents(occ, connectivity)  # the voids' candidates, b0 and chi from the same runs
-    voids, box = _void_set(occ, connectivity, runs.runs)
-    if box is not None:  # a void (rare): the filled solid's own runs
-        runs = RunComponents(occ | voids, connectivity)
-    return runs.count, int(runs.count - runs.euler_characteristic(connectivity))
+    return _filled_genus_of(RunComponents(occ, connectivity), connectivity)
+
+
+def _filled_genus_of(comps: RunComponents, connectivity: int) -> tuple[int, int]:
+    """:func:`filled_genus` of the set whose components (and runs) are ``comps``: the voids' candidates,
+    ``b0`` and ``chi`` from the same runs, no grid (but the filled solid's where there is a void)."""
+    if not comps.count:
+        return 0, 0
+    runs = comps.runs  # None for the labelled components (the tests' slow path): the grid then
+    found = _void_box(None if runs is not None else comps.mask(np.ones(comps.count, np.bool_)), connectivity,
+                      runs, comps.shape)
+    if found is not None:  # a void (rare): the filled solid's own runs
+        sub, box = found
+        filled = comps.mask(np.ones(comps.count, np.bool_))
+        filled[box] |= sub
+        comps = RunComponents(filled, connectivity)
+    return comps.count, int(comps.count - comps.euler_characteristic(connectivity))
 
 
 def _ratio(a: float, b: float) -> float:
@@ -712,10 +724,12 @@ class _Steps:
         """``(stable_components, stable_genus, stable_volume_fraction)``."""
         piece_set = self.get("labels")[4]
         runs = self.get("runs").runs if piece_set is self.occ else None  # the solid's runs, no fragment dropped
-        stable = feature_filter(piece_set, self.o["r"] / self.o["h"], self.cancel, runs)
+        conn = self.o["connectivity"]
+        stable = feature_filter(piece_set, self.o["r"] / self.o["h"], self.cancel, runs, as_runs=True)
         check(self.cancel)
-        stable_components, stable_genus = filled_genus(stable, self.o["connectivity"])
-        return stable_components, stable_genus, float(int(np.count_nonzero(stable)) / self.n)
+        comps = RunComponents.of_runs(stable, piece_set.shape, conn)  # from the packed words: no grid
+        stable_components, stable_genus = _filled_genus_of(comps, conn)
+        return stable_components, stable_genus, float(int(comps.sizes.sum()) / self.n)
 
     def _reasons(self):
         o = self.o

@@ -29,12 +29,14 @@ unpacks the result without its padding: no serial pass over the grid (no ``np.pa
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
 
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
+from .run_components import grid_runs
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -151,6 +153,86 @@ def _unpack_kernel(P, p, out):
                 word = P[i + p, q, j + p]
                 for k in range(max(64 * q - p, 0), min(64 * q + 64 - p, nz)):
                     orow[k] = ((word >> np.uint64(k + p - 64 * q)) & one) != zero
+
+
+@njit(cache=True, inline="always")
+def _popcount(x):
+    """The number of set bits of the word ``x`` (SWAR)."""
+    x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
+    x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return int((x * np.uint64(0x0101010101010101)) >> np.uint64(56))
+
+
+@njit(cache=True, inline="always")
+def _low_bit(x):
+    """The index of the lowest set bit of the word ``x`` (not 0): its power of two is exact in a
+    float, whose exponent is the index."""
+    b = x & (~x + np.uint64(1))
+    return math.frexp(float(b))[1] - 1
+
+
+@njit(cache=True, inline="always")
+def _inside_bits(q, lo, hi):
+    """The bits of word ``q`` whose padded z ``64 q + t`` lies in ``[lo, hi)``."""
+    a = max(lo - 64 * q, 0)
+    b = min(hi - 64 * q, 64)
+    if b <= a:
+        return np.uint64(0)
+    return (~np.uint64(0) >> np.uint64(64 - (b - a))) << np.uint64(a)
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _packed_count_runs_kernel(P, p, n0, n1, nz, counts):
+    """:func:`kinematics.run_components._count_runs_kernel` of the packed set less its padding ``p``
+    (``counts[i n1 + j + 1]``: the runs of column ``(i, j)``), from the words: a run starts at a set
+    bit whose bit below (the word before's top bit for bit 0) is clear."""
+    nw = P.shape[1]
+    one, top = np.uint64(1), np.uint64(63)
+    for i in prange(n0):
+        for j in range(n1):
+            c = 0
+            below = np.uint64(0)
+            for q in range(nw):
+                w = P[i + p, q, j + p] & _inside_bits(q, p, p + nz)
+                c += _popcount(w & ~((w << one) | below))
+                below = w >> top
+            counts[i * n1 + j + 1] = c
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _packed_fill_runs_kernel(P, p, n0, n1, nz, offs, rs, re):
+    """:func:`kinematics.run_components._fill_runs_kernel` of the packed set less its padding ``p``:
+    the runs' first and last z from each word's starts (a set bit over a clear one) and ends (a set
+    bit under a clear one), lowest first; starts and ends alternate along a column."""
+    nw = P.shape[1]
+    one, top = np.uint64(1), np.uint64(63)
+    zero = np.uint64(0)
+    for i in prange(n0):
+        for j in range(n1):
+            a = offs[i * n1 + j]
+            b = a
+            below = zero
+            w = P[i + p, 0, j + p] & _inside_bits(0, p, p + nz)
+            for q in range(nw):
+                above = zero
+                if q + 1 < nw:
+                    nxt = P[i + p, q + 1, j + p] & _inside_bits(q + 1, p, p + nz)
+                    above = (nxt & one) << top
+                else:
+                    nxt = zero
+                starts = w & ~((w << one) | below)
+                ends = w & ~((w >> one) | above)
+                while starts != zero:
+                    rs[a] = 64 * q + _low_bit(starts) - p
+                    starts &= starts - one
+                    a += 1
+                while ends != zero:
+                    re[b] = 64 * q + _low_bit(ends) - p
+                    ends &= ends - one
+                    b += 1
+                below = w >> top
+                w = nxt
 
 
 @njit(parallel=True, cache=True, nogil=True)
@@ -333,6 +415,22 @@ class _Packed:
             _unpack_kernel(self.P, self.pad, out)
         return out
 
+    def runs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The runs ``(offs, rs, re)`` along z of the set less its padding (as
+        :attr:`kinematics.run_components.RunComponents.runs`), read from the words without unpacking
+        them (:func:`_packed_count_runs_kernel`, :func:`_packed_fill_runs_kernel`)."""
+        n0, n1, nz = self.shape
+        offs = np.zeros(n0 * n1 + 1, np.int64)
+        with KERNEL_LOCK:
+            if n0 * n1 * nz:
+                _packed_count_runs_kernel(self.P, self.pad, n0, n1, nz, offs)
+            np.cumsum(offs, out=offs)
+            rs = np.empty(int(offs[-1]), np.int64)
+            re = np.empty_like(rs)
+            if len(rs):
+                _packed_fill_runs_kernel(self.P, self.pad, n0, n1, nz, offs, rs, re)
+        return offs, rs, re
+
 
 def ball_dilate(mask: np.ndarray, radius_voxels: float, *, complement: bool = False,
                 symmetric: bool = False) -> np.ndarray:
@@ -399,44 +497,51 @@ class _Grids:
         p = self.pad
         return self.o[p:-p, p:-p, p:-p]
 
+    def runs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return grid_runs(np.ascontiguousarray(self.unpack()))
 
-def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken, grids) -> np.ndarray:
+
+def _open_close(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken, grids,
+                as_runs: bool = False) -> Any:
     """:func:`feature_filter`'s steps on the solid padded by ``floor(r) + 1`` empty voxels, held by
     ``grids(occupancy, r, symmetric, pad)`` (a :class:`_Packed` or a :class:`_Grids`; ``symmetric=None``:
     each finds whether the solid equals its mirror image ``j -> n_y - 1 - j``, the packed one on its
-    words)."""
+    words); ``as_runs``: the result as its runs along z (``grids``' ``runs()``), not as a grid."""
     occ = np.asarray(occupancy, dtype=bool)
     w = int(np.floor(radius_voxels + 1e-9))
     if w <= 0:
-        return occ.copy()
+        return grid_runs(np.ascontiguousarray(occ)) if as_runs else occ.copy()
     g = grids(occ, radius_voxels, None, w + 1)  # symmetric or not, found by the grids; each step keeps it
     for step, complement in enumerate((True, False, False, True)):  # erode, dilate: open; dilate, erode: close
         if step:
             check(cancel)
         g.dilate(complement)
-    return g.unpack()
+    return g.runs() if as_runs else g.unpack()
 
 
 def feature_filter(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None,
-                   runs: tuple | None = None) -> np.ndarray:
+                   runs: tuple | None = None, *, as_runs: bool = False) -> Any:
     """``S_r = close_r(open_r(W))`` with the digital Euclidean ball of radius ``radius_voxels``.
 
     The opening drops material thinner than about ``2 r`` (knife-edged sheets, specks, thin
     bridges); the closing then fills gaps, slots and tunnels narrower than about ``2 r``. The grid
     is padded with empty voxels first (the box is no obstacle to either operation), and packed once
     along z for the four dilations (:func:`_dilate_packed_kernel`; from ``runs``, the set's runs
-    ``(offs, rs, re)``, when the caller holds them: the same set). Raises
-    :class:`~kinematics.progress.Cancelled` between its four dilations once ``cancel`` is set.
+    ``(offs, rs, re)``, when the caller holds them: the same set). ``as_runs``: the filtered set as
+    its runs along z ``(offs, rs, re)``, read from the packed words (:meth:`_Packed.runs`: no grid is
+    unpacked). Raises :class:`~kinematics.progress.Cancelled` between its four dilations once
+    ``cancel`` is set.
     """
     if np.floor(radius_voxels + 1e-9) >= 64:
-        return feature_filter_reference(occupancy, radius_voxels, cancel, dilate=ball_dilate)
+        return feature_filter_reference(occupancy, radius_voxels, cancel, dilate=ball_dilate, as_runs=as_runs)
     return _open_close(occupancy, radius_voxels, cancel,
-                       lambda m, r, sym, pad: _Packed(m, r, sym, pad, runs=runs))
+                       lambda m, r, sym, pad: _Packed(m, r, sym, pad, runs=runs), as_runs)
 
 
 def feature_filter_reference(occupancy: np.ndarray, radius_voxels: float, cancel: CancelToken = None,
-                             runs: tuple | None = None, *, dilate=ball_dilate_reference) -> np.ndarray:
+                             runs: tuple | None = None, *, dilate=ball_dilate_reference, as_runs: bool = False) -> Any:
     """:func:`feature_filter` (the same signature, so it can stand in for it; ``runs`` unused) as four dilations of
     boolean grids, each by ``dilate`` (:func:`ball_dilate`'s signature; by default
     :func:`ball_dilate_reference`: the former path the tests and the benchmarks compare with)."""
-    return _open_close(occupancy, radius_voxels, cancel, lambda m, r, sym, pad: _Grids(m, r, sym, pad, dilate))
+    return _open_close(occupancy, radius_voxels, cancel, lambda m, r, sym, pad: _Grids(m, r, sym, pad, dilate),
+                       as_runs)

@@ -134,6 +134,23 @@ def _paint_runs_kernel(offs, rs, re, keep_run, n1, out):
                         out[i, j, k] = True
 
 
+def grid_runs(occ: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The runs ``(offs, rs, re)`` along z of the boolean grid ``occ`` (C-contiguous), as
+    :attr:`RunComponents.runs`."""
+    n0, n1, _ = occ.shape
+    offs = np.zeros(n0 * n1 + 1, np.int64)
+    with KERNEL_LOCK:
+        if occ.size:
+            _count_runs_kernel(occ, offs)
+        np.cumsum(offs, out=offs)
+        n_runs = int(offs[-1])
+        rs = np.empty(n_runs, np.int64)
+        re = np.empty(n_runs, np.int64)
+        if n_runs:
+            _fill_runs_kernel(occ, offs, rs, re)
+    return offs, rs, re
+
+
 class RunComponents:
     """The components of ``occupancy`` (module docstring): ``sizes`` (voxels per component, in no
     particular order; ``len(sizes)`` is ``b0``) and :meth:`mask` (the union of chosen components)."""
@@ -144,18 +161,25 @@ class RunComponents:
         occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
         if occ.ndim != 3:
             raise ValueError(f"occupancy has {occ.ndim} dimensions: valid values 3")
-        self.shape = occ.shape
-        n0, n1, _ = occ.shape
-        offs = np.zeros(n0 * n1 + 1, np.int64)
+        self._join(*grid_runs(occ), occ.shape, connectivity)
+
+    @classmethod
+    def of_runs(cls, runs: tuple[np.ndarray, np.ndarray, np.ndarray], shape: tuple[int, int, int],
+                connectivity: int = 1) -> RunComponents:
+        """The components of the set of a grid of ``shape`` given by its runs ``(offs, rs, re)`` (as
+        :attr:`runs`), without the grid."""
+        if connectivity not in (1, 3):
+            raise ValueError(f"connectivity = {connectivity!r} is invalid: valid values 1 or 3")
+        self = cls.__new__(cls)
+        self._join(*runs, tuple(int(n) for n in shape), connectivity)
+        return self
+
+    def _join(self, offs: np.ndarray, rs: np.ndarray, re: np.ndarray, shape: tuple, connectivity: int) -> None:
+        """The components of the runs ``(offs, rs, re)`` of a grid of ``shape``."""
+        self.shape = shape
+        n0, n1, _ = shape
+        n_runs = len(rs)
         with KERNEL_LOCK:
-            if occ.size:
-                _count_runs_kernel(occ, offs)
-            np.cumsum(offs, out=offs)
-            n_runs = int(offs[-1])
-            rs = np.empty(n_runs, np.int64)
-            re = np.empty(n_runs, np.int64)
-            if n_runs:
-                _fill_runs_kernel(occ, offs, rs, re)
             parent = np.arange(n_runs, dtype=np.int64)
             _union_runs_kernel(offs, rs, re, n0, n1, connectivity == 3, parent)
             root = np.empty(n_runs, np.int64)
@@ -203,9 +227,17 @@ class LabelledComponents:
     def __init__(self, occupancy: np.ndarray, connectivity: int = 1) -> None:
         from scipy import ndimage as ndi
 
-        self._lab, self.count = ndi.label(np.asarray(occupancy, dtype=bool),
-                                          structure=ndi.generate_binary_structure(3, connectivity))
+        occ = np.asarray(occupancy, dtype=bool)
+        self.shape = occ.shape
+        self._lab, self.count = ndi.label(occ, structure=ndi.generate_binary_structure(3, connectivity))
         self.sizes = np.bincount(self._lab.ravel(), minlength=1)[1:]
+
+    @classmethod
+    def of_runs(cls, runs: tuple[np.ndarray, np.ndarray, np.ndarray], shape: tuple[int, int, int],
+                connectivity: int = 1) -> LabelledComponents:
+        """:meth:`RunComponents.of_runs`: the grid painted from the runs, then labelled."""
+        comps = RunComponents.of_runs(runs, shape, connectivity)
+        return cls(comps.mask(np.ones(comps.count, np.bool_)), connectivity)
 
     def mask(self, keep: np.ndarray) -> np.ndarray:
         """The union of the components ``keep`` (bool per component) selects."""

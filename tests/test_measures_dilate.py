@@ -131,6 +131,57 @@ def test_feature_filter_packed_from_runs_equals_the_grid(rv):
                 assert np.array_equal(feature_filter(g, rv, runs=runs), scipy_feature_filter(g, rv)), (nz, q)
 
 
+def _runs_by_definition(g: np.ndarray) -> list[list[tuple[int, int]]]:
+    """Each column's runs ``(first z, last z)``, column by column, by a plain Python scan."""
+    out = []
+    for i in range(g.shape[0]):
+        for j in range(g.shape[1]):
+            col, runs, k = g[i, j], [], 0
+            while k < len(col):
+                if col[k]:
+                    a = k
+                    while k + 1 < len(col) and col[k + 1]:
+                        k += 1
+                    runs.append((a, k))
+                k += 1
+            out.append(runs)
+    return out
+
+
+def _as_columns(runs) -> list[list[tuple[int, int]]]:
+    offs, rs, re = runs
+    return [[(int(rs[q]), int(re[q])) for q in range(offs[c], offs[c + 1])] for c in range(len(offs) - 1)]
+
+
+@pytest.mark.parametrize("rv", [0.5, 1.4, 5.2])
+def test_filtered_runs_read_from_the_packed_words_equal_the_grids(rv):
+    """The filtered set's runs read from the packed words (``as_runs``: a run's start is a set bit over
+    a clear one, its end one under a clear one, across word edges; the padding's bits dropped), and
+    the reference's from its grid, are the runs of the filtered grid by a plain scan; the components
+    built from them equal those of the grid."""
+    from paraspace.kinematics.morphology import feature_filter_reference
+    from paraspace.kinematics.run_components import RunComponents
+
+    rng = np.random.default_rng(13)
+    p = int(np.floor(rv + 1e-9)) + 1
+    for nz in (1, 2, 64 - 2 * p - 1, 64 - 2 * p, 64 - 2 * p + 1, 64, 128 - 2 * p + 3, 130):
+        for q in (0.3, 0.7, 0.97):
+            m = rng.random((6, 7, nz)) < q
+            m[0, 0, :] = True  # a run the length of the row
+            m[1, 1, :] = False
+            for g in (m, m | m[:, ::-1]):
+                runs = RunComponents(g).runs
+                grid = feature_filter(g, rv, runs=runs)
+                want = _runs_by_definition(grid)
+                for got in (feature_filter(g, rv, runs=runs, as_runs=True), feature_filter(g, rv, as_runs=True),
+                            feature_filter_reference(g, rv, as_runs=True)):
+                    assert _as_columns(got) == want, (nz, q)
+                comps = RunComponents.of_runs(feature_filter(g, rv, as_runs=True), g.shape)
+                ref = RunComponents(grid)
+                assert comps.count == ref.count and sorted(comps.sizes) == sorted(ref.sizes)
+                assert comps.euler_characteristic() == ref.euler_characteristic()
+
+
 def test_mirror_test_equals_array_equal():
     rng = np.random.default_rng(3)
     for shape in ((5, 1, 3), (6, 2, 4), (7, 9, 5), (4, 10, 66)):
