@@ -291,7 +291,12 @@ def _grid_euler(components: type, euler) -> type:
             self._occupancy = occupancy
 
         def euler_characteristic(self, connectivity: int = 1) -> int:
-            return euler(self._occupancy, connectivity)
+            occ = getattr(self, "_occupancy", None)
+            if occ is None:  # built from runs (of_runs: the filtered solid): the grid painted from them
+                import numpy as np
+
+                occ = self.mask(np.ones(self.count, np.bool_))
+            return euler(occ, connectivity)
 
     return GridEuler
 
