@@ -635,8 +635,8 @@ def _measures_before_meas2():
 
     reference_filter = morph_mod.feature_filter_reference
     patch = {"RunComponents": _grid_euler(LabelledComponents, euler),
-             "feature_filter": lambda occ, r, cancel=None, runs=None: reference_filter(occ, r, cancel,
-                                                                                        dilate=dilate_before)}
+             "feature_filter": lambda occ, r, cancel=None, runs=None, as_runs=False: reference_filter(
+                 occ, r, cancel, dilate=dilate_before, as_runs=as_runs)}
     labelled_count = {"count_components": lambda occ, conn=1: LabelledComponents(occ, conn).count}
     with _patched((mod, patch), (voids_mod, labelled_count),
                   (void_flood, {"_seed_kernel": void_flood._seed_kernel_reference})):
