@@ -139,6 +139,18 @@ def _enclosed_ext_kernel(occ, out, ext):
             _add_row(ext[i], j, rlo, rhi)
 
 
+@njit(cache=True, inline="always")
+def _mark_runs(offs, rs, re, c, v, first, last):
+    """Over the voxels ``k`` of column ``c``'s runs: ``first[k] = min(first[k], v)``, ``last[k] = v``
+    (the lines' ends, when the columns come in increasing ``v``)."""
+    for q in range(offs[c], offs[c + 1]):
+        fv = first[rs[q]:re[q] + 1]
+        lv = last[rs[q]:re[q] + 1]
+        for t in range(fv.shape[0]):  # v grows: the first write is the least, the last the greatest
+            fv[t] = min(fv[t], v)
+            lv[t] = v
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx):
     """The first and last ``i`` of a reachable voxel on each x line ``(j, k)`` (``n0`` and ``-1``:
@@ -151,14 +163,7 @@ def _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx):
         lxj = lx[j]
         _no_ends(fxj, lxj, n0)
         for i in range(n0):
-            i32 = np.int32(i)
-            c = i * n1 + j
-            for q in range(offs[c], offs[c + 1]):
-                fv = fxj[rs[q]:re[q] + 1]
-                lv = lxj[rs[q]:re[q] + 1]
-                for t in range(fv.shape[0]):  # i grows: the first write is the least, the last the greatest
-                    fv[t] = min(fv[t], i32)
-                    lv[t] = i32
+            _mark_runs(offs, rs, re, i * n1 + j, np.int32(i), fxj, lxj)
 
 
 @njit(cache=True, inline="always")
@@ -166,14 +171,7 @@ def _y_ends_runs(offs, rs, re, i, n1, fy, ly):
     """:func:`_x_ends_runs_kernel` along y in slice ``i``: ``fy[k]``, ``ly[k]`` (rows of ``n1``, ``-1``)."""
     _no_ends(fy, ly, n1)
     for j in range(n1):
-        j32 = np.int32(j)
-        c = i * n1 + j
-        for q in range(offs[c], offs[c + 1]):
-            fv = fy[rs[q]:re[q] + 1]
-            lv = ly[rs[q]:re[q] + 1]
-            for t in range(fv.shape[0]):
-                fv[t] = min(fv[t], j32)
-                lv[t] = j32
+        _mark_runs(offs, rs, re, i * n1 + j, np.int32(j), fy, ly)
 
 
 @njit(parallel=True, cache=True, nogil=True)
