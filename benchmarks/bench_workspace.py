@@ -293,9 +293,7 @@ def _grid_euler(components: type, euler) -> type:
         def euler_characteristic(self, connectivity: int = 1) -> int:
             occ = getattr(self, "_occupancy", None)
             if occ is None:  # built from runs (of_runs: the filtered solid): the grid painted from them
-                import numpy as np
-
-                occ = self.mask(np.ones(self.count, np.bool_))
+                occ = self.grid()
             return euler(occ, connectivity)
 
     return GridEuler
@@ -395,8 +393,7 @@ def _measures_before_meas1():
 
     def labelled_box(occ, conn, runs=None, shape=None):  # the voids by labelling, on the whole grid
         if occ is None:  # given by its runs: the grid painted from them
-            comps = RunComponents.of_runs(runs, shape)
-            occ = comps.mask(np.ones(comps.count, np.bool_))
+            occ = RunComponents.of_runs(runs, shape).grid()
         voids, n = voids_mod._voids_labelled_candidates(occ, conn)
         return (voids, tuple(slice(0, m) for m in voids.shape)) if n else None
 

@@ -494,11 +494,11 @@ def _filled_genus_of(comps: RunComponents, connectivity: int) -> tuple[int, int]
     if not comps.count:
         return 0, 0
     runs = comps.runs  # None for the labelled components (the tests' slow path): the grid then
-    found = _void_box(None if runs is not None else comps.mask(np.ones(comps.count, np.bool_)), connectivity,
-                      runs, comps.shape)
+    occ = None if runs is not None else comps.grid()
+    found = _void_box(occ, connectivity, runs, comps.shape)
     if found is not None:  # a void (rare): the filled solid's own runs
         sub, box = found
-        filled = comps.mask(np.ones(comps.count, np.bool_))
+        filled = comps.grid() if occ is None else occ  # a fresh grid either way
         filled[box] |= sub
         comps = RunComponents(filled, connectivity)
     return comps.count, int(comps.count - comps.euler_characteristic(connectivity))

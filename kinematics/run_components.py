@@ -209,6 +209,10 @@ class RunComponents:
         """``b0``: the number of components."""
         return int(len(self.sizes))
 
+    def grid(self) -> np.ndarray:
+        """The whole set as a boolean grid (every run painted)."""
+        return self.mask(np.ones(self.count, np.bool_))
+
     def mask(self, keep: np.ndarray) -> np.ndarray:
         """The voxels of the components ``c`` with ``keep[c]`` (``keep`` indexed like ``sizes``)."""
         keep_root = np.zeros(len(self._root), np.bool_)
@@ -236,8 +240,11 @@ class LabelledComponents:
     def of_runs(cls, runs: tuple[np.ndarray, np.ndarray, np.ndarray], shape: tuple[int, int, int],
                 connectivity: int = 1) -> LabelledComponents:
         """:meth:`RunComponents.of_runs`: the grid painted from the runs, then labelled."""
-        comps = RunComponents.of_runs(runs, shape, connectivity)
-        return cls(comps.mask(np.ones(comps.count, np.bool_)), connectivity)
+        return cls(RunComponents.of_runs(runs, shape, connectivity).grid(), connectivity)
+
+    def grid(self) -> np.ndarray:
+        """The whole set as a boolean grid."""
+        return self._lab > 0
 
     def mask(self, keep: np.ndarray) -> np.ndarray:
         """The union of the components ``keep`` (bool per component) selects."""
