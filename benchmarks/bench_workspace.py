@@ -70,6 +70,7 @@ from collections.abc import Sequence
 # benchmarks/ first on sys.path, not the repository root)
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 
+from paraspace.kinematics import column_counts  # noqa: E402
 from paraspace.kinematics import euler as euler_mod  # noqa: E402
 from paraspace.kinematics import morphology as morph_mod  # noqa: E402
 from paraspace.kinematics import voids as voids_mod  # noqa: E402
@@ -325,6 +326,9 @@ def _former_measures():
              "feature_filter": morph_mod.feature_filter_reference,
              "hollow_mask": hollow, "column_gap_count": lambda occ: int(mod.column_gap_mask(occ).sum()),
              "RunComponents": LabelledComponents}  # components by a labelled grid, the Euler number by skimage
+    # the hull, its underside, the sealed part of it and the gaps counted on the grid by the definitions
+    patch.update({name: getattr(column_counts, name + "_reference")
+                  for name in ("hull_ranges", "under_ranges", "gap_count", "count_in_ranges")})
     with _patched((mod, patch)):
         yield
 

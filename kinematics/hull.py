@@ -218,18 +218,34 @@ def hull_mask(occupancy: np.ndarray, raster: bool = True, extreme: bool = True) 
     ktop = np.empty((nx, ny), np.int64)
     with KERNEL_LOCK:
         _column_ends_kernel(np.ascontiguousarray(occ), kbot, ktop)
+    limits = hull_limits(kbot, ktop, raster, extreme)
+    if limits is None:
+        return occ.copy()
+    out = np.zeros_like(occ)
+    with KERNEL_LOCK:
+        _hull_fill_kernel(limits[2], limits[3], limits[0], limits[1], out)
+    return out
+
+
+def hull_limits(kbot: np.ndarray, ktop: np.ndarray, raster: bool = True,
+                extreme: bool = True) -> tuple[int, int, np.ndarray, np.ndarray] | None:
+    """``(i0, j0, zlo, zhi)``: the hull of the centres of a set whose columns' lowest and highest
+    reachable indices are ``kbot``, ``ktop`` (``-1`` for an empty column; at least one column set)
+    meets column ``(i0 + i, j0 + j)`` in ``zlo[i, j] <= z <= zhi[i, j]`` (index units; ``zlo > zhi``
+    off its footprint, and every column outside the rectangle of ``zlo`` is off it); ``None`` when
+    the centres are coplanar (no 3-D hull). ``raster`` and ``extreme`` are :func:`hull_mask`'s."""
     col = ktop >= 0
     ii, jj = np.nonzero(col)
     pts = hull_points(kbot, ktop, extreme)
     # the extreme points span the same affine hull as all the column ends
     if len(pts) < 4 or np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 3:
-        return occ.copy()
+        return None
     try:  # joggled for the raster (module docstring), exact for the reference
         hull = ConvexHull(pts, qhull_options=QHULL_RASTER) if raster else ConvexHull(pts)
     except QhullError:  # pragma: no cover - lattice points of rank 3 always have a hull
-        return occ.copy()
+        return None
     # the hull's footprint lies within the occupied columns' bounding rectangle
-    i0, i1, j0, j1 = ii.min(), ii.max() + 1, jj.min(), jj.max() + 1
+    i0, i1, j0, j1 = int(ii.min()), int(ii.max()) + 1, int(jj.min()), int(jj.max()) + 1
     if raster:
         zlo = np.empty((i1 - i0, j1 - j0))
         zhi = np.empty((i1 - i0, j1 - j0))
@@ -243,10 +259,7 @@ def hull_mask(occupancy: np.ndarray, raster: bool = True, extreme: bool = True) 
         sub = np.ascontiguousarray(eq[np.sort(first)])
         sub[:, 3] += sub[:, 0] * i0 + sub[:, 1] * j0  # shift to sub-rectangle indices
         zlo, zhi = hull_columns(i1 - i0, j1 - j0, sub, 1e-7)
-    out = np.zeros_like(occ)
-    with KERNEL_LOCK:
-        _hull_fill_kernel(zlo, zhi, i0, j0, out)
-    return out
+    return i0, j0, zlo, zhi
 
 
 @njit(cache=True, nogil=True)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from skimage.measure import marching_cubes
 
+from paraspace.kinematics import column_counts
 from paraspace.kinematics import euler as euler_mod
 from paraspace.kinematics import morphology as morph_mod
 from paraspace.kinematics import voids as voids_mod
@@ -365,7 +366,7 @@ def test_each_measure_alone_equals_the_full_measurement_and_computes_only_its_st
                 one = mod.measure_fields(res, [name], **kw)
                 assert json.loads(json.dumps(mod.jsonable(one[name]))) == full[name], name
     calls = []
-    monkeypatch.setattr(mod, "hull_mask", lambda *a: calls.append("hull"))
+    monkeypatch.setattr(mod, "hull_ranges", lambda *a: calls.append("hull"))
     monkeypatch.setattr(mod.ndi, "label", lambda *a, **k: calls.append("label"))
     monkeypatch.setattr(mod, "RunComponents", lambda *a, **k: calls.append("label"))
     one = mod.measure_fields(res, ["volume", "extents"])
@@ -404,6 +405,9 @@ def _slow_measures(monkeypatch):
     monkeypatch.setattr(mod, "hull_mask", lambda occ, raster=False: hull(occ, raster=False))
     monkeypatch.setattr(mod, "hollow_mask", hollow)
     monkeypatch.setattr(mod, "column_gap_count", lambda occ: int(mod.column_gap_mask(occ).sum()))
+    # the hull, its underside, the sealed part of it and the gaps counted on the grid by the definitions
+    for name in ("hull_ranges", "under_ranges", "gap_count", "count_in_ranges"):
+        monkeypatch.setattr(mod, name, getattr(column_counts, name + "_reference"))
 
 
 def test_fast_measures_equal_the_former_path_on_several_designs(monkeypatch):
@@ -664,7 +668,6 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                         if occ.size:  # with the set's runs: the same set
                             with_runs = voids_mod.sealed_mask(occ, conn, floor=floor, runs=RunComponents(occ).runs)
                             assert np.array_equal(with_runs, ref)
-                        under = rng.random(occ.shape) < 0.5
                         if occ.size:  # the sealed voxels in their box, counted under a random set
                             for runs in (None, RunComponents(occ).runs):
                                 found = voids_mod.sealed_box(occ, conn, floor=floor, runs=runs)
@@ -677,8 +680,13 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                                 inside = np.zeros(occ.shape, bool)
                                 inside[i0:i0 + m0, j0:j0 + m1, max(k0, 0):k0 + m2] = sub[:, :, max(0, -k0):]
                                 assert np.array_equal(inside, ref)
-                                got = int(mod._under_sealed_count_kernel(under, sub, i0, j0, k0))
-                                assert got == int(np.count_nonzero(under & ref))
+                                lo, hi = rng.integers(-2, occ.shape[2] + 2, (2,) + occ.shape[:2])
+                                ranges = column_counts.ColumnRanges(lo, hi, 0)
+                                got = column_counts.count_in_ranges(ranges, sub, (i0, j0, k0))
+                                k = np.arange(occ.shape[2])
+                                within = (k >= lo[:, :, None]) & (k <= hi[:, :, None])
+                                assert got == int(np.count_nonzero(within & ref))
+                                assert got == column_counts.count_in_ranges_reference(ranges, sub, (i0, j0, k0))
             assert voids_mod.sealed_mask(bowl, 1, floor=True).any()
             assert not voids_mod.sealed_mask(bowl, 1, floor=False).any()
             assert voids_mod.sealed_mask(shell, 1, floor=False).sum() == 9 and not voids_mod.sealed_mask(cup, 1).any()
@@ -715,6 +723,67 @@ def test_hull_raster_equals_every_facet_at_every_column():
             assert np.all((counts == 0) | (counts == last - first + 1))
         hulls += int(fast.sum() > occ.sum())
     assert hulls >= 40  # most fields have a hull larger than themselves
+
+
+def test_column_counts_from_the_runs_equal_the_grid_definitions():
+    """The hull volume, the hull underside, the column gaps and the sealed underside counted from the
+    runs per column (kinematics/column_counts.py) equal the grid definitions: the hull's mask
+    (kinematics/hull.py), the covered voxels by cumulative ors, ``column_gap_mask``, and the sealed
+    mask painted and counted; on random fields, a bowl on the floor, a hollow ball, lines and
+    planes of voxels (no 3-D hull: ``K = W``, no underside) and single voxels; and each count equals its
+    ``*_reference`` (the tests' slow path)."""
+    from paraspace.kinematics import measures as mod
+
+    rng = np.random.default_rng(2412)
+    sealed_seen = unders_seen = 0
+    i, j, k = np.ogrid[:24, :21, :18]
+    ball = (i - 12) ** 2 + (j - 10) ** 2 + (k - 8) ** 2
+    dome = (i - 12) ** 2 + (j - 10) ** 2 + k ** 2  # a dome standing on the floor: its underside sealed
+    fields = [(ball <= 64) & (ball >= 25), (ball <= 64) & (ball >= 25) & (k >= 8), (dome <= 81) & (dome >= 36),
+              (i == 3) & (j == 4) & (k > 2),
+              (k == 5) & (i + j < 20), np.zeros((3, 4, 5), bool), (i == 2) & (j == 2) & (k == 2)]
+    fields += [rng.random(tuple(rng.integers(1, 15, 3))) < rng.uniform(0.02, 0.9) for _ in range(80)]
+    for occ in fields:
+        occ = np.ascontiguousarray(np.broadcast_to(occ, np.broadcast_shapes(occ.shape, (1, 1, 1))))
+        runs = RunComponents(occ).runs
+        shape = occ.shape
+        kk = np.arange(shape[2])
+        assert column_counts.gap_count(runs, shape) == int(mod.column_gap_mask(occ).sum())
+        assert column_counts.gap_count(runs, shape) == column_counts.gap_count_reference(runs, shape)
+        if not occ.any():
+            continue
+        hull = column_counts.hull_ranges(runs, shape)
+        mask = mod.hull_mask(occ, raster=False)
+        if hull is None:  # coplanar centres: the hull is the set, nothing under it
+            assert np.linalg.matrix_rank(np.argwhere(occ) - np.argwhere(occ)[0]) < 3
+            assert np.array_equal(mask, occ)
+            assert column_counts.under_ranges(runs, shape, None).voxels == 0 == int(mod.hollow_mask(occ).sum())
+            assert column_counts.hull_ranges_reference(runs, shape) is None
+            continue
+        within = (kk >= hull.lo[:, :, None]) & (kk <= hull.hi[:, :, None])
+        assert np.array_equal(within, mask) and hull.voxels == int(mask.sum())
+        ref = column_counts.hull_ranges_reference(runs, shape)
+        assert ref.voxels == hull.voxels and np.array_equal(
+            (kk >= ref.lo[:, :, None]) & (kk <= ref.hi[:, :, None]), within)
+        under = column_counts.under_ranges(runs, shape, hull)
+        truth = mod.hollow_mask(occ, "hull")  # covered, in the hull, unreachable
+        assert under.voxels == int(truth.sum())
+        span = (kk >= under.lo[:, :, None]) & (kk <= under.hi[:, :, None])
+        assert np.array_equal(span & ~occ, truth)
+        ref = column_counts.under_ranges_reference(runs, shape, hull)
+        assert ref.voxels == under.voxels and np.array_equal(
+            span, (kk >= ref.lo[:, :, None]) & (kk <= ref.hi[:, :, None]))
+        for conn in (1, 3):  # the sealed underside, counted in the sealed voxels' box
+            found = voids_mod.sealed_box(occ, conn, floor=True, runs=runs)
+            sealed = voids_mod.sealed_mask(occ, conn, floor=True)
+            assert not (sealed & occ).any()
+            got = 0 if found is None else column_counts.count_in_ranges(under, *found)
+            assert got == int(np.count_nonzero(truth & sealed))
+            if found is not None:
+                assert got == column_counts.count_in_ranges_reference(under, *found)
+            sealed_seen += got
+        unders_seen += under.voxels
+    assert sealed_seen > 0 and unders_seen > 0
 
 
 def test_hull_mask_against_supporting_planes_by_brute_force():
