@@ -23,40 +23,62 @@ from numba import njit, prange
 
 from .parallel import KERNEL_LOCK
 
+#: eight set bytes of a boolean grid read as one little-endian word
+_EIGHT_SET = np.uint64(0x0101010101010101)
+
 
 @njit(parallel=True, cache=True, nogil=True)
 def _count_runs_kernel(occ, counts):
-    """``counts[i * n1 + j + 1]``: the number of runs of column ``(i, j)``."""
+    """``counts[i * n1 + j + 1]``: the number of runs of column ``(i, j)`` of the grid ``occ`` (its bytes,
+    0 or 1): the set voxels over an unset one, and the first when set (no branch: vector lanes)."""
     n0, n1, n2 = occ.shape
     for i in prange(n0):
         for j in range(n1):
-            c = 0
-            prev = False
-            for k in range(n2):
-                v = occ[i, j, k]
-                if v and not prev:
-                    c += 1
-                prev = v
+            row = occ[i, j]
+            c = np.int64(row[0]) if n2 else np.int64(0)
+            for k in range(1, n2):
+                c += row[k] > row[k - 1]
             counts[i * n1 + j + 1] = c
+
+
+@njit(cache=True, inline="always")
+def _eight(row, k):
+    """The bytes ``row[k] .. row[k + 7]`` as one word (little-endian)."""
+    x = np.uint64(0)
+    for b in range(8):
+        x |= np.uint64(row[k + b]) << np.uint64(8 * b)
+    return x
 
 
 @njit(parallel=True, cache=True, nogil=True)
 def _fill_runs_kernel(occ, offs, rs, re):
     """``rs[q]``, ``re[q]``: first and last z of run ``q``; column ``(i, j)`` holds the runs
-    ``offs[i * n1 + j] .. offs[i * n1 + j + 1] - 1``, in increasing z."""
+    ``offs[i * n1 + j] .. offs[i * n1 + j + 1] - 1``, in increasing z (``occ`` the grid's bytes, 0 or
+    1). A column without runs is not read, and eight bytes that all equal the last one are passed
+    over as one word."""
     n0, n1, n2 = occ.shape
     for i in prange(n0):
         for j in range(n1):
             q = offs[i * n1 + j]
+            if offs[i * n1 + j + 1] == q:
+                continue
+            row = occ[i, j]
             prev = False
-            for k in range(n2):
-                v = occ[i, j, k]
-                if v and not prev:
-                    rs[q] = k
-                elif prev and not v:
-                    re[q] = k - 1
-                    q += 1
-                prev = v
+            k = 0
+            while k < n2:
+                if k + 8 <= n2 and _eight(row, k) == (_EIGHT_SET if prev else np.uint64(0)):
+                    k += 8
+                    continue
+                e = min(k + 8, n2)
+                while k < e:
+                    v = row[k] != 0
+                    if v and not prev:
+                        rs[q] = k
+                    elif prev and not v:
+                        re[q] = k - 1
+                        q += 1
+                    prev = v
+                    k += 1
             if prev:
                 re[q] = n2 - 1
 
@@ -139,6 +161,7 @@ def grid_runs(occ: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     :attr:`RunComponents.runs`."""
     n0, n1, _ = occ.shape
     offs = np.zeros(n0 * n1 + 1, np.int64)
+    occ = np.ascontiguousarray(occ, dtype=np.bool_).view(np.uint8)  # the kernels read the bytes (0 or 1)
     with KERNEL_LOCK:
         if occ.size:
             _count_runs_kernel(occ, offs)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from paraspace.kinematics.run_components import RunComponents, count_components
+from paraspace.kinematics.run_components import RunComponents, count_components, grid_runs
 
 
 def _scipy(occ, conn):
@@ -53,6 +53,42 @@ def test_odd_shapes_equal_scipy_label(conn):
     for occ in shapes + [diag, edge, stripes, ~stripes]:
         _check(occ, conn)
     assert count_components(diag, 1) == 6 and count_components(diag, 3) == 1
+
+
+def _scan(occ):
+    """The runs of every column by a plain Python scan: ``(offs, rs, re)``."""
+    offs, rs, re = [0], [], []
+    for col in occ.reshape(-1, occ.shape[2]):
+        k = 0
+        while k < len(col):
+            if col[k]:
+                e = k
+                while e + 1 < len(col) and col[e + 1]:
+                    e += 1
+                rs.append(k)
+                re.append(e)
+                k = e
+            k += 1
+        offs.append(len(rs))
+    return np.array(offs), np.array(rs, dtype=np.int64), np.array(re, dtype=np.int64)
+
+
+def test_grid_runs_equal_a_plain_scan():
+    """The runs read eight bytes at a time where a column does not change (``_fill_runs_kernel``)
+    and counted without branches equal a plain scan of each column, for column lengths around
+    multiples of 8, sparse and dense fields, long runs, all-set and all-unset columns."""
+    rng = np.random.default_rng(11)
+    for nz in (1, 2, 7, 8, 9, 15, 16, 17, 23, 24, 25, 63, 64, 65, 130):
+        for p in (0.02, 0.5, 0.97):
+            occ = rng.random((3, 4, nz)) < p
+            occ[0, 0] = True
+            occ[0, 1] = False
+            occ[1, 1, nz // 3:] = True  # one long run to the top
+            got = grid_runs(occ)
+            want = _scan(occ)
+            for a, b in zip(got, want):
+                assert np.array_equal(a, b), (nz, p)
+    assert all(len(a) == 0 for a in grid_runs(np.zeros((2, 3, 0), bool))[1:])
 
 
 def test_invalid_arguments():
