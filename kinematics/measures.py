@@ -221,9 +221,9 @@ projection covers it; the hull volume, the underside ``U``, its sealed part and 
 one z-interval per column, counted from the runs (:mod:`kinematics.column_counts`: no grid filled or
 read). :func:`measure_fields`
 computes only the steps the asked-for fields need. The whole :func:`measure_workspace` of the
-default design takes about 50 ms at h = 2 and 350 ms at h = 1 in CPU time with one numba thread on
-the shared 2-core machine (load 1.1: 0.88x and 2.16x the engine in the same run, from 142 ms and
-1.2 s, 2.5x and 7.4x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
+default design takes about 24 ms at h = 2 and 167 ms at h = 1 in CPU time with one numba thread on
+the shared 2-core machine (2026-12-02, load 1.2: 0.54x and 1.05x the engine in the same run, from
+142 ms and 1.43 s, 3.2x and 9.1x, on the path before; ``benchmarks/bench_workspace.py --measure-stages``).
 """
 
 from __future__ import annotations
