@@ -255,9 +255,7 @@ def under_ranges_reference(runs: Runs, shape: tuple[int, int, int], hull: Column
     covered[:, :, :-1] = covered[:, :, 1:].copy()
     covered[:, :, -1] = False  # a voxel with a reachable one strictly above it
     span = covered & _hull_grid(hull, shape[2])
-    under = span & ~occ
-    out = _ranges_of(span, int(np.count_nonzero(under)))
-    return out
+    return _ranges_of(span, int(np.count_nonzero(span & ~occ)))
 
 
 def gap_count_reference(runs: Runs, shape: tuple[int, int, int]) -> int:

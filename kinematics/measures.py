@@ -648,13 +648,12 @@ class _Steps:
         return hull, (self.n if hull is None else hull.voxels) * self.vv
 
     def _under(self):
-        """The hull underside's ranges per column and its number of voxels."""
-        under = under_ranges(self.get("zruns"), self.occ.shape, self.get("hull")[0])
-        return under, under.voxels
+        """The hull underside's ranges per column (and its number of voxels, ``.voxels``)."""
+        return under_ranges(self.get("zruns"), self.occ.shape, self.get("hull")[0])
 
     def _hollow_volume(self):
         if self.o["hollowness_mode"] == "hull":
-            return self.get("under")[1] * self.vv
+            return self.get("under").voxels * self.vv
         return _hollow(self.occ, self.o["hollowness_mode"])[1] * self.vv
 
     def _gap_volume(self):
@@ -662,7 +661,8 @@ class _Steps:
 
     def _cavities(self):
         """``(open_cavity_ratio, sealed_cavity_volume)``."""
-        under, n_under = self.get("under")
+        under = self.get("under")
+        n_under = under.voxels
         if not n_under:  # nothing under the workspace: no open and no sealed cavity there
             return 0.0, 0.0
         found = sealed_box(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None,
