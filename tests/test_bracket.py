@@ -102,14 +102,10 @@ def test_explorer_shows_the_certified_bracket():
 # outward), which would change every later float parse and sum in the test session
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("symmetric", [False, True])
-def test_bracket_agrees_with_an_independent_interval_oracle(symmetric):
-    """codac's interval arithmetic classifies the same cubes (a quarter of the h = 16 grid) on its own:
-    no cube is proven inside by one tool and outside by the other, codac confirms most of our
-    decided cubes, and the two certified brackets of that region overlap (both enclose the truth).
-    The quarter has y >= 0: with ``symmetric`` its cubes off the middle row take their mirror image's
-    class."""
+@pytest.fixture(scope="module")
+def codac_verdicts() -> tuple:
+    """The h = 16 workspace and codac's verdict per cube of a quarter of its grid (y >= 0): ``(res,
+    quarter, verdicts)``. The oracle sees the cubes alone, so one run serves both tests below."""
     import importlib.util
     import json
     import pathlib
@@ -121,8 +117,6 @@ def test_bracket_agrees_with_an_independent_interval_oracle(symmetric):
     design = Design()
     res = compute_workspace(design, WorkspaceSettings(voxel=16.0))
     grid = res.grid
-    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0,
-                       symmetric=symmetric)
     centres = grid.points()
     quarter = np.argwhere((centres[..., 0] >= 0) & (centres[..., 1] >= 0))
     cubes = []
@@ -137,6 +131,23 @@ def test_bracket_agrees_with_an_independent_interval_oracle(symmetric):
                          timeout=600)
     assert out.returncode == 0, out.stderr
     verdicts = json.loads(out.stdout)  # per cube: "in", "out" or "?"
+    assert len(verdicts) == len(cubes)
+    return res, quarter, verdicts
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("symmetric", [False, True])
+def test_bracket_agrees_with_an_independent_interval_oracle(symmetric, codac_verdicts):
+    """codac's interval arithmetic classifies the same cubes (a quarter of the h = 16 grid) on its own:
+    no cube is proven inside by one tool and outside by the other, codac confirms most of our
+    decided cubes, and the two certified brackets of that region overlap (both enclose the truth).
+    The quarter has y >= 0: with ``symmetric`` its cubes off the middle row take their mirror image's
+    class."""
+    res, quarter, verdicts = codac_verdicts
+    design, grid = res.design, res.grid
+    centres = grid.points()
+    cls = cube_classes(design, grid, kernel_args(design, (0.0, 0.0, 0.0), res.n_eta), res.n_eta, 0.0,
+                       symmetric=symmetric)
     ours = {INSIDE: 0, OUTSIDE: 0, BOUNDARY: 0}
     agree = {INSIDE: 0, OUTSIDE: 0}
     for (ix, iy, iz), v in zip(quarter, verdicts):
