@@ -37,12 +37,13 @@ it is narrower than a sub-arc), as there. Joint cones are not covered (their rel
 each cone with its own factor): with cones the bracket takes the per-child path.
 
 *Compile time.* numba inlines a function marked ``inline="always"`` into its caller's IR, and the
-caller's passes (the parallel kernel's most of all) then run over every copy. The child's tests that
-run at most once per child and chain (the hint's, the relaxed test of a sample that passed the tight
-one, the upper end of the window) and its sub-arc bounds are therefore calls of their own
-(:func:`_feasible_call`, :func:`_sub_arc_open`), compiled once; the scans' tests stay inlined. This
-took the kernel's first compile from 87 s to 37 s of one core (a fresh cache, the quiet 2-core
-machine) at the same speed (the bracket at h = 2, refine 2: 0.93-0.96 of its time, one A/B).
+caller's passes (the parallel kernel's most of all) then run over every copy. The child's rarer tests
+(the hint's, once per child and chain; the relaxed test of a sample that already passed the tight
+one, at most once; the scan for the window's upper end, on the levels that keep windows) and its
+sub-arc bounds are therefore calls of their own (:func:`_feasible_call`, :func:`_sub_arc_open`),
+compiled once; the two scans that decide most children keep their tests inlined. This took the
+kernel's first compile from 87 s to 37 s of one core (a fresh cache, the quiet 2-core machine) at the
+same speed (the bracket at h = 2, refine 2: 0.93-0.96 of its time, one A/B).
 """
 
 from __future__ import annotations
@@ -127,8 +128,8 @@ def _sub_arc_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_h
 
 @njit(cache=True, nogil=True)
 def _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
-    """:func:`kinematics.feasibility.feasible_plain` as a call of its own, for the child's tests that
-    run at most once per child and chain (module docstring, *Compile time*)."""
+    """:func:`kinematics.feasibility.feasible_plain` as a call of its own, for the child's rarer tests
+    (module docstring, *Compile time*)."""
     return feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2)
 
 
