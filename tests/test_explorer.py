@@ -204,7 +204,10 @@ def test_invalid_design_combination_is_reported_not_applied(explorer, browsers):
     wait_for(lambda: s.design_error is not None, 10.0, "design error")
     assert "d_s" in s.design_error and "r=60" in s.design_error
     assert s.state.design.r == 100.0 and s.state.design.d_s == 80.0
-    assert s.panels.design_message.visible and "Not applied" in s.panels.design_message.content
+    # the message is shown just after the error is recorded (by the callback's thread): waited for (once,
+    # in a loaded fresh-clone run, read between the two)
+    wait_for(lambda: s.panels.design_message.visible, 10.0, "the design message shown")
+    assert "Not applied" in s.panels.design_message.content
 
 
 def test_downloads(explorer, browsers):
