@@ -88,7 +88,8 @@ def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(expl
     assert (ori.ti1, ori.ti2) == (ref.ti1, ref.ti2) and ref.ti1 > 0
     # the status the user is left with says so too (waited for: once, in a fresh-clone run on a loaded
     # machine, it still read "computing... 0 %" when the maps of the state were already on screen; one
-    # orientation job per selection when replayed here, so the cause is open: see issue 24's note)
+    # orientation job per selection when replayed here; the controller now starts no job for maps on
+    # screen, tests/test_explorer_scan.py)
     wait_for(lambda: f"TI₁ = {fmt(ref.ti1, 4)}" in s.panels.orientation_status.content, 60, "TI in the status")
     wait_for(lambda: f"{fmt(ref.ti1, 4)}" in s.panels.summary.content, 10, "TI in the strip")
     assert s.compare.pin_button.disabled and s.tilt.run.disabled

@@ -50,3 +50,30 @@ def test_scan_range_and_step_from_link_and_sliders(explorer) -> None:
         assert "Not applied" not in s.panels.orientation_status.content
     finally:
         b.close()
+
+
+def test_maps_on_screen_are_not_computed_again(explorer) -> None:
+    """A second submit for a state whose maps are already on screen (here with the cache emptied, as
+    when an equal state comes under another key) starts no job and leaves the maps' status as it is:
+    no "computing..." over the maps the user is reading."""
+    b = FakeBrowser(explorer, "voxel=6&angle_range=40&angle_step=4")
+    try:
+        s = b.session
+        wait_idle(explorer, s)
+        wait_for(lambda: s.orientation is not None and s.orientation.settings.angle_step == 4.0, 60.0, "maps")
+        wait_for(lambda: "TI₁ = " in s.panels.orientation_status.content, 10.0, "the maps' status")
+        shown, status = s.orientation, s.panels.orientation_status.content
+
+        def jobs():
+            return [j for j in explorer.jobs.jobs() if j.kind == "orientation" and j.client == s.job_client]
+        before = len(jobs())
+        explorer.orientation_cache.clear()
+        s.orientation_controller.submit()
+        assert len(jobs()) == before  # no job started
+        assert s.orientation is shown and s.panels.orientation_status.content == status
+        # a state whose maps are not on screen still computes them
+        b.set(s.panels.scan_step, 5.0)
+        wait_for(lambda: s.orientation is not None and s.orientation.settings.angle_step == 5.0, 60.0, "new maps")
+        assert len(jobs()) == before + 1
+    finally:
+        b.close()

@@ -25,7 +25,7 @@ from .. import figures
 from ..jobs import Job, LimitExceeded
 from ..textsafe import md_text
 from ..urlstate import ExplorerState
-from .numbers_panel import NumbersPanel, fmt
+from .numbers_panel import NumbersPanel, fmt, ori_current
 from .plot_exports import PlotExports
 from .session import PROGRESS_INTERVAL, SessionContext
 
@@ -51,6 +51,7 @@ class OrientationController:
         self._submit_lock = threading.Lock()  # orders submit() and forget_stale(); taken before ``ctx.lock``
         self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
         self.on_shown: Callable[[], None] | None = None  # e.g. the Compare table's TI column
+        self._shown: tuple[OrientationResult, figures.FigureSpec] | None = None  # the maps on screen
         # the refusal of the value on screen ("" once a valid one is applied): it heads every status
         # until then, so that maps or progress of the state kept never hide why the input was refused
         self.refusal = ""
@@ -117,8 +118,12 @@ class OrientationController:
             s = ctx.state
             key = self._key(s)
             self.key = key
+            # the maps on screen are already the state's (the same design or mechanism and settings,
+            # by value: a state rebuilt with an equal mechanism may make another key): no job, no
+            # "computing..." over the maps they are
+            shown = self._shown if self._shown is not None and ori_current(s, self._shown[0]) else None
         cache = ctx.explorer.orientation_cache
-        hit = cache.get(key)
+        hit = shown if shown is not None else cache.get(key)
         if hit is not None:
             ctx.cancel_job(self.job)
             self._publish(gen, *hit)
@@ -178,6 +183,7 @@ class OrientationController:
             if gen != self.gen or ctx.closed:
                 return
             ctx.orientation = res
+            self._shown = (res, spec)
             self.exports.set("orientation", spec)
             p = ctx.panels
             p.orientation_plot.aspect = spec.aspect
