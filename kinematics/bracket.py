@@ -338,6 +338,8 @@ def _keep_boundary(out, parents, bits, win, weight, size, offsets, at, c_out, b_
 _CHILDREN = np.array([[dx, dy, dz] for dx in (-0.5, 0.5) for dy in (-0.5, 0.5) for dz in (-0.5, 0.5)])
 #: :func:`kinematics.bracket_children.children_kernel`'s ``centres`` when the children are parent + offset.
 _NO_CENTRES = np.zeros((0, 3))
+#: Its ``kwin`` where the children's windows are not needed (``need_window`` False).
+_NO_WINDOWS = np.zeros((0, 3, 3), np.int64)
 #: Parents per launch of :func:`kinematics.bracket_children.children_kernel`.
 _PARENTS_PER_CALL = 1 << 15
 
@@ -370,12 +372,11 @@ def _cubes_by_parent(b0: np.ndarray, bn: np.ndarray, state: np.ndarray, win: np.
         n_kids = 8 * (e - s)
         out = np.empty(n_kids, np.uint8)
         kbits = np.empty(n_kids, np.uint8)
-        kwin = np.empty((n_kids, 3, 3), np.int64)
         with kernel_launch(e - s):
             children_kernel(np.ascontiguousarray(parents[s:e]), np.ascontiguousarray(pbits[s:e]), pwin[s:e], float(h),
                             fa.eps, fa.arc_slack, float(z_floor), u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc,
                             hb, rho_lo, rho_hi, math.sqrt(lmin2), math.sqrt(lmax2), _CHILDREN, False, out, kbits,
-                            kwin, centres)
+                            _NO_WINDOWS, centres)
         v[gx, gy, gz] = kbits | np.where(out == OUTSIDE, _FAILED, 0).astype(np.uint8)
     keep = ~sel
     return b0[keep], bn[keep], state[keep], win[keep]
@@ -480,7 +481,7 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
             out = np.empty(n_kids, np.uint8)
             if per_parent:
                 bits = np.empty(n_kids, np.uint8)
-                win = np.empty((n_kids, 3, 3), np.int64)
+                win = _NO_WINDOWS if last else np.empty((n_kids, 3, 3), np.int64)
                 with kernel_launch(par.shape[0]):
                     children_kernel(par, p_bits, p_win, size, fa.eps, fa.arc_slack, float(z_floor), u, fa.cos_t,
                                     fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, _CHILDREN,

@@ -66,7 +66,7 @@ def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
                         fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc, ref)
         out = np.empty(kids.shape[0], np.uint8)
         kb = np.empty(kids.shape[0], np.uint8)
-        kw = np.empty((kids.shape[0], 3, 3), np.int64)
+        kw = np.full((kids.shape[0], 3, 3), -7, np.int64)
         need_window = level < levels - 1
         children_kernel(np.ascontiguousarray(centres), pbits, np.ascontiguousarray(pwin), size, fa.eps, fa.arc_slack,
                         z_floor, u, fa.cos_t, fa.sin_t, arc, fa.seg_k, fa.seg_arc, hb, rho_lo, rho_hi,
@@ -77,6 +77,8 @@ def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
         np.testing.assert_array_equal(kb[left], ref_bits[left])
         if need_window:  # the next level starts from them; the hint only orders the visit
             np.testing.assert_array_equal(kw[left][..., 1:], ref_win[left][..., 1:])
+        else:  # the last level leaves the windows alone (the bracket passes an empty array there)
+            assert (kw == -7).all()
         centres, pbits, pwin = kids[left], ref_bits[left], ref_win[left]
 
 
