@@ -51,7 +51,6 @@ class OrientationController:
         self._submit_lock = threading.Lock()  # orders submit() and forget_stale(); taken before ``ctx.lock``
         self.key: tuple | None = None  # (design key, z0, joints key) of the maps being computed/shown
         self.on_shown: Callable[[], None] | None = None  # e.g. the Compare table's TI column
-        self._shown: tuple[OrientationResult, figures.FigureSpec] | None = None  # the maps on screen
         # the refusal of the value on screen ("" once a valid one is applied): it heads every status
         # until then, so that maps or progress of the state kept never hide why the input was refused
         self.refusal = ""
@@ -118,10 +117,12 @@ class OrientationController:
             s = ctx.state
             key = self._key(s)
             self.key = key
-            # the maps on screen are already the state's (the same design or mechanism and settings,
-            # by value: a state rebuilt with an equal mechanism may make another key): no job, no
+            # the maps on screen (``ctx.orientation``, their figure in the exports: both set by
+            # _publish) are already the state's (the same design or mechanism and settings, by value:
+            # a state rebuilt with an equal mechanism may make another key): no job, no
             # "computing..." over the maps they are
-            shown = self._shown if self._shown is not None and ori_current(s, self._shown[0]) else None
+            on_screen, spec = ctx.orientation, self.exports.specs.get("orientation")
+            shown = (on_screen, spec) if spec is not None and ori_current(s, on_screen) else None
         cache = ctx.explorer.orientation_cache
         hit = shown if shown is not None else cache.get(key)
         if hit is not None:
@@ -183,7 +184,6 @@ class OrientationController:
             if gen != self.gen or ctx.closed:
                 return
             ctx.orientation = res
-            self._shown = (res, spec)
             self.exports.set("orientation", spec)
             p = ctx.panels
             p.orientation_plot.aspect = spec.aspect
