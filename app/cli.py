@@ -160,6 +160,37 @@ def _print_total_and_dexterity(out: dict[str, Any]) -> None:
               f"{t['orientations']} orientations, step {t['angle_step']:g} deg; {t['seconds']:.1f} s)")
 
 
+def _print_measures(out: dict, bracket: str | None) -> None:
+    """The volume, its certified bracket (``bracket``: what it certifies; None: not asked), the
+    measures and the bounds of a workspace's ``out`` (the JSON object ``--json`` prints), the same
+    lines for the paper's mechanism and a general one."""
+    print(f"volume          {significant(out['volume'], 4)} units³  ({out['voxels']:,} voxels of edge "
+          f"{out['voxel_size']:g})")
+    if bracket is not None:
+        print(f"certified       {significant(out['volume_inner'], 4)} <= V <= {significant(out['volume_outer'], 4)}"
+              f"  ({bracket})")
+    if out["voxels"]:
+        # the measures that do not change with h lead (kinematics.measures, "Stable measures")
+        frag = f" ({100 * out['fragment_volume_fraction']:.2f} % of the volume)" if out["fragments"] else ""
+        print(f"pieces          {out['pieces']}  (components of >= {100 * out['piece_fraction']:g} % of the "
+              "volume; stable in h)")
+        print(f"stable_genus    {out['stable_genus']}  (tunnels or windows wider than "
+              f"{2 * out['feature_radius']:.3g}; stable in h)")
+        print(f"fragments       {out['fragments']}{frag}  (specks of thin sheets; their number grows as h "
+              "shrinks, their volume does not)")
+        why = "" if out["boundary_complete"] else f"  ({out['completeness_reason']})"
+        print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}{why}")
+        print(f"hollowness      {significant(out['hollowness'], 3)}  (underside cavity ratio)")
+        print(f"voids           {out['voids']}  (enclosed cavities; void ratio "
+              f"{significant(out['void_ratio'], 3)})")
+        print(f"voxel-level     components {out['components']}, genus {out['genus']}, boundary_closed "
+              f"{out['boundary_closed']}  (raw voxel counts: they change with h)")
+    b = out.get("bounds")
+    if b:
+        print("bounds          " + ", ".join(f"{ax} [{significant(lo, 4)}, {significant(hi, 4)}]"
+                                             for ax, lo, hi in zip("xyz", b["min"], b["max"])))
+
+
 def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     """``paraspace workspace --mechanism`` for a general mechanism: the position workspace, its measures
     and the shell (kinematics/mechanism_workspace.py)."""
@@ -208,14 +239,7 @@ def _workspace_general(ns: argparse.Namespace, mech: Any) -> int:
     else:
         print(f"mechanism       {mech.name}  (general engine; carriage samples per chain "
               f"{', '.join(str(n) for n in result.samples)})")
-        print(f"volume          {out['volume']:.6g}  ({out['voxels']} voxels of {out['voxel_size']:g}^3)")
-        if ns.bracket:
-            print(f"certified       {out['volume_inner']:.6g} <= V <= {out['volume_outer']:.6g}"
-                  "  (continuous workspace, general_bracket)")
-        for key in ("components", "voids", "void_volume", "void_ratio", "hollowness", "boundary_closed", "genus"):
-            if key in out:
-                print(f"{key:<15} {out[key]}")
-        print(f"bounds          {out.get('bounds')}")
+        _print_measures(out, "continuous workspace, general_bracket" if ns.bracket else None)
         if "limit_binding" in out:
             print(f"limits          {out['limit_binding']['summary']}")
         print(f"compute_seconds {out['compute_seconds']:.3f}")
@@ -287,31 +311,7 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
     if ns.json:
         emit_json(out)
     else:
-        print(f"volume          {significant(out['volume'], 4)} units³  ({out['voxels']:,} voxels of edge "
-              f"{out['voxel_size']:g})")
-        if ns.bracket:
-            print(f"certified       {significant(out['volume_inner'], 4)} <= V <= {significant(out['volume_outer'], 4)}"
-                  "  (continuous workspace)")
-        if out["voxels"]:
-            # the measures that do not change with h lead (kinematics.measures, "Stable measures")
-            frag = f" ({100 * out['fragment_volume_fraction']:.2f} % of the volume)" if out["fragments"] else ""
-            print(f"pieces          {out['pieces']}  (components of >= {100 * out['piece_fraction']:g} % of the "
-                  "volume; stable in h)")
-            print(f"stable_genus    {out['stable_genus']}  (tunnels or windows wider than "
-                  f"{2 * out['feature_radius']:.3g}; stable in h)")
-            print(f"fragments       {out['fragments']}{frag}  (specks of thin sheets; their number grows as h "
-                  "shrinks, their volume does not)")
-            why = "" if out["boundary_complete"] else f"  ({out['completeness_reason']})"
-            print(f"boundary        {'complete' if out['boundary_complete'] else 'incomplete'}{why}")
-            print(f"hollowness      {significant(out['hollowness'], 3)}  (underside cavity ratio)")
-            print(f"voids           {out['voids']}  (enclosed cavities; void ratio "
-                  f"{significant(out['void_ratio'], 3)})")
-            print(f"voxel-level     components {out['components']}, genus {out['genus']}, boundary_closed "
-                  f"{out['boundary_closed']}  (raw voxel counts: they change with h)")
-        b = out.get("bounds")
-        if b:
-            print("bounds          " + ", ".join(f"{ax} [{significant(lo, 4)}, {significant(hi, 4)}]"
-                                                 for ax, lo, hi in zip("xyz", b["min"], b["max"])))
+        _print_measures(out, "continuous workspace" if ns.bracket else None)
         if ns.diagnostics:
             print(f"chains          {(out.get('chain_binding') or {}).get('summary', '-')}")
             print(f"limits          {out['limit_binding']['summary']}")

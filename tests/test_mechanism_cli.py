@@ -155,3 +155,33 @@ def test_total_orientation_and_dexterity_of_a_general_mechanism(capsys) -> None:
     assert t["voxels"] == dx.voxels and 0 < t["voxels"] < data["voxels"]
     assert data["gci"] == pytest.approx(field.gci) and data["kappa_min"] == 0.3
     assert data["well_conditioned_volume"] == field.well_conditioned_volume
+
+
+def test_a_general_mechanism_prints_the_measures_as_the_paper_path_does() -> None:
+    """The text output names the same measures, in the same words, for a general mechanism as for the
+    paper's (one printer for both), and its numbers are those of ``--json``."""
+    from paraspace.app.numfmt import significant
+
+    def labels(text: str) -> list[str]:
+        return [line.split()[0] for line in text.splitlines() if line.strip()]
+
+    args = ("--voxel", "8", "--bracket", "--bracket-refine", "0")
+    text = run("workspace", "--mechanism", "gough-stewart", *args)
+    data = json.loads(run("workspace", "--mechanism", "gough-stewart", *args, "--json").stdout)
+    paper = run("workspace", "--mechanism", "paper", *args)
+    assert text.returncode == 0 and paper.returncode == 0, text.stderr + paper.stderr
+    lines = dict(line.split(None, 1) for line in text.stdout.splitlines() if line.strip())
+    shared = ["volume", "certified", "pieces", "stable_genus", "fragments", "boundary", "hollowness", "voids",
+              "voxel-level", "bounds", "compute_seconds"]
+    assert [w for w in labels(text.stdout) if w in shared] == shared
+    assert [w for w in labels(paper.stdout) if w in shared] == shared
+    assert lines["volume"].startswith(f"{significant(data['volume'], 4)} units³  ({data['voxels']:,} voxels of edge 8")
+    assert lines["certified"].startswith(f"{significant(data['volume_inner'], 4)} <= V <= "
+                                         f"{significant(data['volume_outer'], 4)}")
+    verdict = "complete" if data["boundary_complete"] else f"incomplete  ({data['completeness_reason']})"
+    assert lines["boundary"] == verdict
+    assert lines["pieces"].startswith(f"{data['pieces']} ")
+    assert lines["stable_genus"].startswith(f"{data['stable_genus']} ")
+    lo, hi = data["bounds"]["min"], data["bounds"]["max"]
+    assert lines["bounds"] == ", ".join(f"{ax} [{significant(a, 4)}, {significant(b, 4)}]"
+                                        for ax, a, b in zip("xyz", lo, hi))
