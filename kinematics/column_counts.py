@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .hull import hull_limits
+from .hull import PendingHull, hull_limits
 from .parallel import KERNEL_LOCK
 from .run_components import _paint_runs_kernel
 
@@ -102,8 +102,19 @@ def _none(shape: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
 def hull_ranges(runs: Runs, shape: tuple[int, int, int]) -> ColumnRanges | None:
     """The hull's voxels ``H`` (module docstring) of the non-empty set of the runs ``runs`` in a grid
     of ``shape``; ``None`` when its centres are coplanar (``K = W``)."""
+    return hull_ranges_of(start_hull(runs, shape, background=False), shape)
+
+
+def start_hull(runs: Runs, shape: tuple[int, int, int], background: bool = True) -> PendingHull:
+    """:func:`hull_ranges`'s hull, with qhull started in a thread of its own where ``background``
+    (:class:`kinematics.hull.PendingHull`); :func:`hull_ranges_of` finishes it."""
     kbot, ktop = column_ends(runs, shape)
-    limits = hull_limits(kbot, ktop)
+    return PendingHull(kbot, ktop, background=background)
+
+
+def hull_ranges_of(pending: PendingHull, shape: tuple[int, int, int]) -> ColumnRanges | None:
+    """:func:`hull_ranges` of a hull started by :func:`start_hull` (waits for its qhull)."""
+    limits = pending.result()
     if limits is None:
         return None
     i0, j0, zlo, zhi = limits

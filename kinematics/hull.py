@@ -29,6 +29,8 @@ a brute-force half-space test on small sets).
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from numba import njit, prange
 from scipy.spatial import ConvexHull, QhullError
@@ -234,32 +236,71 @@ def hull_limits(kbot: np.ndarray, ktop: np.ndarray, raster: bool = True,
     meets column ``(i0 + i, j0 + j)`` in ``zlo[i, j] <= z <= zhi[i, j]`` (index units; ``zlo > zhi``
     off its footprint, and every column outside the rectangle of ``zlo`` is off it); ``None`` when
     the centres are coplanar (no 3-D hull). ``raster`` and ``extreme`` are :func:`hull_mask`'s."""
-    col = ktop >= 0
-    ii, jj = np.nonzero(col)
-    pts = hull_points(kbot, ktop, extreme)
-    # the extreme points span the same affine hull as all the column ends
-    if len(pts) < 4 or np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 3:
-        return None
-    try:  # joggled for the raster (module docstring), exact for the reference
-        hull = ConvexHull(pts, qhull_options=QHULL_RASTER) if raster else ConvexHull(pts)
-    except QhullError:  # pragma: no cover - lattice points of rank 3 always have a hull
-        return None
-    # the hull's footprint lies within the occupied columns' bounding rectangle
-    i0, i1, j0, j1 = int(ii.min()), int(ii.max()) + 1, int(jj.min()), int(jj.max()) + 1
-    if raster:
-        zlo = np.empty((i1 - i0, j1 - j0))
-        zhi = np.empty((i1 - i0, j1 - j0))
-        with KERNEL_LOCK:
-            _raster_kernel(pts, hull.simplices.astype(np.int64), np.ascontiguousarray(hull.equations[:, 2]),
-                           float(i0), float(j0), zlo, zhi)
-    else:
-        # coplanar triangles of one facet share an equation: keep one (about halves the planes)
-        eq = hull.equations
-        _, first = np.unique(np.round(eq, 9), axis=0, return_index=True)
-        sub = np.ascontiguousarray(eq[np.sort(first)])
-        sub[:, 3] += sub[:, 0] * i0 + sub[:, 1] * j0  # shift to sub-rectangle indices
-        zlo, zhi = hull_columns(i1 - i0, j1 - j0, sub, 1e-7)
-    return i0, j0, zlo, zhi
+    return PendingHull(kbot, ktop, raster, extreme).result()
+
+
+class PendingHull:
+    """:func:`hull_limits` in two halves, so that qhull (which releases the GIL) can run beside the
+    caller's other work: the constructor takes the points (a compiled kernel, in the calling thread)
+    and, with ``background``, starts qhull in a thread of its own; :meth:`result` waits for it and
+    rasterises its triangles (in the calling thread: the compiled kernels stay in one thread, under
+    :data:`kinematics.parallel.KERNEL_LOCK`). The same limits either way."""
+
+    def __init__(self, kbot: np.ndarray, ktop: np.ndarray, raster: bool = True, extreme: bool = True,
+                 background: bool = False) -> None:
+        self.raster = raster
+        col = ktop >= 0
+        ii, jj = np.nonzero(col)
+        # the hull's footprint lies within the occupied columns' bounding rectangle
+        self.rect = int(ii.min()), int(ii.max()) + 1, int(jj.min()), int(jj.max()) + 1
+        self.pts = hull_points(kbot, ktop, extreme)
+        self._hull: ConvexHull | None = None
+        self._error: BaseException | None = None
+        self._thread: threading.Thread | None = None
+        # the extreme points span the same affine hull as all the column ends
+        self.flat = len(self.pts) < 4 or np.linalg.matrix_rank(self.pts - self.pts.mean(axis=0), tol=1e-9) < 3
+        if self.flat:
+            return
+        if background:
+            self._thread = threading.Thread(target=self._qhull, name="qhull", daemon=True)
+            self._thread.start()
+        else:
+            self._qhull()
+
+    def _qhull(self) -> None:
+        try:  # joggled for the raster (module docstring), exact for the reference
+            self._hull = ConvexHull(self.pts, qhull_options=QHULL_RASTER) if self.raster else ConvexHull(self.pts)
+        except QhullError:  # pragma: no cover - lattice points of rank 3 always have a hull
+            self._hull = None
+        except BaseException as exc:  # pragma: no cover - handed to the caller by result()
+            self._error = exc
+
+    def result(self) -> tuple[int, int, np.ndarray, np.ndarray] | None:
+        """:func:`hull_limits`'s value (waits for qhull)."""
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._error is not None:  # pragma: no cover - qhull failed otherwise than QhullError
+            raise self._error
+        hull = self._hull
+        if self.flat or hull is None:
+            return None
+        pts = self.pts
+        i0, i1, j0, j1 = self.rect
+        if self.raster:
+            zlo = np.empty((i1 - i0, j1 - j0))
+            zhi = np.empty((i1 - i0, j1 - j0))
+            with KERNEL_LOCK:
+                _raster_kernel(pts, hull.simplices.astype(np.int64), np.ascontiguousarray(hull.equations[:, 2]),
+                               float(i0), float(j0), zlo, zhi)
+        else:
+            # coplanar triangles of one facet share an equation: keep one (about halves the planes)
+            eq = hull.equations
+            _, first = np.unique(np.round(eq, 9), axis=0, return_index=True)
+            sub = np.ascontiguousarray(eq[np.sort(first)])
+            sub[:, 3] += sub[:, 0] * i0 + sub[:, 1] * j0  # shift to sub-rectangle indices
+            zlo, zhi = hull_columns(i1 - i0, j1 - j0, sub, 1e-7)
+        return i0, j0, zlo, zhi
 
 
 @njit(cache=True, nogil=True)

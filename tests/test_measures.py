@@ -754,6 +754,11 @@ def test_column_counts_from_the_runs_equal_the_grid_definitions():
             continue
         hull = column_counts.hull_ranges(runs, shape)
         mask = mod.hull_mask(occ, raster=False)
+        # qhull in a thread of its own (what measure_fields starts first): the same ranges
+        bg = column_counts.hull_ranges_of(column_counts.start_hull(runs, shape), shape)
+        assert (bg is None) == (hull is None)
+        if hull is not None:
+            assert bg.voxels == hull.voxels and np.array_equal(bg.lo, hull.lo) and np.array_equal(bg.hi, hull.hi)
         if hull is None:  # coplanar centres: the hull is the set, nothing under it
             assert np.linalg.matrix_rank(np.argwhere(occ) - np.argwhere(occ)[0]) < 3
             assert np.array_equal(mask, occ)
@@ -840,3 +845,40 @@ def test_box_contact_and_touched_faces_against_the_face_voxels():
                         faces.append("xyz"[a] + side)
             assert box_contact_fraction(occ) == (occ & on).sum() / on.sum(), shape
             assert touched_faces(occ) == faces, shape
+
+
+def test_the_hull_runs_beside_the_steps_before_it(monkeypatch):
+    """A full evaluation starts the hull's qhull (which releases the GIL) in a thread of its own before
+    the feature filter, so both run at once, and reads it only after: the same measures as with qhull
+    in the caller's thread at the hull step. A field that reads no hull starts none."""
+    import threading
+
+    from paraspace.kinematics import hull as hull_mod
+    from paraspace.kinematics import measures as mod
+
+    res = compute_workspace(Design(), WorkspaceSettings(voxel=6.0))
+    events: list[tuple[str, str]] = []
+    real_qhull, real_filter = hull_mod.PendingHull._qhull, mod.feature_filter
+
+    def qhull(self):
+        events.append(("qhull", threading.current_thread().name))
+        real_qhull(self)
+
+    def feature_filter(*a, **k):
+        events.append(("filter", threading.current_thread().name))
+        return real_filter(*a, **k)
+
+    monkeypatch.setattr(hull_mod.PendingHull, "_qhull", qhull)
+    monkeypatch.setattr(mod, "feature_filter", feature_filter)
+    got = measure_workspace(res)
+    main = threading.current_thread().name
+    assert events == [("qhull", "qhull"), ("filter", main)]  # qhull started first, in its own thread
+    events.clear()
+    monkeypatch.setattr(mod._Steps, "start_hull", lambda self: None)  # qhull at the hull step, in this thread
+    assert measure_workspace(res) == got
+    assert events == [("filter", main), ("qhull", main)]
+    monkeypatch.undo()
+    monkeypatch.setattr(hull_mod.PendingHull, "_qhull", qhull)
+    events.clear()
+    mod.measure_fields(res, ["components", "stable_genus"])
+    assert events == []
