@@ -723,8 +723,13 @@ class _Steps:
         if o["completeness_mode"] == "sealed":
             open_ratio = self.get("cavities")[0]
             if open_ratio > o["open_cavity_tolerance"]:
+                off = ""  # why the base cannot close it: the workspace does not reach down to it
+                if not o["on_base"]:
+                    base = "" if o["z_floor"] is None else f" at z = {o['z_floor']:.4g}"
+                    off = f"; the workspace does not reach the base{base}: its bottom is at z = " \
+                          f"{o['bottom']:.4g}"
                 reasons.append(f"underside cavity not enclosed by the workspace and the base "
-                               f"(open cavity ratio {open_ratio:.2f})")
+                               f"(open cavity ratio {open_ratio:.2f}{off})")
         return reasons
 
 
@@ -851,7 +856,9 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     r = float(feature_radius_extent * extent if feature_radius is None else feature_radius)
     steps = _Steps(crop, n, vv, dict(options, hollowness_mode=hollowness, completeness_mode=completeness,
                                      floor_closes=floor_closes, clipped=clipped, r=r, h=h,
-                                     open_cavity_tolerance=open_cavity_tolerance), cancel)
+                                     open_cavity_tolerance=open_cavity_tolerance,
+                                     on_base=floor_face is not None and floor_face in touched,
+                                     z_floor=None if z_floor is None else float(z_floor), bottom=bmin[2]), cancel)
     out: dict[str, Any] = {}
     hull_read = set(_HULL_FIELDS)
     if hollowness == "hull":

@@ -242,3 +242,17 @@ def test_stable_measures_do_not_move_with_h_outside_the_papers_designs(kw):
     assert max(vols) <= 1.01 * min(vols)
     frac = [m.fragment_volume_fraction for m in rows.values()]
     assert all(b <= a + 1e-3 for a, b in zip(frac, frac[1:])) and frac[-1] < 0.01  # 1e-3: a new speck
+
+
+@pytest.mark.parametrize("params, floats", [({"a": 10.0}, False), ({"d_s": 10.0}, True), ({"l_s": 20.0}, True)])
+def test_an_open_underside_says_whether_the_workspace_reaches_the_base(params, floats):
+    """The reason of an open underside says when the workspace does not reach the base, with the
+    base's height and the workspace's bottom (the bounds' lowest z), so that a floating workspace (a
+    short stroke, a hexapod) reads as such; one standing on the base (a = 10, feet only) does not."""
+    m = measure_workspace(compute_workspace(Design(**params), WorkspaceSettings(voxel=4.0)))
+    assert not m.boundary_complete and m.completeness_reason.startswith("underside cavity not enclosed")
+    bottom = m.bounds["min"][2]
+    assert (bottom > 0.0) == floats and (("z-" in m.touched_faces) != floats)
+    clause = f"; the workspace does not reach the base at z = 0: its bottom is at z = {bottom:.4g})"
+    assert m.completeness_reason.endswith(clause) == floats
+    assert ("does not reach the base" in m.completeness_reason) == floats
