@@ -255,7 +255,7 @@ class PendingHull:
         self.rect = int(ii.min()), int(ii.max()) + 1, int(jj.min()), int(jj.max()) + 1
         self.pts = hull_points(kbot, ktop, extreme)
         self._hull: ConvexHull | None = None
-        self._error: BaseException | None = None
+        self._error: Exception | None = None
         self._thread: threading.Thread | None = None
         # the extreme points span the same affine hull as all the column ends
         self.flat = len(self.pts) < 4 or np.linalg.matrix_rank(self.pts - self.pts.mean(axis=0), tol=1e-9) < 3
@@ -272,7 +272,7 @@ class PendingHull:
             self._hull = ConvexHull(self.pts, qhull_options=QHULL_RASTER) if self.raster else ConvexHull(self.pts)
         except QhullError:  # pragma: no cover - lattice points of rank 3 always have a hull
             self._hull = None
-        except BaseException as exc:  # pragma: no cover - handed to the caller by result()
+        except Exception as exc:  # pragma: no cover - handed to the caller by result()
             self._error = exc
 
     def result(self) -> tuple[int, int, np.ndarray, np.ndarray] | None:
