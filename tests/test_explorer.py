@@ -1046,7 +1046,9 @@ def test_no_gui_writes_after_the_browser_left(explorer, monkeypatch):
     the departed browser (viser warns about every such write), and the session knows it has left."""
     from paraspace.app.explorer import share_controller
 
-    monkeypatch.setattr(share_controller, "URL_DEBOUNCE", 1.0)
+    # the debounce never comes due by itself here: the test fires the pending timer when it wants
+    # (after the browser left), so a loaded host cannot fire it before the close
+    monkeypatch.setattr(share_controller, "URL_DEBOUNCE", 600.0)
     b = FakeBrowser(explorer, "voxel=6")
     s = b.session
     wait_idle(explorer, s)
@@ -1057,12 +1059,16 @@ def test_no_gui_writes_after_the_browser_left(explorer, monkeypatch):
         n = len(s.events)
         b.set(s.panels.pose["x"], 7.0)  # IK only (no job); the address bar follows after the debounce
         wait_for(lambda: s.state.pose.x == 7.0 and "mechanism" in [e for _, e in s.events[n:]], 5.0, "the pose")
+        pending = s.share_controller._timer
+        assert pending is not None and pending.is_alive()  # the address-bar update of x = 7 waits
+        assert "x=7" not in (s.share_controller.last_query or "")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             b.close()
             wait_for(lambda: s.client.client_id not in explorer.server.get_clients(), 5.0, "viser dropped the client")
             assert s.closed  # the session knows before its close() has run
-            time.sleep(1.5)  # the address-bar update comes due
+            pending.function(*pending.args, **pending.kwargs)  # the address-bar update comes due
+            pending.cancel()
         dead = [str(w.message) for w in caught if "closed connection" in str(w.message)]
         assert dead == [] and "x=7" not in (s.share_controller.last_query or "")
     finally:
