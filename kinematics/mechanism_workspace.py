@@ -75,6 +75,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
+from .bracket import VolumeBracket
 from .design import Design, ParameterError
 from .feasibility import cone_interval
 from .grid import GridSpec
@@ -687,7 +688,7 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     out = np.zeros(grid.shape, np.bool_)
-    sub = rep.sub(0.0, 1.0)
+    sub = rep.sub(0.0, 0.5 if settings.bracket else 1.0)  # the bracket reports the second half
     if settings.method == "blocks":
         m = CUBE
         r = math.sqrt(3.0) * 0.5 * np.array([m - 1, m // 2 - 1], float) * grid.h  # levels: edge m, m/2
@@ -739,10 +740,8 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
         interference_undecided=undecided)
     if settings.bracket:
         t1 = time.perf_counter()
-        check(cancel)
-        with KERNEL_LOCK:
-            br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor,
-                                 settings.bracket_refine)
+        br = general_bracket(mech, tables, grid, settings.eta_step, length_step, settings.z_floor,
+                             settings.bracket_refine, rep.sub(0.5, 1.0), cancel)
         res.volume_inner, res.volume_outer = br.volume_inner, br.volume_outer
         res.bracket_seconds = time.perf_counter() - t1
     rep(1.0, "voxels computed")
@@ -928,6 +927,7 @@ class GeneralBracket:
     inside: int
     boundary: int
     grid: GridSpec
+    boundary_left: int = 0  # boundary cubes of the last refinement level (``boundary`` without one)
 
 
 def chain_slack(chain: Chain, eta_step: float, length_step: float) -> float:
@@ -1023,14 +1023,32 @@ def _bracket_thresholds(delta: float, slack: np.ndarray, tables: KernelTables, l
     return (delta_t, e_out, lmin2t, lmax2t, np.repeat(lmin2r[None], n, axis=0), np.repeat(lmax2r[None], n, axis=0))
 
 
+#: Voxels of the bracket's grid per launch of its cube pass, and half cubes per launch of its
+#: refinement: each launch holds :data:`~kinematics.parallel.KERNEL_LOCK` for a fraction of a second,
+#: and the cancel token is checked between launches.
+BRACKET_VOXELS_PER_CALL = 1 << 18
+BRACKET_CUBES_PER_CALL = 1 << 16
+
+
 def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_step: float, length_step: float,
-                    z_floor: float, refine: int = 0) -> GeneralBracket:
+                    z_floor: float, refine: int = 0, progress: ProgressFn | None = None,
+                    cancel: CancelToken = None) -> GeneralBracket:
     """The bracket of the module docstring around the workspace computed on ``grid``; ``refine``
     halvings of the boundary cubes (each child cube classified by the same tests with its own
-    half-diagonal, the same proof: ``volume_inner`` grows and ``volume_outer`` shrinks)."""
+    half-diagonal, the same proof: ``volume_inner`` grows and ``volume_outer`` shrinks).
+
+    Work and memory are bounded per step: the cube pass runs in slabs of about
+    :data:`BRACKET_VOXELS_PER_CALL` voxels, and the refinement depth first, :data:`BRACKET_CUBES_PER_CALL`
+    half cubes at a time (a level's boundary children are refined before the next chunk of its
+    parents is cut, so at most ``refine`` chunks are held at once, where a level at a time would hold
+    ``8^refine`` children of every boundary cube). Each launch holds ``KERNEL_LOCK`` on its own; the
+    cancel token is checked between them (raises :class:`~kinematics.progress.Cancelled`). The counts
+    are summed per level and turned into volumes in the order of a level at a time, so the bracket
+    does not depend on the chunk sizes (tested)."""
     if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
         raise ParameterError("bracket", True, "not available with joint cones (u_cone, s_cone) on a general "
                                               "mechanism")
+    rep = Reporter(progress)
     h = grid.h
     slack = np.array([chain_slack(c, eta_step, length_step) for c in mech.chains])
     pad = int(math.ceil(float(slack.max(initial=0.0)) / h)) + 1
@@ -1042,8 +1060,15 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tables.base).max(initial=0.0)))
     legs_chain = np.array([c for c, _, _ in mech.legs])
     state = np.zeros(big.shape, np.uint8)
-    _bracket_kernel(xs, ys, zs, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * h, slack, tables, legs_chain, eps),
-                    *tables.args(), state)
+    cube_args = (*_bracket_thresholds(math.sqrt(3.0) * 0.5 * h, slack, tables, legs_chain, eps), *tables.args())
+    nx, ny, nz = big.shape
+    slab = max(1, BRACKET_VOXELS_PER_CALL // max(ny * nz, 1))
+    stage = rep.sub(0.0, 0.5 if refine > 0 else 1.0)
+    for a in range(0, nx, slab):
+        stage(a / nx, f"certified bracket: classifying the cubes, {100 * a / nx:.0f} %")
+        check(cancel)
+        with KERNEL_LOCK:
+            _bracket_kernel(xs[a:a + slab], ys, zs, *cube_args, state[a:a + slab])
     inside = int((state == 1).sum())
     boundary = int((state == 2).sum())
     vv = h ** 3
@@ -1054,20 +1079,91 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     if big.lo[2] > z_floor + 1e-9:  # the bottom is not the floor: W must not cross it either
         rim[:, :, 0] = True
     contained = not np.any(state[rim] != 0)
-    v_in = inside * vv
     idx = np.argwhere(state == 2)
+    del state, rim
     centres = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1) if len(idx) else np.zeros((0, 3))
-    edge = h
+    # per level: the half cubes found inside and those left on the boundary (the next level's parents)
+    found = [0] * refine
+    kept = [0] * refine
+    level_args = [(*_bracket_thresholds(math.sqrt(3.0) * 0.25 * h / 2 ** k, slack, tables, legs_chain, eps),
+                   *tables.args()) for k in range(refine)]
     offsets = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
-    for _ in range(refine):
-        if not len(centres):
+    per = max(1, BRACKET_CUBES_PER_CALL // 8)  # parents per launch
+    refining = rep.sub(0.5, 1.0)
+
+    def split(parents: np.ndarray, level: int, span: tuple[float, float]) -> None:
+        """Classify the 8 half cubes of each boundary cube of edge ``h / 2^level`` in ``parents`` and
+        refine the boundary ones further (depth first); ``span``: the share of the refinement this call
+        covers (for the progress, reported at every launch)."""
+        quarter = 0.25 * h / 2 ** level  # a child's centre is a quarter of the parent's edge off its centre
+        n = len(parents)
+        for s in range(0, n, per):
+            done = span[0] + (span[1] - span[0]) * s / n
+            refining(done, f"certified bracket: refining {len(centres):,} boundary cubes, {100 * done:.0f} %")
+            check(cancel)
+            kids = np.ascontiguousarray((parents[s:s + per, None, :] + quarter * offsets[None]).reshape(-1, 3))
+            st = np.zeros(len(kids), np.uint8)
+            with KERNEL_LOCK:
+                _bracket_points_kernel(kids, *level_args[level], st)
+            found[level] += int(np.count_nonzero(st == 1))
+            rest = kids[st == 2]
+            kept[level] += len(rest)
+            if level + 1 < refine:
+                split(rest, level + 1, (done, span[0] + (span[1] - span[0]) * min(s + per, n) / n))
+
+    if refine > 0 and len(centres):
+        split(centres, 0, (0.0, 1.0))
+    v_in = inside * vv
+    edge = h
+    n_par = len(centres)
+    for k in range(refine):  # the sums of a level at a time
+        if not n_par:
             break
         edge *= 0.5
-        kids = np.ascontiguousarray((centres[:, None, :] + 0.5 * edge * offsets[None]).reshape(-1, 3))
-        st = np.zeros(len(kids), np.uint8)
-        _bracket_points_kernel(kids, *_bracket_thresholds(math.sqrt(3.0) * 0.5 * edge, slack, tables, legs_chain,
-                                                          eps), *tables.args(), st)
-        v_in += int((st == 1).sum()) * edge ** 3
-        centres = kids[st == 2]
-    v_out = v_in + len(centres) * edge ** 3
-    return GeneralBracket(v_in, v_out if contained else math.inf, inside, boundary, big)
+        v_in += found[k] * edge ** 3
+        n_par = kept[k]
+    v_out = v_in + n_par * edge ** 3
+    return GeneralBracket(v_in, v_out if contained else math.inf, inside, boundary, big, n_par)
+
+
+def bracket_unavailable(mech: Mechanism) -> str | None:
+    """Why :func:`general_bracket` does not apply to ``mech`` (the sentence after "certified
+    bracket"), or ``None`` when it does."""
+    if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
+        return "not available with joint cones (u_cone, s_cone): their axes turn with the carriage's joints"
+    if any(leg.diameter > 0.0 for _, _, leg in mech.legs):
+        return "not available with leg diameters (the bracket does not model leg interference)"
+    return None
+
+
+def bracket_caveat(mech: Mechanism) -> str | None:
+    """What the bracket of ``mech`` cannot show, or ``None``: with a leg of fixed length (``l_min =
+    l_max``, a 6-PSS rod) no cube passes the inside test (its limits tightened by the cube's
+    half-diagonal are empty), so the inner bound stays 0 at every refinement."""
+    if any(leg.length[1] - leg.length[0] <= 0.0 for _, _, leg in mech.legs):
+        return ("inner bound 0 by construction: a leg of fixed length (l_min = l_max) leaves no margin for the "
+                "inside test")
+    return None
+
+
+def general_bracket_of(result: MechanismWorkspaceResult, refine: int | None = None,
+                       progress: ProgressFn | None = None, cancel: CancelToken = None) -> VolumeBracket:
+    """:func:`general_bracket` around a computed general workspace (its grid, orientation, samples
+    and floor; ``refine``: default the settings' ``bracket_refine``), as the paper path's
+    :class:`~kinematics.bracket.VolumeBracket` (``cubes_inside``, ``cubes_boundary``: the bracket's
+    grid, which is the workspace's grown by the arc slack).
+
+    Raises:
+        ParameterError: on ``bracket`` where :func:`bracket_unavailable` gives a reason.
+    """
+    mech = result.mechanism
+    assert mech is not None, "a general mechanism's result"
+    why = bracket_unavailable(mech)
+    if why is not None:
+        raise ParameterError("bracket", True, why)
+    s = result.settings
+    r = s.bracket_refine if refine is None else int(refine)
+    tables = kernel_tables(mech, platform_rotation(mech, s.orientation), s.eta_step, result.length_step)
+    br = general_bracket(mech, tables, result.grid, s.eta_step, result.length_step, s.z_floor, r, progress, cancel)
+    return VolumeBracket(volume_inner=br.volume_inner, volume_outer=br.volume_outer, cubes_inside=br.inside,
+                         cubes_boundary=br.boundary, voxel=result.grid.h, refine=r, boundary_left=br.boundary_left)

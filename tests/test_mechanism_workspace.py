@@ -23,6 +23,7 @@ from paraspace.kinematics.mechanism import carriage_samples, parse_mechanism, re
 from paraspace.kinematics.mechanism_workspace import (
     compute_general_workspace,
     compute_mechanism_workspace,
+    kernel_tables,
     mechanism_ik,
     paper_design,
     platform_rotation,
@@ -450,6 +451,109 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
     samples = {"revolute": 121, "prismatic": 1001}
     assert np.all(reachable_brute_force(mech, np.array(inside_pts), rot, samples=samples))
     assert not np.any(reachable_brute_force(mech, np.array(outside_pts), rot, samples=samples))
+
+
+def _level_at_a_time(mech, tabs, big, refine):
+    """The bracket's refinement as it was before it was chunked: every boundary cube of a level at
+    once (``8^refine`` children of each held together), the volumes summed a level at a time."""
+    from paraspace.kinematics.mechanism_workspace import _BOUND_EPS, _bracket_points_kernel, chain_slack
+
+    lmin, lmax = np.sqrt(tabs.lmin2), np.sqrt(tabs.lmax2)
+    eps = _BOUND_EPS * (1.0 + float(lmax.max()) + float(np.abs(tabs.base).max(initial=0.0)))
+    slack = np.array([chain_slack(c, 0.5, 1.0) for c in mech.chains])
+    e_leg_of = [c for c, _, _ in mech.legs]
+    rows = (len(mech.chains), len(lmin))
+    state = _states(mech, tabs, big)
+    xs, ys, zs = big.axes()
+    idx = np.argwhere(state == 2)
+    centres = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+    v_in, edge = float(np.count_nonzero(state == 1)) * big.h ** 3, big.h
+    offsets = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+    for _ in range(refine):
+        edge *= 0.5
+        kids = np.ascontiguousarray((centres[:, None, :] + 0.5 * edge * offsets[None]).reshape(-1, 3))
+        delta = math.sqrt(3.0) * 0.5 * edge
+        e_leg = (delta + slack + eps)[e_leg_of]
+        st = np.zeros(len(kids), np.uint8)
+        _bracket_points_kernel(kids, delta + eps, delta + slack + eps, (lmin + delta + eps) ** 2,
+                               np.where(lmax - delta - eps > 0, (lmax - delta - eps) ** 2, -1.0),
+                               np.ascontiguousarray(np.broadcast_to(np.where(lmin - e_leg > 0, lmin - e_leg, 0.0) ** 2,
+                                                                    rows)),
+                               np.ascontiguousarray(np.broadcast_to((lmax + e_leg) ** 2, rows)), *tabs.args(), st)
+        v_in += int(np.count_nonzero(st == 1)) * edge ** 3
+        centres = kids[st == 2]
+    return v_in, v_in + len(centres) * edge ** 3
+
+
+def test_the_general_bracket_works_in_bounded_launches_and_stops_between_them(monkeypatch) -> None:
+    """A bracket is a background job's step (the explorer's, the API's): its work goes in launches of
+    at most ``BRACKET_VOXELS_PER_CALL`` voxels and ``BRACKET_CUBES_PER_CALL`` half cubes, each holding
+    the kernel lock on its own, with a progress report and a cancel check before each. Before, one
+    launch classified the whole grid, every refinement level was cut at once (``8^refine`` children of
+    each boundary cube in memory) and the caller held the kernel lock throughout: a REST request for
+    6-pss at voxel 2, refine 3 held every kernel of the server for 79-173 s (2-core machine) and could
+    not be cancelled.
+    The bracket is that of the refinement a level at a time, in any launch size."""
+    import threading
+
+    from paraspace.kinematics import mechanism_workspace as mw
+    from paraspace.kinematics.progress import Cancelled
+
+    mech = gough_stewart()
+    rot = platform_rotation(mech, (0.0, 0.0, 0.0))
+    tabs = kernel_tables(mech, rot)
+    grid = compute_general_workspace(mech, WorkspaceSettings(voxel=H)).grid
+    default = mw.general_bracket(mech, tabs, grid, 0.5, 1.0, 0.0, 3)
+    assert (default.volume_inner, default.volume_outer) == _level_at_a_time(mech, tabs, default.grid, 3)
+
+    launches: list[tuple[str, int]] = []
+    held = []
+
+    class Lock:  # the kernel lock, counting: is it held, and for which launch
+        def __enter__(self):
+            held.append(True)
+
+        def __exit__(self, *exc):
+            held.pop()
+
+    real_cubes, real_points = mw._bracket_kernel, mw._bracket_points_kernel
+    monkeypatch.setattr(mw, "KERNEL_LOCK", Lock())
+    monkeypatch.setattr(mw, "_bracket_kernel", lambda xs, ys, zs, *a: (
+        launches.append(("cubes", len(xs) * len(ys) * len(zs))), real_cubes(xs, ys, zs, *a)))
+    monkeypatch.setattr(mw, "_bracket_points_kernel", lambda kids, *a: (
+        launches.append(("halves", len(kids))), real_points(kids, *a)))
+    monkeypatch.setattr(mw, "BRACKET_VOXELS_PER_CALL", 4000)
+    monkeypatch.setattr(mw, "BRACKET_CUBES_PER_CALL", 64)
+    reports = []
+
+    def progress(fraction, message):
+        assert not held, "a progress report (and the cancel check after it) while a launch holds the lock"
+        reports.append((fraction, message, len(launches)))
+
+    small = mw.general_bracket(mech, tabs, grid, 0.5, 1.0, 0.0, 3, progress)
+    assert small == default
+    cubes = [n for kind, n in launches if kind == "cubes"]
+    halves = [n for kind, n in launches if kind == "halves"]
+    assert sum(cubes) == default.grid.size and max(cubes) <= 4000 < sum(cubes)
+    assert max(halves) <= 64 and len(halves) > 100
+    assert len(reports) == len(launches)  # one report before each launch
+    assert [f for f, _, _ in reports] == sorted(f for f, _, _ in reports) and reports[-1][0] < 1.0
+    assert "classifying the cubes" in reports[0][1]
+    assert f"refining {default.boundary:,} boundary cubes" in reports[-1][1]
+
+    # cancelled at a report half way through the refinement: no launch after it
+    launches.clear()
+    cancel = threading.Event()
+    at = []
+
+    def stop(fraction, message):
+        if "refining" in message and fraction >= 0.5 and not cancel.is_set():
+            cancel.set()
+            at.append(len(launches))
+
+    with pytest.raises(Cancelled):
+        mw.general_bracket(mech, tabs, grid, 0.5, 1.0, 0.0, 3, stop, cancel)
+    assert at and len(launches) == at[0]
 
 
 def _states(mech, tabs, grid):
