@@ -28,7 +28,7 @@ DEFINITIONS: dict[str, str] = {
     "bracket": "Certified bracket V_in ≤ V ≤ V_out of the continuous workspace's volume: V_in counts "
                "blocks proven reachable everywhere (a Lipschitz bound on the leg lengths), V_out "
                "excludes only blocks proven unreachable everywhere; the true volume lies between them "
-               "(kinematics.bracket).",
+               "(kinematics.bracket; a general mechanism's: kinematics.mechanism_workspace.general_bracket).",
     "voids": "Enclosed voids: unreachable regions surrounded by the workspace on every side (not open "
              "to the outside or to a face of the box); the percentage is their volume over V + their "
              "volume.",

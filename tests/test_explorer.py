@@ -766,7 +766,7 @@ def test_a_failed_bracket_is_named_in_the_numbers(explorer, browsers, monkeypatc
     with the reason instead of leaving the line out without a word; the volume is still shown."""
     from paraspace.app.explorer import workspace_controller
 
-    def broken(result, cancel=None):
+    def broken(result, cancel=None, progress=None):
         raise RuntimeError("bracket kernel missing")
 
     monkeypatch.setattr(workspace_controller, "bracket", broken)

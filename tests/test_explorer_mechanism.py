@@ -8,6 +8,7 @@ round-trip. Coarse voxels (h = 6) keep them cheap.
 
 from __future__ import annotations
 
+import json
 import urllib.parse
 
 import numpy as np
@@ -79,8 +80,19 @@ def test_selecting_a_preset_shows_the_volume_of_compute_mechanism_workspace(expl
     assert folder.visible and not s.panels.design["a"].visible
     for p in preset_params(name):
         assert s.panels.mechanism.sliders[name][p.name].value == p.default
-    # the panels on the paper's design say so in words
-    assert f"not for the {name} mechanism yet" in s.panels.numbers.content.replace("\\", "")
+    # the certified bracket of the mechanism's own workspace, as computed directly (its proof is tested
+    # against the brute force in test_mechanism_workspace.py); a fixed-length leg's caveat said
+    from paraspace.kinematics.mechanism_workspace import bracket_caveat, general_bracket_of
+
+    direct = general_bracket_of(compute_mechanism_workspace(preset(name), WorkspaceSettings(voxel=H)), refine=1)
+    line = f"{fmt(direct.volume_inner, 4)} ≤ V ≤ {fmt(direct.volume_outer, 4)} (continuous workspace, units³)"
+    wait_for(lambda: line in s.panels.numbers.content.replace("\\", ""), 120, "the mechanism's bracket")
+    assert direct.volume_inner <= s.bundle.result.volume <= direct.volume_outer
+    caveat = bracket_caveat(preset(name))
+    assert (caveat is not None) == (name == "6-pss") == (direct.volume_inner == 0)
+    assert caveat is None or caveat in s.panels.numbers.content.replace("\\", "")
+    assert "bracket not for" not in s.panels.numbers.content.replace("\\", "")
+    assert f"[{fmt(direct.volume_inner, 4)}, {fmt(direct.volume_outer, 4)}]" in s.panels.summary.content
     # the orientation maps and TI are the mechanism's own (its symmetry lines), as computed directly
     ori = wait_for(lambda: s.ctx.orientation if ori_current(s.state, s.ctx.orientation) else None, 120,
                    "the mechanism's orientation maps")
@@ -157,6 +169,34 @@ def test_an_upload_computes_it_and_its_link_restores_it(explorer, browsers):
     assert s2.url_messages == [] and s2.state == s.state and s2.state.pose.z == 140.0
     wait_mechanism(explorer, s2)
     assert s2.bundle.result.volume == s.bundle.result.volume
+
+
+@pytest.mark.parametrize("extra, why", [
+    ({"u_cone": {"axis": [0.0, 0.0, 1.0], "angle": 60.0}}, "not available with joint cones"),
+    ({"diameter": 4.0}, "not available with leg diameters"),
+])
+def test_a_mechanism_without_a_bracket_says_why(explorer, browsers, extra, why):
+    """An uploaded description with cones or leg diameters (which the bracket's proof does not cover)
+    gets its volume and the reason in place of the certified bracket, and no bracket job."""
+    data = preset("gough-stewart").to_dict()
+    for chain in data["chains"]:
+        for leg in chain["legs"]:
+            leg.update(extra)
+    b = browsers(f"voxel={H:g}&z=140")
+    s = b.session
+    wait_idle(explorer, s, 240)
+
+    def bracket_jobs():
+        return sum(j.client == s.job_client and j.kind == "bracket" for j in explorer.jobs.jobs())
+
+    wait_for(lambda: "(continuous workspace, units³)" in s.panels.numbers.content, 120, "the paper design's bracket")
+    before = bracket_jobs()
+    assert s.mechanism_controller.apply_upload("coned.json", json.dumps(data).encode())
+    wait_mechanism(explorer, s)
+    text = s.panels.numbers.content.replace("\\", "")
+    wait_for(lambda: f"</span> bracket {why}" in s.panels.numbers.content.replace("\\", ""), 30, "the reason")
+    assert s.bundle.result.volume > 0 and "(continuous workspace, units³)" not in text
+    assert bracket_jobs() == before  # none started for the mechanism
 
 
 def test_preset_links_round_trip_and_bad_parameters_are_named():

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from paraspace.kinematics.mechanism_workspace import bracket_caveat
+
 from .. import figures
 from ..glossary import hover
 from ..numfmt import significant
@@ -22,6 +24,7 @@ from ..urlstate import ExplorerState
 from .session import SessionContext, ShellInfo
 
 if TYPE_CHECKING:  # pragma: no cover - types only
+    from paraspace.kinematics.bracket import VolumeBracket
     from paraspace.kinematics.joints import Joints
     from paraspace.kinematics.orientation import OrientationResult
     from paraspace.kinematics.redundancy import Resolution
@@ -37,6 +40,14 @@ def fmt(v: float | None, digits: int = 4) -> str:
     except TypeError:
         return str(v)
     return significant(float(v), digits)
+
+
+def bracket_text(br: VolumeBracket) -> str:
+    """``inner ≤ V ≤ outer``; an outer bound of ``inf`` (a general mechanism's workspace may leave the
+    bracket's grid) is said in words rather than shown as ``-``."""
+    if not np.isfinite(br.volume_outer):
+        return f"{fmt(br.volume_inner, 4)} ≤ V (no outer bound: the workspace may reach beyond the bracket's grid)"
+    return f"{fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)}"
 
 
 def joints_text(j: Joints) -> str:
@@ -87,11 +98,10 @@ def numbers_markdown(s: ExplorerState, info: ShellInfo | None, res: Resolution |
         kind = "preview" if info.preview else "full"
         lines.append(f"**{hover('Volume', 'volume')}** {fmt(info.volume, 4)} units³  ({kind}, h = {info.h:g})")
         br = info.bracket
-        if s.mechanism is not None and info.volume > 0:
-            lines.append(f"{hover('certified', 'bracket')} bracket: {md_text(s.mechanism.not_yet())}  ")
         if br is not None and info.volume > 0:
-            lines.append(f"{hover('certified', 'bracket')}: {fmt(br.volume_inner, 4)} ≤ V ≤ {fmt(br.volume_outer, 4)} "
-                         "(continuous workspace, units³)  ")
+            caveat = bracket_caveat(s.mechanism.mechanism()) if s.mechanism is not None else None
+            lines.append(f"{hover('certified', 'bracket')}: {bracket_text(br)} (continuous workspace, units³)"
+                         + (f"; {md_text(caveat)}" if caveat else "") + "  ")
         elif br is None and info.bracket_note is not None and info.volume > 0:
             lines.append(f"{hover('certified', 'bracket')} bracket {md_text(info.bracket_note)}  ")
         if info.volume == 0:

@@ -27,7 +27,7 @@ from .numbers_panel import NumbersPanel
 from .orientation_controller import OrientationController
 from .session import PROGRESS_INTERVAL, SessionContext, ShellInfo
 from .view_controller import ViewController
-from .workspace_job import ShellBundle, bracket, workspace_job, ws_key, ws_settings
+from .workspace_job import ShellBundle, bracket, bracket_unavailable, workspace_job, ws_key, ws_settings
 
 
 class WorkspaceController:
@@ -146,8 +146,12 @@ class WorkspaceController:
             elif job.status == "failed":  # the panel says so, instead of leaving the line out
                 self._note_bracket(gen, f"failed: {job.error}")
 
+        why = bracket_unavailable(bundle.result)
+        if why is not None:  # leg interference, or a mechanism's cones: the Numbers say why
+            self._note_bracket(gen, why)
+            return
         try:
-            job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel), kind="bracket",
+            job = ctx.jobs.submit(lambda progress, cancel: bracket(bundle.result, cancel, progress), kind="bracket",
                                   client=ctx.job_client, supersede=True, on_done=done)
         except (LimitExceeded, RuntimeError) as exc:  # the server's total limit, or shut down: say so
             self._note_bracket(gen, f"not started: {exc}")

@@ -17,7 +17,7 @@ import dataclasses
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -110,14 +110,36 @@ def measure(result: WorkspaceResult, cancel: threading.Event | None = None) -> W
     return measure_workspace(result, cancel=cancel)
 
 
-def bracket(result: WorkspaceResult, cancel: threading.Event | None = None) -> VolumeBracket | None:
-    """The certified bracket shown in the numbers panel (``None`` with leg interference, which the
-    bracket does not model). Raises :class:`~kinematics.progress.Cancelled` once ``cancel`` is set."""
+def bracket_unavailable(result: WorkspaceResult) -> str | None:
+    """Why the numbers panel shows no certified bracket for ``result`` (the words after "certified
+    bracket"), or ``None`` when :func:`bracket` computes one."""
+    if result.settings.joints.min_distance > 0.0:
+        return "not available with leg interference (the bracket does not model it)"
+    mech = getattr(result, "mechanism", None)
+    if result.design is None and mech is not None:  # a general mechanism
+        from paraspace.kinematics.mechanism_workspace import bracket_unavailable as general_unavailable
+
+        return general_unavailable(mech)
+    return None
+
+
+def bracket(result: WorkspaceResult, cancel: threading.Event | None = None,
+            progress: Progress | None = None) -> VolumeBracket | None:
+    """The certified bracket shown in the numbers panel: the paper engine's
+    (:func:`kinematics.bracket.bracket_of`) or a general mechanism's
+    (:func:`kinematics.mechanism_workspace.general_bracket_of`); ``None`` where
+    :func:`bracket_unavailable` gives a reason. Raises :class:`~kinematics.progress.Cancelled` once
+    ``cancel`` is set (both check it between their launches)."""
+    if bracket_unavailable(result) is not None:
+        return None
+    if result.design is None:
+        from paraspace.kinematics.mechanism_workspace import MechanismWorkspaceResult, general_bracket_of
+
+        return general_bracket_of(cast(MechanismWorkspaceResult, result), refine=EXPLORER_BRACKET_REFINE,
+                                  progress=progress, cancel=cancel)
     from paraspace.kinematics.bracket import bracket_of
 
-    if result.settings.joints.min_distance > 0.0 or result.design is None:  # None: a general mechanism
-        return None
-    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, cancel=cancel)
+    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, progress=progress, cancel=cancel)
 
 
 def ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
