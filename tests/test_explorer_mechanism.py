@@ -357,6 +357,41 @@ def test_a_selection_arriving_while_stop_rewrites_the_controls_is_applied(explor
     assert s.bundle.mechanism.preset == "6-pss" and sel.value == "6-pss"
 
 
+def test_a_selection_recorded_while_the_first_ones_callback_runs_is_applied(explorer, browsers, monkeypatch):
+    """This session's CI (a two-core machine under load) once lost the second of two quick selections
+    (gough-stewart, then 6-pss; the state stayed on gough-stewart): the first callback read the
+    recorded choice and cleared it in two steps, and the second message's record fell between them.
+    The callback now takes the choice and clears it in one locked step; here the first callback is
+    held just after its take while the second selection is recorded."""
+    import threading
+
+    b = browsers(f"voxel={H:g}&mech=6-pups")
+    s = b.session
+    wait_mechanism(explorer, s)
+    ctl = s.mechanism_controller
+    real, first = ctl._take_choice, []
+    taken, go = threading.Event(), threading.Event()
+
+    def take():
+        choice = real()
+        if not first:
+            first.append(choice)
+            taken.set()
+            assert go.wait(30)
+        return choice
+
+    monkeypatch.setattr(ctl, "_take_choice", take)
+    sel = s.panels.mechanism.selector
+    b.set(sel, "gough-stewart")
+    assert taken.wait(30) and first == ["gough-stewart"]
+    b.set(sel, "6-pss")
+    wait_for(lambda: ctl.chosen == "6-pss", 30, "the second selection recorded")
+    go.set()
+    wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == "6-pss", 30, "6-pss")
+    wait_mechanism(explorer, s)
+    assert s.bundle.mechanism.preset == "6-pss" and sel.value == "6-pss"
+
+
 def test_a_file_too_large_for_a_link_is_used_but_not_put_in_the_link(explorer, browsers, monkeypatch):
     from paraspace.app.explorer import mechanism_panel
 

@@ -19,6 +19,7 @@ selected (:class:`NotYetNotes`: "not for the 6-pups mechanism yet") and their bu
 from __future__ import annotations
 
 import dataclasses
+import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -197,6 +198,8 @@ class MechanismController:
             else None
         #: the selector's value of the user's newest message, until a callback applies it
         self.chosen: str | None = None
+        #: guards ``chosen``: a message's record (the event loop) and a callback's take (a thread)
+        self._chosen_lock = threading.Lock()
 
     @property
     def controls(self) -> MechanismControls:
@@ -211,7 +214,8 @@ class MechanismController:
             # value, in the order of the messages; the thread callback runs later, when a programmatic
             # write (Stop's controls, on another thread) may have replaced the value in between
             if event.client is not None:
-                self.chosen = str(event.target.value)
+                with self._chosen_lock:
+                    self.chosen = str(event.target.value)
 
         c.selector.on_update(record)
         c.selector.on_update(cb(self.on_select))
@@ -264,8 +268,9 @@ class MechanismController:
         with self.ctx.input_lock:
             # the user's newest choice (see wire); else the selector's value, which under this lock is
             # the state's once a callback applied a choice (or a server-side assignment's)
-            choice = self.chosen if self.chosen is not None else str(self.controls.selector.value)
-            self.chosen = None
+            choice = self._take_choice()
+            if choice is None:
+                choice = str(self.controls.selector.value)
             if choice == PAPER:
                 self.apply(None)
             elif choice == FILE_OPTION:
@@ -273,6 +278,14 @@ class MechanismController:
                     self.apply(self.uploaded)
             else:
                 self._apply_preset(choice)
+
+    def _take_choice(self) -> str | None:
+        """The newest recorded choice, cleared in the same step: a message recorded between a read and
+        a clear would be lost (a second selection arriving while the first one's callback ran; the
+        first then wrote its own value into the selector, which the second callback applied)."""
+        with self._chosen_lock:
+            choice, self.chosen = self.chosen, None
+        return choice
 
     def on_param(self) -> None:
         """A preset parameter's slider moved: the preset with the sliders' values."""
