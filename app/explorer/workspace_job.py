@@ -138,8 +138,9 @@ def bracket(result: WorkspaceResult, cancel: threading.Event | None = None,
         return general_bracket_of(cast(MechanismWorkspaceResult, result), refine=EXPLORER_BRACKET_REFINE,
                                   progress=progress, cancel=cancel)
     from paraspace.kinematics.bracket import bracket_of
+    from paraspace.kinematics.progress import Reporter
 
-    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, progress=progress, cancel=cancel)
+    return bracket_of(result, refine=EXPLORER_BRACKET_REFINE, progress=Reporter(progress), cancel=cancel)
 
 
 def ws_settings(s: ExplorerState, voxel: float) -> WorkspaceSettings:
