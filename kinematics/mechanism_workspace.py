@@ -894,6 +894,15 @@ def mechanism_ik(mech: Mechanism, position: Sequence[float] | np.ndarray,
 #   :mod:`kinematics.mechanism_workspace`) with every leg in ``[lmin + delta + eps, lmax - delta - eps]``
 #   at ``Pc``: leg lengths are 1-Lipschitz in the position, so the same carriage values serve every
 #   point of the cube.
+# * **inside, a chain of one leg** (:func:`_single_leg_inside`; a 6-PSS rod of fixed length, where the
+#   test above never passes: ``lmin = lmax`` leaves no margin): at a sample, the exact joint moves the
+#   leg's base joint along a line, ``D(s) = D_k + s w`` with ``s`` in ``[s_lo, s_hi]``, so the leg's
+#   length ``f(s) = |B - D(s)| = sqrt((p - s)^2 + q)`` (``p = (B - D_k) . w``, ``q`` the squared distance
+#   of ``B`` from the line) takes every value of ``[m, M]``, ``m = min f`` (the distance of ``B`` from the
+#   segment), ``M = max f`` (at an end), by continuity. ``m`` and ``M`` are 1-Lipschitz in the position
+#   (a minimum and a maximum of 1-Lipschitz functions), so when ``[m + delta + eps, M - delta - eps]``
+#   at ``Pc`` meets ``[lmin, lmax]``, every point ``P`` of the cube has ``[m(P), M(P)]`` containing that
+#   meet: some ``s`` (depending on ``P``) puts the leg in its range, at this same sample.
 # * **outside**: no sample admits an ``s`` with the legs in ``[lmin - e, lmax + e]``, ``e = delta +
 #   e_c + eps``, or the chain's balls grown by ``e`` reject ``Pc``. ``e_c`` bounds how far a base
 #   joint moves between a carriage value and the nearest sample: the sum over the chain's sampled
@@ -949,6 +958,28 @@ def chain_slack(chain: Chain, eta_step: float, length_step: float) -> float:
     return slack
 
 
+@njit(cache=True)
+def _single_leg_inside(px, py, pz, c, k0, nk, l0, s_lo, s_hi, w, base, plat, lmin2, lmax2, shift):
+    """The one-leg inside test of the comment above: some sample ``k`` of chain ``c`` (one leg, ``j``)
+    has ``[m + shift, M - shift]`` meeting ``[lmin, lmax]`` at ``P``, where ``[m, M]`` is the range of
+    the leg's length as the exact joint runs over ``[s_lo, s_hi]``."""
+    j = l0[c]
+    lmin, lmax = math.sqrt(lmin2[j]), math.sqrt(lmax2[j])
+    lo, hi = s_lo[c], s_hi[c]
+    for kk in range(nk[c]):
+        k = k0[c] + kk
+        vx = px + plat[j, 0] - base[k, j, 0]
+        vy = py + plat[j, 1] - base[k, j, 1]
+        vz = pz + plat[j, 2] - base[k, j, 2]
+        p = vx * w[k, 0] + vy * w[k, 1] + vz * w[k, 2]
+        q = max(vx * vx + vy * vy + vz * vz - p * p, 0.0)
+        near = 0.0 if lo <= p <= hi else min(abs(p - lo), abs(p - hi))
+        far = max(abs(p - lo), abs(p - hi))
+        if max(math.sqrt(q + near * near) + shift, lmin) <= min(math.sqrt(q + far * far) - shift, lmax):
+            return True
+    return False
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, k0, nk, l0, nl, s_lo, s_hi, w,
                     base, u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
@@ -974,7 +1005,9 @@ def _bracket_kernel(xs, ys, zs, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, 
                     break
                 if st == 1 and not _chain_ok(xs[ix], ys[iy], zs[iz], c, start, k0, nk, l0, nl, s_lo, s_hi, w, base,
                                             u_axis, k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2, kb0,
-                                            blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t):
+                                            blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t) \
+                        and not (nl[c] == 1 and _single_leg_inside(xs[ix], ys[iy], zs[iz], c, k0, nk, l0, s_lo, s_hi,
+                                                                   w, base, plat, lmin2, lmax2, delta_t)):
                     st = 2
             state[ix, iy, iz] = st
 
@@ -1000,7 +1033,9 @@ def _bracket_points_kernel(pts, delta_t, e_out, lmin2t, lmax2t, lmin2r, lmax2r, 
                 break
             if st == 1 and not _chain_ok(pts[i, 0], pts[i, 1], pts[i, 2], c, start, k0, nk, l0, nl, s_lo, s_hi, w,
                                         base, u_axis, k_u, plat, s_axis, k_s, lmin2t, lmax2t, centre, out2, in2,
-                                        kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t):
+                                        kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, delta_t) \
+                    and not (nl[c] == 1 and _single_leg_inside(pts[i, 0], pts[i, 1], pts[i, 2], c, k0, nk, l0, s_lo,
+                                                               s_hi, w, base, plat, lmin2, lmax2, delta_t)):
                 st = 2
         state[i] = st
 
@@ -1137,12 +1172,14 @@ def bracket_unavailable(mech: Mechanism) -> str | None:
 
 
 def bracket_caveat(mech: Mechanism) -> str | None:
-    """What the bracket of ``mech`` cannot show, or ``None``: with a leg of fixed length (``l_min =
-    l_max``, a 6-PSS rod) no cube passes the inside test (its limits tightened by the cube's
-    half-diagonal are empty), so the inner bound stays 0 at every refinement."""
-    if any(leg.length[1] - leg.length[0] <= 0.0 for _, _, leg in mech.legs):
-        return ("inner bound 0 by construction: a leg of fixed length (l_min = l_max) leaves no margin for the "
-                "inside test")
+    """What the bracket of ``mech`` cannot show, or ``None``: in a chain of several legs, a leg of
+    fixed length (``l_min = l_max``) makes the length test with the limits tightened by a cube's
+    half-diagonal fail everywhere, and the one-leg test (:func:`_single_leg_inside`) does not apply, so
+    no cube is inside and the inner bound stays 0 at every refinement."""
+    if any(len(chain.legs) > 1 and any(leg.length[1] - leg.length[0] <= 0.0 for leg in chain.legs)
+           for chain in mech.chains):
+        return ("inner bound 0 by construction: a leg of fixed length (l_min = l_max) in a chain of several legs "
+                "leaves no margin for the inside test")
     return None
 
 

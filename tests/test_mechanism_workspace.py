@@ -21,6 +21,7 @@ from paraspace.kinematics.design import Design, ParameterError
 from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.mechanism import carriage_samples, parse_mechanism, reachable_brute_force
 from paraspace.kinematics.mechanism_workspace import (
+    bracket_caveat,
     compute_general_workspace,
     compute_mechanism_workspace,
     kernel_tables,
@@ -451,6 +452,51 @@ def test_bracket_contains_the_volume_and_its_cubes_are_right(name) -> None:
     samples = {"revolute": 121, "prismatic": 1001}
     assert np.all(reachable_brute_force(mech, np.array(inside_pts), rot, samples=samples))
     assert not np.any(reachable_brute_force(mech, np.array(outside_pts), rot, samples=samples))
+
+
+def test_fixed_length_legs_get_inside_cubes_each_checked_by_a_crossing_of_the_length() -> None:
+    """6-PSS (rods of fixed length 120 on vertical rails): the length test with the limits tightened by
+    a cube's half-diagonal never passes (``l_min = l_max``), so the inner bound was 0 at every
+    refinement. The one-leg test (the rail moves the rod's base along a line, so its length takes every
+    value between its least and its greatest) certifies inside cubes; each is checked here without the
+    engine, at points anywhere in the cube: along 2,001 positions of each rail the rod's length crosses
+    120 (a sign change of ``length - 120`` between neighbours: a position of exactly 120 lies between
+    them, by continuity). The bracket holds the voxel volumes at h and h / 2."""
+    from paraspace.kinematics.mechanism_workspace import general_bracket
+
+    mech = six_pss()
+    rot = platform_rotation(mech, (0.0, 0.0, 0.0))
+    tabs = kernel_tables(mech, rot)
+    res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, bracket=True))
+    fine = compute_general_workspace(mech, WorkspaceSettings(voxel=H / 2))
+    assert 0.5 * res.volume < res.volume_inner <= min(res.volume, fine.volume)
+    assert max(res.volume, fine.volume) <= res.volume_outer < math.inf
+    br = general_bracket(mech, tabs, res.grid, 0.5, 1.0, 0.0, 0)
+    state = _states(mech, tabs, br.grid)
+    xs, ys, zs = br.grid.axes()
+    idx = np.argwhere(state == 1)
+    rng = np.random.default_rng(5)
+    pick = idx[rng.choice(len(idx), 60, replace=False)]
+    pts = np.stack([xs[pick[:, 0]], ys[pick[:, 1]], zs[pick[:, 2]]], axis=1) + rng.uniform(-0.5, 0.5, (60, 3)) * H
+    for chain in mech.chains:
+        (leg,) = chain.legs
+        _, bases, _ = carriage_samples(chain, {"prismatic": 2001})
+        lengths = np.linalg.norm(pts[:, None, :] + (rot @ np.asarray(leg.platform))[None, None, :]
+                                 - bases[None, :, 0, :], axis=2) - leg.length[0]
+        assert np.all(np.any(lengths[:, :-1] * lengths[:, 1:] <= 0.0, axis=1))
+
+
+def test_a_fixed_length_leg_beside_another_leg_has_no_inside_cube_and_says_so() -> None:
+    """The caveat the explorer shows beside such a bracket is true: the paper's chains with their first
+    leg fixed at 140 have a workspace (h = 8) and an inner bound of 0; the presets have no caveat."""
+    d = paper().to_dict()
+    for chain in d["chains"]:
+        chain["legs"][0]["length"] = [140.0, 140.0]
+    mech = parse_mechanism(d)
+    res = compute_general_workspace(mech, WorkspaceSettings(voxel=H, bracket=True))
+    assert res.volume > 0 and res.volume_inner == 0 and res.volume <= res.volume_outer < math.inf
+    assert "inner bound 0" in bracket_caveat(mech)
+    assert all(bracket_caveat(preset(n)) is None for n in ("gough-stewart", "6-pss", "6-pups", "paper"))
 
 
 def _level_at_a_time(mech, tabs, big, refine):
