@@ -48,7 +48,9 @@ halves, whole: with ``r`` the half-diagonal of a cube's voxel centres, every leg
 and ``s`` that pass at the cube's centre with the limits and cones TIGHTENED by ``r`` pass at every
 voxel of it, and a sample that passes at some voxel passes at the centre with them RELAXED by ``r``
 (both with a rounding margin): "some chain has no sample passing relaxed" makes the cube unreachable,
-"every chain has a sample passing tightened" reachable; the other cubes are tested voxel by voxel.
+"every chain has a sample passing tightened" reachable (or, for a chain of one leg without cones, the
+bracket's one-leg test: its length's range over the exact joint, shrunk by ``r``, meets its limits;
+the comment before :func:`general_bracket`); the other cubes are tested voxel by voxel.
 The voxels are those of ``method="dense"`` (every voxel tested; tested equal).
 
 **The paper's mechanism** (a description equal to :func:`kinematics.presets.paper` of some
@@ -492,7 +494,8 @@ def _chain_out(px, py, pz, r, rt, c, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis
 
 @njit(cache=True)
 def _cube_state(px, py, pz, lv, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, start, k0, nk, l0, nl, s_lo, s_hi, w, base,
-                u_axis, k_u, plat, s_axis, k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi):
+                u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2,
+                gap_lo, gap_hi):
     """0: every voxel of the cube (level ``lv``, centre ``P``) is unreachable; 1: every voxel is
     reachable; 2: undecided (see :func:`_blocks_kernel`)."""
     state = 1
@@ -503,7 +506,10 @@ def _cube_state(px, py, pz, lv, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, start, k0
             return 0
         if state == 1 and not _chain_ok(px, py, pz, c, start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u,
                                         plat, s_axis, k_s, lmin2t[lv], lmax2t[lv], centre, out2, in2, kb0,
-                                        blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, rt[lv]):
+                                        blk_centre, blk_out2, blk_in2, gap_lo, gap_hi, rt[lv]) \
+                and not (nl[c] == 1 and k_u[l0[c]] <= -1.0 and k_s[l0[c]] <= -1.0
+                         and _single_leg_inside(px, py, pz, c, k0, nk, l0, s_lo, s_hi, w, base, plat, lmin2, lmax2,
+                                                rt[lv])):
             state = 2
     return state
 
@@ -518,7 +524,10 @@ def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k
     some chain is out for every point within ``r`` of its centre (:func:`_chain_out`, limits relaxed by
     ``rt``), reachable when every chain passes the test at its centre with its leg limits
     (``lmin2t``, ``lmax2t``) and cones tightened by ``rt`` (the same sample and ``s`` then serve every
-    voxel: lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``); an undecided cube is split
+    voxel: lengths are 1-Lipschitz and cones (1 + k)-Lipschitz in ``P``), or, for a chain of one leg
+    without cones, passes the one-leg test of the bracket with ``rt`` (:func:`_single_leg_inside`: the
+    same sample, an ``s`` per voxel; a 6-PSS rod of fixed length, which the first test never passes);
+    an undecided cube is split
     in eight, and an undecided half decided voxel by voxel as the dense kernel does: the same voxels
     as the dense kernel."""
     n_chains = k0.shape[0]
@@ -543,8 +552,8 @@ def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k
             z1 = min(z0 + m, nz)
             st = _cube_state(0.5 * (xs[x0] + xs[x1 - 1]), 0.5 * (ys[y0] + ys[y1 - 1]), 0.5 * (zs[z0] + zs[z1 - 1]),
                              0, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, start, k0, nk, l0, nl, s_lo, s_hi, w, base,
-                             u_axis, k_u, plat, s_axis, k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2,
-                             gap_lo, gap_hi)
+                             u_axis, k_u, plat, s_axis, k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre,
+                             blk_out2, blk_in2, gap_lo, gap_hi)
             if st < 2:
                 for ix in range(x0, x1):
                     for iy in range(y0, y1):
@@ -560,7 +569,8 @@ def _blocks_kernel(cols, m, xs, ys, zs, r, rt, lmin2t, lmax2t, lmin2r, lmax2r, k
                         st2 = _cube_state(0.5 * (xs[sx] + xs[ex - 1]), 0.5 * (ys[sy] + ys[ey - 1]),
                                           0.5 * (zs[sz] + zs[ez - 1]), 1, r, rt, lmin2t, lmax2t, lmin2r, lmax2r,
                                           start, k0, nk, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, plat, s_axis,
-                                          k_s, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2, gap_lo, gap_hi)
+                                          k_s, lmin2, lmax2, centre, out2, in2, kb0, blk_centre, blk_out2, blk_in2,
+                                          gap_lo, gap_hi)
                         for ix in range(sx, ex):
                             for iy in range(sy, ey):
                                 v = (ix - x0) * m + (iy - y0)
