@@ -96,6 +96,9 @@ _BOUND_EPS = 1e-9
 BLOCK = 8
 #: Edge, in voxels, of the cubes the blocks engine decides whole (then their halves).
 CUBE = 4
+#: Why a general mechanism has no certified bracket (the refusal of ``bracket`` and the explorer's words).
+NO_BRACKET_CONES = "not available with joint cones (u_cone, s_cone): their axes turn with the carriage's joints"
+NO_BRACKET_DIAMETERS = "not available with leg diameters (the bracket does not model leg interference)"
 
 
 def exact_joint(chain: Chain) -> int | None:
@@ -735,7 +738,7 @@ def compute_general_workspace(mech: Mechanism, settings: WorkspaceSettings = Wor
         from .mechanism_interference import interference_filter
 
         if settings.bracket:
-            raise ParameterError("bracket", True, "not with leg diameters (the bracket does not model interference)")
+            raise ParameterError("bracket", True, NO_BRACKET_DIAMETERS)
         idx = np.argwhere(out)
         pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
         sub(1.0, f"leg interference at {len(pts):,} reachable voxels")
@@ -1091,8 +1094,7 @@ def general_bracket(mech: Mechanism, tables: KernelTables, grid: GridSpec, eta_s
     are summed per level and turned into volumes in the order of a level at a time, so the bracket
     does not depend on the chunk sizes (tested)."""
     if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
-        raise ParameterError("bracket", True, "not available with joint cones (u_cone, s_cone) on a general "
-                                              "mechanism")
+        raise ParameterError("bracket", True, NO_BRACKET_CONES)
     rep = Reporter(progress)
     h = grid.h
     slack = np.array([chain_slack(c, eta_step, length_step) for c in mech.chains])
@@ -1175,9 +1177,9 @@ def bracket_unavailable(mech: Mechanism) -> str | None:
     """Why :func:`general_bracket` does not apply to ``mech`` (the sentence after "certified
     bracket"), or ``None`` when it does."""
     if any(leg.u_cone is not None or leg.s_cone is not None for _, _, leg in mech.legs):
-        return "not available with joint cones (u_cone, s_cone): their axes turn with the carriage's joints"
+        return NO_BRACKET_CONES
     if any(leg.diameter > 0.0 for _, _, leg in mech.legs):
-        return "not available with leg diameters (the bracket does not model leg interference)"
+        return NO_BRACKET_DIAMETERS
     return None
 
 

@@ -245,7 +245,7 @@ def test_refusals_name_the_field() -> None:
         compute_mechanism_workspace(gs, WorkspaceSettings(voxel=H), length_step=0)
     data = gs.to_dict()
     data["chains"][2]["legs"][0]["diameter"] = 5.0
-    with pytest.raises(ParameterError, match="bracket = True is invalid: expected not with leg diameters"):
+    with pytest.raises(ParameterError, match="bracket = True is invalid: expected not available with leg diameters"):
         compute_mechanism_workspace(parse_mechanism(data), WorkspaceSettings(voxel=H, bracket=True))
     # the paper's mechanism keeps every option of the paper's engine
     assert compute_mechanism_workspace(paper(), WorkspaceSettings(voxel=H, bracket=True)).volume_inner is not None
