@@ -1057,10 +1057,12 @@ def test_no_gui_writes_after_the_browser_left(explorer, monkeypatch):
     s.close = lambda: (gate.wait(30.0), close())  # the disconnect callback, held back
     try:
         n = len(s.events)
+        before = s.share_controller._timer
         b.set(s.panels.pose["x"], 7.0)  # IK only (no job); the address bar follows after the debounce
         wait_for(lambda: s.state.pose.x == 7.0 and "mechanism" in [e for _, e in s.events[n:]], 5.0, "the pose")
-        pending = s.share_controller._timer
-        assert pending is not None and pending.is_alive()  # the address-bar update of x = 7 waits
+        # the address-bar update of x = 7 waits (its timer is stored, then started: wait for both)
+        pending = wait_for(lambda: t if (t := s.share_controller._timer) is not before and t is not None
+                           and t.is_alive() else None, 5.0, "the pending address-bar update")
         assert "x=7" not in (s.share_controller.last_query or "")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
