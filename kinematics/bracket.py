@@ -102,6 +102,8 @@ REFINE = 2
 METHODS = ("parents", "cubes")
 #: Most arc samples per gap of the workspace's samples in the outside test (:func:`_arc`).
 MAX_FINE = 16
+#: Why there is no bracket with leg interference (the refusal of ``bracket`` and the explorer's words).
+NO_BRACKET_INTERFERENCE = "not available with leg interference (leg_diameter > 0)"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -541,7 +543,7 @@ def bracket_of(result: object, progress: Reporter | None = None, cancel: CancelT
     """
     r: Any = result
     if r.settings.joints.min_distance > 0.0:
-        raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
+        raise ParameterError("bracket", True, NO_BRACKET_INTERFERENCE)
     args = kernel_args(r.design, r.settings.orientation, r.n_eta, r.settings.joints)
     return volume_bracket(r.design, r.grid, args, r.n_eta, r.settings.z_floor, progress, cancel,
                           refine=r.settings.bracket_refine if refine is None else refine,

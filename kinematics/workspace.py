@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit, prange
 
 from .blocks import rounding_margin, run_blocks
-from .bracket import volume_bracket
+from .bracket import NO_BRACKET_INTERFERENCE, volume_bracket
 from .design import Design, ParameterError
 from .feasibility import _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
@@ -92,7 +92,7 @@ class WorkspaceSettings:
         if not isinstance(self.joints, Joints):
             raise ParameterError("joints", self.joints, "a Joints value")
         if self.bracket and self.joints.min_distance > 0.0:
-            raise ParameterError("bracket", True, "not available with leg interference (leg_diameter > 0)")
+            raise ParameterError("bracket", True, NO_BRACKET_INTERFERENCE)
         if self.method not in METHODS:
             raise ParameterError("method", self.method, " or ".join(METHODS))
         WORKSPACE["voxel"].check(self.voxel)

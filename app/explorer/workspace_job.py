@@ -114,7 +114,9 @@ def bracket_unavailable(result: WorkspaceResult) -> str | None:
     """Why the numbers panel shows no certified bracket for ``result`` (the words after "certified
     bracket"), or ``None`` when :func:`bracket` computes one."""
     if result.settings.joints.min_distance > 0.0:
-        return "not available with leg interference (the bracket does not model it)"
+        from paraspace.kinematics.bracket import NO_BRACKET_INTERFERENCE
+
+        return NO_BRACKET_INTERFERENCE
     mech = getattr(result, "mechanism", None)
     if result.design is None and mech is not None:  # a general mechanism
         from paraspace.kinematics.mechanism_workspace import bracket_unavailable as general_unavailable
