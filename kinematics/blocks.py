@@ -474,6 +474,6 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
         level += 1
         if progress is not None:
             frac = min(1.0, level / n_levels)
-            progress(frac, f"computing the workspace, {100 * frac:.0f} % (refining {b0.shape[0]:,} boundary "
-                           f"blocks of {n_before:,})")
+            progress(frac, f"computing the workspace, {100 * frac:.0f} % (level {level} of {n_levels}: "
+                           f"{n_before:,} blocks tested, {b0.shape[0]:,} smaller ones near the boundary next)")
     return out

@@ -111,6 +111,23 @@ def test_progress_and_cancellation():
         compute_workspace(DESIGN, WorkspaceSettings(voxel=2.0, bounds=BOX), progress=cancel_soon, cancel=ev)
 
 
+def test_the_engine_progress_counts_its_levels_and_blocks():
+    """The blocks engine's progress names its level out of all of them and, of the blocks it tested,
+    how many smaller ones come next: at most 8 per block tested, none after the last level (it read
+    "refining 1,648 boundary blocks of 432" before: the children counted against their parents)."""
+    import re
+
+    msgs = []
+    compute_workspace(DESIGN, WorkspaceSettings(voxel=4.0, bounds=BOX), progress=lambda f, m: msgs.append(m))
+    rows = [tuple(int(g.replace(",", "")) for g in m.groups())
+            for m in (re.search(r"level (\d+) of (\d+): ([\d,]+) blocks tested, ([\d,]+) smaller ones", t)
+                      for t in msgs) if m]
+    assert len(rows) >= 3
+    assert [r[0] for r in rows] == list(range(1, len(rows) + 1)) and {r[1] for r in rows} == {len(rows)}
+    assert all(0 < nxt <= 8 * tested for _, _, tested, nxt in rows[:-1])
+    assert rows[-1][3] == 0 and all(rows[k + 1][2] == rows[k][3] for k in range(len(rows) - 1))
+
+
 def test_bad_settings_name_the_field():
     with pytest.raises(ParameterError, match="voxel"):
         WorkspaceSettings(voxel=0)
