@@ -474,6 +474,7 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
         level += 1
         if progress is not None:
             frac = min(1.0, level / n_levels)
+            nxt = f", {b0.shape[0]:,} smaller ones near the boundary next" if b0.shape[0] else ""
             progress(frac, f"computing the workspace, {100 * frac:.0f} % (level {level} of {n_levels}: "
-                           f"{n_before:,} blocks tested, {b0.shape[0]:,} smaller ones near the boundary next)")
+                           f"{n_before:,} blocks tested{nxt})")
     return out

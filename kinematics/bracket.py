@@ -406,6 +406,7 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
     state = np.zeros((b0.shape[0], 3), np.int8)
     win = initial_windows(b0.shape[0], fa.cos_t.shape[1])
     level = 0
+    n_levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     while b0.shape[0]:
         check(cancel)
         for s in range(0, b0.shape[0], 65536):
@@ -421,7 +422,8 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
             b0, bn, state, win = _advance(b0, bn, state, win, False, v, _FAILED)
         level += 1
         if progress is not None:
-            progress(min(0.5, level / 10.0), f"volume bracket: level {level}")
+            progress(min(0.5, level / 10.0),
+                     f"volume bracket: classifying the cubes, level {level} (of at most {n_levels})")
     out = np.empty(grid.shape, np.uint8)
     bits = np.empty(grid.shape, np.uint8) if chain_bits is None else chain_bits
     with kernel_launch(nx):
@@ -505,7 +507,8 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                 n_kept = _keep_boundary(out, par, bits, win, p_weight, size, _CHILDREN, n_kept, left, left_bits,
                                         left_win, left_weight)
         if progress is not None:
-            progress(0.5 + 0.5 * (level + 1) / levels, f"volume bracket: refining the boundary, level {level + 1}")
+            progress(0.5 + 0.5 * (level + 1) / levels,
+                     f"volume bracket: refining the boundary, level {level + 1} of {levels}")
         if last:
             return inside, outside, round(n_left)
         centres, parent_bits = left[:n_kept], left_bits[:n_kept]
