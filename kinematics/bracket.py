@@ -423,7 +423,7 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
         level += 1
         if progress is not None:
             progress(min(0.5, level / 10.0),
-                     f"volume bracket: classifying the cubes, level {level} (of at most {n_levels})")
+                     f"certified bracket: classifying the cubes, level {level} (of at most {n_levels})")
     out = np.empty(grid.shape, np.uint8)
     bits = np.empty(grid.shape, np.uint8) if chain_bits is None else chain_bits
     with kernel_launch(nx):
@@ -508,7 +508,7 @@ def refine_boundary(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int
                                         left_win, left_weight)
         if progress is not None:
             progress(0.5 + 0.5 * (level + 1) / levels,
-                     f"volume bracket: refining the boundary, level {level + 1} of {levels}")
+                     f"certified bracket: refining the boundary, level {level + 1} of {levels}")
         if last:
             return inside, outside, round(n_left)
         centres, parent_bits = left[:n_kept], left_bits[:n_kept]

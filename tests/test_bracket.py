@@ -168,19 +168,20 @@ def test_bracket_agrees_with_an_independent_interval_oracle(symmetric, codac_ver
 
 
 def test_the_bracket_progress_names_its_levels():
-    """The bracket's progress says which stage and level it is at, out of how many: the cube levels
+    """The bracket's progress says which stage and level it is at, out of how many, in the general
+    engine's words ("certified bracket: ..."): the cube levels
     (at most the engine's), then each refinement ``k of refine``; the fraction never goes back."""
     from paraspace.kinematics.bracket import bracket_of
 
     res = compute_workspace(Design(), WorkspaceSettings(voxel=8.0))
     seen: list[tuple[float, str]] = []
     bracket_of(res, progress=lambda f, m: seen.append((f, m)), refine=3)
-    cubes = [re.fullmatch(r"volume bracket: classifying the cubes, level (\d+) \(of at most (\d+)\)", m)
+    cubes = [re.fullmatch(r"certified bracket: classifying the cubes, level (\d+) \(of at most (\d+)\)", m)
              for _, m in seen]
     levels = [int(c.group(1)) for c in cubes if c]
     assert levels == list(range(1, len(levels) + 1)) and len(levels) >= 3
     assert all(int(c.group(2)) >= len(levels) for c in cubes if c)
     assert [m for _, m in seen if "refining" in m] == [
-        f"volume bracket: refining the boundary, level {k} of 3" for k in (1, 2, 3)]
+        f"certified bracket: refining the boundary, level {k} of 3" for k in (1, 2, 3)]
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and fracs[-1] == 1.0
