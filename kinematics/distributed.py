@@ -149,8 +149,11 @@ def _open_client(scheduler: str | None, n_workers: int | None, connect_timeout: 
                                  f"`dask scheduler` and `dask worker ADDRESS`)") from None
         return client, None
     n = n_workers or max(1, os.cpu_count() or 1)
+    # no dashboard; the scheduler's own HTTP routes on a free port of 127.0.0.1 (with no address they
+    # take 8787, and a second cluster -- two optimisations at once -- warned "Port 8787 is already in use")
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None, silence_logs=logging.ERROR, env=dict(WORKER_ENV))
+                           dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                           silence_logs=logging.ERROR, env=dict(WORKER_ENV))
     try:
         client = Client(cluster)
     except BaseException:

@@ -177,3 +177,33 @@ def test_default_backend_rule_by_core_count(monkeypatch):
 def test_usable_cores_is_the_affinity():
     assert distributed.usable_cores() == (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                                           else os.cpu_count())
+
+
+def test_a_local_cluster_serves_http_on_a_free_local_port_and_says_nothing():
+    """The local cluster of the studies binds its scheduler's HTTP routes to 127.0.0.1 on a free
+    port, with no dashboard: with 8787 taken (a user's own Dask dashboard, or a second optimisation
+    at once) it warned "Port 8787 is already in use" before, and nothing outside the machine reaches
+    it either way."""
+    import socket
+    import warnings
+
+    held = socket.socket()
+    try:
+        try:
+            held.bind(("127.0.0.1", 8787))
+            held.listen()
+        except OSError:
+            pass  # already taken by something else: the same situation
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            client, local = distributed._open_client(None, 1, 10.0)
+        try:
+            http = local.scheduler.services["dashboard"]
+            assert http.address == "127.0.0.1" and http.port not in (0, 8787)
+            assert not [w for w in caught if "already in use" in str(w.message)], [str(w.message) for w in caught]
+            assert client.submit(sum, [1, 2]).result(timeout=60) == 3
+        finally:
+            client.close()
+            local.close()
+    finally:
+        held.close()
