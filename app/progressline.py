@@ -22,6 +22,19 @@ __all__ = ["progress_line", "progress_scope"]
 WIDTH = 24
 #: per mille: the bar counts 0..1000 so that fractions of a percent still move it
 _STEPS = 1000
+#: Most characters of the message beside the bar.
+MESSAGE_CHARS = 60
+
+
+def _short(message: str, most: int = MESSAGE_CHARS) -> str:
+    """``message`` as drawn beside the bar: whole when it fits in ``most`` characters, else cut at the
+    last space that leaves room for ``...`` (mid-word only when there is none), so a cut never reads
+    as a different word ("432 blocks test")."""
+    if len(message) <= most:
+        return message
+    head = message[:most - 3]
+    cut = head.rfind(" ")
+    return (head[:cut] if cut > 0 else head).rstrip(" ,;:(") + "..."
 
 
 def progress_line(label: str, stream: TextIO | None = None, *,
@@ -37,11 +50,11 @@ def progress_line(label: str, stream: TextIO | None = None, *,
     def progress(fraction: float, message: str = "") -> None:
         n = round(min(1.0, max(0.0, float(fraction))) * _STEPS)
         if not bars:
-            bars.append(tqdm(total=_STEPS, initial=n, desc=label, postfix=message[:60], file=out, leave=False,
+            bars.append(tqdm(total=_STEPS, initial=n, desc=label, postfix=_short(message), file=out, leave=False,
                              mininterval=0.1, ascii=" #",
                              bar_format="{desc} [{bar:" + str(WIDTH) + "}] {percentage:3.0f} %{postfix}"))
             return
-        bars[0].set_postfix_str(message[:60], refresh=False)
+        bars[0].set_postfix_str(_short(message), refresh=False)
         bars[0].update(n - bars[0].n)
 
     def close() -> None:

@@ -322,6 +322,30 @@ def test_progress_goes_to_a_terminal_only(capsys):
     assert code == 0 and json.loads(out.out)["volume"] > 0 and "%" not in out.err
 
 
+def test_a_long_progress_message_is_cut_between_words():
+    """The bar's message is cut to at most 60 characters at a space, marked with "...": the engine's
+    "(level 1 of 5: 432 blocks tested, ...)" was drawn as "... 432 blocks test" (a cut word reads as
+    another word); a short message is drawn whole."""
+    import io
+
+    from paraspace.app.progressline import MESSAGE_CHARS, progress_line
+
+    msg = "computing the workspace, 20 % (level 1 of 5: 432 blocks tested, 1,648 smaller ones near the boundary next)"
+    buf = io.StringIO()
+    p, close = progress_line("workspace", buf, force=True)
+    p(0.2, msg)
+    close()
+    drawn = buf.getvalue()
+    assert "computing the workspace, 20 % (level 1 of 5: 432 blocks..." in drawn and "blocks test" not in drawn
+    shown = drawn[drawn.index("computing"):].split("...")[0] + "..."
+    assert len(shown) <= MESSAGE_CHARS and msg.startswith(shown[:-3])
+    buf = io.StringIO()
+    p, close = progress_line("x", buf, force=True)
+    p(0.5, "level 2 of 5")
+    close()
+    assert "level 2 of 5" in buf.getvalue() and "..." not in buf.getvalue()
+
+
 def test_oversized_explorer_links_get_an_answer_and_no_traceback(caplog):
     from paraspace.app.explorer import Explorer
 
