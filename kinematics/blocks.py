@@ -53,6 +53,8 @@ __all__ = ["decide_chain", "initial_windows", "run_blocks", "rounding_margin", "
 
 #: Edge (in voxels) of the coarsest blocks.
 TOP_BLOCK = 16
+#: Levels of the coarse-to-fine walk from a top block down to single voxels (halving each level).
+LEVELS = int(math.ceil(math.log2(TOP_BLOCK))) + 1
 
 UNKNOWN, OK, FAIL = 0, 1, 2
 
@@ -458,7 +460,6 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
     win = initial_windows(b0.shape[0], cos_t.shape[1])
     seg_k, seg_arc = sub_arcs(cos_t, sin_t)
     level = 0
-    n_levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     while b0.shape[0]:
         check(cancel)
         step = 65536  # blocks per launch: progress/cancel granularity of a few ms
@@ -473,8 +474,8 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
             b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
         level += 1
         if progress is not None:
-            frac = min(1.0, level / n_levels)
+            frac = min(1.0, level / LEVELS)
             nxt = f", {b0.shape[0]:,} smaller ones near the boundary next" if b0.shape[0] else ""
-            progress(frac, f"computing the workspace, {100 * frac:.0f} % (level {level} of {n_levels}: "
+            progress(frac, f"computing the workspace, {100 * frac:.0f} % (level {level} of {LEVELS}: "
                            f"{n_before:,} blocks tested{nxt})")
     return out

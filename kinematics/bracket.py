@@ -72,6 +72,7 @@ from numba import njit, prange
 
 from .blocks import (
     FAIL,
+    LEVELS,
     OK,
     TOP_BLOCK,
     UNKNOWN,
@@ -406,7 +407,6 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
     state = np.zeros((b0.shape[0], 3), np.int8)
     win = initial_windows(b0.shape[0], fa.cos_t.shape[1])
     level = 0
-    n_levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     while b0.shape[0]:
         check(cancel)
         for s in range(0, b0.shape[0], 65536):
@@ -423,7 +423,7 @@ def cube_classes(design: Design, grid: GridSpec, args: KernelArgs, n_eta: int, z
         level += 1
         if progress is not None:
             progress(min(0.5, level / 10.0),
-                     f"certified bracket: classifying the cubes, level {level} (of at most {n_levels})")
+                     f"certified bracket: classifying the cubes, level {level} (of at most {LEVELS})")
     out = np.empty(grid.shape, np.uint8)
     bits = np.empty(grid.shape, np.uint8) if chain_bits is None else chain_bits
     with kernel_launch(nx):
