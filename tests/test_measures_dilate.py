@@ -95,6 +95,30 @@ def test_packed_rows_across_words_equal_scipy(rv):
     assert np.array_equal(feature_filter(m, rv), scipy_feature_filter(m, rv))
 
 
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_the_dilation_does_not_depend_on_its_slabs(threads):
+    """The dilation deals the x planes in slabs (two per thread) that build their own z dilations of
+    the planes they read, ``w`` on either side: with 1, 2 and 3 threads, on grids of fewer x planes
+    than slabs and with a ball wider than a slab (every slab's halo reaching past the grid), the
+    same voxels as scipy."""
+    import numba
+
+    rng = np.random.default_rng(threads)
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        for shape, rv in (((1, 9, 70), 2.3), ((3, 8, 65), 4.5), ((5, 11, 40), 6.2), ((13, 12, 130), 3.0)):
+            for q in (0.05, 0.5):
+                m = rng.random(shape) < q
+                for g in (m, m | m[:, ::-1]):
+                    sym = bool(np.array_equal(g, g[:, ::-1]))
+                    assert np.array_equal(ball_dilate(g, rv, symmetric=sym), scipy_dilate(g, rv)), (shape, q)
+                    assert np.array_equal(ball_dilate(g, rv, complement=True, symmetric=sym),
+                                          scipy_erode(g, rv)), (shape, q)
+    finally:
+        numba.set_num_threads(before)
+
+
 @pytest.mark.parametrize("rv", [1.4, 5.2])
 def test_feature_filter_padded_across_words_equals_scipy(rv):
     # the filter pads the grid by floor(r) + 1 inside its pack pass: padded rows just under, at and
