@@ -20,10 +20,11 @@ offset and or-ed in. The words are laid out ``[i, q, j]`` (the word index ``q`` 
 branch: the compiler puts it in vector lanes (at h = 1 a dilation took 16 ms in the ``[i, j, q]``
 layout, whose inner loop was the 3 words of a z column, and 5 ms in this one). A set symmetric
 under ``j -> n_y - 1 - j`` is computed on half its rows. The filter packs the set once for its
-four dilations (an erosion is a not of the words around a dilation), padding it in the same parallel
-pass, tells whether it is mirror-symmetric from the packed words (64 voxels per comparison), and
-unpacks the result without its padding: no serial pass over the grid (no ``np.pad``, no
-``np.array_equal`` for the mirror test).
+four dilations, padding it in the same parallel pass, tells whether it is mirror-symmetric from
+the packed words (64 voxels per comparison), and unpacks the result without its padding: no serial
+pass over the grid (no ``np.pad``, no ``np.array_equal`` for the mirror test). An erosion is the
+dilation of the complemented words, complemented; the dilation reads and writes them so in its
+own pass. Each dilation is one parallel region (:func:`_dilate_packed_kernel`).
 """
 
 from __future__ import annotations
@@ -282,26 +283,16 @@ def is_mirror_symmetric(mask: np.ndarray) -> bool:
 
 
 @njit(parallel=True, cache=True, nogil=True)
-def _not_kernel(P, last):
-    """The complement of a packed set, in place (``last``: the valid bits of each row's last word)."""
-    nx, nw, ny = P.shape
-    for i in prange(nx):
-        for q in range(nw):
-            Pq = P[i, q]
-            mask = last if q == nw - 1 else ~np.uint64(0)
-            for j in range(ny):
-                Pq[j] = ~Pq[j] & mask
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, n_slab, R):
+def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
     """``R``: the packed set ``P`` dilated by the ball whose offsets ``(DI[e], DJ[e])`` carry the z
     runs ``|dk| <= A[e]`` (:func:`_ball_offsets`): for ``a = 0 .. w``, ``Z`` = ``P`` dilated along
     z by ``[-a, a]`` (that of ``a - 1`` or-ed with ``P`` moved ``a`` bits each way across the words),
     then or-ed into ``R`` moved by every offset whose run is ``a``. With ``half`` (``P`` symmetric
     under ``j -> ny - 1 - j``, so ``R`` is too) only the rows ``j >= ny // 2`` are or-ed, the others
     copied. Bits past ``nz`` are cleared (``last``). Every inner loop runs over ``j`` on contiguous
-    rows ``[i, q, :]`` without a branch (vector lanes).
+    rows ``[i, q, :]`` without a branch (vector lanes). ``flip`` (all bits set, else 0): the erosion,
+    i.e. ``P`` read complemented and ``R`` written complemented (the valid bits only), in the same
+    pass (it was two more parallel regions).
 
     One parallel region: the ``x`` planes are dealt in ``n_slab`` slabs (:func:`_slabs`), and each slab builds
     ``Z`` for its own planes and the ``w`` planes on either side that its offsets read (the halo,
@@ -311,6 +302,7 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, n_slab, R):
     nx, nw, ny = P.shape
     j0 = ny // 2 if half else 0
     zero = np.uint64(0)
+    full = ~zero
     n = DI.shape[0]
     n_slab = max(min(nx, n_slab), 1)
     for s in prange(n_slab):
@@ -331,20 +323,23 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, n_slab, R):
                 for q in range(nw):
                     Zq = Z[ii - lo_i, q]
                     Pq = P[ii, q]
+                    mq = last if q == nw - 1 else full  # the word's valid bits
                     if a == 0:
                         for j in range(ny):
-                            Zq[j] = Pq[j]
+                            Zq[j] = (Pq[j] ^ flip) & mq
                         continue
                     for j in range(ny):
-                        Zq[j] |= (Pq[j] << ua) | (Pq[j] >> ua)
+                        v = (Pq[j] ^ flip) & mq
+                        Zq[j] |= (v << ua) | (v >> ua)
                     if q > 0:
                         Pm = P[ii, q - 1]
                         for j in range(ny):
-                            Zq[j] |= Pm[j] >> ub
+                            Zq[j] |= (Pm[j] ^ flip) >> ub
                     if q + 1 < nw:
                         Pp = P[ii, q + 1]
+                        mp = last if q + 1 == nw - 1 else full
                         for j in range(ny):
-                            Zq[j] |= Pp[j] << ub
+                            Zq[j] |= ((Pp[j] ^ flip) & mp) << ub
             for i in range(i0, i1):
                 for e in range(n):
                     if A[e] != a:
@@ -363,9 +358,11 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, n_slab, R):
                         for t in range(hi - lo):
                             Rv[t] |= Zv[t]
         for i in range(i0, i1):
-            Rl = R[i, nw - 1]
-            for j in range(j0, ny):
-                Rl[j] &= last
+            for q in range(nw):
+                Rq = R[i, q]
+                mq = last if q == nw - 1 else full
+                for j in range(j0, ny):
+                    Rq[j] = (Rq[j] ^ flip) & mq
             if half:
                 for q in range(nw):
                     Rq = R[i, q]
@@ -419,12 +416,9 @@ class _Packed:
 
     def dilate(self, complement: bool = False) -> None:
         """The set becomes its dilation by the ball (its erosion with ``complement``)."""
+        flip = np.uint64(0xFFFFFFFFFFFFFFFF if complement else 0)
         with KERNEL_LOCK:
-            if complement:
-                _not_kernel(self.P, self.last)
-            _dilate_packed_kernel(self.P, *self.offsets, self.w, self.symmetric, self.last, _slabs(), self.R)
-            if complement:
-                _not_kernel(self.R, self.last)
+            _dilate_packed_kernel(self.P, *self.offsets, self.w, self.symmetric, self.last, flip, _slabs(), self.R)
         self.P, self.R = self.R, self.P
 
     def unpack(self) -> np.ndarray:
