@@ -371,8 +371,10 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
 
 
 def _slabs() -> int:
-    """Slabs of :func:`_dilate_packed_kernel`: two per thread of the launch (read here, not in the
-    kernel: numba does not cache a kernel that reads its thread count)."""
+    """Slabs of :func:`_dilate_packed_kernel`: two per thread of the launch. Every plane costs the
+    same, so any equal slabs balance the threads; two per thread keep each slab's work array smaller
+    (at h = 1 on 2 threads a dilation took 2.64 ms in 4 slabs, 2.85 ms in 2 and 2.64 ms in 8; medians
+    of 15). Read here, not in the kernel: numba does not cache a kernel that reads its thread count."""
     return 2 * numba.get_num_threads()
 
 
