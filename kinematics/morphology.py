@@ -282,6 +282,12 @@ def is_mirror_symmetric(mask: np.ndarray) -> bool:
         return bool(_mirror_kernel(m))
 
 
+@njit(cache=True, inline="always")
+def _valid_bits(q, nw, last):
+    """The valid bits of word ``q`` of a row of ``nw`` words (``last``: those of the last word)."""
+    return last if q == nw - 1 else ~np.uint64(0)
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
     """``R``: the packed set ``P`` dilated by the ball whose offsets ``(DI[e], DJ[e])`` carry the z
@@ -294,15 +300,14 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
     i.e. ``P`` read complemented and ``R`` written complemented (the valid bits only), in the same
     pass (it was two more parallel regions).
 
-    One parallel region: the ``x`` planes are dealt in ``n_slab`` slabs (:func:`_slabs`), and each slab builds
-    ``Z`` for its own planes and the ``w`` planes on either side that its offsets read (the halo,
-    built twice: ``2 w`` planes a slab). (It was two regions for each ``a``, ``2 w + 4`` in all,
+    One parallel region: the ``x`` planes are dealt in ``n_slab`` slabs (:func:`_slabs`), and each
+    slab builds ``Z`` for its own planes and the ``w`` planes on either side that its offsets read
+    (the halo, built twice: ``2 w`` planes a slab). (It was two regions for each ``a``, ``2 w + 4`` in all,
     with ``Z`` shared: at h = 2, where a dilation is about 0.5 ms, two threads took twice the time of
     one, waiting at the regions' ends.) The result does not depend on the slabs (tested)."""
     nx, nw, ny = P.shape
     j0 = ny // 2 if half else 0
     zero = np.uint64(0)
-    full = ~zero
     n = DI.shape[0]
     n_slab = max(min(nx, n_slab), 1)
     for s in prange(n_slab):
@@ -323,7 +328,7 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
                 for q in range(nw):
                     Zq = Z[ii - lo_i, q]
                     Pq = P[ii, q]
-                    mq = last if q == nw - 1 else full  # the word's valid bits
+                    mq = _valid_bits(q, nw, last)
                     if a == 0:
                         for j in range(ny):
                             Zq[j] = (Pq[j] ^ flip) & mq
@@ -337,7 +342,7 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
                             Zq[j] |= (Pm[j] ^ flip) >> ub
                     if q + 1 < nw:
                         Pp = P[ii, q + 1]
-                        mp = last if q + 1 == nw - 1 else full
+                        mp = _valid_bits(q + 1, nw, last)
                         for j in range(ny):
                             Zq[j] |= ((Pp[j] ^ flip) & mp) << ub
             for i in range(i0, i1):
@@ -360,7 +365,7 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
         for i in range(i0, i1):
             for q in range(nw):
                 Rq = R[i, q]
-                mq = last if q == nw - 1 else full
+                mq = _valid_bits(q, nw, last)
                 for j in range(j0, ny):
                     Rq[j] = (Rq[j] ^ flip) & mq
             if half:
@@ -391,8 +396,9 @@ def _ball_offsets(r2: int, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 class _Packed:
     """A boolean grid padded by ``pad`` empty voxels on every side and packed along z for
-    :func:`_dilate_packed_kernel` (its work array and the ball's offsets), dilated and
-    complemented in place of the arrays it holds; :meth:`unpack` drops the padding again.
+    :func:`_dilate_packed_kernel` (the set's words, an array for the result and the ball's
+    offsets), dilated and complemented in place of the arrays it holds; :meth:`unpack` drops the
+    padding again.
     ``symmetric=None``: whether the set is mirror-symmetric is read from the packed words
     (:func:`_packed_mirror_kernel`, 64 voxels per comparison). ``runs``: the set's runs ``(offs, rs,
     re)``, when the caller holds them (packed from them, :func:`_pack_runs_kernel`: the same words)."""
