@@ -19,8 +19,9 @@ tested ONCE per sample ``k`` with three limits, flags:
 The parent skips whole sub-arcs of samples: where the whole-stroke bound of the sub-arc rejects
 the chain at ``Pp`` with the ``R1`` limits (it is conservative over the continuous sub-arc), no
 sample of it has ``R1``. The samples of the other sub-arcs get all three tests, in a loop without
-branches (SIMD lanes; :func:`kinematics.feasibility._passes` answers exactly as the per-sample
-test, and only the soundness of the flags, not their values, enters the children's decisions). The parent then lists
+branches over runs widened to whole SIMD registers (:func:`_flag_run`;
+:func:`kinematics.feasibility._passes` answers exactly as the per-sample test, and only the
+soundness of the flags, not their values, enters the children's decisions). The parent then lists
 its samples by flag once (``X``; ``R0``; ``R1`` without ``R0``), and a child's searches walk these
 lists in the window's order: the samples, tests and order of a scan that skips unflagged samples.
 
@@ -63,6 +64,9 @@ INSIDE, OUTSIDE, BOUNDARY = 1, 2, 0
 _CHUNK = 64
 #: Flags of a parent's sample (module docstring).
 _R1, _R0, _X = 1, 2, 4
+#: The flag pass's runs are whole multiples of this many samples (:func:`_flag_run`): eight doubles
+#: fill one AVX-512 register (two AVX2 ones).
+_LANES = 8
 
 
 def has_cones(jc: np.ndarray) -> bool:
@@ -81,42 +85,71 @@ def _limits2(lo, hi):
 
 
 @njit(cache=True, inline="always")
-def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b, klo,
+def _flag_one(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, k, flags):
+    """The three tests of sample ``k`` of chain ``i``, into ``flags[i, k]``, without a branch; an empty
+    limit pair (``lo2 > hi2``) never passes."""
+    p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb)
+    f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
+    f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
+    fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
+    flags[i, k] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
+
+
+@njit(cache=True, inline="always")
+def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, a, b,
               flags):
-    """The three tests of every sample ``a..b`` of chain ``i``, into ``flags[i]`` (no branch: SIMD lanes); an
-    empty limit pair (``lo2 > hi2``) never passes."""
+    """The three tests of every sample ``a..b`` of chain ``i``, into ``flags[i]``, in SIMD lanes. The
+    run is first widened to a whole number of :data:`_LANES` samples (to the right, or to the left at
+    the stroke's end), so that the vector loop leaves no scalar remainder: a run is a few samples to a
+    few dozen (a last-level window holds 14-22 samples at the median), and each sample of the
+    remainder was a scalar pass with twelve square roots. A sample the widening adds gets the flags
+    of its own tests, which are as sound as any (the children read only the samples of their
+    window)."""
+    n = cos_t.shape[1]
+    w = ((b - a + _LANES) // _LANES) * _LANES
+    if w <= n:
+        b = min(a + w - 1, n - 1)
+        a = b - w + 1
     for k in range(a, b + 1):
-        p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb)
-        f1 = _passes(p1, q1, p2, q2, l1, h1, rho_lo, rho_hi) & (l1 <= h1)
-        f0 = _passes(p1, q1, p2, q2, l0, h0, rho_lo, rho_hi) & (l0 <= h0)
-        fx = _passes(p1, q1, p2, q2, lx, hx, rho_lo, rho_hi) & (lx <= hx)
-        flags[i, k - klo] = np.uint8(f1) | (np.uint8(f1 & f0) << 1) | (np.uint8(f1 & fx) << 2)
+        _flag_one(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, k,
+                  flags)
 
 
 @njit(cache=True, nogil=True)
 def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x,
                   flags):
-    """``flags[i, k - klo]`` for the samples ``klo..khi`` of chain ``i`` at the parent's centre
+    """``flags[i, k]`` for (at least) the samples ``klo..khi`` of chain ``i`` at the parent's centre
     (module docstring). A sub-arc whose whole-stroke bound rejects the chain with the ``R1`` limits
     (conservative over the continuous sub-arc, ends included) has no ``R1`` sample: no test there;
-    the samples of the other sub-arcs are tested in runs, all three tests each."""
+    the samples of the other sub-arcs get all three tests, in runs (:func:`_flag_run`; the sub-arcs
+    between two rejected ones in one run)."""
     b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
     l1, h1 = _limits2(lmin - r1, lmax + r1)
     l0, h0 = _limits2(lmin - r0, lmax + r0)
     lx, hx = _limits2(lmin + x, lmax - x)
     lo1, hi1 = max(lmin - r1, 0.0), lmax + r1
-    done = klo - 1  # samples up to here have their flags
-    for g in range(seg_k.shape[0]):
-        a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
-        if b < a or b <= done:
-            continue
-        if b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo1, hi1):
+    n_seg = seg_k.shape[0]
+    done = klo - 1  # samples up to here have their flags, or are in the pending run
+    run = -1  # the first sample of the pending run (-1: none)
+    for g in range(n_seg + 1):  # one step past the last sub-arc, to test the last run
+        a = b = 0
+        closed = False
+        if g < n_seg:
+            a, b = max(seg_k[g, 0], klo), min(seg_k[g, 1], khi)
+            if b < a or b <= done:
+                continue
+            closed = b - a >= 3 and not _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo,
+                                                      rho_hi, lo1, hi1)
+        if run >= 0 and (closed or g == n_seg):
+            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, run,
+                      done, flags)
+            run = -1
+        if closed:
             for k in range(a, b + 1):
-                flags[i, k - klo] = 0
-        else:
-            _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx,
-                      max(a, done + 1), b, klo, flags)
-        done = b
+                flags[i, k] = 0
+        elif g < n_seg and run < 0:
+            run = max(a, done + 1)
+        done = max(done, b)
 
 
 @njit(cache=True, nogil=True)
@@ -155,9 +188,9 @@ def _visited(k, seg_k, seg_state, narrow, b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_
 
 @njit(cache=True, inline="always")
 def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
-                 e_bound, e_relax, e_tight, can_ok, kwin, c, flags, flo, lists, counts, seg_state, need_window):
+                 e_bound, e_relax, e_tight, can_ok, kwin, c, flags, lists, counts, seg_state, need_window):
     """:func:`kinematics.blocks.decide_chain`'s decision for one child, visiting only the samples
-    its parent's ``flags`` (from sample ``flo``) leave open (module docstring); its window too when
+    its parent's ``flags`` leave open (module docstring); its window too when
     ``need_window``. A sample that passes the tight test lies in an open sub-arc (the sub-arc bounds
     reject only poses at least ``2 delta`` outside the tight limits), so the tight tests come first,
     and the bounds are computed only for the sub-arcs of samples that pass the relaxed test.
@@ -188,7 +221,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
     if n_r0 + n_r1 == 0:  # no sample can pass the relaxed test (R0 and X imply R1), nor the tight one
         return FAIL
     if can_ok:
-        if flags[i, hint - flo] & _X and _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint],
+        if flags[i, hint] & _X and _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint],
                                                         sin_t[i, hint], hb, rho_lo, rho_hi, lo_t2, hi_t2):
             kwin[c, i, 0] = hint
             return OK
@@ -199,7 +232,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             # both tests must pass (as in decide_chain): the tight one first, it fails more often
             if feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2,
                               hi_t2):
-                if flags[i, k - flo] & _R0 or _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k],
+                if flags[i, k] & _R0 or _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k],
                                                              hb, rho_lo, rho_hi, lo_r2, hi_r2):
                     kwin[c, i, 0] = k
                     return OK
@@ -270,7 +303,7 @@ def _sample_lists(flags, i, klo, khi, lists, counts):
     ``lists[1]`` with ``R0``, ``lists[2]`` with ``R1`` but not ``R0``, ascending."""
     n_x = n_r0 = n_r1 = 0
     for k in range(klo, khi + 1):
-        f = flags[i, k - klo]
+        f = flags[i, k]
         if f & _X:
             lists[i, 0, n_x] = k
             n_x += 1
@@ -313,13 +346,11 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
         flags = np.empty((3, n), np.uint8)
         lists = np.empty((3, 3, n), np.int64)
         counts = np.empty((3, 3), np.int64)
-        flo = np.empty(3, np.int64)
         done = np.empty(3, np.bool_)
         seg_state = np.zeros(seg_k.shape[0], np.int8)
         kw = np.empty((8, 3, 3), np.int64)  # the windows of the parent's children
         for p in range(chunk * _CHUNK, min(m, (chunk + 1) * _CHUNK)):
             counts[:] = 0
-            flo[:] = 0
             done[:] = False
             for j in range(8):
                 c = 8 * p + j
@@ -341,14 +372,13 @@ def children_kernel(parents, pbits, pwin, size, eps, arc_slack, zfloor,
                     if not done[i]:
                         klo = max(pwin[p, i, 1], 0)
                         khi = min(pwin[p, i, 2], n - 1)
-                        flo[i] = klo
                         if klo <= khi:
                             _parent_flags(parents[p, 0], parents[p, 1], parents[p, 2], u, i, cos_t, sin_t, seg_k,
                                           seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x, flags)
                             _sample_lists(flags, i, klo, khi, lists, counts)
                         done[i] = True
                     st = _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,
-                                      lmax, delta + eps, e_relax, e_tight, not below, kw, j, flags, flo[i], lists,
+                                      lmax, delta + eps, e_relax, e_tight, not below, kw, j, flags, lists,
                                       counts, seg_state, need_window)
                     if st == FAIL:
                         cls = OUTSIDE

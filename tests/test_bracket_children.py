@@ -22,8 +22,10 @@ from paraspace.kinematics.bracket import (
     cube_classes,
     volume_bracket,
 )
-from paraspace.kinematics.bracket_children import children_kernel, has_cones
+from paraspace.kinematics.blocks import _segment_open, sub_arcs
+from paraspace.kinematics.bracket_children import _limits2, _parent_flags, children_kernel, has_cones
 from paraspace.kinematics.design import Design, ParameterError
+from paraspace.kinematics.feasibility import ChainTables, chain_points, feasible_plain
 from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.kernel_args import kernel_args
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
@@ -80,6 +82,55 @@ def test_every_child_as_the_per_child_kernel(design, orientation, z_floor):
         else:  # the last level leaves the windows alone (the bracket passes an empty array there)
             assert (kw == -7).all()
         centres, pbits, pwin = kids[left], ref_bits[left], ref_win[left]
+
+
+@pytest.mark.parametrize("n", [3, 7, 8, 9, 17, 61, 241])
+def test_the_parent_flags_are_each_samples_own_tests(n):
+    """The flag pass (runs of open sub-arcs widened to whole SIMD registers, so they reach past a
+    window, or back from the stroke's end) against each sample's own three tests, one at a time
+    with ``feasible_plain``: every sample of the window has exactly its tests' flags, or none where
+    its sub-arc's bound rejects the chain; a sample outside the window is untouched or has its own
+    flags too. Strokes of fewer samples than a register take the plain loop."""
+    design = Design()
+    res, args = _setup(design, (0.0, 0.0, 0.0), 8.0)
+    u, _, _, _, hb, rho_lo, rho_hi, lmin2, lmax2, _ = args
+    lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
+    tab = ChainTables(design, n)
+    cos_t, sin_t = tab.cos_t, tab.sin_t
+    seg_k, seg_arc = sub_arcs(cos_t, sin_t, 6)
+    bits = np.zeros(res.grid.shape, np.uint8)
+    cls = cube_classes(design, res.grid, args, res.n_eta, 0.0, chain_bits=bits)
+    rng = np.random.default_rng(n)
+    centres = np.asarray(res.grid.origin) + res.grid.h * np.argwhere(cls == BOUNDARY)
+    centres = centres[rng.choice(centres.shape[0], 60, replace=False)] + rng.uniform(-2.0, 2.0, (60, 3))
+    r1, r0, x = 3.0, 1.0, 0.5  # relaxations and tightening of the kernel's size, in units
+    lims = [_limits2(lmin - r1, lmax + r1), _limits2(lmin - r0, lmax + r0), _limits2(lmin + x, lmax - x)]
+    seen = {0: 0, 1: 0, 3: 0, 7: 0, "rejected": 0, "outside": 0}
+    for c in centres:
+        for i in range(3):
+            klo, khi = sorted(rng.integers(0, n, 2).tolist())
+            if rng.random() < 0.3:  # windows at the stroke's ends
+                klo, khi = (0, min(khi, 5)) if rng.random() < 0.5 else (max(klo, n - 6), n - 1)
+            flags = np.full((3, n), 99, np.uint8)
+            _parent_flags(c[0], c[1], c[2], u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax,
+                          klo, khi, r1, r0, x, flags)
+            b = chain_points(c[0], c[1], c[2], u, i)
+            for k in range(n):
+                tests = [lo2 <= hi2 and feasible_plain(*b, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo2, hi2)
+                         for lo2, hi2 in lims]
+                own = int(tests[0]) | int(tests[0] and tests[1]) << 1 | int(tests[0] and tests[2]) << 2
+                rejected = any(a <= k <= e and e - a >= 3 and not _segment_open(
+                    *b, hb, seg_arc, i, g, rho_lo, rho_hi, max(lmin - r1, 0.0), lmax + r1)
+                    for g, (a, e) in enumerate(seg_k))
+                if klo <= k <= khi:
+                    assert flags[i, k] == own or (flags[i, k] == 0 and rejected), (n, i, k, klo, khi)
+                    seen[own] += 1
+                    seen["rejected"] += int(rejected)
+                else:
+                    assert flags[i, k] in (99, own), (n, i, k, klo, khi)
+                    seen["outside"] += int(flags[i, k] == own)
+    if n >= 17:  # every kind of sample met
+        assert min(seen.values()) > 0, seen
 
 
 @pytest.mark.parametrize("design, orientation, z_floor", CASES)
