@@ -110,8 +110,11 @@ def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
     if w <= n:
         b = min(a + w - 1, n - 1)
         a = b - w + 1
-    for k in range(a, b + 1):
-        _flag_one(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, k,
+    # unsigned sample indices: numba wraps a signed index that may be negative around the axis, and
+    # LLVM then gathers the tables lane by lane instead of loading them (1.6x the time per sample)
+    ua = np.uint64(a)
+    for t in range(np.uint64(b - a + 1)):
+        _flag_one(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, ua + t,
                   flags)
 
 
