@@ -225,7 +225,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
         return FAIL
     if can_ok:
         if flags[i, hint] & _X and _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, hint],
-                                                        sin_t[i, hint], hb, rho_lo, rho_hi, lo_t2, hi_t2):
+                                                  sin_t[i, hint], hb, rho_lo, rho_hi, lo_t2, hi_t2):
             kwin[c, i, 0] = hint
             return OK
         for t in range(n_x):
@@ -236,7 +236,7 @@ def _child_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo
             if feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k], hb, rho_lo, rho_hi, lo_t2,
                               hi_t2):
                 if flags[i, k] & _R0 or _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, cos_t[i, k], sin_t[i, k],
-                                                             hb, rho_lo, rho_hi, lo_r2, hi_r2):
+                                                       hb, rho_lo, rho_hi, lo_r2, hi_r2):
                     kwin[c, i, 0] = k
                     return OK
     lo_b = max(lmin - e_bound, 0.0)
