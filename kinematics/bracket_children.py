@@ -134,7 +134,8 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
     n_seg = seg_k.shape[0]
     done = klo - 1  # samples up to here have their flags, or are in the pending run
     run = -1  # the first sample of the pending run (-1: none)
-    for g in range(n_seg + 1):  # one step past the last sub-arc, to test the last run
+    # one step past the last sub-arc flushes the last run: the inlined vector loop has one call site
+    for g in range(n_seg + 1):
         a = b = 0
         closed = False
         if g < n_seg:
@@ -147,12 +148,14 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
             _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, l1, h1, l0, h0, lx, hx, run,
                       done, flags)
             run = -1
+        if g == n_seg:
+            break
         if closed:
             for k in range(a, b + 1):
                 flags[i, k] = 0
-        elif g < n_seg and run < 0:
+        elif run < 0:
             run = max(a, done + 1)
-        done = max(done, b)
+        done = b
 
 
 @njit(cache=True, nogil=True)

@@ -98,9 +98,9 @@ def test_packed_rows_across_words_equal_scipy(rv):
 @pytest.mark.parametrize("threads", [1, 2, 3])
 def test_the_dilation_does_not_depend_on_its_slabs(threads):
     """The dilation deals the x planes in slabs (two per thread) that build their own z dilations of
-    the planes they read, ``w`` on either side: with 1, 2 and 3 threads (at most the machine's), on grids of fewer x planes
-    than slabs and with a ball wider than a slab (every slab's halo reaching past the grid), the
-    same voxels as scipy."""
+    the planes they read, ``w`` on either side: with 1, 2 and 3 threads (at most the machine's), on
+    grids of fewer x planes than slabs and with a ball wider than a slab (every slab's halo reaching
+    past the grid), the same voxels as scipy."""
     import numba
 
     rng = np.random.default_rng(threads)
