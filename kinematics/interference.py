@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design
-from .feasibility import chain_excluded_at, chain_points, feasible_rho
+from .feasibility import _leg_frames, _leg_intervals, chain_excluded_at, chain_points, cones_set, feasible_rho
 from .geometry import platform_points_local
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
@@ -101,6 +101,70 @@ def pose_scratch(n):
             np.empty((2, 3), np.int64))
 
 
+@njit(cache=True, inline="always")
+def _probe_clears(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
+    """Whether the two legs of the carriage at ``rho`` on the rail ``(c, s)`` are at least ``dmin``
+    apart (S joints ``B_1``, ``B_2``)."""
+    x1, y1 = rho * c - hb * s, rho * s + hb * c
+    x2, y2 = rho * c + hb * s, rho * s - hb * c
+    return segment_distance(x1, y1, 0.0, b1x, b1y, b1z, x2, y2, 0.0, b2x, b2y, b2z) >= dmin
+
+
+@njit(cache=True, inline="always")
+def _piece_witness(lo, hi, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
+    """The first probe of one feasible interval ``[lo, hi]`` of ``rho`` at which the carriage's own two
+    legs clear each other (module doc, step 2: its ends, then its middle), or NaN when none does."""
+    if _probe_clears(lo, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
+        return lo
+    if _probe_clears(hi, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
+        return hi
+    mid = 0.5 * (lo + hi)
+    if _probe_clears(mid, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
+        return mid
+    return math.nan
+
+
+@njit(cache=True)
+def _sample_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, dmin, pieces):
+    """The witness ``rho`` of one arc sample (module doc, step 2): the first probe, interval by interval
+    of :func:`kinematics.feasibility.feasible_rho` (cut by the joint cones of ``jci``), at which the
+    carriage's own legs clear; NaN when the sample does not serve the chain or no probe clears.
+    ``pieces`` (4, 2): scratch."""
+    npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, pieces)
+    for pc in range(npc):
+        rho = _piece_witness(pieces[pc, 0], pieces[pc, 1], c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin)
+        if rho == rho:
+            return rho
+    return math.nan
+
+
+@njit(cache=True)
+def _plain_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, dmin):
+    """:func:`_sample_witness` for a chain without joint cones, the same number (tested): the same
+    intervals in the same order (both legs' (F2) sets met on the rail, as ``feasible_rho`` meets them),
+    from numbers only. No array argument and no scratch: the witness search of a voxel near the
+    workspace's boundary visits dozens of samples that do not serve, and a call with arrays (two
+    for ``feasible_rho``) costs more than their test."""
+    p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
+    n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lmin2, lmax2)
+    if n1 == 0:
+        return math.nan
+    n2, c0, c1, c2, c3 = _leg_intervals(p2, q2, lmin2, lmax2)
+    if n2 == 0:
+        return math.nan
+    for ua in range(n1):
+        lo_a, hi_a = (a0, a1) if ua == 0 else (a2, a3)
+        for ub in range(n2):
+            lo_b, hi_b = (c0, c1) if ub == 0 else (c2, c3)
+            lo = max(lo_a, lo_b, rho_lo)
+            hi = min(hi_a, hi_b, rho_hi)
+            if lo <= hi:
+                rho = _piece_witness(lo, hi, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin)
+                if rho == rho:
+                    return rho
+    return math.nan
+
+
 @njit(cache=True)
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
                cap, wit, skip, sb, pieces):
@@ -109,9 +173,10 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
     ``k`` with ``skip[sb, i, k]`` are passed over: the caller knows they are no witness (all False:
     every sample is tried). The tables (``cos_t``, ``sin_t``, ``skip`` (m, 3, n), ``jc``) are read in
     place: a view costs two atomic reference counts, on tables every thread shares. ``pieces`` (4,
-    2): scratch."""
+    2): scratch. A chain without joint cones is tested from numbers only (:func:`_plain_witness`)."""
     n = cos_t.shape[1]
     jci = jc[i]
+    plain = not cones_set(jci)
     cnt = 0
     mid = n // 2
     for step in range(n):
@@ -120,22 +185,16 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
         if k < 0 or k >= n or skip[sb, i, k]:
             continue
         c, s = cos_t[i, k], sin_t[i, k]
-        npc = feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, pieces)
-        found = False
-        for pc in range(npc):
-            for probe in range(3):
-                rho = pieces[pc, 0] if probe == 0 else (pieces[pc, 1] if probe == 1
-                                                        else 0.5 * (pieces[pc, 0] + pieces[pc, 1]))
-                x1, y1 = rho * c - hb * s, rho * s + hb * c
-                x2, y2 = rho * c + hb * s, rho * s - hb * c
-                if segment_distance(x1, y1, 0.0, b1x, b1y, b1z, x2, y2, 0.0, b2x, b2y, b2z) >= dmin:
-                    wit[i, cnt, 0], wit[i, cnt, 1], wit[i, cnt, 2] = x1, y1, 0.0
-                    wit[i, cnt, 3], wit[i, cnt, 4], wit[i, cnt, 5] = x2, y2, 0.0
-                    cnt += 1
-                    found = True
-                    break
-            if found:
-                break
+        if plain:
+            rho = _plain_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, dmin)
+        else:
+            rho = _sample_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, dmin,
+                                  pieces)
+        if rho != rho:
+            continue
+        wit[i, cnt, 0], wit[i, cnt, 1], wit[i, cnt, 2] = rho * c - hb * s, rho * s + hb * c, 0.0
+        wit[i, cnt, 3], wit[i, cnt, 4], wit[i, cnt, 5] = rho * c + hb * s, rho * s - hb * c, 0.0
+        cnt += 1
         if cnt >= cap:
             break
     return cnt

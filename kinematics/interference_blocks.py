@@ -181,12 +181,11 @@ def _no_split(ga, gb, ha, hb, r0, r1):
     return ga > gb or gb <= r0 or ga >= r1 or (ha < hb and (ha < r0 or hb > r1))
 
 
-@njit(cache=True)
-def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
-    """Lower and upper bounds ``(lo, hi, d0)`` of the distance of the two legs of one carriage (S
-    joints ``B_1 = (b1x, b1y, b1z)`` and ``B_2``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
-    before the move) after the platform and the carriage move so that leg 1's vector ``X = B_1 -
-    D_1`` moves by at most ``shift`` (module doc, own legs)."""
+@njit(cache=True, inline="always")
+def _own_closest(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z):
+    """The two legs of one carriage (at ``rho`` on the rail ``(c, s)``, S joints ``B_1``, ``B_2``):
+    their closest points' parameters ``(s0, t0)``, the legs' vectors ``a = B_1 - D_1`` and ``q = B_2 -
+    D_2``, the vector ``w`` between the closest points and its length ``d0``, as numbers."""
     x1, y1 = _u_joints(rho, c, s, hb, 0)
     x2, y2 = _u_joints(rho, c, s, hb, 1)
     s0, t0 = segment_closest(x1, y1, 0.0, b1x, b1y, b1z, x2, y2, 0.0, b2x, b2y, b2z)
@@ -196,6 +195,16 @@ def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
     wy = y1 + ay * s0 - (y2 + qy * t0)
     wz = az * s0 - qz * t0
     d0 = math.sqrt(wx * wx + wy * wy + wz * wz)
+    return s0, t0, ax, ay, az, qx, qy, qz, wx, wy, wz, d0
+
+
+@njit(cache=True)
+def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
+    """Lower and upper bounds ``(lo, hi, d0)`` of the distance of the two legs of one carriage (S
+    joints ``B_1 = (b1x, b1y, b1z)`` and ``B_2``, the carriage at ``rho`` on the rail ``(c, s)``; ``d0`` the distance
+    before the move) after the platform and the carriage move so that leg 1's vector ``X = B_1 -
+    D_1`` moves by at most ``shift`` (module doc, own legs)."""
+    s0, t0, ax, ay, az, qx, qy, qz, wx, wy, wz, d0 = _own_closest(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z)
     lam = abs(s0 - t0)
     hi = d0 + lam * shift
     # f = |w|^2 grows from (s0, t0) by at least |xi_s a - xi_t b|^2 less the KKT residual of (s0, t0)
@@ -222,23 +231,38 @@ def _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
 
 
 @njit(cache=True)
+def _own_upper(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift):
+    """The upper bound and the distance before the move, ``(hi, d0)``, of :func:`_own_bounds` (the same
+    numbers), without the lower bound: the test that a sample's own legs always collide needs only
+    these, and it runs at most samples the blocks visit."""
+    s0, t0, _, _, _, _, _, _, _, _, _, d0 = _own_closest(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z)
+    return d0 + abs(s0 - t0) * shift, d0
+
+
+@njit(cache=True)
 def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear):
     """Whether the two legs of one carriage (S joints ``B_1``, ``B_2``) are at least ``thr`` apart
     (``clear``) or below ``thr`` (not ``clear``) for every ``rho`` in ``[r0, r1]`` and every platform
-    move of at most ``e`` (bisection of the rail range with :func:`_own_bounds`, at most
-    :data:`MAX_EVAL` bounds). The bisection walks the dyadic pieces ``[r0 + j w, r0 + (j + 1) w]``,
-    ``w = (r1 - r0) / 2^d``, depth first (the right half first) by their indices ``(d, j)`` alone: no
-    stack, so no array argument (numba counts an atomic reference on each, in a function that
-    loops)."""
+    move of at most ``e`` (bisection of the rail range with :func:`_own_bounds`'s lower bound, or
+    :func:`_own_upper`'s upper one, at most :data:`MAX_EVAL` bounds). The bisection walks the dyadic
+    pieces ``[r0 + j w, r0 + (j + 1) w]``, ``w = (r1 - r0) / 2^d``, depth first (the right half
+    first) by their indices ``(d, j)`` alone: no stack, so no array argument (numba counts an atomic
+    reference on each, in a function that loops)."""
     d = 0
     j = 0
     evals = 0
     while True:
         w = (r1 - r0) / (1 << d)
         a, b = r0 + j * w, r0 + (j + 1) * w
-        lo, hi, d0 = _own_bounds(0.5 * (a + b), c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, e + 0.5 * (b - a))
+        rho, shift = 0.5 * (a + b), e + 0.5 * (b - a)
+        if clear:
+            lo, _, d0 = _own_bounds(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift)
+            decided = lo >= thr
+        else:
+            hi, d0 = _own_upper(rho, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, shift)
+            decided = hi <= thr
         evals += 1
-        if (lo >= thr) if clear else (hi <= thr):  # this piece is decided: on to the next
+        if decided:  # this piece is decided: on to the next
             while d > 0 and j % 2 == 0:  # a left half: its parent is done too
                 j //= 2
                 d -= 1

@@ -117,6 +117,75 @@ def test_own_legs_bisection_holds_for_sampled_rho_and_moves():
     assert min(said.values()) > 20  # every answer is exercised
 
 
+def test_own_upper_bound_alone_is_the_one_of_both_bounds():
+    """``_own_upper`` (the upper bound alone, for the test that a sample's own legs always collide) gives
+    the very ``(hi, d0)`` of ``_own_bounds`` at random carriages, S joints and shifts."""
+    from paraspace.kinematics.interference_blocks import _own_upper
+
+    design = Design()
+    rng = np.random.default_rng(29)
+    hb = 0.5 * design.b
+    for _ in range(2000):
+        eta = rng.uniform(-0.5, 0.5)
+        c, s = np.cos(eta), np.sin(eta)
+        rho = rng.uniform(30.0, 110.0)
+        b = np.array([[rng.uniform(-60, 60), rng.uniform(-60, 60), rng.uniform(40, 220)] for _ in range(2)])
+        b[1] = b[0] + rng.normal(size=3) * rng.uniform(0.5, 30.0)
+        shift = rng.uniform(0.0, 8.0)
+        lo, hi, d0 = _own_bounds(rho, c, s, hb, *b[0], *b[1], shift)
+        assert _own_upper(rho, c, s, hb, *b[0], *b[1], shift) == (hi, d0)
+
+
+def test_witness_without_cones_is_the_general_one():
+    """``_plain_witness`` (numbers only, for chains without joint cones) returns the very ``rho`` of
+    ``_sample_witness`` (``feasible_rho``'s intervals, then each one's probes) with a cone table that
+    sets no cone, at random poses, samples and clearances: no witness because the sample does not
+    serve, no witness because every probe collides, and a witness at an interval's low end and at its
+    high end all occur. (An interval's middle never was the first probe to clear in these samples, nor
+    in 200,000 more: the own legs' distance had no maximum inside a feasible interval. Both functions
+    probe it with the same code, :func:`_piece_witness`.)"""
+    from paraspace.kinematics.feasibility import ChainTables, chain_points, feasible_rho
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.interference import _plain_witness, _sample_witness
+    from paraspace.kinematics.joints import cone_table
+
+    design = Design()
+    tab = ChainTables(design, 61)
+    u = np.ascontiguousarray(platform_points_local(design))
+    jc = np.ascontiguousarray(cone_table(design, Joints(), np.eye(3)))
+    assert (jc[:, :, 6:8] == -1.0).all()  # no cone set
+    rng = np.random.default_rng(31)
+    pieces = np.empty((4, 2))
+    seen = {"does not serve": 0, "every probe collides": 0, "low end": 0, "high end": 0}
+    for _ in range(6000):
+        p = rng.uniform((-150, -150, 60), (150, 150, 260))
+        i, k = int(rng.integers(3)), int(rng.integers(61))
+        pts = chain_points(*p, u, i)
+        if rng.uniform() < 0.5:  # the second S joint moved about: own legs that cross, at some rho
+            pts = (*pts[:3], *(np.array(pts[:3]) + rng.normal(size=3) * 20.0))
+        c, s = tab.cos_t[i, k], tab.sin_t[i, k]
+        args = (*pts, c, s, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2)
+        npc = feasible_rho(*args, jc[i], pieces)
+        # a clearance about the own legs' distances at the first interval's probes: every outcome occurs
+        probes = [pieces[0, 0], pieces[0, 1], 0.5 * (pieces[0, 0] + pieces[0, 1])] if npc else [100.0]
+        dist = [segment_distance(r * c - tab.hb * s, r * s + tab.hb * c, 0.0, *pts[:3],
+                                 r * c + tab.hb * s, r * s - tab.hb * c, 0.0, *pts[3:]) for r in probes]
+        dmin = rng.uniform(0.0, 1.3 * max(dist))
+        a = _sample_witness(*args, jc[i], dmin, pieces)
+        b = _plain_witness(*args, dmin)
+        assert (np.isnan(a) and np.isnan(b)) or a == b
+        npc = feasible_rho(*args, jc[i], pieces)
+        if npc == 0:
+            seen["does not serve"] += 1
+        elif np.isnan(a):
+            seen["every probe collides"] += 1
+        else:
+            ends = [(lo, hi) for lo, hi in pieces[:npc] if lo <= a <= hi][0]
+            kind = "low end" if a == ends[0] else ("high end" if a == ends[1] else "middle")
+            seen[kind] = seen.get(kind, 0) + 1
+    assert min(seen.values()) > 10, seen
+
+
 def test_relaxed_hull_without_cones_is_the_general_one():
     """``_relaxed_hull_plain`` (numbers only, for chains without joint cones) gives the very numbers of
     ``_relaxed_hull`` with a cone table that sets no cone, at random poses, samples and limits."""
