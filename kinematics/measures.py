@@ -246,7 +246,7 @@ from .progress import CancelToken, check
 from .run_components import RunComponents, grid_runs
 from .serialize import jsonable
 from .void_flood import _contiguous
-from .voids import _structure, _void_box, _voids, dual_connectivity, sealed_box
+from .voids import _structure, _void_box, _voids, dual_connectivity, sealed_box, x_ends
 from .workspace import WorkspaceResult, _touching_faces
 
 FACE_NAMES: tuple[str, ...] = ("x-", "x+", "y-", "y+", "z-", "z+")
@@ -629,8 +629,13 @@ class _Steps:
         piece_set = occ if n_pieces == components else comps.mask(is_piece)
         return components, largest, n_pieces, fragment_fraction, piece_set
 
+    def _x_ends(self):
+        """The solid's first and last voxel on each x line (:func:`kinematics.voids.x_ends`), read by
+        the voids and, moved up one layer, by the cavities (:func:`kinematics.voids.floored_x_ends`)."""
+        return x_ends(self.get("zruns"), self.occ.shape)
+
     def _voids(self):
-        voids_m, n_voids = _voids(self.occ, self.o["connectivity"], self.get("zruns"))
+        voids_m, n_voids = _voids(self.occ, self.o["connectivity"], self.get("zruns"), self.get("x_ends"))
         return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
 
     def _chi_w(self):
@@ -680,7 +685,7 @@ class _Steps:
         if not n_under:  # nothing under the workspace: no open and no sealed cavity there
             return 0.0, 0.0
         found = sealed_box(self.occ, self.o["connectivity"], floor=self.o["floor_face"] is not None,
-                           runs=self.get("zruns"))
+                           runs=self.get("zruns"), ends=self.get("x_ends"))
         n_sealed = 0 if found is None else count_in_ranges(under, *found)
         n_open = n_under - n_sealed
         return float(n_open / (n_under + self.n)), n_sealed * self.vv

@@ -166,6 +166,31 @@ def _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx):
             _mark_runs(offs, rs, re, i * n1 + j, np.int32(i), fxj, lxj)
 
 
+def x_ends(runs: tuple, shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """``(fx, lx)``, each (n1, n2) int32: the first and last ``i`` of a voxel of the set on each x line
+    ``(j, k)`` (``n0`` and ``-1``: none), from the set's runs along z (:func:`_x_ends_runs_kernel`)."""
+    n0, n1, n2 = (int(n) for n in shape)
+    fx = np.empty((n1, n2), np.int32)
+    lx = np.empty((n1, n2), np.int32)
+    with KERNEL_LOCK:
+        _x_ends_runs_kernel(*runs, n0, n1, fx, lx)
+    return fx, lx
+
+
+def floored_x_ends(ends: tuple[np.ndarray, np.ndarray], n0: int) -> tuple[np.ndarray, np.ndarray]:
+    """The x ends (:func:`x_ends`) of the set on its base layer (:func:`_floored_runs`) from the set's
+    own: the set moved up one layer keeps each line's ends, and every line of the base layer is full
+    (``0`` to ``n0 - 1``). The same numbers as computed from the floored set's runs (tested), for the
+    copy of two small tables instead of a pass over every voxel of the set."""
+    fx, lx = ends
+    n1, n2 = fx.shape
+    ffx = np.empty((n1, n2 + 1), np.int32)
+    flx = np.empty((n1, n2 + 1), np.int32)
+    ffx[:, 0], flx[:, 0] = 0, n0 - 1
+    ffx[:, 1:], flx[:, 1:] = fx, lx
+    return ffx, flx
+
+
 @njit(cache=True, inline="always")
 def _y_ends_runs(offs, rs, re, i, n1, fy, ly):
     """:func:`_x_ends_runs_kernel` along y in slice ``i``: ``fy[k]``, ``ly[k]`` (rows of ``n1``, ``-1``)."""
@@ -314,7 +339,8 @@ def _box_of(ext: np.ndarray) -> tuple | None:
 
 
 def _candidates_box(occupancy: np.ndarray | None, runs: tuple | None = None,
-                    shape: tuple[int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray, tuple] | None:
+                    shape: tuple[int, int, int] | None = None,
+                    ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray, tuple] | None:
     """``(occ, candidates, box)``: the unreachable voxels enclosed along all three axes and the set,
     both cut to the candidates' bounding box grown by one voxel (:func:`_box_of`; contiguous arrays of
     its shape), and the box; ``None`` when there is no candidate.
@@ -323,7 +349,8 @@ def _candidates_box(occupancy: np.ndarray | None, runs: tuple | None = None,
     ``(offs, rs, re)``, when the caller holds them (the same voxels; ``occupancy`` may then be ``None``
     with ``shape`` the grid's): the candidates written only in the runs' gaps
     (:func:`_enclosed_runs_kernel`) and the set's voxels in the box painted from its runs
-    (:func:`_paint_box_kernel`), so no grid is cleared voxel by voxel and none is built for the set."""
+    (:func:`_paint_box_kernel`), so no grid is cleared voxel by voxel and none is built for the set.
+    ``ends``: the set's x ends (:func:`x_ends`) with ``runs``, when the caller holds them."""
     if runs is None:
         occ = np.ascontiguousarray(occupancy, dtype=np.bool_)
         if not occ.size:
@@ -346,12 +373,10 @@ def _candidates_box(occupancy: np.ndarray | None, runs: tuple | None = None,
     if not n0 * n1 * n2:
         return None
     offs, rs, re = runs
-    fx = np.empty((n1, n2), np.int32)
-    lx = np.empty((n1, n2), np.int32)
+    fx, lx = x_ends(runs, dims) if ends is None else ends
     ext = np.empty((n0, 4), np.int64)
     cand = np.zeros((n0, n1, n2), np.bool_)
     with KERNEL_LOCK:
-        _x_ends_runs_kernel(offs, rs, re, n0, n1, fx, lx)
         _enclosed_runs_kernel(offs, rs, re, n1, n2, fx, lx, cand, ext)
     box = _box_of(ext)
     if box is None:
@@ -380,11 +405,12 @@ def _voids_labelled_candidates(occupancy: np.ndarray, connectivity: int) -> tupl
 
 
 def _void_box(occupancy: np.ndarray | None, connectivity: int, runs: tuple | None = None,
-              shape: tuple[int, int, int] | None = None) -> tuple[np.ndarray, tuple] | None:
+              shape: tuple[int, int, int] | None = None,
+              ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, tuple] | None:
     """``(voids, box)``: the voids inside the box that bounds them (``None``: no void), the
-    candidates (:func:`_candidates_box`, with its ``runs`` and ``shape``) less the flood of
+    candidates (:func:`_candidates_box`, with its ``runs``, ``shape`` and ``ends``) less the flood of
     :mod:`kinematics.void_flood` from those that leak, which never visits a sealed cavity."""
-    found = _candidates_box(occupancy, runs, shape)
+    found = _candidates_box(occupancy, runs, shape, ends)
     if found is None:
         return None
     occ, cand, box = found
@@ -393,10 +419,11 @@ def _void_box(occupancy: np.ndarray | None, connectivity: int, runs: tuple | Non
     return (sub, box) if n_void else None
 
 
-def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, tuple | None]:
+def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None,
+              ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, tuple | None]:
     """``(void_mask, box)`` of :func:`_voids` without their number (:func:`_void_box` on the grid's
     shape; ``box`` bounds the voids, ``None``: no void)."""
-    found = _void_box(occupancy, connectivity, runs)
+    found = _void_box(occupancy, connectivity, runs, None, ends)
     if found is None:
         return np.zeros(np.shape(occupancy), np.bool_), None
     sub, box = found
@@ -406,7 +433,8 @@ def _void_set(occupancy: np.ndarray, connectivity: int, runs: tuple | None = Non
     return voids, box
 
 
-def _voids(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) -> tuple[np.ndarray, int]:
+def _voids(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None,
+           ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, int]:
     """``(void_mask, number of voids)`` without labelling the whole complement.
 
     An unreachable voxel with no reachable voxel on one side along some axis is joined to the
@@ -416,9 +444,10 @@ def _voids(occupancy: np.ndarray, connectivity: int, runs: tuple | None = None) 
     candidate (:func:`_void_set`); only the voids left are counted, as components of runs
     (:mod:`kinematics.run_components`; each void component is one candidate component: distinct
     candidate components are not adjacent). ``runs``: the set's runs ``(offs, rs, re)``, when the
-    caller holds them (:func:`_candidates_box`).
+    caller holds them (:func:`_candidates_box`), with their x ends ``ends`` (:func:`x_ends`) if it
+    holds those too.
     """
-    voids, box = _void_set(occupancy, connectivity, runs)
+    voids, box = _void_set(occupancy, connectivity, runs, ends)
     if box is None:
         return voids, 0
     return voids, count_components(voids[box], dual_connectivity(connectivity))
@@ -431,28 +460,35 @@ def void_mask(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarray:
 
 
 def sealed_box(occupancy: np.ndarray, connectivity: int = 1, floor: bool = True,
-               runs: tuple | None = None) -> tuple[np.ndarray, tuple[int, int, int]] | None:
+               runs: tuple | None = None,
+               ends: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, tuple[int, int, int]] | None:
     """:func:`sealed_mask` inside a box that bounds it: ``(sub, corner)``, the sealed voxels with the
     box's corner at ``corner`` in the grid (``None``: none). With ``floor`` the box is the floored
     grid's, one layer lower: its corner's ``k`` may be ``-1`` (that layer is the base, never sealed);
     only its part inside the grid counts. ``runs``: the set's runs, when the caller holds them (the
-    floored set's runs built from them, :func:`_floored_runs`: no floored grid)."""
+    floored set's runs built from them, :func:`_floored_runs`: no floored grid), and ``ends`` their
+    x ends (:func:`x_ends`) when it holds those too (the floored set's from them,
+    :func:`floored_x_ends`)."""
     occ = np.asarray(occupancy, dtype=bool)
     n0, n1, n2 = occ.shape
+    if runs is None:
+        ends = None
     if not floor:
-        found = _void_box(occ, connectivity, runs)
+        found = _void_box(occ, connectivity, runs, None, ends)
         shift = 0
     else:
         if runs is not None:
             floored = None
             with KERNEL_LOCK:
                 runs = _floored_runs(*runs)
+            if ends is not None:
+                ends = floored_x_ends(ends, n0)
         else:
             floored = np.empty((n0, n1, n2 + 1), np.bool_)
             if floored.size:
                 with KERNEL_LOCK:
                     _floored_kernel(np.ascontiguousarray(occ), floored)
-        found = _void_box(floored, connectivity, runs, (n0, n1, n2 + 1))
+        found = _void_box(floored, connectivity, runs, (n0, n1, n2 + 1), ends)
         shift = 1  # the floored grid's layer k + 1 is the grid's layer k
     if found is None:
         return None

@@ -385,7 +385,7 @@ def _slow_measures(monkeypatch):
 
     from paraspace.kinematics import measures as mod
 
-    def voids(occ, conn, runs=None):  # the set's runs are not used on this path
+    def voids(occ, conn, runs=None, ends=None):  # the set's runs and x ends are not used on this path
         v = voids_mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
@@ -558,7 +558,8 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
     """Issue 24 target 7 (cav7): the parallel kernels of the cavities step -- the candidates with
     their per-slice extents (from the grid and from its runs), the grid on its base layer (and its
     runs), the seed count that skips an empty flood,
-    the box's copy and paste, the open/sealed counts -- and the per-slice count and extent of the
+    the box's copy and paste, the open/sealed counts, the x ends of the grid on its base layer from the
+    grid's own -- and the per-slice count and extent of the
     grid (the measures' bounds and crop) give exactly their definitions or the former serial passes
     (the candidates from cumulative ors along each axis, numpy's ``any`` box, ``concatenate``,
     ``ascontiguousarray``, slice assignment, ``count_nonzero``) and the voids of the labelled
@@ -618,6 +619,9 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     if grid is floored:
                         built = voids_mod._floored_runs(*RunComponents(occ).runs)
                         assert all(np.array_equal(a, b) for a, b in zip(built, runs))
+                        # the floored grid's x ends from the set's own: the same as from its runs
+                        ffx, flx = voids_mod.floored_x_ends(voids_mod.x_ends(RunComponents(occ).runs, occ.shape), n0)
+                        assert np.array_equal(ffx, fx) and np.array_equal(flx, lx)
                     found = voids_mod._candidates_box(grid)
                     from_runs = voids_mod._candidates_box(None, runs, grid.shape)  # type: ignore[assignment]
                     if not old.any():
@@ -669,8 +673,10 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                             with_runs = voids_mod.sealed_mask(occ, conn, floor=floor, runs=RunComponents(occ).runs)
                             assert np.array_equal(with_runs, ref)
                         if occ.size:  # the sealed voxels in their box, counted under a random set
-                            for runs in (None, RunComponents(occ).runs):
-                                found = voids_mod.sealed_box(occ, conn, floor=floor, runs=runs)
+                            occ_runs = RunComponents(occ).runs
+                            for runs, ends in ((None, None), (occ_runs, None),
+                                               (occ_runs, voids_mod.x_ends(occ_runs, occ.shape))):
+                                found = voids_mod.sealed_box(occ, conn, floor=floor, runs=runs, ends=ends)
                                 assert (found is None) == (not ref.any())
                                 if found is None:
                                     continue
