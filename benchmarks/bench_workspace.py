@@ -311,7 +311,7 @@ def _former_measures():
 
     from paraspace.kinematics import measures as mod
 
-    def voids(occ, conn, runs=None):  # the set's runs are not used on this path
+    def voids(occ, conn, runs=None, ends=None):  # the set's runs and x ends are not used here
         v = voids_mod.void_mask_labelled(occ, conn)
         return v, int(ndi.label(v, structure=voids_mod._structure(voids_mod.dual_connectivity(conn)))[1])
 
@@ -395,16 +395,16 @@ def _measures_before_meas1():
 
     from paraspace.kinematics.run_components import RunComponents
 
-    def labelled_box(occ, conn, runs=None, shape=None):  # the voids by labelling, on the whole grid
+    def labelled_box(occ, conn, runs=None, shape=None, ends=None):  # the voids by labelling, on the whole grid
         if occ is None:  # given by its runs: the grid painted from them
             occ = RunComponents.of_runs(runs, shape).grid()
         voids, n = voids_mod._voids_labelled_candidates(occ, conn)
         return (voids, tuple(slice(0, m) for m in voids.shape)) if n else None
 
     hull, sealed_box = mod.hull_mask, voids_mod.sealed_box
-    patch = {"_voids": lambda occ, conn, runs=None: voids_mod._voids_labelled_candidates(occ, conn),
+    patch = {"_voids": lambda occ, conn, runs=None, ends=None: voids_mod._voids_labelled_candidates(occ, conn),
              "_void_box": labelled_box,  # the filled genus's voids
-             "sealed_box": lambda occ, conn=1, floor=True, runs=None: sealed_box(occ, conn, floor),  # on the grid
+             "sealed_box": lambda occ, conn=1, floor=True, runs=None, ends=None: sealed_box(occ, conn, floor),  # grid
              "hull_mask": lambda occ, raster=True: hull(occ, raster, extreme=False),
              "RunComponents": _grid_euler(mod.RunComponents, euler)}
     with _patched((mod, patch), (voids_mod, {"_void_box": labelled_box})):  # the sealed cavity's too
