@@ -286,6 +286,16 @@ def _feasible_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2
     return _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
 
 
+@njit(cache=True, inline="always")
+def piece_meet(ua, ub, a0, a1, a2, a3, c0, c1, c2, c3, rho_lo, rho_hi):
+    """The meet ``(lo, hi)`` of leg 1's interval ``ua`` (``[a0, a1]``, or ``[a2, a3]`` when ``ua`` is
+    1), leg 2's interval ``ub`` (``[c0, c1]`` or ``[c2, c3]``) and the rail ``[rho_lo, rho_hi]``;
+    empty when ``lo > hi``. :func:`feasible_rho`'s pieces are these, ``ua`` outer, ``ub`` inner."""
+    lo_a, hi_a = (a0, a1) if ua == 0 else (a2, a3)
+    lo_b, hi_b = (c0, c1) if ub == 0 else (c2, c3)
+    return max(lo_a, lo_b, rho_lo), min(hi_a, hi_b, rho_hi)
+
+
 @njit(cache=True)
 def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, out):
     """The feasible set of ``rho`` at one carriage angle as at most 4 intervals written to ``out``
@@ -296,11 +306,8 @@ def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
         return 0
     cnt = 0
     for u in range(n1):
-        lo_a, hi_a = (a0, a1) if u == 0 else (a2, a3)
         for v in range(n2):
-            lo_b, hi_b = (c0, c1) if v == 0 else (c2, c3)
-            lo = max(lo_a, lo_b, rho_lo)
-            hi = min(hi_a, hi_b, rho_hi)
+            lo, hi = piece_meet(u, v, a0, a1, a2, a3, c0, c1, c2, c3, rho_lo, rho_hi)
             if lo <= hi:
                 out[cnt, 0] = lo
                 out[cnt, 1] = hi

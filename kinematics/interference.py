@@ -34,7 +34,15 @@ import numpy as np
 from numba import njit, prange
 
 from .design import Design
-from .feasibility import _leg_frames, _leg_intervals, chain_excluded_at, chain_points, cones_set, feasible_rho
+from .feasibility import (
+    _leg_frames,
+    _leg_intervals,
+    chain_excluded_at,
+    chain_points,
+    cones_set,
+    feasible_rho,
+    piece_meet,
+)
 from .geometry import platform_points_local
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
@@ -141,10 +149,10 @@ def _sample_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin
 @njit(cache=True)
 def _plain_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, dmin):
     """:func:`_sample_witness` for a chain without joint cones, the same number (tested): the same
-    intervals in the same order (both legs' (F2) sets met on the rail, as ``feasible_rho`` meets them),
-    from numbers only. No array argument and no scratch: the witness search of a voxel near the
-    workspace's boundary visits dozens of samples that do not serve, and a call with arrays (two
-    for ``feasible_rho``) costs more than their test."""
+    intervals in the same order (both legs' (F2) sets met on the rail by ``piece_meet``, as
+    ``feasible_rho`` meets them), from numbers only. No array argument and no scratch: the witness
+    search of a voxel near the workspace's boundary visits dozens of samples that do not serve, and
+    a call with arrays (two for ``feasible_rho``) costs more than their test."""
     p1, _, q1, p2, _, q2 = _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb)
     n1, a0, a1, a2, a3 = _leg_intervals(p1, q1, lmin2, lmax2)
     if n1 == 0:
@@ -153,11 +161,8 @@ def _plain_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2
     if n2 == 0:
         return math.nan
     for ua in range(n1):
-        lo_a, hi_a = (a0, a1) if ua == 0 else (a2, a3)
         for ub in range(n2):
-            lo_b, hi_b = (c0, c1) if ub == 0 else (c2, c3)
-            lo = max(lo_a, lo_b, rho_lo)
-            hi = min(hi_a, hi_b, rho_hi)
+            lo, hi = piece_meet(ua, ub, a0, a1, a2, a3, c0, c1, c2, c3, rho_lo, rho_hi)
             if lo <= hi:
                 rho = _piece_witness(lo, hi, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin)
                 if rho == rho:
