@@ -540,18 +540,28 @@ def test_link_problems_note_closes_at_the_first_change(explorer, browsers):
 def test_typed_value_outside_the_slider_waits_for_the_pause_and_its_link_restores_it(explorer, browsers):
     """Issue 8 defects 1 and 2: typing "80" sends "8" first; a value outside the slider's Table I
     range is applied only when typing pauses, so "8" followed at once by "80" never computes a = 8;
-    a = 8 itself (typed and left) is applied, and the link written for it restores a = 8 exactly."""
+    a = 8 itself (typed and left) is applied, and the link written for it restores a = 8 exactly.
+    The two keystrokes are sent at once; a machine loaded by other work can still hand them to the
+    session further apart than the pause (seen once in CI, with the other worker compiling), and then
+    applying "8" is what the explorer promises: the test tells the two cases apart by when the server
+    dispatched each keystroke."""
+    from paraspace.app.explorer.design_controller import TYPING_PAUSE
+
     b = browsers("voxel=6")
     s = b.session
     wait_idle(explorer, s)
     seen: list[float] = []
     orig = s.design_controller.apply_design
     s.design_controller.apply_design = lambda d: (seen.append(d.a), orig(d))[1]
+    arrived: list[float] = []
+    s.panels.design["a"].on_update(lambda _event: arrived.append(time.monotonic()))
     b.set(s.panels.design["a"], 8.0)
     b.set(s.panels.design["a"], 80.0)
     wait_for(lambda: s.state.design.a == 80.0, 5.0, "a = 80 applied")
     time.sleep(1.2)  # longer than the typing pause: the "8" must not come back
-    assert 8.0 not in seen and s.state.design.a == 80.0
+    assert s.state.design.a == 80.0
+    if 8.0 in seen:  # only where the server got the keystrokes a typing pause apart
+        assert len(arrived) >= 2 and arrived[1] - arrived[0] >= 0.9 * TYPING_PAUSE, (seen, arrived)
     b.set(s.panels.design["a"], 8.0)
     wait_for(lambda: s.state.design.a == 8.0, 5.0, "a = 8 applied after the pause")
     wait_for(lambda: "a=8&" in b.search, 5.0, "the link")
