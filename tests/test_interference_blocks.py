@@ -16,6 +16,21 @@ from paraspace.kinematics.rotation import euler_zyx_deg
 from paraspace.kinematics.workspace import INTERFERENCE, WorkspaceSettings, compute_workspace
 
 
+def _tables_without_cones():
+    """``(design, tables, u, jc)`` of the default design with 61 arc samples, its platform points at
+    zero orientation and a cone table that sets no cone (checked)."""
+    from paraspace.kinematics.feasibility import ChainTables
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.joints import cone_table
+
+    design = Design()
+    tab = ChainTables(design, 61)
+    u = np.ascontiguousarray(platform_points_local(design))
+    jc = np.ascontiguousarray(cone_table(design, Joints(), np.eye(3)))
+    assert (jc[:, :, 6:8] == -1.0).all()  # no cone set
+    return design, tab, u, jc
+
+
 @pytest.mark.parametrize("design,joints,orient,h", [
     (Design(), Joints(leg_diameter=10.0), (0.0, 0.0, 0.0), 3.0),
     (Design(), Joints(leg_diameter=6.0, clearance=1.0), (0.0, 0.0, 0.0), 3.5),
@@ -144,16 +159,10 @@ def test_witness_without_cones_is_the_general_one():
     high end all occur. (An interval's middle never was the first probe to clear in these samples, nor
     in 200,000 more: the own legs' distance had no maximum inside a feasible interval. Both functions
     probe it with the same code, :func:`_piece_witness`.)"""
-    from paraspace.kinematics.feasibility import ChainTables, chain_points, feasible_rho
-    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.feasibility import chain_points, feasible_rho
     from paraspace.kinematics.interference import _plain_witness, _sample_witness
-    from paraspace.kinematics.joints import cone_table
 
-    design = Design()
-    tab = ChainTables(design, 61)
-    u = np.ascontiguousarray(platform_points_local(design))
-    jc = np.ascontiguousarray(cone_table(design, Joints(), np.eye(3)))
-    assert (jc[:, :, 6:8] == -1.0).all()  # no cone set
+    design, tab, u, jc = _tables_without_cones()
     rng = np.random.default_rng(31)
     pieces = np.empty((4, 2))
     seen = {"does not serve": 0, "every probe collides": 0, "low end": 0, "high end": 0}
@@ -189,16 +198,10 @@ def test_witness_without_cones_is_the_general_one():
 def test_relaxed_hull_without_cones_is_the_general_one():
     """``_relaxed_hull_plain`` (numbers only, for chains without joint cones) gives the very numbers of
     ``_relaxed_hull`` with a cone table that sets no cone, at random poses, samples and limits."""
-    from paraspace.kinematics.feasibility import ChainTables, chain_points
-    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.feasibility import chain_points
     from paraspace.kinematics.interference_blocks import _relaxed_hull, _relaxed_hull_plain
-    from paraspace.kinematics.joints import cone_table
 
-    design = Design()
-    tab = ChainTables(design, 61)
-    u = np.ascontiguousarray(platform_points_local(design))
-    jc = np.ascontiguousarray(cone_table(design, Joints(), np.eye(3)))
-    assert (jc[:, :, 6:8] == -1.0).all()  # no cone set
+    design, tab, u, jc = _tables_without_cones()
     rng = np.random.default_rng(23)
     oks = 0
     for _ in range(3000):
