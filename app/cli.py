@@ -265,11 +265,15 @@ _WORKSPACE_PAPER_ONLY: dict[str, str] = {}
 
 
 def cmd_workspace(ns: argparse.Namespace) -> int:
+    from paraspace.kinematics.cuda_dense import check_backend
     from paraspace.kinematics.measures import measure_workspace
     from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace, warm_up
 
     mech, design = mechanism_of(ns, _WORKSPACE_PAPER_ONLY)
     if design is None:
+        if ns.backend != "cpu":
+            raise ParameterError("backend", ns.backend, f"cpu for {mech.name!r} (the cuda backend runs the paper's "
+                                                        "mechanism)")
         return _workspace_general(ns, mech)
     if mech is not None:
         length_step_of(ns)  # validated; the paper's engine solves d exactly and samples no other prismatic joint
@@ -279,9 +283,10 @@ def cmd_workspace(ns: argparse.Namespace) -> int:
                                  joints=joints_of(ns))
     total, dexterity = _total_and_dexterity(ns)
     fmt = _export_format(ns)
+    check_backend(ns.backend, settings.joints.has_cones, settings.joints.min_distance > 0.0)
     warm_up()
     with progress_scope("workspace") as progress:
-        result = compute_workspace(design, settings, progress)
+        result = compute_workspace(design, settings, progress, backend=ns.backend)
     measures = measure_workspace(result)
     out = {"design": design.to_dict(), "joints": settings.joints.to_dict(), **measures.to_dict(),
            "voxel_size": result.grid.h, "voxels": result.voxels,
@@ -566,6 +571,9 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
     w.add_argument("--method", default="blocks", metavar="blocks|dense",
                    help="engine: coarse-to-fine blocks (default) or every voxel (dense, the oracle); same voxels")
+    w.add_argument("--backend", default="cpu", metavar="cpu|cuda",
+                   help="where the voxels are decided: the CPU engines (default) or the dense test on an NVIDIA GPU "
+                        "(needs CuPy: pip install 'paraspace[cuda]'; strokes only); same voxels")
     w.add_argument("--bracket-refine", dest="bracket_refine", default=2, metavar="N",
                    help="halvings of the bracket's boundary cubes, 0-3 (default 2; each about halves the gap "
                         "and costs about 4x the previous one)")

@@ -157,7 +157,8 @@ def given(ns: argparse.Namespace, flag: str, dest: str) -> bool:
 
 _DEFAULTS: dict[str, Any] = {**{n: spec.default for n, spec in PARAMS.items()}, "eta_range": "centered",
                              "cone_axis": "normal", "leg_diameter": 0.0, "clearance": 0.0, "angle_step": 5.0,
-                             "dexterity_mode": "resolved", "bracket_refine": 2, "method": "blocks"}
+                             "dexterity_mode": "resolved", "bracket_refine": 2, "method": "blocks",
+                             "backend": "cpu"}
 
 
 def mechanism_of(ns: argparse.Namespace, paper_only: dict[str, str]) -> tuple[Any, Design | None]:

@@ -41,6 +41,8 @@ In one run, on the issue's reference box [-180,180]^2 x [0,165] and the paper's 
      h = 2 with 0, 1, 2 refinements. Target 7 (also alone, ``--serial-tail``): each stage of the
      engine and of the measures at h = 0.5 with 1 and 2 threads, the single-threaded share by
      Amdahl's law and measured directly (the time outside numba's parallel kernels with 1 thread).
+     Target 11: the CUDA backend against the CPU engine at h = 2, 1, 0.5 (a line saying why not where
+     the machine has no NVIDIA GPU or no CuPy).
   9. a row per mechanism preset (kinematics/presets.py) at h = 2 with derived bounds, against the
      paper engine on the paper's default design in the same run (medians of alternating runs; its
      dense method too, which like the general engine evaluates every voxel, though it computes half the
@@ -961,6 +963,27 @@ def bracket_rows(design: Design, runs: int = 3) -> None:
         _row(f"bracket, refine {r}, every cube (before)", med[f"full {r}"], med["engine"])
 
 
+def cuda_rows(design: Design, runs: int = 5) -> None:
+    """Target 11: the CUDA backend's dense test (:mod:`kinematics.cuda_dense`) at h = 2, 1 and 0.5
+    against the CPU's blocks engine on the same design, alternating, with whether the voxels are the
+    same; a line saying why where the machine has no GPU (or no CuPy)."""
+    from paraspace.kinematics.cuda_dense import cuda_unavailable
+
+    why = cuda_unavailable()
+    if why is not None:
+        print(f"  target 11, CUDA backend: not measured here: {why}")
+        return
+    for h in (2.0, 1.0, 0.5):
+        ws = WorkspaceSettings(voxel=h)
+        cpu, gpu = compute_workspace(design, ws), compute_workspace(design, ws, backend="cuda")  # also compiles
+        same = gpu.grid == cpu.grid and bool((gpu.occupancy == cpu.occupancy).all())
+        med = _alternating({"engine": lambda ws=ws: compute_workspace(design, ws),
+                            "cuda": lambda ws=ws: compute_workspace(design, ws, backend="cuda")}, runs)
+        print(f"  target 11, CUDA backend h={h:g} (load average {os.getloadavg()[0]:.2f}; the same voxels: {same}; "
+              f"{cpu.voxels} of {cpu.occupancy.size}):")
+        _row(f"cuda dense test h={h:g} (with the bounds' scout and the copy back)", med["cuda"], med["engine"])
+
+
 def total_orientation_rows(design: Design, runs: int = 3) -> None:
     """Target 5: the total-orientation workspace 15/15 deg (step 5, 657 orientations) at h = 4:
     blocks excluded by the hardest orientations and voxels certified from their neighbour's cut of
@@ -1240,7 +1263,7 @@ THROUGHPUT_ROWS = {
     "measure-stages": measure_stage_rows, "feature-filter": feature_filter_rows, "tail": tail_rows,
     "display": display_rows, "optimizer": lambda _design: optimizer_cluster_rows(),
     "interference": interference_rows, "stages": stage_rows, "total-orientation": total_orientation_rows,
-    "bracket": bracket_rows, "dexterity": dexterity_rows,
+    "bracket": bracket_rows, "dexterity": dexterity_rows, "cuda": cuda_rows,
 }
 
 

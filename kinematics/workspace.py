@@ -33,6 +33,7 @@ from numba import njit, prange
 
 from .blocks import rounding_margin, run_blocks
 from .bracket import NO_BRACKET_INTERFERENCE, volume_bracket
+from .cuda_dense import check_backend, dense_masks_cuda
 from .design import Design, ParameterError
 from .feasibility import _chain_excluded, chain_points, chain_search, default_n_eta
 from .geometry import platform_points_local
@@ -408,14 +409,16 @@ def _use_mirror(design: Design, settings: WorkspaceSettings, grid: GridSpec) -> 
 
 
 def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
-              progress: Reporter | None, cancel: CancelToken, all_chains: bool = False):
+              progress: Reporter | None, cancel: CancelToken, all_chains: bool = False, backend: str = "cpu"):
     n_eta = default_n_eta(design, settings.eta_step)
     args = kernel_args(design, settings.orientation, n_eta, settings.joints)
     xs, ys, zs = grid.axes()
     nx, ny, nz = grid.shape
     mirror = _use_mirror(design, settings, grid)
     ny_eval = (ny + 1) // 2 if mirror else ny
-    if settings.method == "blocks":
+    if backend == "cuda":
+        out = dense_masks_cuda((xs, ys, zs), ny_eval, args, all_chains, progress, cancel)
+    elif settings.method == "blocks":
         out = run_blocks(grid.shape, (xs, ys, zs), grid.h, args, ny_eval, all_chains, progress, cancel)
     else:
         out = np.zeros(grid.shape, np.uint8)
@@ -449,7 +452,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
 
 
 def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSettings(),
-                      progress: ProgressFn | None = None, cancel: CancelToken = None) -> WorkspaceResult:
+                      progress: ProgressFn | None = None, cancel: CancelToken = None,
+                      backend: str = "cpu") -> WorkspaceResult:
     """Compute the constant-orientation position workspace (see the module docstring).
 
     Parameters
@@ -463,6 +467,10 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
         ``progress(fraction, message)``, called as the computation advances.
     cancel : threading.Event or callable, optional
         Checked between chunks of work: when it is set the computation stops.
+    backend : {"cpu", "cuda"}, optional
+        Where the voxels are decided: the CPU engines (default) or the dense test on an NVIDIA GPU
+        (:mod:`kinematics.cuda_dense`: the same voxels; strokes only, needs CuPy). The bounds' coarse
+        scout and the bracket stay on the CPU.
 
     Returns
     -------
@@ -487,6 +495,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
     >>> res.volume == res.voxels * 8.0 ** 3
     True
     """
+    check_backend(backend, settings.joints.has_cones, settings.joints.min_distance > 0.0)
     rep = Reporter(progress)
     t0 = time.perf_counter()
     explicit = settings.bounds is not None
@@ -498,7 +507,7 @@ def compute_workspace(design: Design, settings: WorkspaceSettings = WorkspaceSet
     for _attempt in range(4):
         grid = GridSpec.from_bounds(lo, hi, settings.voxel)
         mask, n_eta, occ = _run_grid(design, settings, grid, rep.sub(0.05, 1.0), cancel,
-                                     all_chains=settings.diagnostics)
+                                     all_chains=settings.diagnostics, backend=backend)
         if explicit:
             break
         grow = _touching_faces(occ)

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install everything the tests need, lint, type-check and run the whole suite:
 #  - Debian's chromium (the browser test drives it through Playwright; `playwright install` cannot
-#    download here), with apt-get (as root, or through sudo);
+#    download here) and g++ (tests/test_cuda_dense.py compiles the CUDA backend's device functions
+#    for the CPU), with apt-get (as root, or through sudo);
 #  - ./.venv with the project and its test extras;
 #  - ruff and mypy (configured in pyproject.toml) on the package: zero findings, or the run stops;
 #  - the doctests of the public functions and the suite (tests/, examples/ run by tests/test_examples.py).
@@ -10,11 +11,11 @@
 # Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ ! -x /usr/bin/chromium ]; then
+if [ ! -x /usr/bin/chromium ] || ! command -v g++ >/dev/null; then
   SUDO=""
   [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium g++ >/dev/null
 fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
