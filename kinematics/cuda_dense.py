@@ -176,7 +176,11 @@ def dense_masks_cuda(axes: tuple[np.ndarray, np.ndarray, np.ndarray], ny_eval: i
     out = np.zeros((nx, ny, nz), np.uint8)
     if not out.size or ny_eval <= 0:
         return out
-    kernel = _kernel()
+    try:
+        kernel = _kernel()
+    except Exception as err:  # noqa: BLE001 - NVRTC's and the driver's errors have no common public base
+        raise ParameterError("backend", "cuda", f"cpu on this machine: the CUDA kernel did not build here "
+                                                f"({type(err).__name__}: {err})") from err
     d_xs, d_ys, d_zs = cupy.asarray(xs), cupy.asarray(ys), cupy.asarray(zs)
     d_u = cupy.asarray(np.ascontiguousarray(u, dtype=np.float64))
     d_cos, d_sin = cupy.asarray(np.ascontiguousarray(cos_t)), cupy.asarray(np.ascontiguousarray(sin_t))
