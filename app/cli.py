@@ -571,7 +571,9 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--export", metavar="FILE", help="write the marching-cubes shell (.stl .ply .obj .glb)")
     w.add_argument("--method", default="blocks", metavar="blocks|dense",
                    help="engine: coarse-to-fine blocks (default) or every voxel (dense, the oracle); same voxels")
-    w.add_argument("--backend", default="cpu", metavar="cpu|cuda",
+    from paraspace.kinematics.cuda_dense import BACKENDS
+
+    w.add_argument("--backend", default=BACKENDS[0], metavar="|".join(BACKENDS),
                    help="where the voxels are decided: the CPU engines (default) or the dense test on an NVIDIA GPU "
                         "(needs CuPy: pip install 'paraspace[cuda]'; strokes only); same voxels")
     w.add_argument("--bracket-refine", dest="bracket_refine", default=2, metavar="N",
