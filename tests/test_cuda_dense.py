@@ -3,8 +3,11 @@
 Everywhere: the device functions of its CUDA source, compiled for this CPU by the C++ compiler (with
 CUDA's qualifiers defined away and a loop over the voxels in place of the GPU's threads), decide every
 voxel as the CPU engines do, through the same driver (`_run_grid`: the rows it decides, the mirror
-fill, the chain masks); and the backend is refused by name where it cannot run. Where CuPy sees an
-NVIDIA GPU: the backend itself against the CPU engines."""
+fill, the chain masks); the whole kernel, its thread indexing included, compiled the same way and
+launched by `dense_masks_cuda` itself with CuPy replaced by a stand-in (`_FakeCuPy`: the launcher's
+arguments in the kernel's order and kinds, its slabs, the copy back, cancellation); and the backend
+is refused by name where it cannot run. Where CuPy sees an NVIDIA GPU: the backend itself against the
+CPU engines."""
 
 from __future__ import annotations
 
@@ -47,16 +50,50 @@ extern "C" void host_feasible(int m, const double* v, u8* out) {  /* v: m rows o
 """
 
 
+# the whole source, kernel included, for the CPU: CUDA's thread indices as globals that a loop over the
+# launch's blocks and threads sets (the emulated launch of the fake CuPy below)
+_LAUNCH = r"""
+#include <cmath>
+using std::sqrt;
+struct ps_dim3 { unsigned int x; };
+static ps_dim3 blockIdx, blockDim, threadIdx;
+#define __device__
+#define __global__
+#define __forceinline__ inline
+""" + cuda_dense.SOURCE + r"""
+extern "C" void host_launch(unsigned int grid, unsigned int block, const double* xs, const double* ys,
+                            const double* zs, int x0, int nxc, int ny, int ny_eval, int nz, const double* u,
+                            const double* cos_t, const double* sin_t, int n, double hb, double rho_lo, double rho_hi,
+                            double lo2, double hi2, int all_chains, u8* out) {
+    blockDim.x = block;
+    for (unsigned int b = 0; b < grid; b++) {
+        blockIdx.x = b;
+        for (unsigned int t = 0; t < block; t++) {
+            threadIdx.x = t;
+            ps_dense_masks(xs, ys, zs, x0, nxc, ny, ny_eval, nz, u, cos_t, sin_t, n, hb, rho_lo, rho_hi, lo2, hi2,
+                           all_chains, out);
+        }
+    }
+}
+"""
+#: the kernel's parameters after (grid, block): p a device array, i an int32, d a float64
+_KINDS = "ppp" + "iiiii" + "ppp" + "i" + "ddddd" + "i" + "p"
+
+
+def _compile(tmp_path_factory: pytest.TempPathFactory, name: str, source: str) -> ctypes.CDLL:
+    cxx = shutil.which("g++") or shutil.which("c++")
+    assert cxx, "a C++ compiler (scripts/test.sh installs g++)"
+    folder = tmp_path_factory.mktemp(name)
+    (folder / "src.cpp").write_text(source)
+    subprocess.run([cxx, "-O2", "-ffp-contract=off", "-fno-fast-math", "-shared", "-fPIC", "-o",
+                    str(folder / "lib.so"), str(folder / "src.cpp")], check=True, capture_output=True)
+    return ctypes.CDLL(str(folder / "lib.so"))
+
+
 @pytest.fixture(scope="module")
 def host_lib(tmp_path_factory: pytest.TempPathFactory) -> ctypes.CDLL:
     """The device functions compiled for the CPU: no fused multiply-add (as ``--fmad=false`` on the GPU)."""
-    cxx = shutil.which("g++") or shutil.which("c++")
-    assert cxx, "a C++ compiler (scripts/test.sh installs g++)"
-    folder = tmp_path_factory.mktemp("cuda_host")
-    (folder / "host.cpp").write_text(_HOST)
-    subprocess.run([cxx, "-O2", "-ffp-contract=off", "-fno-fast-math", "-shared", "-fPIC", "-o",
-                    str(folder / "host.so"), str(folder / "host.cpp")], check=True, capture_output=True)
-    lib = ctypes.CDLL(str(folder / "host.so"))
+    lib = _compile(tmp_path_factory, "cuda_host", _HOST)
     dp = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
     lib.host_masks.argtypes = [dp, dp, dp] + [ctypes.c_int] * 4 + [dp, dp, dp, ctypes.c_int] + \
         [ctypes.c_double] * 5 + [ctypes.c_int, np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")]
@@ -190,6 +227,114 @@ def test_the_command_line_names_the_backend_and_what_is_valid() -> None:
         assert r.returncode == 2 and "expected cpu on this machine" in r.stderr, r.stderr
     r = run_cli("workspace", "--voxel", "8", "--backend", "cpu", "--json")
     assert r.returncode == 0 and '"voxels": 10016' in r.stdout
+
+
+class _DeviceArray(np.ndarray):
+    """A fake CuPy array: a numpy array with CuPy's ``get()``."""
+
+    def get(self) -> np.ndarray:
+        return np.array(self)
+
+
+class _FakeCuPy:
+    """The part of CuPy that :mod:`kinematics.cuda_dense` uses, on the CPU: arrays are numpy arrays, and
+    ``RawModule`` checks the source and the options it is given and launches the CPU build of that
+    source (``_LAUNCH``), checking each argument's kind against the kernel's parameter list."""
+
+    uint8 = np.uint8
+
+    def __init__(self, lib: ctypes.CDLL) -> None:
+        self.lib, self.launches, self.built = lib, [], []
+        self.cuda = type("cuda", (), {"runtime": type("runtime", (), {"getDeviceCount": staticmethod(lambda: 1)})})
+
+    @staticmethod
+    def asarray(a) -> _DeviceArray:
+        return np.array(a, copy=True, order="C").view(_DeviceArray)
+
+    @staticmethod
+    def zeros(shape, dtype) -> _DeviceArray:
+        return np.zeros(shape, dtype).view(_DeviceArray)
+
+    def RawModule(self, code: str, options: tuple):  # noqa: N802 - CuPy's name
+        self.built.append((code, options))
+        fake = self
+
+        class Module:
+            def get_function(self, name: str):
+                assert name == "ps_dense_masks"
+                return fake.launch
+
+        return Module()
+
+    def launch(self, grid: tuple, block: tuple, args: tuple) -> None:
+        assert len(args) == len(_KINDS), len(args)
+        conv = []
+        for kind, a in zip(_KINDS, args):
+            if kind == "p":
+                assert isinstance(a, _DeviceArray) and a.flags.c_contiguous, type(a)
+                conv.append(ctypes.c_void_p(a.ctypes.data))
+            elif kind == "i":
+                assert isinstance(a, np.int32), type(a)
+                conv.append(ctypes.c_int(int(a)))
+            else:
+                assert isinstance(a, np.float64), type(a)
+                conv.append(ctypes.c_double(float(a)))
+        self.launches.append((grid, block, int(args[3]), int(args[4])))
+        self.lib.host_launch(ctypes.c_uint(grid[0]), ctypes.c_uint(block[0]), *conv)
+
+
+@pytest.fixture(scope="module")
+def launch_lib(tmp_path_factory: pytest.TempPathFactory) -> ctypes.CDLL:
+    lib = _compile(tmp_path_factory, "cuda_launch", _LAUNCH)
+    lib.host_launch.restype = None
+    return lib
+
+
+@pytest.mark.parametrize("orientation, diagnostics", [((0.0, 0.0, 0.0), False), ((10.0, 15.0, -5.0), True)])
+def test_the_launcher_through_a_cpu_build_of_the_whole_kernel(launch_lib, monkeypatch, orientation,
+                                                              diagnostics) -> None:
+    """``compute_workspace(..., backend="cuda")`` end to end with CuPy replaced by :class:`_FakeCuPy`:
+    the kernel's own source and thread indexing, the launcher's arguments in the kernel's order and
+    kinds, slabs of x planes with a short last one, the copy back, the progress lines and cancellation
+    between slabs. What this cannot check is CuPy, NVRTC and the device themselves."""
+    import sys
+
+    from paraspace.kinematics.progress import Cancelled
+
+    fake = _FakeCuPy(launch_lib)
+    monkeypatch.setitem(sys.modules, "cupy", fake)
+    monkeypatch.setattr(cuda_dense, "_SLAB_VOXELS", 9000)  # several slabs, the last one short
+    cuda_dense._kernel.cache_clear()
+    try:
+        assert cuda_dense.cuda_unavailable() is None
+        s = WorkspaceSettings(voxel=6.0, orientation=orientation, diagnostics=diagnostics)
+        cpu = compute_workspace(Design(), s)
+        lines: list[str] = []
+        gpu = compute_workspace(Design(), s, progress=lambda f, m: lines.append(m), backend="cuda")
+        assert gpu.grid == cpu.grid and gpu.voxels == cpu.voxels > 0
+        np.testing.assert_array_equal(gpu.occupancy, cpu.occupancy)
+        if diagnostics:
+            np.testing.assert_array_equal(gpu.chain_mask, cpu.chain_mask)
+        assert fake.built and all(code == cuda_dense.SOURCE and "--fmad=false" in opts for code, opts in fake.built)
+        # the final grid's launches: slabs of whole x planes, in order, the last one short, covering every plane
+        nx, (ny, nz) = cpu.grid.shape[0], cpu.grid.shape[1:]
+        planes = 9000 // (ny * nz)
+        count = -(-nx // planes)
+        last = [(x0, nxc) for _g, _b, x0, nxc in fake.launches][-count:]
+        assert last == [(x0, min(planes, nx - x0)) for x0 in range(0, nx, planes)], last
+        assert len(last) > 3 and last[-1][1] < planes, last
+        assert all(g[0] * b[0] >= nxc * nz for g, b, _x0, nxc in fake.launches[-len(last):])
+        assert any("on the GPU" in m for m in lines), lines
+        # cancelled between slabs (30 x planes of 30 x 19 voxels: slabs of 15): the second never starts
+        calls = iter(range(100))
+        before = len(fake.launches)
+        with pytest.raises(Cancelled):
+            compute_workspace(Design(), WorkspaceSettings(voxel=6.0, orientation=orientation,
+                                                          bounds=((-90, -90, 60), (90, 90, 170))),
+                              cancel=lambda: next(calls) >= 1, backend="cuda")
+        assert len(fake.launches) == before + 1
+    finally:
+        cuda_dense._kernel.cache_clear()
 
 
 needs_gpu = pytest.mark.skipif(cuda_dense.cuda_unavailable() is not None,
