@@ -216,7 +216,8 @@ def test_the_command_line_names_the_backend_and_what_is_valid() -> None:
     from cli_inprocess import run_cli
 
     for args, valid in ((("--backend", "gpu"), "expected cpu or cuda"),
-                        (("--backend", "cuda", "--leg-diameter", "10"), "expected cpu with joint cones or leg interference"),
+                        (("--backend", "cuda", "--leg-diameter", "10"),
+                         "expected cpu with joint cones or leg interference"),
                         (("--backend", "cuda", "--mechanism", "6-pss"), "expected cpu for '6-PSS")):
         r = run_cli("workspace", "--voxel", "8", *args)
         assert r.returncode == 2 and r.stdout == "", r
