@@ -16,6 +16,7 @@ import json
 import re
 import threading
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -153,13 +154,32 @@ class FakeBrowser:
         self.ws.close()
 
 
+class SlowWait(UserWarning):
+    """A wait that succeeded but took longer than :data:`SLOW_WAIT` seconds: not a failure (speed is
+    never asserted in tests), a line in the run's warnings summary that names the test and the wait,
+    so that a slow run of the suite says where its time went."""
+
+
+#: Seconds after which a successful wait is reported as :class:`SlowWait`.
+SLOW_WAIT = 15.0
+
+
+def note_slow_wait(what: str, t0: float) -> None:
+    """Report the wait for ``what`` begun at ``t0`` (``time.monotonic()``) if it took over :data:`SLOW_WAIT`."""
+    took = time.monotonic() - t0
+    if took > SLOW_WAIT:
+        warnings.warn(SlowWait(f"waiting for {what} took {took:.1f} s"), stacklevel=3)
+
+
 def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
     """Poll ``fn`` until it returns a truthy value (returned) or fail after ``timeout`` seconds (times
-    :data:`DEADLINE_SCALE`)."""
-    deadline = time.monotonic() + timeout * DEADLINE_SCALE
+    :data:`DEADLINE_SCALE`); a wait over :data:`SLOW_WAIT` seconds is reported (:class:`SlowWait`)."""
+    t0 = time.monotonic()
+    deadline = t0 + timeout * DEADLINE_SCALE
     while time.monotonic() < deadline:
         v = fn()
         if v:
+            note_slow_wait(what, t0)
             return v
         time.sleep(0.02)
     raise AssertionError(f"timed out after {timeout * DEADLINE_SCALE:g} s waiting for: {what}")

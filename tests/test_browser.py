@@ -29,7 +29,7 @@ if not os.path.exists(CHROMIUM):
     pytest.skip(f"{CHROMIUM} is missing (install Debian's chromium package to run the browser tests)",
                 allow_module_level=True)
 
-from explorer_client import wait_for  # noqa: E402  (tests/, pytest prepend import mode)
+from explorer_client import note_slow_wait, wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 
 from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
@@ -69,12 +69,16 @@ def open_page(browser: Browser, explorer: Explorer, query: str = "",
     before = set(explorer.sessions)
     ctx = browser.new_context(viewport={"width": viewport[0], "height": viewport[1]})
     page = ctx.new_page()
+    t0 = time.monotonic()
     page.goto(explorer.url + (("?" + query) if query else ""))
     page.wait_for_function("() => !document.body.innerText.includes('Connecting...')", timeout=30000)
+    note_slow_wait("the page to connect", t0)
     session = wait_for(lambda: next((s for cid, s in list(explorer.sessions.items())
                                      if cid not in before and s.ready.is_set()), None), 30, "session")
+    t0 = time.monotonic()
     page.wait_for_function("n => !!window.__viserMutable?.nodeRefFromName[n]", arg="/workspace/shell",
                            timeout=30000)
+    note_slow_wait("the page's first shell", t0)
     close_webgl_toast(page)
     return page, session
 
