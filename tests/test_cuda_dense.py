@@ -25,12 +25,18 @@ from paraspace.kinematics.joints import Joints
 from paraspace.kinematics.kernel_args import kernel_args
 from paraspace.kinematics.workspace import WorkspaceSettings, compute_workspace
 
+# the whole source, kernel included, built for the CPU: CUDA's qualifiers defined away and its thread
+# indices as globals that a loop over the launch's blocks and threads sets (host_launch: the emulated
+# launch of the fake CuPy below); host_masks and host_feasible call the device functions directly
 _HOST = r"""
 #include <cmath>
 using std::sqrt;
+struct ps_dim3 { unsigned int x; };
+static ps_dim3 blockIdx, blockDim, threadIdx;
 #define __device__
+#define __global__
 #define __forceinline__ inline
-""" + cuda_dense.DEVICE_SOURCE + r"""
+""" + cuda_dense.SOURCE + r"""
 extern "C" void host_masks(const double* xs, const double* ys, const double* zs, int nx, int ny, int ny_eval,
                            int nz, const double* u, const double* cos_t, const double* sin_t, int n, double hb,
                            double rho_lo, double rho_hi, double lo2, double hi2, int all_chains, u8* out) {
@@ -47,20 +53,7 @@ extern "C" void host_feasible(int m, const double* v, u8* out) {  /* v: m rows o
         out[j] = ps_feasible_plain(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11], a[12]);
     }
 }
-"""
 
-
-# the whole source, kernel included, for the CPU: CUDA's thread indices as globals that a loop over the
-# launch's blocks and threads sets (the emulated launch of the fake CuPy below)
-_LAUNCH = r"""
-#include <cmath>
-using std::sqrt;
-struct ps_dim3 { unsigned int x; };
-static ps_dim3 blockIdx, blockDim, threadIdx;
-#define __device__
-#define __global__
-#define __forceinline__ inline
-""" + cuda_dense.SOURCE + r"""
 extern "C" void host_launch(unsigned int grid, unsigned int block, const double* xs, const double* ys,
                             const double* zs, int x0, int nxc, int ny, int ny_eval, int nz, const double* u,
                             const double* cos_t, const double* sin_t, int n, double hb, double rho_lo, double rho_hi,
@@ -80,26 +73,23 @@ extern "C" void host_launch(unsigned int grid, unsigned int block, const double*
 _KINDS = "ppp" + "iiiii" + "ppp" + "i" + "ddddd" + "i" + "p"
 
 
-def _compile(tmp_path_factory: pytest.TempPathFactory, name: str, source: str) -> ctypes.CDLL:
-    cxx = shutil.which("g++") or shutil.which("c++")
-    assert cxx, "a C++ compiler (scripts/test.sh installs g++)"
-    folder = tmp_path_factory.mktemp(name)
-    (folder / "src.cpp").write_text(source)
-    subprocess.run([cxx, "-O2", "-ffp-contract=off", "-fno-fast-math", "-shared", "-fPIC", "-o",
-                    str(folder / "lib.so"), str(folder / "src.cpp")], check=True, capture_output=True)
-    return ctypes.CDLL(str(folder / "lib.so"))
-
-
 @pytest.fixture(scope="module")
 def host_lib(tmp_path_factory: pytest.TempPathFactory) -> ctypes.CDLL:
-    """The device functions compiled for the CPU: no fused multiply-add (as ``--fmad=false`` on the GPU)."""
-    lib = _compile(tmp_path_factory, "cuda_host", _HOST)
+    """``_HOST`` compiled for the CPU: no fused multiply-add (as ``--fmad=false`` on the GPU)."""
+    cxx = shutil.which("g++") or shutil.which("c++")
+    assert cxx, "a C++ compiler (scripts/test.sh installs g++)"
+    folder = tmp_path_factory.mktemp("cuda_host")
+    (folder / "host.cpp").write_text(_HOST)
+    subprocess.run([cxx, "-O2", "-ffp-contract=off", "-fno-fast-math", "-shared", "-fPIC", "-o",
+                    str(folder / "host.so"), str(folder / "host.cpp")], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(folder / "host.so"))
     dp = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
     lib.host_masks.argtypes = [dp, dp, dp] + [ctypes.c_int] * 4 + [dp, dp, dp, ctypes.c_int] + \
         [ctypes.c_double] * 5 + [ctypes.c_int, np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")]
     lib.host_masks.restype = None
     lib.host_feasible.argtypes = [ctypes.c_int, dp, np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")]
     lib.host_feasible.restype = None
+    lib.host_launch.restype = None
     return lib
 
 
@@ -240,7 +230,7 @@ class _DeviceArray(np.ndarray):
 class _FakeCuPy:
     """The part of CuPy that :mod:`kinematics.cuda_dense` uses, on the CPU: arrays are numpy arrays, and
     ``RawModule`` checks the source and the options it is given and launches the CPU build of that
-    source (``_LAUNCH``), checking each argument's kind against the kernel's parameter list."""
+    source (``_HOST``'s ``host_launch``), checking each argument's kind against the kernel's parameter list."""
 
     uint8 = np.uint8
 
@@ -284,15 +274,8 @@ class _FakeCuPy:
         self.lib.host_launch(ctypes.c_uint(grid[0]), ctypes.c_uint(block[0]), *conv)
 
 
-@pytest.fixture(scope="module")
-def launch_lib(tmp_path_factory: pytest.TempPathFactory) -> ctypes.CDLL:
-    lib = _compile(tmp_path_factory, "cuda_launch", _LAUNCH)
-    lib.host_launch.restype = None
-    return lib
-
-
 @pytest.mark.parametrize("orientation, diagnostics", [((0.0, 0.0, 0.0), False), ((10.0, 15.0, -5.0), True)])
-def test_the_launcher_through_a_cpu_build_of_the_whole_kernel(launch_lib, monkeypatch, orientation,
+def test_the_launcher_through_a_cpu_build_of_the_whole_kernel(host_lib, monkeypatch, orientation,
                                                               diagnostics) -> None:
     """``compute_workspace(..., backend="cuda")`` end to end with CuPy replaced by :class:`_FakeCuPy`:
     the kernel's own source and thread indexing, the launcher's arguments in the kernel's order and
@@ -302,7 +285,7 @@ def test_the_launcher_through_a_cpu_build_of_the_whole_kernel(launch_lib, monkey
 
     from paraspace.kinematics.progress import Cancelled
 
-    fake = _FakeCuPy(launch_lib)
+    fake = _FakeCuPy(host_lib)
     monkeypatch.setitem(sys.modules, "cupy", fake)
     monkeypatch.setattr(cuda_dense, "_SLAB_VOXELS", 9000)  # several slabs, the last one short
     cuda_dense._kernel.cache_clear()
