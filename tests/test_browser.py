@@ -31,6 +31,7 @@ if not os.path.exists(CHROMIUM):
 
 from explorer_client import note_slow_wait, wait_for  # noqa: E402  (tests/, pytest prepend import mode)
 from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
+from playwright.sync_api import TimeoutError as PlaywrightTimeout  # noqa: E402
 
 from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
 from paraspace.app.numfmt import significant  # noqa: E402
@@ -84,13 +85,19 @@ def open_page(browser: Browser, explorer: Explorer, query: str = "",
 
 
 def close_webgl_toast(page: Page) -> None:
-    """Close viser's "Software WebGL rendering detected" notification (it covers the scene)."""
-    toast = page.locator(".mantine-Notification-root", has_text="Software WebGL")
+    """Close viser's "Software WebGL rendering detected" notice (it covers the scene). The page closes
+    it by itself a few seconds after it is first shown (``app/explorer/pagehook.py``), so a Playwright
+    click on its button could wait for a button that is gone by then (30 s, Playwright's default
+    time-out, seen under load): the button is clicked by a script in the page, which does not wait for
+    it to be stable, and each wait here is bounded."""
+    find = ("() => [...document.querySelectorAll('.mantine-Notification-root')]"
+            ".find(n => n.textContent.includes('Software WebGL'))")
     try:
-        toast.first.wait_for(timeout=3000)
-        toast.first.locator(".mantine-Notification-closeButton").click()
-        toast.first.wait_for(state="detached", timeout=5000)
-    except Exception:  # noqa: BLE001 - not shown (e.g. a GPU) or already gone
+        page.wait_for_function(f"() => {{ const n = ({find})(); "
+                               "n?.querySelector('.mantine-Notification-closeButton')?.click(); return !!n; }",
+                               timeout=3000, polling=100)
+        page.wait_for_function(f"() => !({find})()", timeout=5000, polling=100)
+    except PlaywrightTimeout:  # not shown (e.g. a GPU), or still closing (screenshots wait for a settled image)
         pass
 
 
