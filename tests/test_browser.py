@@ -34,6 +34,7 @@ from playwright.sync_api import Browser, Page, sync_playwright  # noqa: E402
 from playwright.sync_api import TimeoutError as PlaywrightTimeout  # noqa: E402
 
 from paraspace.app.explorer import ClientSession, Explorer  # noqa: E402
+from paraspace.app.explorer.pagehook import WEBGL_NOTICE_KEY  # noqa: E402
 from paraspace.app.numfmt import significant  # noqa: E402
 from paraspace.app.urlstate import parse_query  # noqa: E402
 
@@ -64,11 +65,17 @@ def browser() -> Iterator[Browser]:
         b.close()
 
 
-def open_page(browser: Browser, explorer: Explorer, query: str = "",
-              viewport: tuple[int, int] = (1400, 900)) -> tuple[Page, ClientSession]:
-    """A fresh browser context (own localStorage) on the explorer; returns the page and its session."""
+def open_page(browser: Browser, explorer: Explorer, query: str = "", viewport: tuple[int, int] = (1400, 900),
+              first_visit: bool = False) -> tuple[Page, ClientSession]:
+    """A fresh browser context (own localStorage) on the explorer; returns the page and its session.
+    Its localStorage says that viser's software-WebGL notice was shown before, as in a browser that
+    opened the explorer before, so the page closes the notice as soon as it appears
+    (``app/explorer/pagehook.py``); ``first_visit``: a browser that never did (the notice stays for
+    a few seconds, and this closes it)."""
     before = set(explorer.sessions)
     ctx = browser.new_context(viewport={"width": viewport[0], "height": viewport[1]})
+    if not first_visit:
+        ctx.add_init_script(f"try {{ localStorage.setItem('{WEBGL_NOTICE_KEY}', '1'); }} catch (e) {{}}")
     page = ctx.new_page()
     t0 = time.monotonic()
     page.goto(explorer.url + (("?" + query) if query else ""))
@@ -80,7 +87,8 @@ def open_page(browser: Browser, explorer: Explorer, query: str = "",
     page.wait_for_function("n => !!window.__viserMutable?.nodeRefFromName[n]", arg="/workspace/shell",
                            timeout=30000)
     note_slow_wait("the page's first shell", t0)
-    close_webgl_toast(page)
+    if first_visit:
+        close_webgl_toast(page)
     return page, session
 
 
@@ -306,7 +314,7 @@ def test_layout_a_slider_and_the_volume_in_view_with_definitions(browser: Browse
     scene only on the first load of a browser."""
     from paraspace.app.glossary import DEFINITIONS
 
-    page, session = open_page(browser, explorer, viewport=(1440, 900))
+    page, session = open_page(browser, explorer, viewport=(1440, 900), first_visit=True)
     full_volume_text(page)
     wait_for(lambda: "TI₂" in page.locator("body").inner_text(), 60, "TI in the strip")
     strip = page.locator("p").filter(has_text=re.compile(r"^V .*units³ ∈ \[")).first

@@ -88,11 +88,13 @@ TYPING_GATE = (
     "})();</script>").encode()
 #: How long viser's "Software WebGL rendering detected" notice stays the first time, milliseconds.
 WEBGL_NOTICE_MS = 8000
+#: The browser's localStorage key saying that it was shown viser's software-WebGL notice ("1").
+WEBGL_NOTICE_KEY = "paraspace.webglNoticeShown"
 #: Put into the page's head: viser's software-WebGL notice (it covers the scene's top left corner)
 #: is shown once per browser for :data:`WEBGL_NOTICE_MS`, then closed; on later loads it is closed
 #: as soon as it appears (the browser remembers in its localStorage that it was told).
 WEBGL_NOTICE = (
-    "<script>(function(){var K='paraspace.webglNoticeShown',seen=false;"
+    "<script>(function(){var K='" + WEBGL_NOTICE_KEY + "',seen=false;"
     "try{seen=localStorage.getItem(K)==='1';}catch(e){}"
     "function close(n){var b=n.querySelector('.mantine-Notification-closeButton');if(b)b.click();}"
     "new MutationObserver(function(){document.querySelectorAll('.mantine-Notification-root').forEach("
