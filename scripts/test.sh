@@ -7,7 +7,8 @@
 #  - ruff and mypy (configured in pyproject.toml) on the package: zero findings, or the run stops;
 #  - the doctests of the public functions and the suite (tests/, examples/ run by tests/test_examples.py).
 #    The suite runs on two worker processes (pytest-xdist, a test file each at a time: a file's
-#    module-scoped servers stay in one process); `-n 0` among the extra arguments runs it in one.
+#    module-scoped servers stay in one process; the longest files first, tests/conftest.py's
+#    LONGEST_FIRST); `-n 0` among the extra arguments runs it in one.
 # Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,4 +23,4 @@ fi
 .venv/bin/python -m pip install -q ".[test]"
 .venv/bin/python -m ruff check kinematics app paraspace examples
 .venv/bin/python -m mypy
-exec .venv/bin/python -m pytest -ra -n 2 --dist loadfile "$@"
+exec .venv/bin/python -m pytest -ra -n 2 --dist loadfile --no-loadscope-reorder "$@"
