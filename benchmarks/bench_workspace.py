@@ -1030,7 +1030,8 @@ def _per_voxel_interference():
     from paraspace.kinematics import workspace
     from paraspace.kinematics.interference import interference_free
 
-    def per_voxel(design, joints, axes, h, rot, n_eta, where, cancel=None):
+    def per_voxel(design, joints, axes, h, rot, n_eta, where, cancel=None, mirror=False):
+        # every voxel, mirror or not
         idx = np.argwhere(where)
         out = np.zeros(where.shape, bool)
         pts = np.stack([axes[a][idx[:, a]] for a in range(3)], axis=1)

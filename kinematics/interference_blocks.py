@@ -21,7 +21,9 @@ before the move, ``a``, ``b`` the legs' vectors and ``g = a - b``:
 
 Let a block be a box of voxel centres with centre ``Pc`` and half-diagonal ``delta``, ``e = delta +
 eps`` (``eps`` the rounding margin of :func:`kinematics.blocks.rounding_margin`). For a chain, walk
-the arc samples in the witness search's order (outward from the middle sample) and keep in ``K``:
+the arc samples in the witness search's order (outward from the middle sample, turned for ``y < 0``:
+:func:`kinematics.interference.scan_sample`; no block holds centres of both signs of ``y``, below) and
+keep in ``K``:
 
 * nothing for a sample that fails at ``Pc`` with the leg limits relaxed by ``e`` (cones by ``(1 + k)
   e``): it fails at every centre of the block (:mod:`kinematics.blocks`), so it is no witness there;
@@ -68,6 +70,15 @@ h = 1). Any other block is split in eight; a single voxel is decided by the per-
 voxel-identical to it. Blocks with no voxel to test are skipped. Distances get one more margin of
 ``1e-7`` of the design's scale so the rounding of the closed-form distance never matters.
 
+The top blocks are laid so that none holds voxel centres of both signs of ``y`` (their y edges start
+at the first centre with ``y >= 0``), so each block walks in the order of all its centres.
+
+**Mirror.** With ``mirror`` (the engine's own mirror: a mirror-symmetric design at a mirror-symmetric
+orientation, a grid and a ``where`` symmetric under ``y -> -y``), the witness search commutes with the
+mirror (:mod:`kinematics.interference`, step 2), so only the rows ``j >= n_y // 2`` are decided (the
+middle row of an odd ``n_y``, at ``y = 0``, maps onto itself) and the others are copied from their
+images ``n_y - 1 - j`` (:func:`_mirror_rows`): half the work.
+
 Cost: about the number of blocks near poses where legs come within ``d_min`` of each other, instead
 of every voxel of the workspace.
 """
@@ -84,7 +95,7 @@ from .blocks import child_offsets, n_children, rounding_margin, write_child
 from .design import Design
 from .feasibility import ChainTables, _leg_frames, _leg_intervals, _leg_sets, chain_points, cones_set
 from .geometry import platform_points_local
-from .interference import _pose_clear, pose_scratch, segment_closest, segment_distance
+from .interference import _pose_clear, pose_scratch, scan_sample, segment_closest, segment_distance
 from .joints import Joints, cone_table
 from .parallel import KERNEL_LOCK
 from .progress import CancelToken, check
@@ -311,11 +322,12 @@ def _pair_clear(ax, ay, az, ca, sa, hba, la, a0, a1, bx, by, bz, cb, sb, hbb, lb
 
 @njit(cache=True)
 def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, sb, stack,
-                 ks, hull, bx, by, bz, nk, cen, rad):
+                 ks, hull, bx, by, bz, nk, cen, rad, flip):
     """The module doc's certificate at the block centre ``P`` with ``e = delta + eps``: True when
     every centre of the block is clear (``skip[sb]`` (3, n): samples known to be no witness anywhere
     in the block, passed over; ``stack``, ``ks`` (3, n), ``hull`` (3, n, 2), ``bx/by/bz`` (3, 2),
-    ``nk`` (3,), ``cen`` (3, 2, 2), ``rad`` (3, 2): scratch, from :func:`_block_scratch`)."""
+    ``nk`` (3,), ``cen`` (3, 2, 2), ``rad`` (3, 2): scratch, from :func:`_block_scratch`). ``flip``:
+    the block's centres have ``y < 0`` (the witness search's order for them)."""
     need = dmin + e + margin
     n = cos_t.shape[1]
     lo_r = max(lmin - e, 0.0)
@@ -326,7 +338,6 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         return False
     lo_t2, hi_t2 = lo_t * lo_t, hi_t * hi_t
     nk[:] = 0
-    mid = n // 2
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bx[i, 0], by[i, 0], bz[i, 0] = b1x, b1y, b1z
@@ -336,9 +347,8 @@ def _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
         stopped = False
         tries = 0
         for step in range(n):  # the witness search's order (interference._witnesses)
-            off = (step + 1) // 2
-            k = mid + off if step % 2 == 1 else mid - off
-            if k < 0 or k >= n or skip[sb, i, k]:
+            k = scan_sample(step, n, flip)
+            if k < 0 or skip[sb, i, k]:
                 continue
             c, s = cos_t[i, k], sin_t[i, k]
             ok, r0, r1, h1a, h1b, h2a, h2b = _hull_at(cones, b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi,
@@ -513,7 +523,7 @@ def _blocks_kernel(b0, bn, pskip, par, skip, sat, where, xs, ys, zs, h, eps, mar
             # holds there (the children decide; this saves time and changes no answer)
             if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
                                                     jc, dmin, margin, skip, b, stack, ks, hull, bx, by, bz, nk, cen,
-                                                    rad):
+                                                    rad, py < 0.0):
                 for x in range(b0[b, 0], b0[b, 0] + nx):
                     for y in range(b0[b, 1], b0[b, 1] + ny):
                         for z in range(b0[b, 2], b0[b, 2] + nz):
@@ -528,11 +538,13 @@ def _blocks_kernel(b0, bn, pskip, par, skip, sat, where, xs, ys, zs, h, eps, mar
 
 def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarray, np.ndarray, np.ndarray],
                            h: float, rotation: np.ndarray, n_eta: int, where: np.ndarray,
-                           cancel: CancelToken = None) -> np.ndarray:
+                           cancel: CancelToken = None, mirror: bool = False) -> np.ndarray:
     """:func:`kinematics.interference.interference_free` at the voxel centres of a grid (``axes``, edge
     ``h``) at one ``rotation``, for the voxels where ``where`` is True (the others are False), decided
     block by block (module docstring): bool array of ``where``'s shape, the per-voxel answer at each
-    voxel."""
+    voxel. ``mirror``: the caller states that the design, the ``rotation``, the y centres and
+    ``where`` are symmetric under ``y -> -y`` (the engine's mirror, :meth:`WorkspaceSettings.mirror_symmetric`);
+    the rows ``j < n_y // 2`` are then copied from their mirror images (module doc, Mirror)."""
     xs, ys, zs = (np.ascontiguousarray(a, dtype=np.float64) for a in axes)
     mask = np.ascontiguousarray(where, dtype=np.bool_)
     out = np.zeros(mask.shape, np.bool_)
@@ -546,10 +558,7 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
     eps = rounding_margin(lmax, (xs, ys, zs))
     margin = 100.0 * eps  # 1e-7 of the design's scale (module doc)
     sat = summed_volume(mask)
-    starts = [np.arange(0, s, TOP) for s in mask.shape]
-    gx, gy, gz = np.meshgrid(*starts, indexing="ij")
-    b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
-    bn = np.minimum(TOP, np.array(mask.shape, np.int64)[None, :] - b0)
+    b0, bn = _top_blocks(mask.shape, ys, mirror)
     n = tab.cos_t.shape[1]
     pskip = np.zeros((1, 3, n), np.bool_)  # the top blocks' parent: no sample marked
     par = np.zeros(b0.shape[0], np.int64)
@@ -569,7 +578,41 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
         with KERNEL_LOCK:
             b0, bn, par = _split_undecided(b0, bn, state)
         pskip = skip
+    if mirror:
+        with KERNEL_LOCK:
+            _mirror_rows(out, mask)
     return out
+
+
+def _top_blocks(shape: tuple[int, int, int], ys: np.ndarray, mirror: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The top blocks ``(b0, bn)`` (first voxel and size, (m, 3) int64): :data:`TOP` voxels across, their
+    y edges starting at the first centre with ``y >= 0`` (so no block holds centres of both signs of
+    ``y``: module doc), or with ``mirror`` at row ``n_y // 2``, and then only the rows from there up."""
+    def edges(n: int, at: int, below: bool) -> np.ndarray:
+        e = set(range(at, n, TOP)) | ({n} if n > at else set())
+        if below:
+            e |= set(range(at, 0, -TOP)) | {0}
+        return np.array(sorted(e), np.int64)
+
+    ny = shape[1]
+    ey = edges(ny, ny // 2, False) if mirror else edges(ny, int(np.searchsorted(ys, 0.0, side="left")), True)
+    axes = [edges(shape[0], 0, False), ey, edges(shape[2], 0, False)]
+    gx, gy, gz = np.meshgrid(*(a[:-1] for a in axes), indexing="ij")
+    sx, sy, sz = np.meshgrid(*(np.diff(a) for a in axes), indexing="ij")
+    b0 = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1).astype(np.int64)
+    bn = np.stack([sx.ravel(), sy.ravel(), sz.ravel()], axis=1).astype(np.int64)
+    return b0, bn
+
+
+@njit(parallel=True, cache=True, nogil=True)
+def _mirror_rows(out, where):
+    """``out[:, j] = out[:, n_y - 1 - j] & where[:, j]`` for the rows ``j < n_y // 2`` (module doc,
+    Mirror), parallel over x."""
+    nx, ny, nz = out.shape
+    for i in prange(nx):
+        for j in range(ny // 2):
+            for k in range(nz):
+                out[i, j, k] = out[i, ny - 1 - j, k] and where[i, j, k]
 
 
 @njit(parallel=True, cache=True, nogil=True)

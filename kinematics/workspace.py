@@ -444,7 +444,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
         check(cancel)
         if occ.any():
             rot = euler_zyx_deg(*settings.orientation)
-            ok = interference_free_grid(design, settings.joints, (xs, ys, zs), grid.h, rot, n_eta, occ, cancel)
+            ok = interference_free_grid(design, settings.joints, (xs, ys, zs), grid.h, rot, n_eta, occ, cancel,
+                                        mirror)
             bad = occ & ~ok
             out[bad] |= INTERFERENCE
             occ &= ok

@@ -294,7 +294,8 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
                     solo = np.ones((1, 3, n), np.bool_)
                     solo[0, i, k] = False
                     assert _witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
-                                      tab.lmax2, jc, joints.min_distance, 1, w, solo, 0, np.empty((4, 2))) == 0
+                                      tab.lmax2, jc, joints.min_distance, 1, w, solo, 0, np.empty((4, 2)),
+                                      ys[iy] < 0.0) == 0
                     marked += 1
     assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
 
@@ -377,3 +378,71 @@ def test_one_interval_rule_holds_at_every_centre_of_the_block():
             if cnt:
                 assert r0 - 1e-9 <= pieces[0, 0] and pieces[0, 1] <= r1 + 1e-9  # inside the relaxed hull
     assert len(split) > 10 and one_blocks > 100 and second_case > 10  # every case is exercised
+
+
+def test_the_witness_search_commutes_with_the_mirror():
+    """The per-voxel search turns its scan order with the sign of ``y`` (kinematics/interference.py,
+    step 2), so on the default (mirror-symmetric) design a pose and its mirror image ``y -> -y`` get
+    the same answer at every voxel the chains reach, and the engine's occupancy with leg interference
+    is mirror-symmetric. With one order for both signs, 828 voxels at h = 2 had a mirror image with the
+    other answer."""
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 2.0
+    legs = compute_workspace(design, WorkspaceSettings(voxel=h, joints=joints))
+    assert legs.occupancy.any() and np.array_equal(legs.occupancy, legs.occupancy[:, ::-1, :])
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h, bounds=(legs.grid.lo, legs.grid.hi)))
+    xs, ys, zs = plain.grid.axes()
+    idx = np.argwhere(plain.occupancy & (ys > 0.0)[None, :, None])
+    pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+    up = interference_free(design, joints, pts, np.eye(3)[None], plain.n_eta)[:, 0]
+    down = interference_free(design, joints, pts * np.array([1.0, -1.0, 1.0]), np.eye(3)[None], plain.n_eta)[:, 0]
+    assert 0 < up.sum() < up.size
+    assert np.array_equal(up, down)
+    # the engine's voxels on the upper side are the per-voxel answers there
+    assert np.array_equal(legs.occupancy[idx[:, 0], idx[:, 1], idx[:, 2]], up)
+
+
+@pytest.mark.parametrize("odd", [False, True])
+def test_the_mirror_half_decides_the_whole_grid(odd):
+    """``interference_free_grid(mirror=True)`` decides the rows ``j >= n_y // 2`` and copies the others
+    from their mirror images: the same voxels as the whole grid and as the per-voxel search, on a grid
+    with an even ``n_y`` and on one with a middle row at ``y = 0`` (odd ``n_y``)."""
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 3.0
+    bounds = ((-180.0, -60.5 * h, 0.0), (180.0, 60.5 * h, 165.0)) if odd else None
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h, bounds=bounds))
+    xs, ys, zs = plain.grid.axes()
+    occ = plain.occupancy
+    assert (ys.size % 2 == 1) == odd and np.array_equal(occ, occ[:, ::-1, :])
+    if odd:
+        assert ys[ys.size // 2] == 0.0 and occ[:, ys.size // 2].any()
+    whole = interference_free_grid(design, joints, (xs, ys, zs), h, np.eye(3), plain.n_eta, occ)
+    half = interference_free_grid(design, joints, (xs, ys, zs), h, np.eye(3), plain.n_eta, occ, mirror=True)
+    assert np.array_equal(half, whole)
+    idx = np.argwhere(occ)
+    pts = np.stack([xs[idx[:, 0]], ys[idx[:, 1]], zs[idx[:, 2]]], axis=1)
+    old = interference_free(design, joints, pts, np.eye(3)[None], plain.n_eta)[:, 0]
+    assert 0 < old.sum() < old.size
+    assert np.array_equal(whole[idx[:, 0], idx[:, 1], idx[:, 2]], old)
+
+
+@pytest.mark.parametrize("ny,zero_at,mirror", [(37, 0, False), (37, 37, False), (37, 21, False), (40, 9, False),
+                                               (37, 18, True), (40, 20, True), (1, 0, False), (1, 0, True)])
+def test_top_blocks_tile_the_grid_without_a_block_across_y_0(ny, zero_at, mirror):
+    """``_top_blocks``: every voxel lies in exactly one top block (with ``mirror``, every voxel of the
+    rows ``j >= n_y // 2`` and none below), no block is wider than ``TOP`` or holds centres of both
+    signs of ``y``."""
+    from paraspace.kinematics.interference_blocks import TOP, _top_blocks
+
+    shape = (35, ny, 20)
+    ys = np.arange(ny) - zero_at + 0.5  # the first centre with y >= 0 is row zero_at
+    if mirror:
+        ys = np.arange(ny) - 0.5 * (ny - 1)
+    b0, bn = _top_blocks(shape, ys, mirror)
+    assert (bn >= 1).all() and (bn <= TOP).all()
+    seen = np.zeros(shape, np.int64)
+    for (x, y, z), (a, b, c) in zip(b0, bn):
+        seen[x:x + a, y:y + b, z:z + c] += 1
+        assert (ys[y:y + b] >= 0.0).all() or (ys[y:y + b] < 0.0).all()
+    want = np.ones(shape, np.int64)
+    if mirror:
+        want[:, :ny // 2] = 0
+    assert np.array_equal(seen, want)
