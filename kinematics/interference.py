@@ -247,19 +247,22 @@ def _clear(bp, wit, i, ia, j, ib, dmin):
 
 @njit(cache=True)
 def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip, sb,
-                wit, bp, pieces, pick, cnt):
+                wit, bp, pieces, pick, cnt, screen):
     """Module doc, steps 2-3, for one platform pose (``u``: its rotated platform points); the chosen
     U joints are written to ``sel`` (3, 6) when it returns True. ``skip[sb]`` (3, n): arc samples
     known to be no witness of their chain at this pose, passed over (:func:`_witnesses`; all False:
     none). ``wit, bp, pieces, pick, cnt``: scratch from :func:`pose_scratch`. The samples are scanned
-    in the order of the sign of ``py`` (module doc, step 2)."""
+    in the order of the sign of ``py`` (module doc, step 2). ``screen``: first reject a chain that the
+    whole-stroke bound excludes (:func:`kinematics.feasibility.chain_excluded_at`), a shortcut for
+    poses a chain does not reach; the answer is the same without it (no sample of an excluded chain
+    serves, so it has no witness), and a caller whose poses every chain reaches passes False."""
     n = cos_t.shape[1]
     flip = py < 0.0
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
         bp[i, 0, 0], bp[i, 0, 1], bp[i, 0, 2] = b1x, b1y, b1z
         bp[i, 1, 0], bp[i, 1, 1], bp[i, 1, 2] = b2x, b2y, b2z
-        if chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
+        if screen and chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
             return False
         cnt[0, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
                                lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces, flip)
@@ -307,7 +310,7 @@ def _clear_kernel(points, us, jcs, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2,
             wit, bp, pieces, pick, cnt = pose_scratch(cos_t.shape[1])
             out[p, m] = _pose_clear(points[p, 0], points[p, 1], points[p, 2], us[m], cos_t, sin_t, arc, hb,
                                     rho_lo, rho_hi, lmin2, lmax2, jcs[m], dmin, sel, skip, 0,
-                                    wit, bp, pieces, pick, cnt)
+                                    wit, bp, pieces, pick, cnt, True)
 
 
 def interference_free(design: Design, joints: Joints, points: np.ndarray, rotations: np.ndarray, n_eta: int,
@@ -349,7 +352,7 @@ def clear_configuration(design: Design, joints: Joints, position, rotation: np.n
     with KERNEL_LOCK:
         ok = _pose_clear(px, py, pz, u, tab.cos_t, tab.sin_t, tab.arc, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
                          tab.lmax2, jc, float(joints.min_distance), sel, np.zeros((1,) + tab.cos_t.shape, np.bool_),
-                         0, *pose_scratch(tab.cos_t.shape[1]))
+                         0, *pose_scratch(tab.cos_t.shape[1]), True)
     if not ok:
         return None
     mid = 0.5 * (sel[:, 0:2] + sel[:, 3:5])  # carriage centre rho e on the base plane

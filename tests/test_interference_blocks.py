@@ -446,3 +446,18 @@ def test_top_blocks_tile_the_grid_without_a_block_across_y_0(ny, zero_at, mirror
     if mirror:
         want[:, :ny // 2] = 0
     assert np.array_equal(seen, want)
+
+
+def test_blocks_decide_voxels_no_chain_reaches_as_the_screened_search():
+    """The single voxels of the blocks skip the per-voxel search's whole-stroke screen (a shortcut that
+    changes no answer): on a ``where`` that is the whole box, most of whose voxels some chain does not
+    reach, the blocks give the screened per-voxel search's answer at every voxel."""
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 8.0
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h))
+    xs, ys, zs = plain.grid.axes()
+    where = np.ones(plain.grid.shape, bool)
+    pts = np.stack(np.meshgrid(xs, ys, zs, indexing="ij"), axis=-1).reshape(-1, 3)
+    old = interference_free(design, joints, pts, np.eye(3)[None], plain.n_eta)[:, 0].reshape(where.shape)
+    new = interference_free_grid(design, joints, (xs, ys, zs), h, np.eye(3), plain.n_eta, where)
+    assert np.array_equal(new, old)
+    assert 0 < old.sum() < plain.occupancy.sum() < where.sum() // 2  # unreached voxels are most of the box
