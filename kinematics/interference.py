@@ -283,13 +283,21 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
         cnt[1, i] = m
         for q in range(m):
             pick[i, q] = 0 if m == 1 else int(round(q * (cnt[0, i] - 1) / (m - 1)))
+    # the combinations in their order, each pair of picks of chains (2, 3) and (1, 3) tested once
+    # (memo: -1 not yet, 0 they collide, 1 they clear): the same answer and configuration
+    memo = np.full((2, SPREAD, SPREAD), -1, np.int8)
     for q0 in range(cnt[1, 0]):
         for q1 in range(cnt[1, 1]):
             if not _clear(bp, wit, 0, pick[0, q0], 1, pick[1, q1], dmin):
                 continue
             for q2 in range(cnt[1, 2]):
-                if _clear(bp, wit, 1, pick[1, q1], 2, pick[2, q2], dmin) and \
-                        _clear(bp, wit, 0, pick[0, q0], 2, pick[2, q2], dmin):
+                if memo[0, q1, q2] < 0:
+                    memo[0, q1, q2] = 1 if _clear(bp, wit, 1, pick[1, q1], 2, pick[2, q2], dmin) else 0
+                if memo[0, q1, q2] == 0:
+                    continue
+                if memo[1, q0, q2] < 0:
+                    memo[1, q0, q2] = 1 if _clear(bp, wit, 0, pick[0, q0], 2, pick[2, q2], dmin) else 0
+                if memo[1, q0, q2] == 1:
                     for t in range(6):
                         sel[0, t] = wit[0, pick[0, q0], t]
                         sel[1, t] = wit[1, pick[1, q1], t]

@@ -67,11 +67,12 @@ changes): the certificate proves every chain feasible at every centre, which a b
 boundary of the engine's occupancy (its ``where``) does not have (none of them passed, default design,
 h = 1). Any other block is split in eight; a single voxel is decided by the per-voxel search itself
 (:func:`kinematics.interference._pose_clear`, with the marks its block inherited), so the result is
-voxel-identical to it. It runs without the search's first step, the whole-stroke screen of each chain: a
-shortcut for poses a chain does not reach, which changes no answer (no sample of an excluded chain
-serves, so it has no witness) and never fires on the engine's ``where``, which every chain reaches;
-it cost about a tenth of the engine's interference time at h = 1. Blocks with no voxel to test are skipped. Distances get one more margin of
-``1e-7`` of the design's scale so the rounding of the closed-form distance never matters.
+voxel-identical to it. It runs without the search's first step, the whole-stroke screen of each
+chain: a shortcut for poses a chain does not reach, which changes no answer (no sample of an excluded
+chain serves, so it has no witness) and never fires on the engine's ``where``, which every chain
+reaches; it cost about a tenth of the engine's interference time at h = 1. Blocks with no voxel to
+test are skipped. Distances get one more margin of ``1e-7`` of the design's scale so the rounding of
+the closed-form distance never matters.
 
 The top blocks are laid so that none holds voxel centres of both signs of ``y`` (their y edges start
 at the first centre with ``y >= 0``), so each block walks in the order of all its centres.

@@ -461,3 +461,62 @@ def test_blocks_decide_voxels_no_chain_reaches_as_the_screened_search():
     new = interference_free_grid(design, joints, (xs, ys, zs), h, np.eye(3), plain.n_eta, where)
     assert np.array_equal(new, old)
     assert 0 < old.sum() < plain.occupancy.sum() < where.sum() // 2  # unreached voxels are most of the box
+
+
+def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
+    """Step 3 of kinematics/interference.py where the first witnesses collide, against a plain reading
+    of its definition: each chain's witnesses listed in the scan order (``_witnesses``), ``SPREAD`` of
+    them picked evenly over the list, and the pose reachable when some combination of picks (chain 1's
+    outermost, then 2's, then 3's) clears every pair of legs of different chains (segment distances
+    here); the configuration ``clear_configuration`` reports is the first such combination's."""
+    import math
+
+    from paraspace.kinematics.feasibility import ChainTables, chain_points
+    from paraspace.kinematics.geometry import platform_points_local
+    from paraspace.kinematics.interference import SPREAD, _witnesses, clear_configuration
+    from paraspace.kinematics.joints import cone_table
+
+    design, joints, h = Design(), Joints(leg_diameter=10.0), 4.0
+    plain = compute_workspace(design, WorkspaceSettings(voxel=h))
+    xs, ys, zs = plain.grid.axes()
+    n = plain.n_eta
+    tab = ChainTables(design, n)
+    u = np.ascontiguousarray(platform_points_local(design))
+    jc = np.ascontiguousarray(cone_table(design, joints, np.eye(3)))
+    dmin = joints.min_distance
+    skip = np.zeros((1, 3, n), np.bool_)
+
+    def legs_clear(wi, bi, wj, bj):
+        return all(segment_distance(*wi[3 * la:3 * la + 3], *bi[la], *wj[3 * lb:3 * lb + 3], *bj[lb]) >= dmin
+                   for la in range(2) for lb in range(2))
+
+    seen = {True: 0, False: 0}
+    rng = np.random.default_rng(5)
+    idx = np.argwhere(plain.occupancy)
+    for ix, iy, iz in idx[rng.permutation(len(idx))]:
+        p = (xs[ix], ys[iy], zs[iz])
+        wit = np.empty((3, n, 6))
+        cnt, bs = [], []
+        for i in range(3):
+            pts = chain_points(*p, u, i)
+            bs.append((pts[0:3], pts[3:6]))
+            cnt.append(_witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2,
+                                  jc, dmin, n, wit, skip, 0, np.empty((4, 2)), p[1] < 0.0))
+        if min(cnt) == 0 or all(legs_clear(wit[i, 0], bs[i], wit[j, 0], bs[j]) for i, j in ((0, 1), (1, 2), (0, 2))):
+            continue  # no witness, or the first witnesses clear: not the spread
+        picks = [[0] if c == 1 else [int(round(q * (c - 1) / (min(SPREAD, c) - 1))) for q in range(min(SPREAD, c))]
+                 for c in cnt]
+        first = next(((a, b, c) for a in picks[0] for b in picks[1] for c in picks[2]
+                      if legs_clear(wit[0, a], bs[0], wit[1, b], bs[1]) and legs_clear(wit[1, b], bs[1], wit[2, c], bs[2])
+                      and legs_clear(wit[0, a], bs[0], wit[2, c], bs[2])), None)
+        assert interference_free(design, joints, np.array([p]), np.eye(3)[None], n)[0, 0] == (first is not None)
+        conf = clear_configuration(design, joints, p, np.eye(3), n)
+        assert (conf is None) == (first is None)
+        if first is not None:
+            for i, q in enumerate(first):
+                rho = math.hypot(*(0.5 * (wit[i, q, 0:2] + wit[i, q, 3:5])))
+                assert conf[0][i] == pytest.approx(design.r - rho, abs=1e-9)
+        seen[first is not None] += 1
+        if min(seen.values()) >= 15 and sum(seen.values()) >= 60:
+            break
+    assert min(seen.values()) >= 15  # poses the spread clears and poses it does not
