@@ -507,7 +507,8 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
         picks = [[0] if c == 1 else [int(round(q * (c - 1) / (min(SPREAD, c) - 1))) for q in range(min(SPREAD, c))]
                  for c in cnt]
         first = next(((a, b, c) for a in picks[0] for b in picks[1] for c in picks[2]
-                      if legs_clear(wit[0, a], bs[0], wit[1, b], bs[1]) and legs_clear(wit[1, b], bs[1], wit[2, c], bs[2])
+                      if legs_clear(wit[0, a], bs[0], wit[1, b], bs[1])
+                      and legs_clear(wit[1, b], bs[1], wit[2, c], bs[2])
                       and legs_clear(wit[0, a], bs[0], wit[2, c], bs[2])), None)
         assert interference_free(design, joints, np.array([p]), np.eye(3)[None], n)[0, 0] == (first is not None)
         conf = clear_configuration(design, joints, p, np.eye(3), n)
