@@ -521,3 +521,18 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
         if min(seen.values()) >= 15 and sum(seen.values()) >= 60:
             break
     assert min(seen.values()) >= 15  # poses the spread clears and poses it does not
+
+
+def test_box_count_counts_the_voxels_of_a_box():
+    """``_box_count`` (the blocks' test for a block with no voxel to test, or with voxels left out)
+    against numpy's count on random masks and boxes, the boxes touching every face of the grid."""
+    from paraspace.kinematics.interference_blocks import _box_count
+
+    rng = np.random.default_rng(11)
+    for shape, p in (((17, 9, 23), 0.5), ((5, 31, 8), 0.05), ((12, 12, 12), 0.97)):
+        mask = np.ascontiguousarray(rng.random(shape) < p)
+        for _ in range(200):
+            lo = [int(rng.integers(0, n)) for n in shape]
+            size = [int(rng.integers(1, n - a + 1)) for a, n in zip(lo, shape)]
+            want = int(mask[lo[0]:lo[0] + size[0], lo[1]:lo[1] + size[1], lo[2]:lo[2] + size[2]].sum())
+            assert _box_count(mask, *lo, *size) == want
