@@ -246,6 +246,20 @@ def _finish_kernel(out, ny_eval, mirror, bits, occ):
                 occ[i, j, k] = out[i, j, k] == ALL_CHAINS
 
 
+@njit(parallel=True, cache=True, nogil=True)
+def _interference_kernel(out, occ, ok):
+    """Leg interference applied in one parallel pass over x slices: a voxel of ``occ`` that ``ok``
+    refuses gets the :data:`INTERFERENCE` bit in ``out`` and leaves ``occ`` (numpy's ``bad = occ &
+    ~ok; out[bad] |= INTERFERENCE; occ &= ok`` took 16 ms at h = 1 on one thread)."""
+    nx, ny, nz = out.shape
+    for i in prange(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if occ[i, j, k] and not ok[i, j, k]:
+                    out[i, j, k] |= INTERFERENCE
+                    occ[i, j, k] = False
+
+
 # --------------------------------------------------------------------------------------------
 # Python drivers
 
@@ -446,9 +460,8 @@ def _run_grid(design: Design, settings: WorkspaceSettings, grid: GridSpec,
             rot = euler_zyx_deg(*settings.orientation)
             ok = interference_free_grid(design, settings.joints, (xs, ys, zs), grid.h, rot, n_eta, occ, cancel,
                                         mirror)
-            bad = occ & ~ok
-            out[bad] |= INTERFERENCE
-            occ &= ok
+            with KERNEL_LOCK:
+                _interference_kernel(out, occ, ok)
     return out, n_eta, occ
 
 
