@@ -603,15 +603,20 @@ def interference_free_grid(design: Design, joints: Joints, axes: tuple[np.ndarra
 def _top_blocks(shape: tuple[int, int, int], ys: np.ndarray, mirror: bool) -> tuple[np.ndarray, np.ndarray]:
     """The top blocks ``(b0, bn)`` (first voxel and size, (m, 3) int64): :data:`TOP` voxels across, their
     y edges starting at the first centre with ``y >= 0`` (so no block holds centres of both signs of
-    ``y``: module doc), or with ``mirror`` at row ``n_y // 2``, and then only the rows from there up."""
+    ``y``: module doc), or with ``mirror`` only the rows from ``n_y // 2`` up (the middle row of an odd
+    ``n_y`` a layer of its own when its centre lies below 0 by rounding)."""
     def edges(n: int, at: int, below: bool) -> np.ndarray:
-        e = set(range(at, n, TOP)) | ({n} if n > at else set())
+        e = set(range(at, n, TOP)) | {n}
         if below:
             e |= set(range(at, 0, -TOP)) | {0}
         return np.array(sorted(e), np.int64)
 
     ny = shape[1]
-    ey = edges(ny, ny // 2, False) if mirror else edges(ny, int(np.searchsorted(ys, 0.0, side="left")), True)
+    j0 = int(np.searchsorted(ys, 0.0, side="left"))  # the first centre with y >= 0
+    if mirror:
+        ey = np.union1d(edges(ny, max(j0, ny // 2), False), [ny // 2])
+    else:
+        ey = edges(ny, j0, True)
     axes = [edges(shape[0], 0, False), ey, edges(shape[2], 0, False)]
     gx, gy, gz = np.meshgrid(*(a[:-1] for a in axes), indexing="ij")
     sx, sy, sz = np.meshgrid(*(np.diff(a) for a in axes), indexing="ij")

@@ -424,18 +424,20 @@ def test_the_mirror_half_decides_the_whole_grid(odd):
     assert np.array_equal(whole[idx[:, 0], idx[:, 1], idx[:, 2]], old)
 
 
-@pytest.mark.parametrize("ny,zero_at,mirror", [(37, 0, False), (37, 37, False), (37, 21, False), (40, 9, False),
-                                               (37, 18, True), (40, 20, True), (1, 0, False), (1, 0, True)])
-def test_top_blocks_tile_the_grid_without_a_block_across_y_0(ny, zero_at, mirror):
+@pytest.mark.parametrize("ny,zero_at,mirror,tilt", [
+    (37, 0, False, 0.0), (37, 37, False, 0.0), (37, 21, False, 0.0), (40, 9, False, 0.0),
+    (37, 18, True, 0.0), (37, 18, True, -1e-16), (40, 20, True, 0.0), (1, 0, False, 0.0), (1, 0, True, 0.0),
+    (1, 0, True, -1e-16)])
+def test_top_blocks_tile_the_grid_without_a_block_across_y_0(ny, zero_at, mirror, tilt):
     """``_top_blocks``: every voxel lies in exactly one top block (with ``mirror``, every voxel of the
     rows ``j >= n_y // 2`` and none below), no block is wider than ``TOP`` or holds centres of both
-    signs of ``y``."""
+    signs of ``y``, also where the middle row of a mirror grid lies below 0 by rounding (``tilt``)."""
     from paraspace.kinematics.interference_blocks import TOP, _top_blocks
 
     shape = (35, ny, 20)
     ys = np.arange(ny) - zero_at + 0.5  # the first centre with y >= 0 is row zero_at
     if mirror:
-        ys = np.arange(ny) - 0.5 * (ny - 1)
+        ys = np.arange(ny) - 0.5 * (ny - 1) + tilt
     b0, bn = _top_blocks(shape, ys, mirror)
     assert (bn >= 1).all() and (bn <= TOP).all()
     seen = np.zeros(shape, np.int64)
