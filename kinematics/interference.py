@@ -23,11 +23,11 @@ definition):
    samples in mirrored orders, found first witnesses that are not mirror images where two samples
    at the same distance from the middle both serve, and could get different answers: 6,400 of the
    default design's voxels at h = 1 (diameter 10; 3,200 mirror pairs, 0.2 % of its free voxels)
-   had a mirror image with the other answer. With
-   the order turned, the search at the mirror image of a pose is the mirror image of the search at
-   the pose (the pair tests and the spread below do not depend on the chains' order), so a
-   mirror-symmetric design at a mirror-symmetric orientation gets a mirror-symmetric answer, and
-   the grid engine computes half of it (:mod:`kinematics.interference_blocks`).
+   had a mirror image with the other answer. With the order turned, the search at the mirror image
+   of a pose is the mirror image of the search at the pose (the pair tests and the spread below do
+   not depend on the chains' order), so a mirror-symmetric design at a mirror-symmetric orientation
+   gets a mirror-symmetric answer, and the grid engine computes half of it
+   (:mod:`kinematics.interference_blocks`).
 3. **Coupling.** The pose is reachable when one witness per chain makes every pair of legs of
    different chains clear. The first witnesses (nearest the stroke middle) are tried first; if they
    collide, up to :data:`SPREAD` witnesses per chain spread evenly over the stroke are combined
