@@ -207,11 +207,21 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
     place: a view costs two atomic reference counts, on tables every thread shares. ``pieces`` (4,
     2): scratch. A chain without joint cones is tested from numbers only (:func:`_plain_witness`).
     ``flip``: the order of a platform centre with ``y < 0`` (:func:`scan_sample`)."""
+    return _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
+                         cap, wit, skip, sb, pieces, flip, 0, 0)[0]
+
+
+@njit(cache=True)
+def _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
+                  cap, wit, skip, sb, pieces, flip, start, found):
+    """:func:`_witnesses` from step ``start`` of the scan on, the ``found`` witnesses already in
+    ``wit[i]`` kept (a scan taken up where an earlier one stopped): ``(count, step)``, the witnesses
+    found in all and the step after the last one visited."""
     n = cos_t.shape[1]
     jci = jc[i]
     plain = not cones_set(jci)
-    cnt = 0
-    for step in range(n):
+    cnt = found
+    for step in range(start, n):
         k = scan_sample(step, n, flip)
         if k < 0 or skip[sb, i, k]:
             continue
@@ -227,8 +237,8 @@ def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi
         wit[i, cnt, 3], wit[i, cnt, 4], wit[i, cnt, 5] = rho * c + hb * s, rho * s - hb * c, 0.0
         cnt += 1
         if cnt >= cap:
-            break
-    return cnt
+            return cnt, step + 1
+    return cnt, n
 
 
 @njit(cache=True, inline="always")
@@ -255,8 +265,14 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
     in the order of the sign of ``py`` (module doc, step 2). ``screen``: first reject a chain that the
     whole-stroke bound excludes (:func:`kinematics.feasibility.chain_excluded_at`), a shortcut for
     poses a chain does not reach; the answer is the same without it (no sample of an excluded chain
-    serves, so it has no witness), and a caller whose poses every chain reaches passes False."""
-    n = cos_t.shape[1]
+    serves, so it has no witness), and a caller whose poses every chain reaches passes False.
+
+    Where the first witnesses collide, each chain's list of witnesses goes on from its first one (the
+    scan is taken up where it stopped), and the lists of the two chains whose first witnesses collide
+    first come first: when no pick of one clears any pick of the other, no combination clears, so the
+    answer is False without the third chain's list. Otherwise the combinations are tried in their
+    order, each pair of picks tested once (a memo). The answer and the configuration are those of
+    every combination tried in order (tested against a plain reading of the definition)."""
     flip = py < 0.0
     for i in range(3):
         b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
@@ -264,46 +280,80 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
         bp[i, 1, 0], bp[i, 1, 1], bp[i, 1, 2] = b2x, b2y, b2z
         if screen and chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
             return False
-        cnt[0, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces, flip)
+        # cnt[1, i]: the step after the first witness, where the spread's scan takes up
+        cnt[0, i], cnt[1, i] = _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                                             lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces, flip, 0, 0)
         if cnt[0, i] == 0:
             return False
-    if _clear(bp, wit, 0, 0, 1, 0, dmin) and _clear(bp, wit, 1, 0, 2, 0, dmin) and _clear(bp, wit, 0, 0, 2, 0, dmin):
+    # the first pair of chains (in the order tested) whose first witnesses collide: (a, b); c the third
+    if not _clear(bp, wit, 0, 0, 1, 0, dmin):
+        a, b, c = 0, 1, 2
+    elif not _clear(bp, wit, 1, 0, 2, 0, dmin):
+        a, b, c = 1, 2, 0
+    elif not _clear(bp, wit, 0, 0, 2, 0, dmin):
+        a, b, c = 0, 2, 1
+    else:
         for i in range(3):
             for t in range(6):
                 sel[i, t] = wit[i, 0, t]
         return True
-    # the first witnesses collide: combine witnesses spread over the stroke
-    for i in range(3):
-        b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-        cnt[0, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
-                               lmin2, lmax2, jc, dmin, n, wit, skip, sb, pieces, flip)
-    for i in range(3):
-        m = min(SPREAD, cnt[0, i])
-        cnt[1, i] = m
-        for q in range(m):
-            pick[i, q] = 0 if m == 1 else int(round(q * (cnt[0, i] - 1) / (m - 1)))
-    # the combinations in their order, each pair of picks of chains (2, 3) and (1, 3) tested once
-    # (memo: -1 not yet, 0 they collide, 1 they clear): the same answer and configuration
-    memo = np.full((2, SPREAD, SPREAD), -1, np.int8)
+    # the first witnesses collide: combine witnesses spread over the stroke. memo[p, q, r] for the pairs
+    # p = 0: chains (1, 2), 1: (2, 3), 2: (1, 3), picks q and r: -1 not yet, 0 they collide, 1 they clear
+    memo = np.full((3, SPREAD, SPREAD), -1, np.int8)
+    _spread_picks(px, py, pz, u, a, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
+                  flip, pick, cnt)
+    _spread_picks(px, py, pz, u, b, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
+                  flip, pick, cnt)
+    pair = 0 if c == 2 else (1 if c == 0 else 2)
+    some = False
+    for qa in range(cnt[1, a]):
+        for qb in range(cnt[1, b]):
+            memo[pair, qa, qb] = 1 if _clear(bp, wit, a, pick[a, qa], b, pick[b, qb], dmin) else 0
+            if memo[pair, qa, qb] == 1:
+                some = True
+                break
+        if some:
+            break
+    if not some:
+        return False
+    _spread_picks(px, py, pz, u, c, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
+                  flip, pick, cnt)
     for q0 in range(cnt[1, 0]):
         for q1 in range(cnt[1, 1]):
-            if not _clear(bp, wit, 0, pick[0, q0], 1, pick[1, q1], dmin):
+            if memo[0, q0, q1] < 0:
+                memo[0, q0, q1] = 1 if _clear(bp, wit, 0, pick[0, q0], 1, pick[1, q1], dmin) else 0
+            if memo[0, q0, q1] == 0:
                 continue
             for q2 in range(cnt[1, 2]):
-                if memo[0, q1, q2] < 0:
-                    memo[0, q1, q2] = 1 if _clear(bp, wit, 1, pick[1, q1], 2, pick[2, q2], dmin) else 0
-                if memo[0, q1, q2] == 0:
+                if memo[1, q1, q2] < 0:
+                    memo[1, q1, q2] = 1 if _clear(bp, wit, 1, pick[1, q1], 2, pick[2, q2], dmin) else 0
+                if memo[1, q1, q2] == 0:
                     continue
-                if memo[1, q0, q2] < 0:
-                    memo[1, q0, q2] = 1 if _clear(bp, wit, 0, pick[0, q0], 2, pick[2, q2], dmin) else 0
-                if memo[1, q0, q2] == 1:
+                if memo[2, q0, q2] < 0:
+                    memo[2, q0, q2] = 1 if _clear(bp, wit, 0, pick[0, q0], 2, pick[2, q2], dmin) else 0
+                if memo[2, q0, q2] == 1:
                     for t in range(6):
                         sel[0, t] = wit[0, pick[0, q0], t]
                         sel[1, t] = wit[1, pick[1, q1], t]
                         sel[2, t] = wit[2, pick[2, q2], t]
                     return True
     return False
+
+
+@njit(cache=True)
+def _spread_picks(px, py, pz, u, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
+                  flip, pick, cnt):
+    """Chain ``i``'s whole list of witnesses (module doc, step 3: its scan taken up at step ``cnt[1, i]``,
+    after its first witness) and its picks: ``cnt[0, i]`` witnesses, ``cnt[1, i]`` picks spread evenly
+    over them in ``pick[i]``."""
+    n = cos_t.shape[1]
+    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
+    cnt[0, i] = _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc,
+                              dmin, n, wit, skip, sb, pieces, flip, cnt[1, i], 1)[0]
+    m = min(SPREAD, cnt[0, i])
+    cnt[1, i] = m
+    for q in range(m):
+        pick[i, q] = 0 if m == 1 else int(round(q * (cnt[0, i] - 1) / (m - 1)))
 
 
 @njit(parallel=True, cache=True, nogil=True)
