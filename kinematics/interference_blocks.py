@@ -65,8 +65,9 @@ same order) and saves most of the scan of a chain whose own legs collide.
 A block holding voxels outside ``where`` is not tested for clear (the children decide, so no answer
 changes): the certificate proves every chain feasible at every centre, which a block across the
 boundary of the engine's occupancy (its ``where``) does not have (none of them passed, default design,
-h = 1). Any other block is split in eight; a single voxel is decided by the per-voxel search itself
-(:func:`kinematics.interference._pose_clear`, with the marks its block inherited), so the result is
+h = 1). Any other block is split in eight, except that a block of at most two voxels across decides
+its voxels at once (they would be its children). A single voxel is decided by the per-voxel search
+itself (:func:`kinematics.interference._pose_clear`, with the marks of its block), so the result is
 voxel-identical to it. It runs without the search's first step, the whole-stroke screen of each
 chain: a shortcut for poses a chain does not reach, which changes no answer (no sample of an excluded
 chain serves, so it has no witness) and never fires on the engine's ``where``, which every chain
@@ -261,7 +262,8 @@ def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear):
     :func:`_own_upper`'s upper one, at most :data:`MAX_EVAL` bounds). The bisection walks the dyadic
     pieces ``[r0 + j w, r0 + (j + 1) w]``, ``w = (r1 - r0) / 2^d``, depth first (the right half
     first) by their indices ``(d, j)`` alone: no stack, so no array argument (numba counts an atomic
-    reference on each, in a function that loops)."""
+    reference on each, in a function that loops). It gives up (False) at a piece whose bound misses
+    ``thr`` by more than bisecting the piece could make up."""
     d = 0
     j = 0
     evals = 0
@@ -284,7 +286,14 @@ def _own_legs(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, r0, r1, e, thr, clear):
                 return True
             j -= 1  # a right half: its left sibling is next
             continue
-        if (d0 < thr) if clear else (d0 > thr):
+        # not decided. The piece cannot be when a point of it fails, nor (a heuristic, which changes no
+        # answer: False only splits the block) when its bound misses by more than bisecting it to the
+        # end could gain: the distance at the middles moves by at most |s - t| <= 1 times the shift
+        # in rho, sigma <= 2 and lambda <= 1 times the shift, w / 2 summed over the levels
+        if clear:
+            if d0 < thr or lo + 2.0 * (b - a) < thr:
+                return False
+        elif d0 > thr or hi - (b - a) > thr:
             return False
         if evals > MAX_EVAL:
             return False
@@ -496,8 +505,11 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
     """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED, with the
     samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children):
     block ``b`` starts from its parent's marks ``pskip[par[b]]``, which a single voxel reads in place
-    and a larger block copies into ``skip[b]`` before its tests add to them (so the rows of single
-    voxels are never written). Parallel over runs of :data:`CHUNK` blocks, each with one set of
+    and a larger block copies into ``skip[b]`` before its tests add to them. A block of at most two
+    voxels across that its tests leave undecided decides its voxels at once, with the per-voxel
+    search and its own marks (its children would be those voxels): it is always DONE, so it keeps
+    its marks in the thread's scratch, and the rows of such blocks and of single voxels are never
+    written. Parallel over runs of :data:`CHUNK` blocks, each with one set of
     scratch (an allocation per block or voxel cost a call to the allocator and atomic reference
     counts each); every table is read in place, by index. The runs are visited in the strided order
     of :mod:`kinematics.slices` for the launch's ``threads``: the undecided blocks gather along the
@@ -514,6 +526,7 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
         sel = np.empty((3, 6))
         wit, bp, pieces, pick, cnt = pose_scratch(n)
         stack, ks, hull, bx, by, bz, nk, cen, rad = _block_scratch(n)
+        own = np.empty((1, 3, n), np.bool_)  # the marks of a block of at most two voxels across
         for b in range(c * CHUNK, min(nb, c * CHUNK + CHUNK)):
             nin = _box_count(where, b0[b, 0], b0[b, 1], b0[b, 2], bn[b, 0], bn[b, 1], bn[b, 2])
             if nin == 0:  # no voxel to test
@@ -528,9 +541,11 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
                 state[b] = DONE
                 continue
             p = par[b]
+            last = nx <= 2 and ny <= 2 and nz <= 2  # its children would be single voxels
+            mk, row = (own, 0) if last else (skip, b)
             for i in range(3):
                 for k in range(n):
-                    skip[b, i, k] = pskip[p, i, k]
+                    mk[row, i, k] = pskip[p, i, k]
             px = 0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + nx - 1])
             py = 0.5 * (ys[b0[b, 1]] + ys[b0[b, 1] + ny - 1])
             pz = 0.5 * (zs[b0[b, 2]] + zs[b0[b, 2] + nz - 1])
@@ -539,16 +554,25 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
             # its occupancy) the certificate, which proves every chain feasible at every centre, never
             # holds there (the children decide; this saves time and changes no answer)
             if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
-                                                    jc, dmin, margin, skip, b, stack, ks, hull, bx, by, bz, nk, cen,
+                                                    jc, dmin, margin, mk, row, stack, ks, hull, bx, by, bz, nk, cen,
                                                     rad, py < 0.0):
                 for x in range(b0[b, 0], b0[b, 0] + nx):
                     for y in range(b0[b, 1], b0[b, 1] + ny):
                         for z in range(b0[b, 2], b0[b, 2] + nz):
                             out[x, y, z] = where[x, y, z]
                 state[b] = DONE
-            elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, skip, b,
+            elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, mk, row,
                           bx, by, bz):
                 state[b] = DONE  # every voxel interferes: out stays False
+            elif last:
+                for ix in range(b0[b, 0], b0[b, 0] + nx):
+                    for iy in range(b0[b, 1], b0[b, 1] + ny):
+                        for iz in range(b0[b, 2], b0[b, 2] + nz):
+                            if where[ix, iy, iz]:
+                                out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo,
+                                                              rho_hi, lmin2, lmax2, jc, dmin, sel, own, 0, wit, bp,
+                                                              pieces, pick, cnt, False)
+                state[b] = DONE
             else:
                 state[b] = UNDECIDED
 
