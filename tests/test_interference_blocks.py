@@ -470,7 +470,9 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
     of its definition: each chain's witnesses listed in the scan order (``_witnesses``), ``SPREAD`` of
     them picked evenly over the list, and the pose reachable when some combination of picks (chain 1's
     outermost, then 2's, then 3's) clears every pair of legs of different chains (segment distances
-    here); the configuration ``clear_configuration`` reports is the first such combination's."""
+    here); the configuration ``clear_configuration`` reports is the first such combination's. The
+    search answers False without the third chain's list where no pick of the first colliding pair of
+    chains clears any pick of the other: poses of both kinds of False are among those checked."""
     import math
 
     from paraspace.kinematics.feasibility import ChainTables, chain_points
@@ -493,6 +495,7 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
                    for la in range(2) for lb in range(2))
 
     seen = {True: 0, False: 0}
+    falses = {"no pick of the colliding pair clears": 0, "the third chain's picks collide": 0}
     rng = np.random.default_rng(5)
     idx = np.argwhere(plain.occupancy)
     for ix, iy, iz in idx[rng.permutation(len(idx))]:
@@ -513,6 +516,11 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
                       and legs_clear(wit[1, b], bs[1], wit[2, c], bs[2])
                       and legs_clear(wit[0, a], bs[0], wit[2, c], bs[2])), None)
         assert interference_free(design, joints, np.array([p]), np.eye(3)[None], n)[0, 0] == (first is not None)
+        if first is None:
+            a, b = next((i, j) for i, j in ((0, 1), (1, 2), (0, 2))
+                        if not legs_clear(wit[i, 0], bs[i], wit[j, 0], bs[j]))
+            some = any(legs_clear(wit[a, qa], bs[a], wit[b, qb], bs[b]) for qa in picks[a] for qb in picks[b])
+            falses["the third chain's picks collide" if some else "no pick of the colliding pair clears"] += 1
         conf = clear_configuration(design, joints, p, np.eye(3), n)
         assert (conf is None) == (first is None)
         if first is not None:
@@ -520,9 +528,10 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
                 rho = math.hypot(*(0.5 * (wit[i, q, 0:2] + wit[i, q, 3:5])))
                 assert conf[0][i] == pytest.approx(design.r - rho, abs=1e-9)
         seen[first is not None] += 1
-        if min(seen.values()) >= 15 and sum(seen.values()) >= 60:
+        if min(seen.values()) >= 15 and sum(seen.values()) >= 60 and min(falses.values()) >= 3:
             break
     assert min(seen.values()) >= 15  # poses the spread clears and poses it does not
+    assert min(falses.values()) >= 3, falses  # both ways of answering False
 
 
 def test_box_count_counts_the_voxels_of_a_box():
