@@ -504,12 +504,11 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
                    rho_hi, lmin2, lmax2, jc, dmin, state, out, threads):
     """Decide each block: DONE (its voxels of ``where`` written to ``out``) or UNDECIDED, with the
     samples that are no witness anywhere in it marked in ``skip[b]`` (inherited by its children):
-    block ``b`` starts from its parent's marks ``pskip[par[b]]``, which a single voxel reads in place
-    and a larger block copies into ``skip[b]`` before its tests add to them. A block of at most two
-    voxels across that its tests leave undecided decides its voxels at once, with the per-voxel
-    search and its own marks (its children would be those voxels): it is always DONE, so it keeps
-    its marks in the thread's scratch, and the rows of such blocks and of single voxels are never
-    written. Parallel over runs of :data:`CHUNK` blocks, each with one set of
+    block ``b`` starts from a copy of its parent's marks ``pskip[par[b]]``, to which its tests add. A
+    block of at most two voxels across that its tests leave undecided (a single voxel is not tested)
+    decides its voxels at once, with the per-voxel search and its own marks (its children would be
+    those voxels): it is always DONE, so it keeps its marks in the thread's scratch, and the rows of
+    such blocks are never written. Parallel over runs of :data:`CHUNK` blocks, each with one set of
     scratch (an allocation per block or voxel cost a call to the allocator and atomic reference
     counts each); every table is read in place, by index. The runs are visited in the strided order
     of :mod:`kinematics.slices` for the launch's ``threads``: the undecided blocks gather along the
@@ -533,13 +532,6 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
                 state[b] = DONE
                 continue
             nx, ny, nz = bn[b, 0], bn[b, 1], bn[b, 2]
-            if nx == 1 and ny == 1 and nz == 1:
-                ix, iy, iz = b0[b, 0], b0[b, 1], b0[b, 2]
-                out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo, rho_hi,
-                                              lmin2, lmax2, jc, dmin, sel, pskip, par[b], wit, bp, pieces, pick, cnt,
-                                              False)  # no screen (module doc)
-                state[b] = DONE
-                continue
             p = par[b]
             last = nx <= 2 and ny <= 2 and nz <= 2  # its children would be single voxels
             mk, row = (own, 0) if last else (skip, b)
@@ -553,16 +545,17 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
             # a block with voxels outside ``where`` is not tested for clear: in the engine's use (``where``
             # its occupancy) the certificate, which proves every chain feasible at every centre, never
             # holds there (the children decide; this saves time and changes no answer)
-            if nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax,
-                                                    jc, dmin, margin, mk, row, stack, ks, hull, bx, by, bz, nk, cen,
-                                                    rad, py < 0.0):
+            tested = nx * ny * nz > 1  # a single voxel goes to the per-voxel search at once
+            if tested and nin == nx * ny * nz and _block_clear(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi,
+                                                               lmin, lmax, jc, dmin, margin, mk, row, stack, ks, hull,
+                                                               bx, by, bz, nk, cen, rad, py < 0.0):
                 for x in range(b0[b, 0], b0[b, 0] + nx):
                     for y in range(b0[b, 1], b0[b, 1] + ny):
                         for z in range(b0[b, 2], b0[b, 2] + nz):
                             out[x, y, z] = where[x, y, z]
                 state[b] = DONE
-            elif _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin, mk, row,
-                          bx, by, bz):
+            elif tested and _exclude(px, py, pz, e, u, cos_t, sin_t, hb, rho_lo, rho_hi, lmin, lmax, jc, dmin, margin,
+                                     mk, row, bx, by, bz):
                 state[b] = DONE  # every voxel interferes: out stays False
             elif last:
                 for ix in range(b0[b, 0], b0[b, 0] + nx):
@@ -571,7 +564,7 @@ def _blocks_kernel(b0, bn, pskip, par, skip, where, xs, ys, zs, h, eps, margin, 
                             if where[ix, iy, iz]:
                                 out[ix, iy, iz] = _pose_clear(xs[ix], ys[iy], zs[iz], u, cos_t, sin_t, arc, hb, rho_lo,
                                                               rho_hi, lmin2, lmax2, jc, dmin, sel, own, 0, wit, bp,
-                                                              pieces, pick, cnt, False)
+                                                              pieces, pick, cnt, False)  # no screen (module doc)
                 state[b] = DONE
             else:
                 state[b] = UNDECIDED
