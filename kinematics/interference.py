@@ -199,24 +199,17 @@ def scan_sample(step, n, flip):
 
 @njit(cache=True)
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
-               cap, wit, skip, sb, pieces, flip):
+               cap, wit, skip, sb, pieces, flip, start, found):
     """Up to ``cap`` witness carriage poses of chain ``i`` (module doc, step 2) as the two U joints
-    ``(D1, D2)`` in ``wit[i, w] = (x1, y1, z1, x2, y2, z2)``; returns how many were found. Samples
+    ``(D1, D2)`` in ``wit[i, w] = (x1, y1, z1, x2, y2, z2)``, scanning from step ``start`` on with the
+    ``found`` witnesses already in ``wit[i]`` kept (0, 0: the whole scan; a later start takes a scan
+    up where an earlier one stopped). Returns ``(count, step)``: the witnesses found in all and the
+    step after the last one visited. Samples
     ``k`` with ``skip[sb, i, k]`` are passed over: the caller knows they are no witness (all False:
     every sample is tried). The tables (``cos_t``, ``sin_t``, ``skip`` (m, 3, n), ``jc``) are read in
     place: a view costs two atomic reference counts, on tables every thread shares. ``pieces`` (4,
     2): scratch. A chain without joint cones is tested from numbers only (:func:`_plain_witness`).
     ``flip``: the order of a platform centre with ``y < 0`` (:func:`scan_sample`)."""
-    return _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
-                         cap, wit, skip, sb, pieces, flip, 0, 0)[0]
-
-
-@njit(cache=True)
-def _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
-                  cap, wit, skip, sb, pieces, flip, start, found):
-    """:func:`_witnesses` from step ``start`` of the scan on, the ``found`` witnesses already in
-    ``wit[i]`` kept (a scan taken up where an earlier one stopped): ``(count, step)``, the witnesses
-    found in all and the step after the last one visited."""
     n = cos_t.shape[1]
     jci = jc[i]
     plain = not cones_set(jci)
@@ -281,8 +274,8 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
         if screen and chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lmin2, lmax2):
             return False
         # cnt[1, i]: the step after the first witness, where the spread's scan takes up
-        cnt[0, i], cnt[1, i] = _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
-                                             lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces, flip, 0, 0)
+        cnt[0, i], cnt[1, i] = _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
+                                          lmin2, lmax2, jc, dmin, 1, wit, skip, sb, pieces, flip, 0, 0)
         if cnt[0, i] == 0:
             return False
     # the first pair of chains (in the order tested) whose first witnesses collide: (a, b); c the third
@@ -300,10 +293,10 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
     # the first witnesses collide: combine witnesses spread over the stroke. memo[p, q, r] for the pairs
     # p = 0: chains (1, 2), 1: (2, 3), 2: (1, 3), picks q and r: -1 not yet, 0 they collide, 1 they clear
     memo = np.full((3, SPREAD, SPREAD), -1, np.int8)
-    _spread_picks(px, py, pz, u, a, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
-                  flip, pick, cnt)
-    _spread_picks(px, py, pz, u, b, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
-                  flip, pick, cnt)
+    _spread_picks(bp, a, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces, flip, pick,
+                  cnt)
+    _spread_picks(bp, b, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces, flip, pick,
+                  cnt)
     pair = 0 if c == 2 else (1 if c == 0 else 2)
     some = False
     for qa in range(cnt[1, a]):
@@ -316,8 +309,8 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
             break
     if not some:
         return False
-    _spread_picks(px, py, pz, u, c, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
-                  flip, pick, cnt)
+    _spread_picks(bp, c, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces, flip, pick,
+                  cnt)
     for q0 in range(cnt[1, 0]):
         for q1 in range(cnt[1, 1]):
             if memo[0, q0, q1] < 0:
@@ -341,15 +334,15 @@ def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lma
 
 
 @njit(cache=True)
-def _spread_picks(px, py, pz, u, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces,
-                  flip, pick, cnt):
+def _spread_picks(bp, i, cos_t, sin_t, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, wit, skip, sb, pieces, flip, pick,
+                  cnt):
     """Chain ``i``'s whole list of witnesses (module doc, step 3: its scan taken up at step ``cnt[1, i]``,
-    after its first witness) and its picks: ``cnt[0, i]`` witnesses, ``cnt[1, i]`` picks spread evenly
-    over them in ``pick[i]``."""
+    after its first witness; its S joints in ``bp[i]``) and its picks: ``cnt[0, i]`` witnesses,
+    ``cnt[1, i]`` picks spread evenly over them in ``pick[i]``."""
     n = cos_t.shape[1]
-    b1x, b1y, b1z, b2x, b2y, b2z = chain_points(px, py, pz, u, i)
-    cnt[0, i] = _witness_scan(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc,
-                              dmin, n, wit, skip, sb, pieces, flip, cnt[1, i], 1)[0]
+    cnt[0, i] = _witnesses(bp[i, 0, 0], bp[i, 0, 1], bp[i, 0, 2], bp[i, 1, 0], bp[i, 1, 1], bp[i, 1, 2], cos_t, sin_t,
+                           i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, n, wit, skip, sb, pieces, flip, cnt[1, i],
+                           1)[0]
     m = min(SPREAD, cnt[0, i])
     cnt[1, i] = m
     for q in range(m):

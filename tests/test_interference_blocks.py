@@ -295,7 +295,7 @@ def test_samples_marked_for_a_block_are_no_witness_at_any_of_its_voxels():
                     solo[0, i, k] = False
                     assert _witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2,
                                       tab.lmax2, jc, joints.min_distance, 1, w, solo, 0, np.empty((4, 2)),
-                                      ys[iy] < 0.0) == 0
+                                      ys[iy] < 0.0, 0, 0)[0] == 0
                     marked += 1
     assert marked > 100 and blocked > 0  # the check has samples and blocked blocks to look at
 
@@ -506,7 +506,7 @@ def test_the_spread_of_witnesses_is_the_first_combination_that_clears():
             pts = chain_points(*p, u, i)
             bs.append((pts[0:3], pts[3:6]))
             cnt.append(_witnesses(*pts, tab.cos_t, tab.sin_t, i, tab.hb, tab.rho_lo, tab.rho_hi, tab.lmin2, tab.lmax2,
-                                  jc, dmin, n, wit, skip, 0, np.empty((4, 2)), p[1] < 0.0))
+                                  jc, dmin, n, wit, skip, 0, np.empty((4, 2)), p[1] < 0.0, 0, 0)[0])
         if min(cnt) == 0 or all(legs_clear(wit[i, 0], bs[i], wit[j, 0], bs[j]) for i, j in ((0, 1), (1, 2), (0, 2))):
             continue  # no witness, or the first witnesses clear: not the spread
         picks = [[0] if c == 1 else [int(round(q * (c - 1) / (min(SPREAD, c) - 1))) for q in range(min(SPREAD, c))]
