@@ -59,13 +59,37 @@ def _leak(cand, occ, a, b, e):
     return not occ[a, b, e] and not cand[a, b, e]
 
 
+@njit(cache=True, inline="always")
+def _seed_at(cand, occ, full, i, j, k):
+    """:func:`_seed_kernel`'s answer at one voxel, every neighbour read with its bounds tested (the
+    voxels of the box's outer layer)."""
+    if not cand[i, j, k]:
+        return False
+    for di in range(-1, 2):
+        for dj in range(-1, 2):
+            for dk in range(-1, 2):
+                if (di != 0 or dj != 0 or dk != 0) and (full or abs(di) + abs(dj) + abs(dk) == 1) \
+                        and _leak(cand, occ, i + di, j + dj, k + dk):
+                    return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _open(cand, occ, i, j, k):
+    """Voxel ``(i, j, k)`` (inside the array) is unreachable and not a candidate: ``_leak`` without
+    its bounds test and without a branch."""
+    return not (occ[i, j, k] | cand[i, j, k])
+
+
 @njit(parallel=True, cache=True, nogil=True)
 def _seed_kernel(cand, occ, full, out):
     """``out``: candidates with a dual neighbour (``full``: 26, else 6) that is unreachable and not a
     candidate, or that lies outside the array (never, for candidates of a margin-padded box). For 26
     neighbours the 3x3x3 neighbourhood is the product of three 3-voxel segments, so "some leaking
     voxel in it" is an or along x, then along y, then along z (nine reads a voxel, not 27); for 6
-    neighbours the six are read directly. A slice without candidates is written without reads of
+    neighbours the six are read directly. The voxels off the box's outer layer read their neighbours
+    without bounds tests and without branches (their inner loops run in vector lanes); those of the
+    outer layer (:func:`_seed_at`) with them. A slice without candidates is written without reads of
     its neighbours."""
     n0, n1, n2 = cand.shape
     for i in prange(n0):
@@ -82,25 +106,35 @@ def _seed_kernel(cand, occ, full, out):
                 for k in range(n2):
                     out[i, j, k] = False
             continue
-        if not full:
+        if i == 0 or i == n0 - 1 or n1 < 3 or n2 < 3:  # the outer layer
             for j in range(n1):
                 for k in range(n2):
-                    out[i, j, k] = cand[i, j, k] and (
-                        _leak(cand, occ, i - 1, j, k) or _leak(cand, occ, i + 1, j, k)
-                        or _leak(cand, occ, i, j - 1, k) or _leak(cand, occ, i, j + 1, k)
-                        or _leak(cand, occ, i, j, k - 1) or _leak(cand, occ, i, j, k + 1))
+                    out[i, j, k] = _seed_at(cand, occ, full, i, j, k)
             continue
-        sx = np.empty((n1, n2), np.bool_)  # a leak among (i - 1 .. i + 1, j, k)
-        for j in range(n1):
-            for k in range(n2):
-                sx[j, k] = (_leak(cand, occ, i - 1, j, k) or _leak(cand, occ, i, j, k)
-                            or _leak(cand, occ, i + 1, j, k))
+        sx = np.empty((n1, n2), np.bool_)  # full: a leak among (i - 1 .. i + 1, j, k)
+        if full:
+            for j in range(n1):
+                for k in range(n2):
+                    sx[j, k] = _open(cand, occ, i - 1, j, k) | _open(cand, occ, i, j, k) | _open(cand, occ, i + 1, j, k)
         sy = np.empty(n2, np.bool_)  # ... among (i - 1 .. i + 1, j - 1 .. j + 1, k)
         for j in range(n1):
-            for k in range(n2):
-                sy[k] = (j == 0 or j == n1 - 1 or sx[j - 1, k] or sx[j, k] or sx[j + 1, k])
-            for k in range(n2):
-                out[i, j, k] = cand[i, j, k] and (k == 0 or k == n2 - 1 or sy[k - 1] or sy[k] or sy[k + 1])
+            if j == 0 or j == n1 - 1:
+                for k in range(n2):
+                    out[i, j, k] = _seed_at(cand, occ, full, i, j, k)
+                continue
+            out[i, j, 0] = _seed_at(cand, occ, full, i, j, 0)
+            out[i, j, n2 - 1] = _seed_at(cand, occ, full, i, j, n2 - 1)
+            if full:
+                for k in range(n2):
+                    sy[k] = sx[j - 1, k] | sx[j, k] | sx[j + 1, k]
+                for k in range(1, n2 - 1):
+                    out[i, j, k] = cand[i, j, k] & (sy[k - 1] | sy[k] | sy[k + 1])
+            else:
+                for k in range(1, n2 - 1):
+                    out[i, j, k] = cand[i, j, k] & (
+                        _open(cand, occ, i - 1, j, k) | _open(cand, occ, i + 1, j, k)
+                        | _open(cand, occ, i, j - 1, k) | _open(cand, occ, i, j + 1, k)
+                        | _open(cand, occ, i, j, k - 1) | _open(cand, occ, i, j, k + 1))
 
 
 @njit(cache=True, nogil=True)
