@@ -310,13 +310,18 @@ class WorkspaceMeasures:
 
 @njit(parallel=True, cache=True, nogil=True)
 def _occ_extent_kernel(occ, ext):
-    """Per x slice ``i`` of ``occ``: ``ext[i] = (count, j_lo, j_hi, k_lo, k_hi)`` of its set voxels
+    """Per x slice ``i`` of ``occ``: ``ext[i, :5] = (count, j_lo, j_hi, k_lo, k_hi)`` of its set voxels
     (inclusive; ``j_hi = k_hi = -1`` when none), over x slices in parallel: the number of voxels and
-    the bounding box without serial passes over the grid."""
+    the bounding box without serial passes over the grid. And the slice's voxels on the box's faces
+    (:func:`_faces_of`), read from the rows the counts read: ``ext[i, 5:11] =`` the set voxels of its
+    row ``j = 0``, of its row ``j = n_y - 1``, those at ``k = 0`` and at ``k = n_z - 1`` of its rows
+    ``0 < j < n_y - 1``, and those at ``k = 0`` and at ``k = n_z - 1`` of its rows ``j = 0`` and ``j =
+    n_y - 1``."""
     n0, n1, n2 = occ.shape
     for i in prange(n0):
         c = 0
         jlo, jhi, klo, khi = n1, -1, n2, -1
+        ext[i, 5:11] = 0
         for j in range(n1):
             cr = 0
             for k in range(n2):  # branch-free count of the row
@@ -324,6 +329,15 @@ def _occ_extent_kernel(occ, ext):
             if cr == 0:
                 continue
             c += cr
+            if j == 0 or j == n1 - 1:
+                ext[i, 5 if j == 0 else 6] += cr
+                if n1 == 1:
+                    ext[i, 6] += cr
+                ext[i, 9] += occ[i, j, 0]
+                ext[i, 10] += occ[i, j, n2 - 1]
+            else:
+                ext[i, 7] += occ[i, j, 0]
+                ext[i, 8] += occ[i, j, n2 - 1]
             if jlo == n1:
                 jlo = j
             jhi = j
@@ -340,6 +354,22 @@ def _occ_extent_kernel(occ, ext):
         ext[i, 2] = jhi
         ext[i, 3] = klo
         ext[i, 4] = khi
+
+
+def _faces_of(ext: np.ndarray, shape: tuple[int, int, int]) -> tuple[list[str], float]:
+    """:func:`touched_faces` and :func:`box_contact_fraction` of a non-empty grid of ``shape`` from its
+    slices' counts (:func:`_occ_extent_kernel`): the same numbers, with no pass over the faces' layers
+    (a face at ``k = 0`` is a strided read of the whole grid)."""
+    n0 = shape[0]
+    x_lo, x_hi = int(ext[0, 0]), int(ext[n0 - 1, 0])
+    sums = ext[:, 5:11].sum(axis=0)
+    hit = [x_lo > 0, x_hi > 0, sums[0] > 0, sums[1] > 0, sums[2] + sums[4] > 0, sums[3] + sums[5] > 0]
+    touched = ["xyz"[a] + side for a in range(3) for side, on in zip("-+", hit[2 * a:2 * a + 2]) if on]
+    if min(shape) <= 2:  # every voxel lies on a face
+        return touched, float(int(ext[:, 0].sum()) / (n0 * shape[1] * shape[2]))
+    n_face = n0 * shape[1] * shape[2] - (n0 - 2) * (shape[1] - 2) * (shape[2] - 2)
+    inner = ext[1:n0 - 1, 5:9].sum()  # the rows j = 0, n_y - 1 and the ends k of the others
+    return touched, float((x_lo + x_hi + int(inner)) / n_face)
 
 
 def touched_faces(occupancy: np.ndarray) -> list[str]:
@@ -636,7 +666,8 @@ class _Steps:
 
     def _voids(self):
         voids_m, n_voids = _voids(self.occ, self.o["connectivity"], self.get("zruns"), self.get("x_ends"))
-        return voids_m, n_voids, int(np.count_nonzero(voids_m)) * self.vv
+        # no void: the mask is all False (a count of it would read the whole grid)
+        return voids_m, n_voids, (int(np.count_nonzero(voids_m)) if n_voids else 0) * self.vv
 
     def _chi_w(self):
         return self.get("runs").euler_characteristic(self.o["connectivity"])
@@ -808,14 +839,14 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
     h = float(grid.h)
     vv = h ** 3
     occ = np.asarray(result.occupancy, dtype=bool)
-    ext = np.zeros((occ.shape[0] if occ.size else 0, 5), np.int64)
+    ext = np.zeros((occ.shape[0] if occ.size else 0, 11), np.int64)
     if occ.size:
         with KERNEL_LOCK:
             _occ_extent_kernel(occ, ext)
     n = int(ext[:, 0].sum())
     volume = n * vv
 
-    touched = touched_faces(occ)
+    touched, contact = _faces_of(ext, occ.shape) if n else ([], 0.0)
     floor_face = None
     z_floor = getattr(result.settings, "z_floor", None)
     if z_floor is not None and abs(grid.lo[2] - float(z_floor)) <= 0.5 * h + 1e-9 * max(1.0, h):
@@ -880,7 +911,7 @@ def measure_fields(result: WorkspaceResult, names: Any = None, *, connectivity: 
         if name in _FIELD_OF:
             out[name] = _FIELD_OF[name](steps, volume)
         elif name == "box_contact_fraction":
-            out[name] = box_contact_fraction(result.occupancy)
+            out[name] = contact
         elif name == "chain_binding":
             out[name] = binding
         elif name == "feature_radius":

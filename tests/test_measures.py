@@ -16,7 +16,7 @@ from paraspace.kinematics import morphology as morph_mod
 from paraspace.kinematics import voids as voids_mod
 from paraspace.kinematics.design import Design
 from paraspace.kinematics.grid import GridSpec
-from paraspace.kinematics.measures import box_contact_fraction, measure_workspace, touched_faces
+from paraspace.kinematics.measures import box_contact_fraction, measure_fields, measure_workspace, touched_faces
 from paraspace.kinematics.run_components import LabelledComponents, RunComponents
 from paraspace.kinematics.workspace import WorkspaceResult, WorkspaceSettings, compute_workspace
 
@@ -655,14 +655,22 @@ def test_parallel_cavities_kernels_equal_the_former_passes():
                     voids_mod._paste_kernel(np.ascontiguousarray(sub), cut[0].start, cut[1].start,
                                             cut[2].start - shift, pasted)
                     assert np.array_equal(pasted, ref)
-                    ext = np.empty((occ.shape[0], 5), np.int64)
+                    ext = np.empty((occ.shape[0], 11), np.int64)
                     mod._occ_extent_kernel(occ, ext)
                     assert int(ext[:, 0].sum()) == int(np.count_nonzero(occ))
                     assert np.array_equal(ext[:, 0], occ.sum(axis=(1, 2)))
+                    n1 = occ.shape[1]
                     for i in range(occ.shape[0]):
                         js, ks = np.nonzero(occ[i])
-                        assert list(ext[i, 1:]) == ([js.min(), js.max(), ks.min(), ks.max()] if js.size
-                                                    else [occ.shape[1], -1, occ.shape[2], -1])
+                        assert list(ext[i, 1:5]) == ([js.min(), js.max(), ks.min(), ks.max()] if js.size
+                                                     else [occ.shape[1], -1, occ.shape[2], -1])
+                        # the voxels on the faces: rows j = 0 and n_y - 1, the z ends of the other rows
+                        # and of those two
+                        edge = [0] if n1 == 1 else [0, n1 - 1]
+                        inner = occ[i, 1:n1 - 1]
+                        assert list(ext[i, 5:11]) == [
+                            occ[i, 0].sum(), occ[i, n1 - 1].sum(), inner[:, 0].sum(), inner[:, -1].sum(),
+                            occ[i, edge, 0].sum(), occ[i, edge, -1].sum()]
                 for conn in (1, 3):
                     for floor in (False, True):
                         sealed = voids_mod.sealed_mask(occ, conn, floor=floor)
@@ -835,9 +843,10 @@ def test_hull_mask_against_supporting_planes_by_brute_force():
 
 
 def test_box_contact_and_touched_faces_against_the_face_voxels():
-    # |W n B| / |B| and the touched faces from the face voxels listed by their indices (brute force)
+    # |W n B| / |B| and the touched faces from the face voxels listed by their indices (brute force),
+    # by the functions and by measure_workspace's fields
     rng = np.random.default_rng(11)
-    for shape in ((1, 1, 1), (2, 3, 4), (3, 3, 3), (4, 5, 6), (7, 2, 9), (9, 8, 7)):
+    for shape in ((1, 1, 1), (2, 3, 4), (3, 3, 3), (4, 5, 6), (7, 2, 9), (9, 8, 7), (5, 1, 4), (3, 6, 1), (6, 4, 3)):
         for p in (0.02, 0.5, 0.97):
             occ = rng.random(shape) < p
             idx = np.indices(shape)
@@ -851,6 +860,10 @@ def test_box_contact_and_touched_faces_against_the_face_voxels():
                         faces.append("xyz"[a] + side)
             assert box_contact_fraction(occ) == (occ & on).sum() / on.sum(), shape
             assert touched_faces(occ) == faces, shape
+            if occ.any():  # measure_workspace reads both from its slices' counts, not from the faces
+                fields = measure_fields(make_result(occ), ["box_contact_fraction", "touched_faces"])
+                assert fields["box_contact_fraction"] == (occ & on).sum() / on.sum(), shape
+                assert fields["touched_faces"] == faces, shape
 
 
 def test_the_hull_runs_beside_the_steps_before_it(monkeypatch):
