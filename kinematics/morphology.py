@@ -301,7 +301,7 @@ def _dilate_packed_kernel(P, DI, DJ, A, w, half, last, flip, n_slab, R):
     d``), and ``S`` is or-ed into ``R`` at the planes ``p - d`` and ``p + d``: about ``(m + 2 w + 1) /
     2`` row passes a plane for the ``m`` offsets of the ball, against ``m`` read-modify-writes of ``R``
     when each offset was or-ed in alone (at h = 1, radius 6.36 voxels: 84 against 129; a dilation
-    0.71-0.80 of its time, 0.62-0.68 at h = 0.5). With ``half`` (``P`` symmetric under ``j -> ny - 1 -
+    0.71-0.86 of its time, 0.62-0.68 at h = 0.5). With ``half`` (``P`` symmetric under ``j -> ny - 1 -
     j``, so ``R`` is too) only the rows ``j >= ny // 2`` are or-ed, the others copied. Bits past ``nz``
     are cleared (``last``). Every inner loop runs over ``j`` on contiguous rows ``[., q, :]`` without
     a branch (vector lanes). ``flip`` (all bits set, else 0): the erosion, i.e. ``P`` read complemented
