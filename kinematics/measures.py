@@ -210,9 +210,9 @@ unreachable voxel sees the padding along a straight line) less a flood from thos
 (:mod:`kinematics.void_flood`, its seeds found by separable ors: a sealed cavity is never visited,
 and only the voids are counted, when their number is asked for); the dilations
 (:mod:`kinematics.morphology`) work on the solid packed 64 voxels to a word along z (the ball as
-the union over its ``(di, dj)`` offsets of z runs ``|dk| <= floor(sqrt(r^2 - di^2 - dj^2))``: the
-set dilated along z by each run length, by shifts of whole words, moved by each offset and or-ed
-in), compute half the rows of a mirror-symmetric
+the union over its ``(di, dj)`` offsets of z runs ``|dk| <= floor(sqrt(r^2 - di^2 - dj^2))``: each
+plane dilated along z by each run length, by shifts of whole words, then by each section ``di`` of the
+ball into one row, or-ed into the planes ``i - di`` and ``i + di``), compute half the rows of a mirror-symmetric
 solid, and the filter packs the solid once for its four dilations (an erosion is the complement of
 the complement's dilation, a not of the words);
 the hull (:mod:`kinematics.hull`) gives qhull only the column ends that are vertices of the 2-D
