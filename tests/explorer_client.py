@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 import threading
 import time
+import traceback
 import warnings
 from collections.abc import Callable
 from typing import Any
@@ -182,7 +184,22 @@ def wait_for(fn: Callable[[], Any], timeout: float, what: str) -> Any:
             note_slow_wait(what, t0)
             return v
         time.sleep(0.02)
-    raise AssertionError(f"timed out after {timeout * DEADLINE_SCALE:g} s waiting for: {what}")
+    raise AssertionError(f"timed out after {timeout * DEADLINE_SCALE:g} s waiting for: {what}\n"
+                         f"the other threads (the explorer's callbacks and jobs run in this process):\n"
+                         f"{thread_stacks()}")
+
+
+def thread_stacks(depth: int = 14) -> str:
+    """The innermost ``depth`` frames of every thread but the caller's, by name: what a time-out waited
+    on (a callback blocked on a lock, a job that does not end). A wait that failed once in CI and never
+    here then says where it stood."""
+    names = {t.ident: t.name for t in threading.enumerate()}
+    me = threading.get_ident()
+    parts = []
+    for ident, frame in sys._current_frames().items():
+        if ident != me:
+            parts.append(f"--- {names.get(ident, ident)}\n" + "".join(traceback.format_stack(frame, limit=depth)))
+    return "\n".join(parts)
 
 
 def wait_idle(exp: Explorer, session: ClientSession, timeout: float = 60.0) -> None:
