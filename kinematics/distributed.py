@@ -367,9 +367,11 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
                 i = where[fut.key]
                 pending.discard(fut.key)
                 base = {"params": values[i], "index": list(indices[i])}
+                # every wait on a future is bounded: one whose worker left may never resolve (the CI of
+                # 2026-12-04 waited 600 s in fut.exception() after the cluster was scaled to 0)
                 if fut.status == "finished":
                     try:
-                        res = fut.result()
+                        res = fut.result(timeout=lost_after)
                     except Exception as e:  # noqa: BLE001 - e.g. the data was lost with its worker
                         rows[i] = {**base, "ok": False, "error": _one_line(e), "design": designs[i].to_dict()}
                         failed += 1
@@ -378,7 +380,9 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
                 else:
                     exc = None
                     try:
-                        exc = fut.exception()
+                        exc = fut.exception(timeout=lost_after)
+                    except TimeoutError:
+                        exc = None  # reported as "point <status>"
                     except Exception as e:  # noqa: BLE001 - cancelled futures raise here
                         exc = e
                     rows[i] = {**base, "ok": False, "error": _one_line(exc) if exc else f"point {fut.status}",
