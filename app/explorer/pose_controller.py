@@ -11,6 +11,7 @@ changed, which asks the workspace controller for a new workspace.
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -80,6 +81,9 @@ class PoseController:
         self.mechanism: MechanismScene
         self.gizmo: viser.TransformControlsHandle
         self.general: GeneralMechanismScene | None = None  # the selector's mechanism drawn (not the paper's)
+        #: the gizmo's position and orientation of the user's newest drag message, until a callback takes it
+        self._dragged: tuple[np.ndarray, np.ndarray] | None = None
+        self._dragged_lock = threading.Lock()
 
     def build_scene(self, res: Resolution) -> None:
         """Draw the mechanism at ``res`` and the drag gizmo (the caller holds ``client.atomic()``)."""
@@ -101,6 +105,17 @@ class PoseController:
         for key in ("psi", "theta", "phi"):
             p.pose[key].on_update(cb(lambda: self.on_pose_input(orientation_changed=True)))
         p.gizmo.on_update(cb(self.on_gizmo_toggle))
+
+        async def record(_event: Any) -> None:
+            # viser awaits a coroutine callback on its event loop right after it stored the client's
+            # pose; the thread callback runs later, when update_mechanism (another thread, after the
+            # drag before) may have written the shown pose into the gizmo in between: the newest drag
+            # would then be lost (seen in CI: the state stayed at z = 380 after a drag back to 140).
+            # The selector has the same guard (mechanism_panel.MechanismController.wire).
+            with self._dragged_lock:
+                self._dragged = (np.array(self.gizmo.position, float), np.array(self.gizmo.wxyz, float))
+
+        self.gizmo.on_update(record)
         self.gizmo.on_update(self._on_gizmo)
         p.carriages.on_update(cb(self.on_carriage_mode))
         for h in p.d + p.eta:
@@ -238,8 +253,12 @@ class PoseController:
         from paraspace.kinematics.rotation import euler_zyx_from_matrix
 
         ctx = self.ctx
-        pos = np.asarray(self.gizmo.position, float)
-        rot = vtf.SO3(np.asarray(self.gizmo.wxyz, float)).as_matrix()
+        with self._dragged_lock:  # the newest drag's pose, taken in one step with its record (see wire)
+            dragged, self._dragged = self._dragged, None
+        if dragged is None:  # already applied by the callback of an earlier message
+            return
+        pos, wxyz = dragged
+        rot = vtf.SO3(wxyz).as_matrix()
         psi, theta, phi = np.degrees(euler_zyx_from_matrix(rot))
         vals = {"x": pos[0], "y": pos[1], "z": pos[2], "psi": psi, "theta": theta, "phi": phi}
         vals = {k: round(float(v), 1) + 0.0 for k, v in vals.items()}
