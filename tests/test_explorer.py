@@ -1026,6 +1026,42 @@ def test_a_colour_mode_that_fails_says_so_and_shows_the_height_colours(explorer,
     wait_for(lambda: "1/kappa at the resolved" in s.panels.legend.caption.content, 60.0, "dexterity colours")
 
 
+def test_a_colour_chosen_while_a_failed_job_resets_the_dropdown_is_applied(explorer, browsers, monkeypatch):
+    """A colour job that fails writes height z into the dropdown from its thread. A choice the user
+    made just before that write, whose callback had not yet read the dropdown, is still applied: the
+    message's value is recorded as it arrives (session.NewestMessage), and the dropdown shows it again.
+    Here the choice's callback is held until the job's reset has been written."""
+    import threading
+
+    b = browsers("voxel=6")
+    s = b.session
+    wait_idle(explorer, s)
+    chosen = s.view_controller.colour_chosen
+    real, held, go = chosen.take, threading.Event(), threading.Event()
+
+    def take():
+        held.set()
+        assert go.wait(30)
+        return real()
+
+    monkeypatch.setattr(chosen, "take", take)
+    b.set(s.panels.shell_colour, "binding limit")
+    assert held.wait(30)
+    assert chosen.peek() == "binding limit"
+
+    def failed_job_resets() -> None:  # what _colours_ready does for a failed job, on its own thread
+        with s.ctx.programmatic():
+            s.panels.shell_colour.value = "height z"
+
+    t = threading.Thread(target=failed_job_resets)
+    t.start()
+    t.join(10)
+    assert s.panels.shell_colour.value == "height z"
+    go.set()
+    wait_for(lambda: "bounds the workspace there" in s.panels.legend.caption.content, 60.0, "limit colours")
+    assert s.panels.shell_colour.value == "binding limit" and chosen.peek() is None
+
+
 def test_shell_coloured_by_the_binding_limit(explorer, browsers):
     """Issue 9: the shell coloured by the limit that binds; checked against the definition: at the
     points just outside, relaxing the named limit makes the failing chains feasible."""

@@ -368,7 +368,7 @@ def test_a_selection_recorded_while_the_first_ones_callback_runs_is_applied(expl
     s = b.session
     wait_mechanism(explorer, s)
     ctl = s.mechanism_controller
-    real, first = ctl._take_choice, []
+    real, first = ctl.chosen.take, []
     taken, go = threading.Event(), threading.Event()
 
     def take():
@@ -379,12 +379,12 @@ def test_a_selection_recorded_while_the_first_ones_callback_runs_is_applied(expl
             assert go.wait(30)
         return choice
 
-    monkeypatch.setattr(ctl, "_take_choice", take)
+    monkeypatch.setattr(ctl.chosen, "take", take)
     sel = s.panels.mechanism.selector
     b.set(sel, "gough-stewart")
     assert taken.wait(30) and first == ["gough-stewart"]
     b.set(sel, "6-pss")
-    wait_for(lambda: ctl.chosen == "6-pss", 30, "the second selection recorded")
+    wait_for(lambda: ctl.chosen.peek() == "6-pss", 30, "the second selection recorded")
     go.set()
     wait_for(lambda: s.state.mechanism is not None and s.state.mechanism.preset == "6-pss", 30, "6-pss")
     wait_mechanism(explorer, s)

@@ -19,9 +19,8 @@ selected (:class:`NotYetNotes`: "not for the 6-pups mechanism yet") and their bu
 from __future__ import annotations
 
 import dataclasses
-import threading
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import viser
@@ -36,10 +35,8 @@ from ..urlstate import POSE_SLIDERS, ExplorerState, encode_query
 from .mechanism_scene import STATE_TEXT, MechanismPose
 from .pagehook import MAX_QUERY_CHARS
 from .panels import pose_slider_span, slider_span
+from .session import NewestMessage, SessionContext
 from .typed_values import hold_typed_values
-
-if TYPE_CHECKING:  # pragma: no cover - types only
-    from .session import SessionContext
 
 #: The selector's entry of an uploaded description (offered once a file was read).
 FILE_OPTION = "uploaded file"
@@ -197,9 +194,7 @@ class MechanismController:
         self.uploaded: MechanismLink | None = ctx.state.mechanism if option_of(ctx.state.mechanism) == FILE_OPTION \
             else None
         #: the selector's value of the user's newest message, until a callback applies it
-        self.chosen: str | None = None
-        #: guards ``chosen``: a message's record (the event loop) and a callback's take (a thread)
-        self._chosen_lock = threading.Lock()
+        self.chosen: NewestMessage[str] = NewestMessage(lambda: str(self.controls.selector.value))
 
     @property
     def controls(self) -> MechanismControls:
@@ -209,15 +204,7 @@ class MechanismController:
         """Attach the selector, the sliders and the upload button; show the state's mechanism."""
         c, cb = self.controls, self.ctx.callback
 
-        async def record(event: Any) -> None:
-            # viser awaits a coroutine callback on its event loop right after it stored the client's
-            # value, in the order of the messages; the thread callback runs later, when a programmatic
-            # write (Stop's controls, on another thread) may have replaced the value in between
-            if event.client is not None:
-                with self._chosen_lock:
-                    self.chosen = str(event.target.value)
-
-        c.selector.on_update(record)
+        self.chosen.watch(c.selector)  # a write by Stop's controls could replace it (NewestMessage)
         c.selector.on_update(cb(self.on_select))
         for sliders in c.sliders.values():
             for h in sliders.values():
@@ -268,7 +255,7 @@ class MechanismController:
         with self.ctx.input_lock:
             # the user's newest choice (see wire); else the selector's value, which under this lock is
             # the state's once a callback applied a choice (or a server-side assignment's)
-            choice = self._take_choice()
+            choice = self.chosen.take()
             if choice is None:
                 choice = str(self.controls.selector.value)
             if choice == PAPER:
@@ -278,14 +265,6 @@ class MechanismController:
                     self.apply(self.uploaded)
             else:
                 self._apply_preset(choice)
-
-    def _take_choice(self) -> str | None:
-        """The newest recorded choice, cleared in the same step: a message recorded between a read and
-        a clear would be lost (a second selection arriving while the first one's callback ran; the
-        first then wrote its own value into the selector, which the second callback applied)."""
-        with self._chosen_lock:
-            choice, self.chosen = self.chosen, None
-        return choice
 
     def on_param(self) -> None:
         """A preset parameter's slider moved: the preset with the sliders' values."""

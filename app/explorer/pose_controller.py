@@ -11,7 +11,6 @@ changed, which asks the workspace controller for a new workspace.
 from __future__ import annotations
 
 import logging
-import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -29,7 +28,7 @@ from .mechanism_scene import GeneralMechanismScene, mechanism_pose, show_paper_d
 from .numbers_panel import NumbersPanel
 from .panels import pose_slider_span
 from .scene import LEG_STATE_TEXT, MechanismScene, rotation_wxyz
-from .session import SessionContext
+from .session import NewestMessage, SessionContext
 
 log = logging.getLogger(__name__)
 
@@ -82,8 +81,8 @@ class PoseController:
         self.gizmo: viser.TransformControlsHandle
         self.general: GeneralMechanismScene | None = None  # the selector's mechanism drawn (not the paper's)
         #: the gizmo's position and orientation of the user's newest drag message, until a callback takes it
-        self._dragged: tuple[np.ndarray, np.ndarray] | None = None
-        self._dragged_lock = threading.Lock()
+        self.dragged: NewestMessage[tuple[np.ndarray, np.ndarray]] = NewestMessage(
+            lambda: (np.array(self.gizmo.position, float), np.array(self.gizmo.wxyz, float)))
 
     def build_scene(self, res: Resolution) -> None:
         """Draw the mechanism at ``res`` and the drag gizmo (the caller holds ``client.atomic()``)."""
@@ -106,16 +105,10 @@ class PoseController:
             p.pose[key].on_update(cb(lambda: self.on_pose_input(orientation_changed=True)))
         p.gizmo.on_update(cb(self.on_gizmo_toggle))
 
-        async def record(_event: Any) -> None:
-            # viser awaits a coroutine callback on its event loop right after it stored the client's
-            # pose; the thread callback runs later, when update_mechanism (another thread, after the
-            # drag before) may have written the shown pose into the gizmo in between: the newest drag
-            # would then be lost (seen in CI: the state stayed at z = 380 after a drag back to 140).
-            # The selector has the same guard (mechanism_panel.MechanismController.wire).
-            with self._dragged_lock:
-                self._dragged = (np.array(self.gizmo.position, float), np.array(self.gizmo.wxyz, float))
-
-        self.gizmo.on_update(record)
+        # update_mechanism (another thread, after the drag before) may write the shown pose into the
+        # gizmo before the thread callback reads it (seen in CI: the state stayed at z = 380 after a
+        # drag back to 140): the pose is recorded as the message arrives (NewestMessage)
+        self.dragged.watch(self.gizmo)
         self.gizmo.on_update(self._on_gizmo)
         p.carriages.on_update(cb(self.on_carriage_mode))
         for h in p.d + p.eta:
@@ -253,8 +246,7 @@ class PoseController:
         from paraspace.kinematics.rotation import euler_zyx_from_matrix
 
         ctx = self.ctx
-        with self._dragged_lock:  # the newest drag's pose, taken in one step with its record (see wire)
-            dragged, self._dragged = self._dragged, None
+        dragged = self.dragged.take()  # the newest drag's pose (see wire)
         if dragged is None:  # already applied by the callback of an earlier message
             return
         pos, wxyz = dragged

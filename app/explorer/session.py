@@ -5,7 +5,8 @@ Every browser (viser client) gets one context: its GUI and scene handles, the cu
 engine -> mesh -> scene), the results on screen (shell, preview, IK, orientation maps), the locks
 that order concurrent callbacks, the session's view of the job manager (:class:`SessionJobs`) and
 the small helpers every controller uses (:meth:`SessionContext.programmatic`,
-:meth:`SessionContext.callback`, :meth:`SessionContext.notify`, :meth:`SessionContext.event`).
+:meth:`SessionContext.callback`, :meth:`SessionContext.notify`, :meth:`SessionContext.event`), and
+:class:`NewestMessage`, which keeps a control's newest client value from a server write's race.
 
 It holds state, not behaviour: what a panel does lives in its controller (``app/*_controller.py``,
 ``app/numbers_panel.py``), which reads and writes this context. Lock order: ``view_lock`` before
@@ -20,7 +21,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Generic, Protocol, TypeVar
 
 import viser
 
@@ -45,6 +46,49 @@ log = logging.getLogger(__name__)
 
 #: Smallest interval between two progress updates of one bar, seconds (see SessionContext.throttled).
 PROGRESS_INTERVAL = 0.25
+
+T = TypeVar("T")
+
+
+class NewestMessage(Generic[T]):
+    """The value of a control's newest client message, until a callback takes it.
+
+    viser stores a client's value in the control's handle and then runs the handle's callbacks: a
+    coroutine at once, on its event loop and in the order of the messages; a plain function later, on
+    a thread. A write of the same handle by the server on another thread in between (a colour job's
+    failure resetting the shell colour, the drag before's pose written into the gizmo, Stop's controls)
+    replaces the client's value before the thread callback reads it, and that input is lost: CI saw it
+    twice (a second selection of the mechanism, a gizmo drag). :meth:`watch` records ``read()`` on the
+    event loop for every client message; the thread callback takes the newest record (:meth:`take`) and
+    clears it in one locked step (a record falling between a read and a clear would be lost too).
+    ``take`` returns ``None`` when an earlier callback already took it.
+    """
+
+    def __init__(self, read: Callable[[], T]) -> None:
+        self._read = read
+        self._value: T | None = None
+        self._lock = threading.Lock()
+
+    def watch(self, handle: Any) -> None:
+        """Record ``read()`` whenever a client's message changes ``handle`` (call it before the
+        handle's thread callbacks are attached)."""
+        async def record(event: Any) -> None:
+            if event.client is not None:
+                value = self._read()
+                with self._lock:
+                    self._value = value
+        handle.on_update(record)
+
+    def take(self) -> T | None:
+        """The newest recorded value, cleared in the same step; ``None`` if there is none."""
+        with self._lock:
+            value, self._value = self._value, None
+        return value
+
+    def peek(self) -> T | None:
+        """The newest recorded value, left in place (for tests)."""
+        with self._lock:
+            return self._value
 
 
 class ExplorerServices(Protocol):

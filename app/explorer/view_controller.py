@@ -31,7 +31,7 @@ from .dexterity_colour import (
     field_colours,
     values_colours,
 )
-from .session import SessionContext
+from .session import NewestMessage, SessionContext
 from .workspace_job import ShellBundle, ws_settings
 
 #: Directions (from the target to the camera) of the camera presets.
@@ -81,12 +81,17 @@ class ViewController:
         self.ctx = ctx
         self.on_state_change = on_state_change
         self.show_grid: Callable[[bool], None] | None = None  # the floor grid's visibility (the mechanism's)
+        #: the shell colour of the user's newest choice, until a callback applies it: a colour job that
+        #: fails writes the height mode into the dropdown from its thread, which could replace a choice
+        #: made meanwhile before its callback read it (NewestMessage)
+        self.colour_chosen: NewestMessage[str] = NewestMessage(lambda: str(self.ctx.panels.shell_colour.value))
 
     def wire(self) -> None:
         """Attach the View tab's controls."""
         p, cb = self.ctx.panels, self.ctx.callback
         p.view_buttons.on_click(cb(lambda: self.on_view(str(p.view_buttons.value))))
         p.fit_view.on_click(cb(self.fit_view))
+        self.colour_chosen.watch(p.shell_colour)
         p.shell_colour.on_update(cb(self.recolour_shell))
         for h in (p.cut, p.cut_z, p.cut_keep, p.opacity):
             h.on_update(cb(self.on_view_settings))
@@ -176,10 +181,14 @@ class ViewController:
         """The View tab's "shell colour": height z (the shell's own colours) or the local dexterity
         1/kappa (app/dexterity_colour.py), computed in the background for the shell on screen."""
         ctx = self.ctx
+        chosen = self.colour_chosen.take()
         bundle = ctx.bundle
         if bundle is None:
             return
         mode = str(ctx.panels.shell_colour.value)
+        if chosen is not None and chosen != mode:  # a job's reset came after the choice: the choice wins
+            with ctx.programmatic():
+                ctx.panels.shell_colour.value = mode = chosen
         link = ctx.state.mechanism
         if link is not None and mode != COLOUR_MODES[0]:  # the colour fields are the paper design's
             ctx.notify("Shell coloured by height", f"shell colour = {mode}: {link.not_yet()}", color="orange")
