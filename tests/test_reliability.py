@@ -192,7 +192,7 @@ def test_a_lost_cluster_ends_the_sweep_with_the_points_done(monkeypatch, capsys)
         ok = [r for r in rows if r["ok"]]
         lost = [r for r in rows if not r["ok"]]
         assert len(rows) == 30 and lost and ok
-        assert all("cluster lost" in r["error"] for r in lost)
+        assert all("cluster lost" in r["error"] for r in lost), [r["error"] for r in lost]
         assert elapsed < 60
     finally:
         cluster.close()
@@ -203,6 +203,51 @@ def test_a_lost_cluster_ends_the_sweep_with_the_points_done(monkeypatch, capsys)
     code = cli.main(["sweep", "--param", "a", "--values", "20,30", "--voxel", "8"])
     assert code == 1
     assert "1 of 2 points failed" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_result_lost_with_the_last_worker_is_reported_as_the_lost_cluster(monkeypatch):
+    """The CI of 2026-12-04 (second run): a point had finished, and its result went with the last
+    worker before the sweep fetched it; its row said "TimeoutError: timed out after 2 s." instead of
+    the lost cluster. Here the cluster is scaled to 0 just before the fourth result is fetched."""
+    import distributed
+    from distributed import LocalCluster
+
+    from paraspace.kinematics.design import Design
+    from paraspace.kinematics.distributed import sweep_grid
+    from paraspace.kinematics.workspace import WorkspaceSettings
+
+    def quick_eval(design, settings, *, orientation=None):
+        time.sleep(0.2)
+        return {"volume": float(design.a)}
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
+    real, fetched = distributed.Future.result, []
+
+    def result(self, timeout=None):
+        if len(fetched) == 3:  # the last worker leaves with this point's result
+            cluster.scale(0)
+            t0 = time.monotonic()
+            while cluster.workers and time.monotonic() - t0 < 10:
+                time.sleep(0.05)
+            time.sleep(0.5)
+        fetched.append(self.status)
+        return real(self, timeout=timeout)
+
+    monkeypatch.setattr(distributed.Future, "result", result)
+    try:
+        rows = sweep_grid(Design(), {"a": [float(v) for v in range(20, 80, 2)]}, WorkspaceSettings(voxel=8),
+                          scheduler=cluster.scheduler_address, evaluate=quick_eval, lost_after=2.0)
+    finally:
+        cluster.close()
+    assert fetched[:3] == ["finished"] * 3 and len(fetched) == 4
+    ok = [r for r in rows if r["ok"]]
+    lost = [r for r in rows if not r["ok"]]
+    assert len(rows) == 30 and len(ok) == 3 and len(lost) == 27
+    assert all(r["volume"] == r["params"]["a"] for r in ok)
+    assert all(r["error"].startswith("cluster lost: no worker") for r in lost), [r["error"] for r in lost]
+    went = [r for r in lost if "this point: finished, but its result did not come within 2 s" in r["error"]]
+    assert len(went) == 1
 
 
 # ----- issue 13 -----------------------------------------------------------------------------------
