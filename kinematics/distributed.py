@@ -404,7 +404,9 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
             # a point whose result could not be fetched before the cluster was found lost went with
             # its worker (seen in CI: a result finished as the last worker retired): the same cause
             for i in unfetched:
-                rows[i]["error"] = f"{lost}; this point: {rows[i]['error']}"
+                row = rows[i]
+                assert row is not None  # written with i
+                row["error"] = f"{lost}; this point: {row['error']}"
             for f in futures:
                 if f.key in pending:
                     i = where[f.key]
