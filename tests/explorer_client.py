@@ -52,6 +52,8 @@ class FakeBrowser:
         self.base = explorer.url
         self.storage: dict[str, str] = {}
         self.scripts: list[str] = []
+        #: every address-bar rewrite the server sent (app/jsbridge.replace_query), in order
+        self.rewrites: list[str] = []
         self.downloads: dict[str, dict[str, Any]] = {}
         self.lock = threading.Lock()
         self.closed = False
@@ -109,8 +111,10 @@ class FakeBrowser:
             if var_k and "navigator.clipboard" in src:  # a page without clipboard access
                 self.storage[json.loads(var_k.group(1))] = "refused"
             q = re.search(r"var q = (\"(?:[^\"\\]|\\.)*\");", src)
-            if q and "replaceState" in src:
+            if q and "replaceState" in src:  # app/jsbridge.replace_query (plotly.js mentions replaceState too)
                 self.search = json.loads(q.group(1))
+                with self.lock:
+                    self.rewrites.append(self.search)
         elif kind == "LocalStorageGetItemRequestMessage":
             value = self.storage.get("viser-user:" + m["key"])
             answer = {"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None,

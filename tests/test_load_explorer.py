@@ -83,7 +83,6 @@ class RecordingBrowser(FakeBrowser):
         # set before FakeBrowser.__init__: its receive thread starts there
         self.cond = threading.Condition()
         self.gizmo_positions: list[tuple[float, float, float]] = []
-        self.searches: list[str] = []
         super().__init__(explorer, search)
 
     def _handle(self, m: dict) -> None:
@@ -93,9 +92,6 @@ class RecordingBrowser(FakeBrowser):
             with self.cond:
                 self.gizmo_positions.append(tuple(float(v) for v in m["position"]))
                 self.cond.notify_all()
-        elif kind == "RunJavascriptMessage" and "replaceState" in m.get("source", ""):
-            with self.cond:
-                self.searches.append(self.search)
 
     def wait_gizmo(self, pred: Any, start: int, timeout: float) -> bool:
         """Wait until a gizmo position received after index ``start`` satisfies ``pred``."""
@@ -302,7 +298,7 @@ def test_concurrent_sessions_protocol_level(explorer: Explorer) -> None:
             # nothing another browser did ever reached this browser's scene or address bar
             foreign = [p for p in b.gizmo_positions if p[0] != plan.x or p[2] not in plan.z_set]
             assert not foreign, f"browser {plan.i} received foreign gizmo positions {foreign[:3]}"
-            for q in b.searches:
+            for q in b.rewrites:  # every address bar the server sent it
                 st, msgs = parse_query(q)
                 assert msgs == [] and plan.owns(st.design, st.pose), f"browser {plan.i} got address bar {q}"
             assert len(b.gizmo_positions) >= counts[plan.i][0]
