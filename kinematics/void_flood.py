@@ -68,10 +68,8 @@ def _seed_edge(cand, occ, full, i, j, k):
 
 @njit(cache=True)
 def _seed_at(cand, occ, full, i, j, k):
-    """:func:`_seed_kernel`'s answer at one voxel, every neighbour read with its bounds tested (the
-    voxels of the box's outer layer)."""
-    if not cand[i, j, k]:
-        return False
+    """:func:`_seed_kernel`'s answer at a candidate voxel (its caller :func:`_seed_edge` tests that),
+    every neighbour read with its bounds tested (the voxels of the box's outer layer)."""
     for di in range(-1, 2):
         for dj in range(-1, 2):
             for dk in range(-1, 2):
