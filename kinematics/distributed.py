@@ -344,6 +344,11 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
         alive_at = last_check = time.monotonic()
         lost: str | None = None
         unfetched: set[int] = set()  # points that failed without their evaluation's own error
+
+        def fail(i: int, why: str) -> None:
+            rows[i] = {"params": values[i], "index": list(indices[i]), "ok": False, "error": why,
+                       "design": designs[i].to_dict()}
+
         while pending:
             if is_cancelled(cancel):
                 client.cancel([f for f in futures if f.key in pending])
@@ -368,20 +373,18 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
             for fut in batch:
                 i = where[fut.key]
                 pending.discard(fut.key)
-                base = {"params": values[i], "index": list(indices[i])}
                 # every wait on a future is bounded: one whose worker left may never resolve (the CI of
                 # 2026-12-04 waited 600 s in fut.exception() after the cluster was scaled to 0)
                 if fut.status == "finished":
                     try:
                         res = fut.result(timeout=lost_after)
                     except Exception as e:  # noqa: BLE001 - e.g. the data was lost with its worker
-                        why = (f"finished, but its result did not come within {lost_after:g} s"
-                               if isinstance(e, TimeoutError) else _one_line(e))
-                        rows[i] = {**base, "ok": False, "error": why, "design": designs[i].to_dict()}
+                        fail(i, f"finished, but its result did not come within {lost_after:g} s"
+                             if isinstance(e, TimeoutError) else _one_line(e))
                         unfetched.add(i)
                         failed += 1
                     else:
-                        rows[i] = {**res, **base, "ok": True}
+                        rows[i] = {**res, "params": values[i], "index": list(indices[i]), "ok": True}
                 else:
                     exc = None
                     try:
@@ -390,8 +393,7 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
                         exc = None  # reported as "point <status>"
                     except Exception as e:  # noqa: BLE001 - cancelled futures raise here
                         exc = e
-                    rows[i] = {**base, "ok": False, "error": _one_line(exc) if exc else f"point {fut.status}",
-                               "design": designs[i].to_dict()}
+                    fail(i, _one_line(exc) if exc else f"point {fut.status}")
                     if fut.status != "error" or exc is None:  # not the evaluation's own error
                         unfetched.add(i)
                     failed += 1
@@ -409,9 +411,7 @@ def sweep_grid(design: Design | PresetDesign, params: Mapping[str, Sequence[floa
                 row["error"] = f"{lost}; this point: {row['error']}"
             for f in futures:
                 if f.key in pending:
-                    i = where[f.key]
-                    rows[i] = {"params": values[i], "index": list(indices[i]), "ok": False, "error": lost,
-                               "design": designs[i].to_dict()}
+                    fail(where[f.key], lost)
                     failed += 1
             log.warning("sweep_grid: %s; %d of %d points not finished", lost, len(pending), n)
             discard_client(client)
