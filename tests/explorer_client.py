@@ -101,7 +101,7 @@ class FakeBrowser:
             src = m["source"]
             with self.lock:
                 self.scripts.append(src)
-            # Play the browser: the two scripts of app/jsbridge.py that matter here.
+            # Play the browser: the scripts of app/explorer/jsbridge.py that matter here.
             var_k = re.search(r"var k = (\"[^\"]+\");", src)
             if var_k and "location.search" in src:
                 own = re.fullmatch(r"viser-user:paraspace_location_(\d+)", json.loads(var_k.group(1)))
@@ -110,6 +110,8 @@ class FakeBrowser:
                 self.storage[json.loads(var_k.group(1))] = json.dumps({"search": self.search, "base": self.base})
             if var_k and "navigator.clipboard" in src:  # a page without clipboard access
                 self.storage[json.loads(var_k.group(1))] = "refused"
+            if var_k and "paraspace_drawn_" in src:  # jsbridge.wait_drawn: a page that draws at once
+                self.storage[json.loads(var_k.group(1))] = "1"
             q = re.search(r"var q = (\"(?:[^\"\\]|\\.)*\");", src)
             if q and "replaceState" in src:  # app/jsbridge.replace_query (plotly.js mentions replaceState too)
                 self.search = json.loads(q.group(1))

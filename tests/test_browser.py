@@ -66,16 +66,18 @@ def browser() -> Iterator[Browser]:
 
 
 def open_page(browser: Browser, explorer: Explorer, query: str = "", viewport: tuple[int, int] = (1400, 900),
-              first_visit: bool = False) -> tuple[Page, ClientSession]:
+              first_visit: bool = False, init_script: str = "") -> tuple[Page, ClientSession]:
     """A fresh browser context (own localStorage) on the explorer; returns the page and its session.
     Its localStorage says that viser's software-WebGL notice was shown before, as in a browser that
     opened the explorer before, so the page closes the notice as soon as it appears
     (``app/explorer/pagehook.py``); ``first_visit``: a browser that never did (the notice stays for
-    a few seconds, and this closes it)."""
+    a few seconds, and this closes it). ``init_script`` runs in the page before its own scripts."""
     before = set(explorer.sessions)
     ctx = browser.new_context(viewport={"width": viewport[0], "height": viewport[1]})
     if not first_visit:
         ctx.add_init_script(f"try {{ localStorage.setItem('{WEBGL_NOTICE_KEY}', '1'); }} catch (e) {{}}")
+    if init_script:
+        ctx.add_init_script(init_script)
     page = ctx.new_page()
     t0 = time.monotonic()
     page.goto(explorer.url + (("?" + query) if query else ""))
@@ -238,6 +240,42 @@ def test_slider_link_and_screenshots(browser: Browser, explorer: Explorer) -> No
     assert any("φ (about z) feasible" in t for t in legend) and any("τ" in t for t in legend)
     page.context.close()
     page2.context.close()
+
+
+#: Before the page's scripts: when ``window.Plotly`` gets its value (plotly.js evaluated) and when the
+#: frame after the first shell's load starts (the shell drawn), in the page's clock.
+ORDER_PROBE = """
+(() => {
+  const C = window.__order = {plotly: null, shell: null};
+  let plotly;
+  Object.defineProperty(window, 'Plotly', {configurable: true, enumerable: true, get() { return plotly; },
+    set(v) { plotly = v; if (C.plotly === null) { C.plotly = performance.now(); } }});
+  const tick = () => {
+    const M = window.__viserMutable;
+    const sh = M && M.nodeRefFromName['/workspace/shell'];
+    if (sh && sh.children.length > 0) { requestAnimationFrame(() => { C.shell = performance.now(); }); return; }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+})();
+"""
+
+
+def test_the_first_shell_is_drawn_before_the_plots_plotly_js(browser: Browser, explorer: Explorer) -> None:
+    """plotly.js (1.7 MB; seconds of the page's main thread with software WebGL) goes to the page only
+    once it has drawn its first shell (the plot gate of ``app/explorer/lazy_plot.py``): before the
+    gate, the orientation maps' first figure, ready just after the shell was sent, made the browser
+    evaluate plotly.js first and draw the shell after it. The maps then come."""
+    page, session = open_page(browser, explorer, "voxel=3", init_script=ORDER_PROBE)
+    try:
+        wait_for(lambda: page.evaluate("() => window.__order.plotly !== null"), 60, "plotly.js in the page")
+        order = page.evaluate("() => window.__order")
+        assert order["shell"] is not None and order["shell"] < order["plotly"], order
+        assert session.plot_gate.opened.is_set()
+        page.get_by_role("tab", name="Plots").click()
+        page.locator(".js-plotly-plot").filter(has_text="orientation workspace").first.wait_for(timeout=30000)
+    finally:
+        page.context.close()
 
 
 def test_two_browsers_keep_separate_states(browser: Browser, explorer: Explorer) -> None:

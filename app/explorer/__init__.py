@@ -9,7 +9,8 @@
   ``legend``, ``joints_panel``, ``compare_panel``, ``paper_panel``, ``tilt_panel``,
   ``dexterous_panel``, ``optimize_panel``, ``plot_exports``);
 * the 3-D scene (``scene``), the page gate (``pagehook``), the browser bridge (``jsbridge``) and
-  plots created at their first figure (``lazy_plot``).
+  plots created at their first figure, a page's first ones after its first shell is drawn
+  (``lazy_plot``).
 
 It depends on the core (:mod:`paraspace.kinematics`) and on the shared services of :mod:`paraspace.app`
 (jobs, limits, URL state, text escaping, figures); nothing outside this package imports its modules

@@ -6,6 +6,8 @@ up), and the public ``client.local_storage`` reads a value back. Together they f
 
 * :func:`read_location` makes the page store ``location.search`` and the page's base URL in
   localStorage and reads them back (one round trip, about 0.1 s on localhost);
+* :func:`wait_drawn` waits until the page has drawn a scene node (the first shell, before the plots'
+  plotly.js is sent: :mod:`paraspace.app.explorer.lazy_plot`);
 * :func:`replace_query` rewrites the address bar with ``history.replaceState`` (no reload);
 * :func:`copy_to_clipboard` tries ``navigator.clipboard`` (may be refused outside a secure context;
   the explorer always shows the link in a text field as well);
@@ -21,6 +23,7 @@ viser internals is :mod:`paraspace.app.pagehook`, the gate on the page request.)
 from __future__ import annotations
 
 import json
+import time
 
 import viser
 from viser import _messages
@@ -35,12 +38,20 @@ def run_js(client: viser.ClientHandle, source: str) -> None:
     client._websock_connection.queue_message(_messages.RunJavascriptMessage(source=wrapped))  # noqa: SLF001
 
 
-def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: float) -> str | None:
+def _round_trip(client: viser.ClientHandle, key: str, source: str, timeout: float,
+                poll: float | None = None) -> str | None:
     """Run ``source`` (which stores its answer under the JS variable ``k``'s localStorage key) and
-    read the answer back; ``None`` if the browser did not answer within ``timeout`` seconds."""
+    read the answer back; ``None`` if the browser did not answer within ``timeout`` seconds.
+    ``poll``: the script answers later (after frames, a promise), so the key is read again every
+    ``poll`` seconds until it is there; without it, the first read is the answer (a script that
+    answers at once: the read queued after it sees the key)."""
     run_js(client, f"var k = {json.dumps(VISER_STORAGE_PREFIX + key)};" + source)
+    deadline = time.monotonic() + timeout
     try:
         raw = client.local_storage.get_item(key, timeout=timeout)
+        while raw is None and poll is not None and time.monotonic() + poll < deadline:
+            time.sleep(poll)
+            raw = client.local_storage.get_item(key, timeout=max(deadline - time.monotonic(), 0.01))
     except (TimeoutError, RuntimeError):
         return None
     try:
@@ -66,6 +77,24 @@ def read_location(client: viser.ClientHandle, timeout: float = 5.0) -> tuple[str
         return str(data.get("search", "")), str(data.get("base", ""))
     except (ValueError, AttributeError):
         return None
+
+
+def wait_drawn(client: viser.ClientHandle, node: str, timeout: float = 8.0, give_up: float = 5.0) -> bool | None:
+    """Wait until the page has drawn the scene node ``node``: the node has loaded children (a GLB is
+    parsed asynchronously after its message) and the next animation frame has started. ``True``:
+    drawn; ``False``: the page gave up after ``give_up`` seconds (no such node with children, or a
+    viser client without ``window.__viserMutable``, the scene internals viser 1.1.1 exposes for
+    end-to-end tests); ``None``: no answer within ``timeout`` seconds (a hidden tab draws no frames).
+    Blocks, polling the answer every 50 ms (a ``def`` callback or a thread of its own)."""
+    raw = _round_trip(client, f"paraspace_drawn_{client.client_id}", (
+        f"var n = {json.dumps(node)}; var t0 = performance.now();"
+        "function go() { var M = window.__viserMutable; var o = M && M.nodeRefFromName && M.nodeRefFromName[n];"
+        " if (o && o.children && o.children.length > 0) {"
+        "  requestAnimationFrame(function () { localStorage.setItem(k, '1'); }); return; }"
+        f" if (performance.now() - t0 > {1000.0 * give_up:.0f}) {{ localStorage.setItem(k, '0'); return; }}"
+        " requestAnimationFrame(go); }"
+        "requestAnimationFrame(go);"), timeout, poll=0.05)
+    return None if raw is None else raw == "1"
 
 
 def replace_query(client: viser.ClientHandle, query: str) -> None:

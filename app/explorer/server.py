@@ -55,6 +55,7 @@ from . import jsbridge, pagehook
 from .compare_panel import CompareHooks, ComparePanel
 from .design_controller import DesignController
 from .dexterous_panel import DexterousPanel
+from .lazy_plot import hold_plots
 from .mechanism_panel import MechanismController, NotYetNotes, build_mechanism_controls
 from .numbers_panel import NumbersPanel
 from .optimize_panel import OptimizePanel
@@ -111,6 +112,9 @@ class ClientSession:
         self.optimize_query = dict(optimize_query or {})
         self.optimize: OptimizePanel | None = None
         self.ready = threading.Event()  # set when the GUI is built and wired
+        # the plots' plotly.js goes to the page once it has drawn its first shell (lazy_plot, the gate)
+        self.plot_gate = hold_plots(client.gui, lambda: jsbridge.wait_drawn(client, ShellScene.NAME,
+                                                                            timeout=PLOTS_WAIT_SECONDS))
         self.numbers = NumbersPanel(ctx)
         self.share_controller = ShareController(ctx)
         url = self.share_controller.schedule_url
@@ -274,6 +278,7 @@ class ClientSession:
     def close(self) -> None:
         """The browser left: cancel its jobs and timers."""
         self.ctx.closed = True
+        self.plot_gate.close()
         self.share_controller.close()
         self.design_controller.close()
         for job in self.explorer.jobs.active(self.ctx.job_client):
@@ -312,6 +317,9 @@ class ClientSession:
 # the server
 
 
+#: Seconds a page's first plot waits for the browser to draw the first shell (the plot gate of
+#: :mod:`paraspace.app.explorer.lazy_plot`); the page itself gives up after 5 s without a shell.
+PLOTS_WAIT_SECONDS = 8.0
 #: Seconds a new page's browser gets to tell the server its link (``location.search``) before the
 #: page is built on the defaults (with a message; its address bar is then never rewritten).
 LINK_READ_SECONDS = 60.0
