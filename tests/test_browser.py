@@ -278,6 +278,39 @@ def test_the_first_shell_is_drawn_before_the_plots_plotly_js(browser: Browser, e
         page.context.close()
 
 
+def _copy_link_notice(page: Page) -> str:
+    page.get_by_role("tab", name="Share").click()
+    page.get_by_role("button", name="Copy link").first.click()
+    notice = page.locator(".mantine-Notification-root").filter(has_text=re.compile("Link (not )?copied")).first
+    notice.wait_for(timeout=30000)
+    return notice.inner_text()
+
+
+def test_copy_link_says_what_the_clipboard_did(browser: Browser, explorer: Explorer) -> None:
+    """The Share tab's "Copy link" reports the browser's answer: the page answers when the clipboard's
+    promise settles, after the server's first read, which until 2026-12-05 took it for a refusal and
+    said "Link not copied" with the link on the clipboard."""
+    page, session = open_page(browser, explorer, "voxel=4&a=55")
+    try:
+        page.context.grant_permissions(["clipboard-read", "clipboard-write"])
+        notice = _copy_link_notice(page)
+        link = session.ctx.panels.link.value
+        assert notice.startswith("Link copied"), notice
+        assert page.evaluate("() => navigator.clipboard.readText()") == link and "a=55" in link
+    finally:
+        page.context.close()
+    # a browser that refuses (the permission's answer depends on the page's focus and the click's user
+    # activation, so the refusal is the page's own)
+    refuse = ("navigator.clipboard && (navigator.clipboard.writeText = "
+              "() => Promise.reject(new DOMException('denied', 'NotAllowedError')));")
+    page, _ = open_page(browser, explorer, "voxel=4&a=56", init_script=refuse)
+    try:
+        notice = _copy_link_notice(page)
+        assert notice.startswith("Link not copied") and "did not allow the clipboard" in notice, notice
+    finally:
+        page.context.close()
+
+
 def test_two_browsers_keep_separate_states(browser: Browser, explorer: Explorer) -> None:
     p1, s1 = open_page(browser, explorer, "voxel=4&z=140")
     p2, s2 = open_page(browser, explorer, "voxel=4&z=120")

@@ -110,14 +110,17 @@ def replace_query(client: viser.ClientHandle, query: str) -> None:
 def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.0) -> bool | None:
     """Try to put ``text`` on the clipboard of this client's browser and report what happened:
     ``True`` copied, ``False`` refused by the browser (e.g. not a secure context, no permission),
-    ``None`` no answer within ``timeout`` seconds. Blocks for one round trip (a ``def`` callback)."""
+    ``None`` no answer within ``timeout`` seconds. The page answers when the clipboard's promise
+    settles, after the first read of the answer has usually arrived, so the answer is polled (until
+    2026-12-05 it was read once, and a link the browser had copied was reported as refused). Blocks
+    (a ``def`` callback)."""
     raw = _round_trip(client, f"paraspace_clip_{client.client_id}", (
         f"var t = {json.dumps(text)};"
         "function put(v) { localStorage.setItem(k, v); }"
         "if (navigator.clipboard && navigator.clipboard.writeText) {"
         " navigator.clipboard.writeText(t).then(function () { put('ok'); },"
         " function (e) { console.warn('clipboard:', e); put('refused'); }); }"
-        " else { put('refused'); }"), timeout)
+        " else { put('refused'); }"), timeout, poll=0.05)
     return None if raw is None else raw == "ok"
 
 

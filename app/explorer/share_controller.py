@@ -133,8 +133,10 @@ class ShareController:
             self.ctx.notify("Link copied", "the link to this design, pose and view is on the clipboard",
                             color="green")
         else:
-            self.ctx.notify("Link not copied", "the browser did not allow the clipboard here; select the link "
-                                               "in the text field above and copy it (Ctrl+C)", color="orange")
+            why = ("the browser did not allow the clipboard here" if ok is False
+                   else "the browser did not say within 3 s whether it copied it")
+            self.ctx.notify("Link not copied", f"{why}; select the link in the text field above and copy it "
+                                               "(Ctrl+C)", color="orange")
 
     # ----- downloads ------------------------------------------------------------------------------
     def download_shell(self, fmt: str) -> None:
