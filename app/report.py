@@ -129,7 +129,8 @@ def shell_views_png(result: WorkspaceResult) -> bytes:
         ax.set_zlim(lo[2], hi[2])
         ax.set_box_aspect(tuple(np.maximum(hi - lo, 1e-9)))
         ax.view_init(elev=elev, azim=azim)
-        ax.set_title(title, fontsize=10)
+        # seen from below, the x axis (ticks and label) runs along the top edge: the title goes above it
+        ax.set_title(title, fontsize=10, pad=22 if elev < 0 else 6)
         ax.tick_params(labelsize=6)
         # label the two axes the view shows; the one seen end-on has no readable ticks
         hidden = "z" if abs(elev) == 90.0 else ("y" if elev == 0.0 else "")
@@ -138,13 +139,19 @@ def shell_views_png(result: WorkspaceResult) -> bytes:
                 getattr(ax, f"set_{axis}ticks")([])
             else:
                 getattr(ax, f"set_{axis}label")(axis, fontsize=8)
-    fig.subplots_adjust(wspace=0.05, hspace=0.12)
+    fig.subplots_adjust(wspace=0.05, hspace=0.25)
     return _png(fig)
 
 
 def mechanism_png(design: Design) -> bytes:
+    """A top view of ``design`` at its home pose (:func:`mechanism_figure`) as a PNG."""
+    return _png(mechanism_figure(design))
+
+
+def mechanism_figure(design: Design) -> Any:
     """A top view of ``design`` at its home pose: the base circle, each carriage's arc and radial
-    rail (its strokes), the U joints at zero carriage values and the platform's six joints."""
+    rail (its strokes), the U joints at zero carriage values and the platform's six joints; each
+    chain named outside the middle of its arc, the legend below the axes."""
     from matplotlib.figure import Figure
 
     from paraspace.kinematics.geometry import base_points, carriage_rails, platform_points_local
@@ -157,21 +164,28 @@ def mechanism_png(design: Design) -> bytes:
     for i in range(3):
         ax.plot(*rails["arcs"][i, :, :2].T, color="#0072B2", lw=3, label="arc stroke" if i == 0 else None)
         ax.plot(*rails["radials"][i, :, :2].T, color="#D55E00", lw=2, label="radial stroke" if i == 0 else None)
-        mid = rails["arcs"][i, len(rails["arcs"][i]) // 2, :2] * 1.12
+        mid = rails["arcs"][i, len(rails["arcs"][i]) // 2, :2] * 1.08
+        ux, uy = mid / max(float(np.hypot(*mid)), 1e-9)  # the label stands outside its arc, away from it
         ax.annotate(f"chain {i + 1}", (float(mid[0]), float(mid[1])), fontsize=7,
-                    ha="center", va="center")
+                    ha="left" if ux > 0.35 else ("right" if ux < -0.35 else "center"),
+                    va="bottom" if uy > 0.35 else ("top" if uy < -0.35 else "center"))
     base = base_points(design, np.zeros(3), np.zeros(3)).reshape(-1, 3)
     ax.plot(base[:, 0], base[:, 1], "ks", ms=3, label="U joints (d = 0, eta = 0)")
     plat = platform_points_local(design).reshape(-1, 3)
     plat = plat[np.argsort(np.arctan2(plat[:, 1], plat[:, 0]))]  # the hexagon's corners in turn
     ax.fill(plat[:, 0], plat[:, 1], color="#009E73", alpha=0.35, label="platform (radius a)")
+    # room for the chain labels (outside their arcs' middles, which autoscaling ignores)
+    lim = 1.5 * float(max(np.abs(rails["arcs"][:, :, :2]).max(), np.abs(plat[:, :2]).max()))
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")
     ax.set_xlabel("x", fontsize=8)
     ax.set_ylabel("y", fontsize=8)
     ax.tick_params(labelsize=7)
-    ax.legend(fontsize=6, loc="lower left", frameon=False)
+    # below the axes: inside, it covered chain 3's rails and label
+    ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     ax.set_title("mechanism, top view", fontsize=9)
-    return _png(fig)
+    return fig
 
 
 def _img(png: bytes, alt: str, width: str = "100%") -> str:

@@ -15,6 +15,7 @@ import os
 import re
 import urllib.parse
 
+import numpy as np
 import pytest
 
 from paraspace.app.glossary import DEFINITIONS
@@ -133,3 +134,31 @@ def test_opens_offline_in_chromium(page, tmp_path):
             assert pdf[:5] == b"%PDF-" and pdf.count(b"/Type /Page") - pdf.count(b"/Type /Pages") >= 3
         finally:
             b.close()
+
+
+@pytest.mark.parametrize("design", [Design(), Design(eta_range="from-zero", a=80.0, r=90.0, eta_s=90.0)],
+                         ids=["paper", "from-zero arcs of 90 deg"])
+def test_the_mechanism_view_names_every_chain_in_view_and_off_its_rails(design):
+    """Each chain's name is drawn inside the axes (the first version put chain 1's outside them, where
+    it was cut off), off its arc and radial rail, and the legend lies below the axes, off the drawing."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from paraspace.app.report import mechanism_figure
+
+    fig = mechanism_figure(design)
+    ax = fig.axes[0]
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    r = canvas.get_renderer()
+    box = ax.get_window_extent(r)
+    labels = [t for t in ax.texts if t.get_text().startswith("chain ")]
+    assert sorted(t.get_text() for t in labels) == ["chain 1", "chain 2", "chain 3"]
+    rails = [line for line in ax.get_lines() if line.get_color() in ("#0072B2", "#D55E00")]  # arcs, radial rails
+    assert len(rails) == 6
+    points = np.concatenate([ax.transData.transform(np.column_stack(line.get_data())) for line in rails])
+    for t in labels:
+        ext = t.get_window_extent(r)
+        assert box.x0 <= ext.x0 and ext.x1 <= box.x1 and box.y0 <= ext.y0 and ext.y1 <= box.y1, t.get_text()
+        inside = ((points[:, 0] > ext.x0) & (points[:, 0] < ext.x1) & (points[:, 1] > ext.y0) & (points[:, 1] < ext.y1))
+        assert not inside.any(), f"{t.get_text()} covers a rail"
+    assert ax.get_legend().get_window_extent(r).y1 <= box.y0
