@@ -51,6 +51,11 @@ def host(server):
     jobs.shutdown(wait=False)
 
 
+def finished(panel: OptimizePanel) -> bool:
+    """The run's whole front is shown (not the partial front of the generations done so far)."""
+    return panel.result is not None and not panel.result.get("partial")
+
+
 def _small(panel: OptimizePanel) -> None:
     panel.apply_query({"opt_params": "a,l_s", "opt_objectives": "volume,-footprint", "opt_pop": "6",
                        "opt_gen": "2", "opt_voxel": "10", "opt_seed": "4"})
@@ -63,7 +68,7 @@ def test_run_shows_front_and_loads_a_design(host):
     assert links == []  # applying a link does not rewrite it
     job = panel.run()
     assert job is not None and panel.stop_button.visible and panel.run_button.disabled
-    wait_for(lambda: panel.result is not None)
+    wait_for(lambda: finished(panel))
     # the panel shows what the core computes for the same settings
     core = optimize(OptimizeSettings(params=("a", "l_s"), objectives="volume,-footprint", design=base,
                                      workspace=WorkspaceSettings(voxel=10.0), population=6, generations=2,
@@ -85,7 +90,7 @@ def test_same_settings_shown_from_held_result_without_a_job(host):
     first = make()
     _small(first)
     first.run()
-    wait_for(lambda: first.result is not None)
+    wait_for(lambda: finished(first))
     n_jobs = len(jobs.jobs())
     second = make()  # e.g. the same link opened in another browser
     _small(second)
@@ -127,4 +132,39 @@ def test_bad_settings_and_stop(host):
     wait_for(lambda: job.is_final)
     assert job.status == "cancelled"
     wait_for(lambda: not panel.stop_button.visible)
-    assert panel.result is None and "cancelled" in panel.status.value
+    # stopped inside the first generation: nothing to show, and the line says so
+    assert panel.result is None and "stopped before the first generation ended" in panel.status.value
+
+
+def test_stop_keeps_the_front_of_the_generations_done(host):
+    """Stop after some generations: their front stays in the list and the plot, the status says it is
+    partial (the generation it stopped at, of how many) and it is not held for the link: the same
+    settings run again compute every generation. The partial front is the core's front after as many
+    generations (the same seed), and a design of it loads."""
+    make, jobs, loaded, links, base = host
+    panel = make()
+    panel.apply_query({"opt_params": "a,l_s", "opt_objectives": "volume,-footprint", "opt_pop": "12",
+                       "opt_gen": "20", "opt_voxel": "8", "opt_seed": "5"})
+    job = panel.run()
+    assert job is not None
+    wait_for(lambda: panel.result is not None and len(panel.result["generations"]) >= 2, 120)
+    assert "generation" in panel.status.value and panel.stop_button.visible  # still running, progress speaks
+    panel.stop()
+    wait_for(lambda: job.is_final and not panel.stop_button.visible)
+    assert job.status == "cancelled"
+    k = len(panel.result["generations"])
+    assert 2 <= k < 20 and panel.result.get("partial") is True
+    status = panel.status.value
+    assert status.startswith(f"stopped at generation {k} of 20 (Stop pressed)"), status
+    assert f"{len(panel.result['front'])} designs on the front" in status and "not kept" in status
+    core = optimize(OptimizeSettings(params=("a", "l_s"), objectives="volume,-footprint", design=base,
+                                     workspace=WorkspaceSettings(voxel=8.0), population=12, generations=k,
+                                     seed=5)).to_dict()
+    assert [e["design"] for e in panel.result["front"]] == [e["design"] for e in core["front"]]
+    assert len(panel.designs.options) == len(core["front"]) and not panel.load_button.disabled
+    panel.designs.value = panel.designs.options[0]
+    assert panel.load_selected() == Design.from_dict(core["front"][0]["design"])
+    again = make()  # the same settings: no held result (the partial front is not the run's answer)
+    again.apply_query({"opt_params": "a,l_s", "opt_objectives": "volume,-footprint", "opt_pop": "12",
+                       "opt_gen": "20", "opt_voxel": "8", "opt_seed": "5"})
+    assert again.result is None and not again.show_cached()

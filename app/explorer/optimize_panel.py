@@ -1,6 +1,9 @@
 """The explorer's "Optimize" panel: a bounded multi-objective optimisation (``kinematics.optimize``)
 run as a job, its Pareto front as an interactive plot, and "Load this design".
 
+The front is shown after each generation of a run; Stop keeps the front of the generations done
+(said to be partial in the status line, never held in ``results``).
+
 :class:`OptimizePanel` builds its controls into any viser GUI container it is given (a tab, a
 folder, ``client.gui``) and needs from its host only
 
@@ -237,9 +240,22 @@ class OptimizePanel:
             self._gen += 1
             gen = self._gen
         cache = self.cache
+        settings_dict = s.to_dict()
+        history: list[dict] = []  # each finished generation's summary (the job's thread)
+        partial: list[dict] = []  # the front of the generations done so far
+
+        def on_generation(info: dict) -> None:
+            history.append({k: v for k, v in info.items() if k != "front"})
+            front = {"settings": settings_dict, "front": info["front"], "generations": list(history),
+                     "evaluations": info["evaluations"], "hypervolume": [], "failed": [], "partial": True}
+            partial.append(front)
+            with self._lock:
+                if gen != self._gen:
+                    return
+            self._show(front, cached=False, keep_status=True)  # the progress line keeps the status
 
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
-            return optimize(s, cache=cache, progress=progress, cancel=cancel).to_dict()
+            return optimize(s, cache=cache, progress=progress, cancel=cancel, on_generation=on_generation).to_dict()
 
         def on_progress(job: Job) -> None:
             if gen == self._gen:
@@ -255,8 +271,18 @@ class OptimizePanel:
             if job.status == "done":
                 self.results.put(key, job.result)
                 self._show(job.result, cached=False)
+            elif partial:  # the front of the generations done stays, said to be partial (not held)
+                last = partial[-1]
+                done_gen = last["generations"][-1]["generation"]
+                why = ("Stop pressed" if job.status == "cancelled"
+                       else f"{job.status}: {job.error or job.message}")
+                self.status.value = (f"stopped at generation {done_gen} of {s.generations} ({why}): "
+                                     f"{len(last['front'])} designs on the front of the generations done, "
+                                     f"{last['evaluations']} evaluations; not kept for this link: Run computes "
+                                     f"all {s.generations}")
             else:
-                self.status.value = f"{job.status}: {job.error or job.message}"
+                self.status.value = ("stopped before the first generation ended (Stop pressed): no front"
+                                     if job.status == "cancelled" else f"{job.status}: {job.error or job.message}")
 
         try:
             job = self.jobs.submit(fn, kind="optimize", client=self.client, supersede=True, on_done=done,
@@ -273,13 +299,16 @@ class OptimizePanel:
         return job
 
     def stop(self) -> None:
-        """Cancel the running job (its partial front is not shown)."""
+        """Cancel the running job; the front of the generations it finished stays on screen, said to
+        be partial, and is not held for the link (:meth:`run`)."""
         job = self.job
         if job is not None and not job.is_final:
             self.jobs.cancel(job.id)
 
     # ----- showing and loading ----------------------------------------------------------------------
-    def _show(self, result: dict, *, cached: bool) -> None:
+    def _show(self, result: dict, *, cached: bool, keep_status: bool = False) -> None:
+        """The front of ``result`` in the list and the plot, and the status line says what it is
+        (``keep_status``: left as it is, for a run's partial front while its progress speaks)."""
         front = result["front"]
         params = list(result["settings"]["params"])
         labels = list(result["settings"]["objectives"])
@@ -294,10 +323,11 @@ class OptimizePanel:
             self.plot.figure = fig
         self.load_button.disabled = not front
         hv = result.get("hypervolume") or []
-        self.status.value = (f"{len(front)} designs on the front, {result['evaluations']} evaluations"
-                             + (f", hypervolume {hv[-1]:.3g}" if hv else "")
-                             + (f", {len(result['failed'])} failed" if result.get("failed") else "")
-                             + (" (held result, not recomputed)" if cached else ""))
+        if not keep_status:
+            self.status.value = (f"{len(front)} designs on the front, {result['evaluations']} evaluations"
+                                 + (f", hypervolume {hv[-1]:.3g}" if hv else "")
+                                 + (f", {len(result['failed'])} failed" if result.get("failed") else "")
+                                 + (" (held result, not recomputed)" if cached else ""))
         self.result = result  # last: a reader that sees the result sees the plot and the list
 
     def selected_index(self) -> int | None:
