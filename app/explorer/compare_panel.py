@@ -97,6 +97,11 @@ def comparison_table(pinned: Sequence[ShellBundle], current: ShellBundle,
     lines = ["| | " + " | ".join(names) + (" | change |" if one else " |"),
              "|---" * (len(cols) + 1 + one) + "|"]
 
+    def change_of(a: float, b: float) -> str:
+        diff = float(b) - float(a)
+        rel = f" ({100.0 * diff / abs(a):+.0f} %)" if a else ""
+        return f" {'+' if diff > 0 else ''}{significant(diff, 3)}{rel} |"
+
     def row(label: str, vals: list[Any], digits: int | None) -> None:
         text = [_cell(v, digits) for v in vals]
         change = ""
@@ -105,9 +110,7 @@ def comparison_table(pinned: Sequence[ShellBundle], current: ShellBundle,
             if digits is None:
                 change = " same |" if bool(a) == bool(b) else " changed |"
             else:
-                diff = float(b) - float(a)
-                rel = f" ({100.0 * diff / abs(a):+.0f} %)" if a else ""
-                change = f" {'+' if diff > 0 else ''}{significant(diff, 3)}{rel} |"
+                change = change_of(a, b)
         lines.append(f"| {label} | " + " | ".join(text) + " |" + change)
 
     for key, spec in PARAMS.items():
@@ -124,11 +127,16 @@ def comparison_table(pinned: Sequence[ShellBundle], current: ShellBundle,
     if indices is not None and len(indices) == len(cols):
         for k, label in ((0, "TI₁ (deg·units)"), (1, "TI₂ (deg·units)")):
             text = []
+            bounds = []
             for ti in indices:
                 value, bound = ti[k], ti[2 + k] if len(ti) > 2 else False
                 lower = lower or bool(bound)
+                bounds.append(bool(bound))
                 text.append(("≥ " if bound else "") + significant(value, 4))
-            lines.append(f"| {label} | " + " | ".join(text) + " |" + (" |" if one else ""))
+            change = ""
+            if one:  # a difference with a lower bound is no difference of the indices
+                change = " (a lower bound) |" if any(bounds) else change_of(indices[0][k], indices[1][k])
+            lines.append(f"| {label} | " + " | ".join(text) + " |" + change)
     return ("\n".join(lines) + "\n\n◆ the parameters that differ"
             + ("; ≥ a lower bound: the rotation range reaches the scan's ends (Plots tab: widen the scan)" if lower
                else ""))
