@@ -448,8 +448,12 @@ def test_viser_panel_does_not_flash_before_the_explorer_gui(browser: Browser, ex
 
 def _number_box(page: Page, session: ClientSession, key: str) -> Any:
     """The number box inside the design slider ``key`` (Mantine's NumberInput beside the track)."""
-    uuid = session.panels.design[key]._impl.uuid
-    return page.locator(f'[id="{uuid}"]').locator("xpath=../..").locator("input.mantine-NumberInput-input")
+    return handle_box(page, session.panels.design[key])
+
+
+def handle_box(page: Page, handle: Any) -> Any:
+    """The number box inside a slider ``handle`` (Mantine's NumberInput beside the track)."""
+    return page.locator(f'[id="{handle._impl.uuid}"]').locator("xpath=../..").locator("input.mantine-NumberInput-input")
 
 
 def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browser, explorer: Explorer) -> None:
@@ -528,6 +532,30 @@ def test_typing_never_applies_a_prefix(browser: Browser, explorer: Explorer) -> 
     text = page.locator("body").inner_text()
     assert "d_s = 120 is invalid; valid range [0, r=100]. The design keeps d_s = 50." in text, text[-800:]
     assert s.state.design.d_s == 50.0 and s.state.design.a == 80.0
+
+
+def test_a_number_typed_over_a_zero_is_applied_whole(browser: Browser, explorer: Explorer) -> None:
+    """The pose's boxes start at 0. The typing gate handed React one input event from "0" to the whole
+    text, and the number box undid a text two or more characters longer that ends like the old one:
+    y = 100, psi = -10 typed key by key were never sent and the boxes went back to 0 (2026-12-05).
+    Each is applied now, never a prefix, and a value of two characters as before."""
+    page, s = open_page(browser, explorer, "voxel=6")
+    try:
+        full_volume_text(page)
+        page.get_by_role("tab", name="Pose").click()
+        for key, typed in (("y", "100"), ("psi", "-10"), ("x", "101"), ("theta", "-5"), ("phi", "20")):
+            handle = s.panels.pose[key]
+            assert handle.value == 0.0
+            box = handle_box(page, handle)
+            box.click()
+            box.press("Control+a")
+            box.press_sequentially(typed, delay=120)
+            box.press("Enter")
+            wait_for(lambda key=key, typed=typed: getattr(s.state.pose, key) == float(typed), 30,
+                     f"{key} = {typed} applied")
+            assert box.input_value() == typed and handle.value == float(typed)
+    finally:
+        page.context.close()
 
 
 def test_paper_tab_is_readable_at_1440x900(browser: Browser, explorer: Explorer) -> None:

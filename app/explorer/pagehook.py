@@ -74,12 +74,18 @@ TYPING_PAUSE_MS = 800
 #: is typed only on Enter, on leaving the box, or after a pause of :data:`TYPING_PAUSE_MS` - never
 #: a keystroke's prefix ("120" typed key by key never applies 12). The keystrokes' ``input`` events
 #: are held at the document (capture phase, before React's root listener sees them); on Enter, blur
-#: or the pause one ``input`` event with the box's whole text goes to React, which applies it.
+#: or the pause the box's whole text goes to React in two ``input`` events: an empty box (not a
+#: number: nothing is applied), then the text, which it applies. The number box diffs each text
+#: against the one it last saw, and a single event from "0" to a text two or more characters longer
+#: that ends the same ("0" -> "100", "-10", "101") was undone and never sent (found typing a pose on
+#: 2026-12-05; "0" -> "50" and "20" -> "200" went through); from an empty box every text is new.
 TYPING_GATE = (
     "<script>(function(){var P=" + str(TYPING_PAUSE_MS) + ",q=new Map();"
+    "var S=Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set;"
     "function own(e){return e&&e.classList&&e.classList.contains('mantine-NumberInput-input');}"
+    "function fire(e){e.dispatchEvent(new Event('input',{bubbles:true}));}"
     "function go(e){var t=q.get(e);if(t===undefined)return;clearTimeout(t);q.delete(e);e.__psGo=true;"
-    "try{e.dispatchEvent(new Event('input',{bubbles:true}));}finally{e.__psGo=false;}}"
+    "try{var v=e.value;S.call(e,'');fire(e);S.call(e,v);fire(e);}finally{e.__psGo=false;}}"
     "document.addEventListener('input',function(v){var e=v.target;if(!own(e)||e.__psGo)return;"
     "v.stopImmediatePropagation();var t=q.get(e);if(t!==undefined)clearTimeout(t);"
     "q.set(e,setTimeout(function(){go(e);},P));},true);"
