@@ -152,6 +152,7 @@ def test_cli_total_orientation_bad_input(args, field, rng):
     (DESIGN, 15.0, 15.0, 5.0, 32, 8),  # the former hardest 32 leading the blocks, small top blocks
     (Design(a=30, b=20, eta_s=60), 20.0, 10.0, 5.0, 0, 4),  # the tree decides every sample; small top blocks
     (Design(a=60, b=10, d_s=70, l_s=70, eta_range="from-zero"), 10.0, 20.0, 5.0, 8, 2),
+    (DESIGN, 10.0, 20.0, 3.0, None, None),  # 1,241 orientations: the top nodes' centres by the chordal mean
 ])
 def test_tree_is_voxel_identical_to_testing_every_orientation(design, tilt, torsion, step, first, top, monkeypatch):
     """Issue 24 target 5: blocks of positions excluded by one orientation and voxels certified by
@@ -246,15 +247,17 @@ def test_unknown_method_is_refused(plain):
                                     method="fast")
 
 
-@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 10.0, 5.0), (10.0, 20.0, 5.0)])
+@pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 10.0, 5.0), (10.0, 20.0, 5.0),
+                                                (10.0, 20.0, 3.0)])  # 1,241: the root's centre by the mean
 def test_orientation_tree_groups_and_slack(tilt, torsion, step):
     """The compiled tree build (kinematics/orientation_tree.py): each inner node's members are its two
     children's, disjoint, split into halves; leaves are single samples; the centre is a member whose
-    largest angle to the others is the smallest (checked against every angle); and the vectorized
+    largest angle to the others is the smallest (checked against every angle), in a node of more than
+    CENTRE_EXACT members the member nearest their chordal mean; and the vectorized
     slack is, node by node and chain by chain, the largest |R u - R0 u| over the members (the same
     value as the former per-node expression)."""
     from paraspace.kinematics.joints import Joints
-    from paraspace.kinematics.orientation_tree import build_tree, node_slack
+    from paraspace.kinematics.orientation_tree import CENTRE_EXACT, build_tree, node_slack
     from paraspace.kinematics.workspace import rotation_tables
 
     samples = orientation_samples(tilt, torsion, step)
@@ -271,6 +274,10 @@ def test_orientation_tree_groups_and_slack(tilt, torsion, step):
         a, b = members[left[k]], members[right[k]]
         assert sorted(np.concatenate([a, b]).tolist()) == sorted(mem.tolist()) and abs(a.size - b.size) <= 1
         assert a.min() < b.min()  # children in sample order (hardest first)
+        if mem.size > CENTRE_EXACT:  # the member nearest the chordal mean (one pass)
+            near = np.einsum("aij,ij->a", rots[mem], rots[mem].mean(axis=0))
+            assert near[list(mem).index(centre[k])] >= near.max() - 1e-9
+            continue
         tr = np.einsum("aij,bij->ab", rots[mem], rots[mem])
         worst = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0)).max(axis=0)
         assert worst[list(mem).index(centre[k])] <= worst.min() + 1e-9

@@ -902,6 +902,27 @@ def test_total_orientation_workspace_shown_on_request(explorer, browsers, monkey
     wait_for(lambda: s.dexterous.handle is None, 5.0, "hidden")
 
 
+def test_total_orientation_workspace_has_a_stop(explorer, browsers):
+    """A fine step over wide angles runs for long: Stop (shown while it runs) cancels the job, which says
+    where it stopped; Show works again."""
+    b = browsers("voxel=6")
+    s = b.session
+    assert not s.dexterous.stop.visible
+    b.set(s.dexterous.tilt, 40.0)
+    b.set(s.dexterous.torsion, 80.0)
+    b.set(s.dexterous.step, 2.0)
+    wait_for(lambda: s.dexterous.tilt.value == 40.0 and s.dexterous.step.value == 2.0, 5.0, "inputs")
+    b.click(s.dexterous.show)
+    job = wait_for(lambda: s.dexterous.job, 10.0, "the job")
+    wait_for(lambda: s.dexterous.stop.visible and s.dexterous.show.disabled, 10.0, "Stop shown")
+    wait_for(lambda: job.progress > 0.0, 60.0, "some progress")
+    b.click(s.dexterous.stop)
+    wait_for(lambda: job.is_final, 30.0, "the job to end")
+    assert job.status == "cancelled"
+    wait_for(lambda: "stopped at" in s.dexterous.text.content, 10.0, "the stopped note")
+    assert not s.dexterous.stop.visible and not s.dexterous.show.disabled and s.dexterous.result is None
+
+
 def test_shell_coloured_by_the_actuator_usage_maps(explorer, browsers):
     """Issue 22: the leg-stroke-use and joint-angle maps (kinematics.usage) as shell colour modes;
     the colours are viridis of the map sampled at the vertices over its range on the workspace."""

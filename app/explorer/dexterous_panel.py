@@ -58,6 +58,7 @@ class DexterousPanel:
         self.notify = notify
         self.lock = threading.Lock()
         self.job: Job | None = None
+        self._gen = 0  # the latest run's number (:meth:`start`)
         self.handle: Any | None = None
         self.result: Any | None = None
         with gui.add_folder("Total-orientation workspace", expand_by_default=False):
@@ -65,10 +66,13 @@ class DexterousPanel:
             self.torsion = _slider(gui, "torsion S (deg)", TOTAL_ORIENTATION["torsion"])
             self.step = _slider(gui, "angle step (deg)", TOTAL_ORIENTATION["angle_step"])
             self.show = gui.add_button(f"Show (h = {DEXTEROUS_VOXEL:g})", icon=viser.Icon.PLAYER_PLAY)
+            # a fine step over wide angles runs for minutes: the run can be stopped like every other job
+            self.stop = gui.add_button("Stop", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             self.hide = gui.add_button("Hide", icon=viser.Icon.EYE_OFF, disabled=True)
             self.text = gui.add_markdown("The positions from which every such orientation is reachable, drawn "
                                          "in purple inside the workspace.")
         self.show.on_click(lambda _e: self.start())
+        self.stop.on_click(lambda _e: self.cancel())
         self.hide.on_click(lambda _e: self.clear())
 
     def start(self) -> None:
@@ -86,14 +90,23 @@ class DexterousPanel:
         def on_progress(job: Job) -> None:
             self.text.content = f"computing... {100 * job.progress:.0f} %"
 
+        with self.lock:
+            self._gen += 1
+            gen = self._gen
+
         def done(job: Job) -> None:
+            with self.lock:
+                if gen != self._gen:  # a newer run took over (and cancelled this one)
+                    return
             self.show.disabled = False
+            self.stop.visible = False
             if job.status == "done":
                 self._draw(job.result)
             elif job.status == "failed":
                 self.text.content = f"**failed:** {md_text(job.error)}"
             else:
-                self.text.content = "stopped"
+                self.text.content = (f"stopped at {100 * job.progress:.0f} %: nothing new drawn"
+                                     + ("; the workspace shown is the one before" if self.handle is not None else ""))
 
         with self.lock:
             old = self.job
@@ -108,7 +121,15 @@ class DexterousPanel:
         with self.lock:
             self.job = job
         self.show.disabled = True
+        self.stop.visible = True
         self.text.content = "computing..."
+
+    def cancel(self) -> None:
+        """The Stop button: cancel the running job (it ends at its next check, and says so)."""
+        with self.lock:
+            job = self.job
+        if job is not None and not job.is_final:
+            self.jobs.cancel(job.id)
 
     def _draw(self, res: Any) -> None:
         """Show ``res``: its shell (built first, the slow part), then its text, then ``result`` last,
