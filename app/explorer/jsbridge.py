@@ -107,7 +107,11 @@ def replace_query(client: viser.ClientHandle, query: str) -> None:
     ))
 
 
-def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = 3.0) -> bool | None:
+#: Seconds the page gets to say whether it copied to the clipboard (:func:`copy_to_clipboard`).
+CLIPBOARD_SECONDS = 3.0
+
+
+def copy_to_clipboard(client: viser.ClientHandle, text: str, timeout: float = CLIPBOARD_SECONDS) -> bool | None:
     """Try to put ``text`` on the clipboard of this client's browser and report what happened:
     ``True`` copied, ``False`` refused by the browser (e.g. not a secure context, no permission),
     ``None`` no answer within ``timeout`` seconds. The page answers when the clipboard's promise

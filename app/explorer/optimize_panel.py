@@ -242,13 +242,13 @@ class OptimizePanel:
         cache = self.cache
         settings_dict = s.to_dict()
         history: list[dict] = []  # each finished generation's summary (the job's thread)
-        partial: list[dict] = []  # the front of the generations done so far
+        partial: dict[str, dict] = {}  # "last": the front of the generations done so far
 
         def on_generation(info: dict) -> None:
             history.append({k: v for k, v in info.items() if k != "front"})
             front = {"settings": settings_dict, "front": info["front"], "generations": list(history),
                      "evaluations": info["evaluations"], "hypervolume": [], "failed": [], "partial": True}
-            partial.append(front)
+            partial["last"] = front
             with self._lock:
                 if gen != self._gen:
                     return
@@ -272,7 +272,7 @@ class OptimizePanel:
                 self.results.put(key, job.result)
                 self._show(job.result, cached=False)
             elif partial:  # the front of the generations done stays, said to be partial (not held)
-                last = partial[-1]
+                last = partial["last"]
                 done_gen = last["generations"][-1]["generation"]
                 why = ("Stop pressed" if job.status == "cancelled"
                        else f"{job.status}: {job.error or job.message}")

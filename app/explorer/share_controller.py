@@ -134,7 +134,7 @@ class ShareController:
                             color="green")
         else:
             why = ("the browser did not allow the clipboard here" if ok is False
-                   else "the browser did not say within 3 s whether it copied it")
+                   else f"the browser did not say within {jsbridge.CLIPBOARD_SECONDS:g} s whether it copied it")
             self.ctx.notify("Link not copied", f"{why}; select the link in the text field above and copy it "
                                                "(Ctrl+C)", color="orange")
 
