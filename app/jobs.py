@@ -155,12 +155,16 @@ class Job:
         """Request cancellation (no effect on a finished job)."""
         self._manager.cancel(self.id)
 
+    @property
+    def elapsed(self) -> float | None:
+        """Seconds it has run, or ran (``None`` while queued)."""
+        if self.started is None:
+            return None
+        return (self.finished or time.time()) - self.started
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-serializable state (without ``result``)."""
-        now = time.time()
-        elapsed = None
-        if self.started is not None:
-            elapsed = round((self.finished or now) - self.started, 6)
+        elapsed = self.elapsed
         return {
             "id": self.id,
             "kind": self.kind,
@@ -172,7 +176,7 @@ class Job:
             "created": self.created,
             "started": self.started,
             "finished": self.finished,
-            "elapsed_seconds": elapsed,
+            "elapsed_seconds": None if elapsed is None else round(elapsed, 6),
             "time_limit_seconds": self.max_seconds,
         }
 

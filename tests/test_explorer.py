@@ -294,6 +294,53 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     assert list(s.panels.sweep_plot.figure.data[0].y) == [r["hollowness"] for r in rows]
 
 
+def test_a_stopped_sweep_draws_the_points_done_and_a_new_run_computes_only_the_others(explorer, browsers,
+                                                                                     monkeypatch):
+    """Stop mid-sweep: the status says where it stopped and the points done are drawn (the figure says
+    it stopped); Run again takes those from the cache and computes only the others."""
+    from paraspace.kinematics import sweep
+
+    real = sweep._evaluate_cached
+    monkeypatch.setattr(sweep, "_evaluate_cached", lambda *a, **k: (time.sleep(0.4), real(*a, **k))[1])
+    b = browsers("voxel=6")
+    s = b.session
+
+    def status() -> str:  # the status line as read (markdown's escapes dropped)
+        return s.panels.sweep_status.content.replace("\\", "")
+
+    b.set(s.panels.study_voxel, 9.0)  # no other test sweeps at h = 9: every point is new to the cache
+    b.set(s.panels.sweep_param, "d_s")
+    b.set(s.panels.sweep_points, 6)
+    wait_for(lambda: s.panels.sweep_points.value == 6 and s.panels.sweep_param.value == "d_s"
+             and s.panels.study_voxel.value == 9.0, 5.0, "inputs")
+    cache = explorer.study_cache
+    misses = cache.misses
+    b.click(s.panels.sweep_run)
+    wait_for(lambda: "(4 of 6 points)" in status(), 60.0, "the fourth point in the status")
+    b.click(s.panels.sweep_stop)
+    job = s.studies_controller.sweep_job
+    wait_for(lambda: job.is_final and "Stopped" in status(), 30.0, "the stopped note")
+    assert job.status == "cancelled"
+    rows = s.studies_controller.sweep["rows"]
+    k = len(rows)
+    assert 3 <= k < 6 and f"Stopped** after {k} of 6 points (Stop pressed" in status()
+    assert f"so Run sweep computes only the other {6 - k}" in status()
+    fig = s.panels.sweep_plot.figure
+    assert s.panels.sweep_plot.visible and list(fig.data[0].x) == [r["value"] for r in rows]
+    assert f"stopped after {k} of 6 points" in fig.layout.title.text
+    assert not s.panels.sweep_run.disabled and not s.panels.sweep_stop.visible
+    # the new run: the k points from the cache, the others and the current design computed
+    done_misses = cache.misses
+    assert done_misses - misses >= k
+    b.click(s.panels.sweep_run)
+    wait_for(lambda: s.studies_controller.sweep_job is not job and s.studies_controller.sweep_job.is_final, 60.0,
+             "the second sweep")
+    assert s.studies_controller.sweep_job.status == "done"
+    assert len(s.studies_controller.sweep["rows"]) == 6 and "note" not in s.studies_controller.sweep
+    assert cache.misses - done_misses == 6 - k + 1  # the other points and the current design
+    assert status().startswith("6 points at h = 9")
+
+
 def test_gizmo_drag_sets_the_pose_sliders(explorer, browsers):
     b = browsers("voxel=6")
     s = b.session
@@ -471,9 +518,31 @@ def test_surface_study(explorer, browsers):
     heat = [t for t in s.panels.surface_plot.figure.data if t.type == "heatmap"]
     assert list(heat[0].x) == out["values_x"] and list(heat[0].y) == out["values_y"]  # cells centred on samples
     assert any(t.type == "surface" for t in s.panels.surface_plot.figure.data)
+    assert s.panels.surface_status.content.startswith("3 x 3 points at h = 10")
     b.click(s.panels.surface_csv)
     rows = list(csv.reader(io.StringIO(b.download("paraspace_volume_a_d_s.csv").decode())))
     assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
+
+
+def test_a_stopped_surface_study_says_where_it_stopped(explorer, browsers, monkeypatch):
+    from paraspace.kinematics import sweep
+
+    real = sweep._evaluate_cached
+    monkeypatch.setattr(sweep, "_evaluate_cached", lambda *a, **k: (time.sleep(0.4), real(*a, **k))[1])
+    b = browsers("voxel=6")
+    s = b.session
+    b.set(s.panels.study_voxel, 9.0)
+    b.set(s.panels.surface_points, 4)
+    wait_for(lambda: s.panels.surface_points.value == 4 and s.panels.study_voxel.value == 9.0, 5.0, "inputs")
+    b.click(s.panels.surface_run)
+    wait_for(lambda: "(3/16)" in s.panels.surface_status.content.replace("\\", ""), 60.0, "the third point")
+    job = s.studies_controller.surface_job
+    b.click(s.panels.surface_stop)
+    wait_for(lambda: job.is_final and "Stopped" in s.panels.surface_status.content, 30.0, "the stopped note")
+    text = s.panels.surface_status.content.replace("\\", "")
+    assert job.status == "cancelled" and text.startswith("**Stopped** at a = ") and "(Stop pressed, " in text
+    assert "/16)" in text and "nothing drawn" in text and s.studies_controller.surface is None
+    assert not s.panels.surface_plot.visible and not s.panels.surface_run.disabled
 
 
 def test_design_change_cancels_stale_orientation_maps(explorer, browsers, monkeypatch):
@@ -639,10 +708,38 @@ def test_paper_tab_runs_the_comparison_in_the_background(explorer, browsers, mon
     explorer.paper_results.clear()
     b.click(s.paper.run)
     wait_for(lambda: "**Claims**" in s.paper.result.content, 120.0, "the comparison")
+    assert s.paper.status.content.startswith("checked in ")
     text = s.paper.result.content.replace("\\", "")
     assert "3.47e+06" in text and "holds" in text and "**fails**" in text and "from_zero" in text
     assert text.count("differs under:") == text.count("\n- ") >= 40  # one list item per claim
     assert 10.0 in explorer.paper_results
+
+
+def test_the_paper_tab_says_what_it_checks_and_where_it_stopped(explorer, browsers, monkeypatch):
+    from paraspace.app.explorer import paper_panel
+    from paraspace.kinematics import paper
+
+    monkeypatch.setattr(paper_panel, "PAPER_VOXEL", 10.0)
+    monkeypatch.setattr(paper_panel, "PAPER_ASSUMPTIONS", ("paper",))
+    real = paper._evaluate
+    monkeypatch.setattr(paper, "_evaluate", lambda *a: (time.sleep(0.2), real(*a))[1])
+    explorer.paper_results.clear()  # a page shows the comparison held when it opens
+    b = browsers("voxel=6")
+    s = b.session
+
+    def status() -> str:  # the status line as read (markdown's escapes dropped)
+        return s.paper.status.content.replace("\\", "")
+
+    b.click(s.paper.run)
+    wait_for(lambda: "under the column paper" in status(), 60.0, "a claim in the status")
+    assert status().startswith("checking claim ")
+    job = s.paper.job
+    b.click(s.paper.stop)
+    wait_for(lambda: job.is_final and "Stopped" in status(), 30.0, "the stopped note")
+    assert job.status == "cancelled" and "(Stop pressed, " in status()
+    assert status().startswith("**Stopped** while checking claim ") and "under the column paper" in status()
+    assert "nothing kept" in status() and "**Claims**" not in s.paper.result.content
+    assert 10.0 not in explorer.paper_results and not s.paper.run.disabled and not s.paper.stop.visible
 
 
 @pytest.mark.parametrize("preset", ["iso", "top", "bottom", "side"])

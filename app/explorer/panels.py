@@ -109,6 +109,7 @@ class Panels:
     sweep_run: Any
     sweep_stop: Any
     sweep_progress: Any
+    sweep_status: Any
     sweep_plot: Any
     sweep_csv: Any
     sweep_png: Any
@@ -117,6 +118,7 @@ class Panels:
     surface_run: Any
     surface_stop: Any
     surface_progress: Any
+    surface_status: Any
     surface_plot: Any
     surface_csv: Any
     surface_png: Any
@@ -288,6 +290,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             sweep_run = gui.add_button("Run sweep", icon=viser.Icon.PLAYER_PLAY)
             sweep_stop = gui.add_button("Stop sweep", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             sweep_progress = gui.add_progress_bar(0.0, visible=False)
+            sweep_status = gui.add_markdown("")
             sweep_plot = _plot(gui, sweep_folder, "", visible=False)
             sweep_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
             sweep_png, sweep_svg = _downloads(gui)
@@ -296,6 +299,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             surface_run = gui.add_button("Run (a, d_s) study", icon=viser.Icon.PLAYER_PLAY)
             surface_stop = gui.add_button("Stop study", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
             surface_progress = gui.add_progress_bar(0.0, visible=False)
+            surface_status = gui.add_markdown("")
             surface_plot = _plot(gui, surface_folder, "", visible=False)
             surface_csv = gui.add_button("Download CSV", icon=viser.Icon.DOWNLOAD, disabled=True)
             surface_png, surface_svg = _downloads(gui)
@@ -332,9 +336,11 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
         orientation_png=orientation_png, orientation_svg=orientation_svg, study_voxel=study_voxel,
         sweep_param=sweep_param, sweep_measure=sweep_measure,
         sweep_points=sweep_points, sweep_run=sweep_run, sweep_stop=sweep_stop, sweep_progress=sweep_progress,
+        sweep_status=sweep_status,
         sweep_plot=sweep_plot, sweep_csv=sweep_csv, sweep_png=sweep_png, sweep_svg=sweep_svg,
         surface_points=surface_points,
         surface_run=surface_run, surface_stop=surface_stop, surface_progress=surface_progress,
+        surface_status=surface_status,
         surface_plot=surface_plot, surface_csv=surface_csv, surface_png=surface_png, surface_svg=surface_svg,
         link=link, copy_link=copy_link, download_stl=download_stl, download_ply=download_ply,
         download_glb=download_glb, download_json=download_json,

@@ -1,13 +1,13 @@
 """The explorer's "Paper" tab: every checkable claim of the paper with its verdict under each assumption.
 
-One button runs :func:`kinematics.paper.paper_comparison` as a background job (about 90 s at h = 4
-on two cores for the six assumption columns; progress shown, Stop available, the result cached for
-every browser of the server). The tab shows the paper's reported numbers beside ours under each
-column (never "closest" outside the paper's own design), the verdict counts per column, and one row
-per claim: the paper's words, our value under the paper's model, the verdict there, and the columns
-(assumptions) under which the verdict flips -- which assumption decides which claim. The same
-dictionary is what ``paraspace paper --json`` prints; the fit of the unstated assumptions is
-``paraspace paper --fit`` (README).
+One button runs :func:`kinematics.paper.paper_comparison` as a background job (about half a minute
+at h = 4 on two cores for the six assumption columns; progress shown in words with the seconds
+spent, Stop available, the result cached for every browser of the server). The tab shows the paper's
+reported numbers beside ours under each column (never "closest" outside the paper's own design), the
+verdict counts per column, and one row per claim: the paper's words, our value under the paper's
+model, the verdict there, and the columns (assumptions) under which the verdict flips -- which
+assumption decides which claim. The same dictionary is what ``paraspace paper --json`` prints; the
+fit of the unstated assumptions is ``paraspace paper --fit`` (README).
 """
 
 from __future__ import annotations
@@ -83,6 +83,16 @@ def comparison_markdown(out: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _claim_words(message: str) -> str:
+    """The core's progress message ``"paper: <claim> (<column>)"`` in the tab's words."""
+    text = message.removeprefix("paper: ").strip()
+    if text in ("", "queued", "running"):
+        return "the first claim"
+    claim, _, column = text.partition(" (")
+    return (f"claim {md_text(claim, 60)} under the column {md_text(column.rstrip(')'), 40)}" if column
+            else md_text(text, 120))
+
+
 class PaperPanel:
     """The Paper tab of one browser (module docstring)."""
 
@@ -97,9 +107,11 @@ class PaperPanel:
         gui.add_markdown("Every checkable claim of the paper (Sec. III, Fig. 4, Fig. 5, conclusion) with its "
                          "verdict under the paper's model and under each assumption the paper does not state. "
                          "The same as `paraspace paper --json`.")
-        self.run = gui.add_button("Check the paper's claims (about 90 s)", icon=viser.Icon.PLAYER_PLAY)
+        self.run = gui.add_button("Check the paper's claims", icon=viser.Icon.PLAYER_PLAY,
+                                  hint="six assumption columns at h = 4: about half a minute on two cores")
         self.stop = gui.add_button("Stop", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)
         self.progress = gui.add_progress_bar(0.0, visible=False)
+        self.status = gui.add_markdown("")
         self.result = gui.add_markdown("")
         self.run.on_click(lambda _e: self.start())
         self.stop.on_click(lambda _e: self.cancel())
@@ -119,8 +131,12 @@ class PaperPanel:
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
             return paper_comparison(PAPER_VOXEL, progress, cancel, assumptions=PAPER_ASSUMPTIONS, **PAPER_SCAN)
 
+        last = ["queued"]  # the last progress message (a stopped job's own message is its status)
+
         def on_progress(job: Job) -> None:
+            last[0] = job.message
             self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (viser's stub says read-only)
+            self.status.content = f"checking {_claim_words(job.message)} ({job.elapsed or 0.0:.0f} s)"
 
         def done(job: Job) -> None:
             self.stop.visible = False
@@ -128,8 +144,13 @@ class PaperPanel:
             self.run.disabled = False
             if job.status == "done":
                 self.cache.put(PAPER_VOXEL, job.result)
+                self.status.content = f"checked in {job.elapsed or 0.0:.0f} s"
                 self.result.content = comparison_markdown(job.result)
-            elif job.status == "failed":
+                return
+            why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
+            self.status.content = (f"**Stopped** while checking {_claim_words(last[0])} ({why}, "
+                                   f"{job.elapsed or 0.0:.0f} s): nothing kept; the button runs the whole check again")
+            if job.status == "failed":
                 self.notify("Paper comparison failed", str(job.error))
 
         try:
@@ -143,6 +164,7 @@ class PaperPanel:
         self.run.disabled = True
         self.stop.visible = True
         self.progress.visible = True
+        self.status.content = "starting..."
         self.progress.value = 0.0  # type: ignore[misc]  # settable (viser's stub says read-only)
 
     def cancel(self) -> None:

@@ -17,6 +17,7 @@ from typing import Any
 
 from .. import figures
 from ..jobs import Job, LimitExceeded
+from ..textsafe import md_text
 from .plot_exports import PlotExports
 from .session import PROGRESS_INTERVAL, SessionContext
 from .workspace_job import ws_settings
@@ -37,6 +38,7 @@ class StudiesController:
         self.sweep: dict | None = None  # the last sweep on screen
         self.surface_job: Job | None = None
         self.surface: dict | None = None  # the last (a, d_s) study on screen
+        self._messages: dict[str, str] = {}  # kind -> the last progress message of its latest job
 
     def wire(self) -> None:
         """Attach the two studies' buttons and the sweep's measure menu."""
@@ -72,12 +74,19 @@ class StudiesController:
         # TI_1/TI_2 need the orientation maps of every point (at the current z0)
         ori = s.orientation_settings() if measure in ("TI_1", "TI_2") else None
 
+        done_rows: list[dict] = []  # the points done, in order (read by done() after a Stop)
+        n_points = len(values)
+
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
-            rows = sweep_1d(s.design, param, values, settings, orientation=ori,
-                            progress=lambda f, m: progress(0.95 * f, m), cancel=cancel, cache=cache)
+            # point by point, so that a Stop keeps (and draws) the points done
+            for i, v in enumerate(values):
+                progress(0.95 * i / n_points, f"{param} = {v:g} ({i + 1} of {n_points} points)")
+                done_rows.extend(sweep_1d(s.design, param, [v], settings, orientation=ori, cancel=cancel,
+                                          cache=cache))
             current = float(getattr(s.design, param))
+            progress(0.95, f"the current design ({param} = {current:g})")
             cur_row = sweep_1d(s.design, param, [current], settings, orientation=ori, cancel=cancel, cache=cache)[0]
-            out = {"param": param, "rows": rows, "current": current, "current_row": cur_row,
+            out = {"param": param, "rows": list(done_rows), "current": current, "current_row": cur_row,
                    "current_volume": cur_row["volume"], "voxel": voxel, "design": s.design,
                    "orientation": settings.orientation}
             out["spec"] = self._sweep_spec(out, measure)
@@ -85,24 +94,47 @@ class StudiesController:
             return out
 
         def done(job: Job) -> None:
+            if ctx.closed:
+                return
             p.sweep_stop.visible = False
             p.sweep_run.disabled = False
+            p.sweep_progress.visible = False
             if job.status == "done":
                 self._show_sweep(job.result)
-                p.sweep_progress.visible = False
                 p.sweep_csv.disabled = False
-            else:
-                p.sweep_progress.visible = False
-                if job.status == "failed":
-                    ctx.notify("Sweep failed", str(job.error))
+                p.sweep_status.content = f"{n_points} points at h = {voxel:g} ({job.elapsed or 0.0:.0f} s)"
+                return
+            k = len(done_rows)
+            why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
+            if k and job.status == "cancelled":
+                rows = list(done_rows)
+                current = float(getattr(s.design, param))
+                part: dict[str, Any] = {
+                    "param": param, "rows": rows, "current": current, "current_row": {}, "voxel": voxel,
+                    "design": s.design, "orientation": settings.orientation,
+                    "note": f"stopped after {k} of {n_points} points (Stop pressed)"}
+                spec = self._sweep_spec(part, measure)
+                part.update(spec=spec, figure=figures.to_plotly(spec))
+                self._show_sweep(part)
+                p.sweep_csv.disabled = False
+            p.sweep_status.content = (
+                f"**Stopped** after {k} of {n_points} points ({why}, {job.elapsed or 0.0:.0f} s): "
+                + (f"the {k} points done are drawn, from {param} = {done_rows[0]['value']:g} to "
+                   f"{done_rows[-1]['value']:g}; they are kept, so Run sweep computes only the other "
+                   f"{n_points - k}." if k and job.status == "cancelled" else "nothing drawn."))
+            if job.status == "failed":
+                ctx.notify("Sweep failed", str(job.error))
 
-        self.sweep_job = self._start(fn, "sweep", p.sweep_progress, p.sweep_stop, p.sweep_run, done)
+        self.sweep_job = self._start(fn, "sweep", p.sweep_progress, p.sweep_stop, p.sweep_run, done, p.sweep_status)
 
     @staticmethod
     def _sweep_spec(data: dict, measure: str) -> figures.FigureSpec:
         cur = data["current_row"].get(measure)
-        return figures.sweep_spec(data["rows"], data["param"], measure, current=data["current"],
+        spec = figures.sweep_spec(data["rows"], data["param"], measure, current=data["current"],
                                   current_value=None if cur is None else float(cur), voxel=data["voxel"])
+        if data.get("note"):  # a sweep stopped part-way says so on the figure and its downloads
+            spec.warnings.append(data["note"])
+        return spec
 
     def _show_sweep(self, data: dict) -> None:
         p = self.ctx.panels
@@ -155,6 +187,8 @@ class StudiesController:
                     "orientation": settings.orientation}
 
         def done(job: Job) -> None:
+            if ctx.closed:
+                return
             p.surface_stop.visible = False
             p.surface_run.disabled = False
             p.surface_progress.visible = False
@@ -168,17 +202,30 @@ class StudiesController:
                 p.surface_csv.disabled = False
                 p.surface_png.disabled = False
                 p.surface_svg.disabled = False
-            elif job.status == "failed":
+                p.surface_status.content = f"{len(xs)} x {len(ys)} points at h = {voxel:g} ({job.elapsed or 0.0:.0f} s)"
+                return
+            why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
+            p.surface_status.content = (f"**Stopped** at {md_text(status_of(job), 120)} ({why}, "
+                                        f"{job.elapsed or 0.0:.0f} s): nothing drawn (the surface needs every point)"
+                                        + ("; the points done are kept, so Run computes only the others."
+                                           if job.status == "cancelled" else "."))
+            if job.status == "failed":
                 ctx.notify("Study failed", str(job.error))
 
-        self.surface_job = self._start(fn, "surface", p.surface_progress, p.surface_stop, p.surface_run, done)
+        status_of = self._last_message
+        self.surface_job = self._start(fn, "surface", p.surface_progress, p.surface_stop, p.surface_run, done,
+                                       p.surface_status)
 
-    def _start(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any, done: Callable[[Job], None]) -> Job | None:
+    def _start(self, fn: Any, kind: str, bar: Any, stop: Any, run: Any, done: Callable[[Job], None],
+               status: Any) -> Job | None:
         ctx = self.ctx
 
         def on_progress(job: Job) -> None:
+            self._messages[kind] = job.message
             if not ctx.throttled(kind + "-progress", PROGRESS_INTERVAL):
                 bar.value = 100.0 * job.progress
+                status.content = f"computing {md_text(job.message, 120)} ({job.elapsed or 0.0:.0f} s)"
+        self._messages[kind] = ""
         try:
             job = ctx.jobs.submit(fn, kind=kind, client=ctx.job_client, supersede=True,
                                   on_done=done, on_progress=on_progress)
@@ -190,7 +237,12 @@ class StudiesController:
         bar.animated = True
         stop.visible = True
         run.disabled = True
+        status.content = "starting..."
         return job
+
+    def _last_message(self, job: Job) -> str:
+        """The last progress message of the study ``job`` (its own message is its status once stopped)."""
+        return self._messages.get(job.kind, "")
 
     # ----- CSV ------------------------------------------------------------------------------------
     def download_sweep_csv(self) -> None:
