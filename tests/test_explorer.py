@@ -732,12 +732,13 @@ def test_the_paper_tab_says_what_it_checks_and_where_it_stopped(explorer, browse
 
     b.click(s.paper.run)
     wait_for(lambda: "under the column paper" in status(), 60.0, "a claim in the status")
-    assert status().startswith("checking claim ")
+    assert " % checked, the last: claim " in status()
     job = s.paper.job
     b.click(s.paper.stop)
     wait_for(lambda: job.is_final and "Stopped" in status(), 30.0, "the stopped note")
     assert job.status == "cancelled" and "(Stop pressed, " in status()
-    assert status().startswith("**Stopped** while checking claim ") and "under the column paper" in status()
+    assert status().startswith("**Stopped** at ") and "% checked, the last: claim " in status()
+    assert "under the column paper" in status()
     assert "nothing kept" in status() and "**Claims**" not in s.paper.result.content
     assert 10.0 not in explorer.paper_results and not s.paper.run.disabled and not s.paper.stop.visible
 

@@ -285,7 +285,7 @@ def build_panels(gui: viser.GuiApi, state: ExplorerState) -> Panels:
             sweep_param = gui.add_dropdown("parameter", STUDY_PARAMS, initial_value="a")
             sweep_measure = gui.add_dropdown("measure", SWEEP_MEASURES, initial_value="volume",
                                              hint="the plotted measure; TI_1/TI_2 add the orientation maps of "
-                                                  "every point (about 5 s each)")
+                                                  "every point, at the scan settings above")
             sweep_points = gui.add_slider("points", min=3, max=31, step=1, initial_value=10)
             sweep_run = gui.add_button("Run sweep", icon=viser.Icon.PLAYER_PLAY)
             sweep_stop = gui.add_button("Stop sweep", color="red", icon=viser.Icon.PLAYER_STOP, visible=False)

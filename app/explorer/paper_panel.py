@@ -83,14 +83,15 @@ def comparison_markdown(out: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _claim_words(message: str) -> str:
-    """The core's progress message ``"paper: <claim> (<column>)"`` in the tab's words."""
+def _checked_words(message: str, fraction: float) -> str:
+    """Where the check is, from the core's progress (``"paper: <claim> (<column>)"``, reported after
+    each claim under each column): the share checked and the last claim checked, in the tab's words."""
     text = message.removeprefix("paper: ").strip()
-    if text in ("", "queued", "running"):
-        return "the first claim"
     claim, _, column = text.partition(" (")
-    return (f"claim {md_text(claim, 60)} under the column {md_text(column.rstrip(')'), 40)}" if column
-            else md_text(text, 120))
+    if not column:  # nothing checked yet (the first columns' workspaces are being computed)
+        return "computing the columns' workspaces, 0 % checked"
+    return (f"{100 * fraction:.0f} % checked, the last: claim {md_text(claim, 60)} under the column "
+            f"{md_text(column.rstrip(')'), 40)}")
 
 
 class PaperPanel:
@@ -131,12 +132,13 @@ class PaperPanel:
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
             return paper_comparison(PAPER_VOXEL, progress, cancel, assumptions=PAPER_ASSUMPTIONS, **PAPER_SCAN)
 
-        last = ["queued"]  # the last progress message (a stopped job's own message is its status)
+        last: dict[str, Any] = {"message": "", "fraction": 0.0}  # the last progress (a stopped job's
+        # own message is its status)
 
         def on_progress(job: Job) -> None:
-            last[0] = job.message
+            last.update(message=job.message, fraction=float(job.progress))
             self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (viser's stub says read-only)
-            self.status.content = f"checking {_claim_words(job.message)} ({job.elapsed or 0.0:.0f} s)"
+            self.status.content = f"{_checked_words(job.message, job.progress)} ({job.elapsed or 0.0:.0f} s)"
 
         def done(job: Job) -> None:
             self.stop.visible = False
@@ -148,7 +150,7 @@ class PaperPanel:
                 self.result.content = comparison_markdown(job.result)
                 return
             why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
-            self.status.content = (f"**Stopped** while checking {_claim_words(last[0])} ({why}, "
+            self.status.content = (f"**Stopped** at {_checked_words(last['message'], last['fraction'])} ({why}, "
                                    f"{job.elapsed or 0.0:.0f} s): nothing kept; the button runs the whole check again")
             if job.status == "failed":
                 self.notify("Paper comparison failed", str(job.error))
@@ -164,7 +166,7 @@ class PaperPanel:
         self.run.disabled = True
         self.stop.visible = True
         self.progress.visible = True
-        self.status.content = "starting..."
+        self.status.content = _checked_words("", 0.0)
         self.progress.value = 0.0  # type: ignore[misc]  # settable (viser's stub says read-only)
 
     def cancel(self) -> None:
