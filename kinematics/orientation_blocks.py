@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -63,8 +64,19 @@ from .workspace import rotation_tables
 #: Edge (in voxels) of the coarsest position blocks (each voxel's cut and hints start afresh in a
 #: top block: at h = 4, 657 orientations, 64 cost 0.9x the CPU time of 32, 16 1.1x).
 TOP_BLOCK = 64
-#: Top blocks per kernel launch (cancellation and progress are checked between launches).
+#: Top blocks per kernel launch at the default 15/15 deg set's 657 orientations (cancellation and
+#: progress are checked between launches; :func:`launch_blocks`).
 LAUNCH = 16
+#: Orientations x top blocks of one launch (:func:`launch_blocks`).
+LAUNCH_WORK = LAUNCH * 657
+
+
+def launch_blocks(n_orientations: int, threads: int) -> int:
+    """Top blocks per kernel launch for a set of ``n_orientations``: :data:`LAUNCH` at the default
+    set's 657, fewer for a larger set so that a launch holds about :data:`LAUNCH_WORK` block-
+    orientations (a Stop waited 15 s for a launch of 16 blocks at 352,557 orientations), and never
+    fewer than one per thread."""
+    return max(1, int(threads), min(LAUNCH, LAUNCH_WORK // max(1, int(n_orientations))))
 
 
 @njit(cache=True, nogil=True)
@@ -311,21 +323,17 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (xs, ys, zs))
     first = min(int(first), rots.shape[0])
-    if first < rots.shape[0]:
-        left, right, leaf, centre, members = build_tree(samples[first:], rots[first:])
-        leaf = np.where(leaf >= 0, leaf + first, -1)
-        centre = centre + first
-        members = [m + first for m in members]
-    else:
-        left = right = leaf = centre = np.zeros(0, np.int64)
-        members = []
+    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first)
     # the first samples as single-sample nodes after the tree's
+    ones = np.arange(first, dtype=np.int64)
     left = np.concatenate([left, np.full(first, -1, np.int64)])
     right = np.concatenate([right, np.full(first, -1, np.int64)])
-    leaf = np.concatenate([leaf, np.arange(first, dtype=np.int64)])
-    centre = np.concatenate([centre, np.arange(first, dtype=np.int64)])
-    members = members + [np.array([m]) for m in range(first)]
-    slack = node_slack(us, members, centre) + eps
+    leaf = np.concatenate([leaf, ones])
+    centre = np.concatenate([centre, ones])
+    lo = np.concatenate([lo, perm.size + ones])
+    hi = np.concatenate([hi, perm.size + ones + 1])
+    perm = np.concatenate([perm, ones])
+    slack = node_slack(us, perm, lo, hi, centre) + eps
     lo2 = (lmin + slack) ** 2
     hi2 = np.where((lmin + slack <= lmax - slack) & (leaf < 0)[:, None], (lmax - slack) ** 2, -1.0)
     parent = np.full(left.size, -1, np.int64)
@@ -340,9 +348,10 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     t0, tn = t0[counts > 0], tn[counts > 0]
     levels = int(math.ceil(math.log2(TOP_BLOCK))) + 1
     seg_k, seg_arc = sub_arcs(cos_t, sin_t)
-    for s in range(0, t0.shape[0], LAUNCH):
+    per = launch_blocks(rots.shape[0], numba.get_num_threads())
+    for s in range(0, t0.shape[0], per):
         check(cancel)
-        sl = slice(s, min(t0.shape[0], s + LAUNCH))
+        sl = slice(s, min(t0.shape[0], s + per))
         with kernel_launch(sl.stop - sl.start):
             _blocks_kernel(t0[sl], tn[sl], cand, cum, xs, ys, zs, float(h), eps, first, levels, us, jcs, left, right,
                            parent, leaf, centre, lo2, hi2, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin,

@@ -241,6 +241,44 @@ def test_the_mirrored_half_gives_the_voxels_of_the_whole_grid(design):
                           whole & lopsided)
 
 
+def test_launches_shrink_with_the_orientation_count_and_change_no_voxel(monkeypatch):
+    """A kernel launch (between which a Stop is seen) holds about LAUNCH_WORK block-orientations: 16
+    top blocks at the default 657 orientations, one per thread at the panel's largest sets (a Stop
+    waited 15 s for 16 blocks of 352,557 orientations before). The launch size changes no voxel."""
+    import numba
+
+    from paraspace.kinematics import orientation_blocks as ob
+    from paraspace.kinematics.tilt_torsion import tt_rotations
+    from paraspace.kinematics.workspace import default_n_eta
+
+    assert ob.launch_blocks(657, 2) == ob.LAUNCH == 16
+    sizes = [ob.launch_blocks(n, 2) for n in (1, 657, 1_241, 5_000, 74_425, 352_557)]
+    assert sizes == sorted(sizes, reverse=True) and sizes[-1] == 2 and ob.launch_blocks(352_557, 1) == 1
+    assert all(ob.launch_blocks(n, 2) * n <= ob.LAUNCH_WORK for n in (1_241, 5_000))
+    design = DESIGN
+    ws = WorkspaceSettings(voxel=8.0)
+    pos = compute_workspace(design, ws)
+    s = orientation_samples(15.0, 10.0, 5.0)
+    rots = tt_rotations(s[:, 0], s[:, 1], s[:, 2])
+    n_eta = default_n_eta(design, ws.eta_step)
+    g = pos.grid
+    occ = np.asarray(pos.occupancy, bool)
+    monkeypatch.setattr(ob, "TOP_BLOCK", 8)  # many top blocks on this small grid
+    steps: dict[int, list[float]] = {}
+    out = {}
+    for work in (ob.LAUNCH_WORK, rots.shape[0]):  # 16 blocks a launch, then one per thread
+        monkeypatch.setattr(ob, "LAUNCH_WORK", work)
+        steps[work] = []
+        out[work] = ob.reachable_on_grid(design, occ, g.axes(), g.h, s, rots, n_eta, 8,
+                                         progress=lambda f, m, k=work: steps[k].append(f))
+    few, many = steps[ob.LAUNCH * 657], steps[rots.shape[0]]
+    per = ob.launch_blocks(rots.shape[0], numba.get_num_threads())
+    n_top = round(per / many[0])  # one progress report per launch, at the blocks done so far
+    assert per < 16 < n_top and many[-1] == few[-1] == 1.0
+    assert len(many) == -(-n_top // per) and len(few) == -(-n_top // 16)
+    assert np.array_equal(out[ob.LAUNCH * 657], out[rots.shape[0]]) and out[rots.shape[0]].any()
+
+
 def test_unknown_method_is_refused(plain):
     with pytest.raises(ParameterError, match="method"):
         total_orientation_workspace(DESIGN, 5.0, 5.0, 5.0, WorkspaceSettings(voxel=8.0), position=plain,
@@ -262,7 +300,8 @@ def test_orientation_tree_groups_and_slack(tilt, torsion, step):
 
     samples = orientation_samples(tilt, torsion, step)
     rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
-    left, right, leaf, centre, members = build_tree(samples, rots)
+    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots)
+    members = [perm[a:b] for a, b in zip(lo, hi)]
     assert left.size == 2 * samples.shape[0] - 1 and set(members[0].tolist()) == set(range(samples.shape[0]))
     assert sorted(leaf[leaf >= 0].tolist()) == list(range(samples.shape[0]))
     for k in range(left.size):
@@ -282,7 +321,12 @@ def test_orientation_tree_groups_and_slack(tilt, torsion, step):
         worst = np.arccos(np.clip(0.5 * (tr - 1.0), -1.0, 1.0)).max(axis=0)
         assert worst[list(mem).index(centre[k])] <= worst.min() + 1e-9
     us, _ = rotation_tables(DESIGN, rots, Joints())
-    slack = node_slack(us, members, centre)
+    slack = node_slack(us, perm, lo, hi, centre)
     for k in range(left.size):
         for i in range(3):
             assert slack[k, i] == np.linalg.norm(us[members[k], i] - us[centre[k], i], axis=-1).max()  # former
+    # numbered as the whole set when the tree leaves out the first samples
+    left8, right8, leaf8, centre8, perm8, lo8, hi8 = build_tree(samples, rots, 8)
+    ref = build_tree(samples[8:], rots[8:])
+    assert np.array_equal(left8, ref[0]) and np.array_equal(perm8, ref[4] + 8) and np.array_equal(centre8, ref[3] + 8)
+    assert np.array_equal(leaf8, np.where(ref[2] >= 0, ref[2] + 8, -1)) and np.array_equal(lo8, ref[5])
