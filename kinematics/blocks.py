@@ -471,7 +471,8 @@ def run_blocks(shape: tuple[int, int, int], axes: tuple[np.ndarray, np.ndarray, 
                                  rho_hi, lmin, lmax, jc)
         n_before = b0.shape[0]
         with kernel_launch(n_before):
-            b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out)
+            # fail_bit given (as the bracket gives it): one compiled signature for both callers
+            b0, bn, state, win = _advance(b0, bn, state, win, bool(all_chains), out, 0)
         level += 1
         if progress is not None:
             frac = min(1.0, level / LEVELS)

@@ -94,8 +94,6 @@ class StudiesController:
             return out
 
         def done(job: Job) -> None:
-            if ctx.closed:
-                return
             p.sweep_stop.visible = False
             p.sweep_run.disabled = False
             p.sweep_progress.visible = False
@@ -187,8 +185,6 @@ class StudiesController:
                     "orientation": settings.orientation}
 
         def done(job: Job) -> None:
-            if ctx.closed:
-                return
             p.surface_stop.visible = False
             p.surface_run.disabled = False
             p.surface_progress.visible = False
