@@ -213,20 +213,26 @@ def test_sample_sets_are_closed_under_the_mirror(tilt, torsion, step):
         assert not mirror_closed(tt_rotations(s[keep, 0], s[keep, 1], s[keep, 2]))
 
 
+def _grid_and_samples(design: Design) -> tuple:
+    """The h = 8 workspace of ``design`` and the 15/10/5 orientation samples, their rotations and the
+    arc samples: ``(settings, result, samples, rotations, n_eta)``."""
+    from paraspace.kinematics.tilt_torsion import tt_rotations
+    from paraspace.kinematics.workspace import default_n_eta
+
+    ws = WorkspaceSettings(voxel=8.0)
+    s = orientation_samples(15.0, 10.0, 5.0)
+    return ws, compute_workspace(design, ws), s, tt_rotations(s[:, 0], s[:, 1], s[:, 2]), \
+        default_n_eta(design, ws.eta_step)
+
+
 @pytest.mark.parametrize("design", [DESIGN, Design(a=30, b=20, eta_s=60), Design(a=70, d_s=80, l_s=80)])
 def test_the_mirrored_half_gives_the_voxels_of_the_whole_grid(design):
     """Issue 24 target 5: deciding the rows j >= ny // 2 and copying the others from their mirror
     rows gives the voxels of deciding every row (and of every orientation per pair); where the
     candidates are not symmetric the mirror is not used."""
     from paraspace.kinematics.orientation_blocks import reachable_on_grid
-    from paraspace.kinematics.tilt_torsion import tt_rotations
-    from paraspace.kinematics.workspace import default_n_eta
 
-    ws = WorkspaceSettings(voxel=8.0)
-    pos = compute_workspace(design, ws)
-    s = orientation_samples(15.0, 10.0, 5.0)
-    rots = tt_rotations(s[:, 0], s[:, 1], s[:, 2])
-    n_eta = default_n_eta(design, ws.eta_step)
+    ws, pos, s, rots, n_eta = _grid_and_samples(design)
     g = pos.grid
     occ = np.asarray(pos.occupancy, bool)
     assert np.array_equal(occ, occ[:, ::-1])
@@ -248,19 +254,13 @@ def test_launches_shrink_with_the_orientation_count_and_change_no_voxel(monkeypa
     import numba
 
     from paraspace.kinematics import orientation_blocks as ob
-    from paraspace.kinematics.tilt_torsion import tt_rotations
-    from paraspace.kinematics.workspace import default_n_eta
 
     assert ob.launch_blocks(657, 2) == ob.LAUNCH == 16
     sizes = [ob.launch_blocks(n, 2) for n in (1, 657, 1_241, 5_000, 74_425, 352_557)]
     assert sizes == sorted(sizes, reverse=True) and sizes[-1] == 2 and ob.launch_blocks(352_557, 1) == 1
     assert all(ob.launch_blocks(n, 2) * n <= ob.LAUNCH_WORK for n in (1_241, 5_000))
     design = DESIGN
-    ws = WorkspaceSettings(voxel=8.0)
-    pos = compute_workspace(design, ws)
-    s = orientation_samples(15.0, 10.0, 5.0)
-    rots = tt_rotations(s[:, 0], s[:, 1], s[:, 2])
-    n_eta = default_n_eta(design, ws.eta_step)
+    ws, pos, s, rots, n_eta = _grid_and_samples(design)
     g = pos.grid
     occ = np.asarray(pos.occupancy, bool)
     monkeypatch.setattr(ob, "TOP_BLOCK", 8)  # many top blocks on this small grid

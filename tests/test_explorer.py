@@ -294,14 +294,19 @@ def test_sweep_on_request_with_progress(explorer, browsers):
     assert list(s.panels.sweep_plot.figure.data[0].y) == [r["hollowness"] for r in rows]
 
 
-def test_a_stopped_sweep_draws_the_points_done_and_a_new_run_computes_only_the_others(explorer, browsers,
-                                                                                     monkeypatch):
-    """Stop mid-sweep: the status says where it stopped and the points done are drawn (the figure says
-    it stopped); Run again takes those from the cache and computes only the others."""
+@pytest.fixture
+def slow_study_points(monkeypatch):
+    """Each study point 0.4 s longer, so that a test can press Stop part-way."""
     from paraspace.kinematics import sweep
 
     real = sweep._evaluate_cached
     monkeypatch.setattr(sweep, "_evaluate_cached", lambda *a, **k: (time.sleep(0.4), real(*a, **k))[1])
+
+
+def test_a_stopped_sweep_draws_the_points_done_and_a_new_run_computes_only_the_others(explorer, browsers,
+                                                                                     slow_study_points):
+    """Stop mid-sweep: the status says where it stopped and the points done are drawn (the figure says
+    it stopped); Run again takes those from the cache and computes only the others."""
     b = browsers("voxel=6")
     s = b.session
 
@@ -524,11 +529,7 @@ def test_surface_study(explorer, browsers):
     assert rows[0][:3] == ["a", "d_s", "volume"] and len(rows) == 10
 
 
-def test_a_stopped_surface_study_says_where_it_stopped(explorer, browsers, monkeypatch):
-    from paraspace.kinematics import sweep
-
-    real = sweep._evaluate_cached
-    monkeypatch.setattr(sweep, "_evaluate_cached", lambda *a, **k: (time.sleep(0.4), real(*a, **k))[1])
+def test_a_stopped_surface_study_says_where_it_stopped(explorer, browsers, slow_study_points):
     b = browsers("voxel=6")
     s = b.session
     b.set(s.panels.study_voxel, 9.0)
