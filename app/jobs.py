@@ -104,6 +104,8 @@ class Job:
         status: ``"queued" | "running" | "done" | "failed" | "cancelled"``.
         progress: fraction in ``[0, 1]``.
         message: last progress message (or the reason of the final status).
+        progress_message: the last progress message the work itself reported (kept when the job
+            ends, so that a stopped job can say where it was).
         result: ``fn``'s return value once ``done`` (``None`` otherwise).
         error: one-line error of a ``failed`` job, else ``None``.
         created, started, finished: ``time.time()`` stamps (``started``/``finished`` are ``None``
@@ -121,6 +123,7 @@ class Job:
         self.status: JobStatus = "queued"
         self.progress = 0.0
         self.message = "queued"
+        self.progress_message = ""
         self.result: Any = None
         self.result_dropped = False  # the history's byte budget dropped the result (see JobManager)
         self._summarize: Any = None  # callable, None (drop), or False (already summarised)
@@ -532,7 +535,7 @@ class JobManager:
                 f = job.progress
             job.progress = min(1.0, max(0.0, f))
             if message:
-                job.message = str(message)
+                job.message = job.progress_message = str(message)
             for hook in list(job._progress_hooks):
                 try:
                     hook(job)

@@ -338,8 +338,9 @@ def test_a_stopped_sweep_draws_the_points_done_and_a_new_run_computes_only_the_o
     done_misses = cache.misses
     assert done_misses - misses >= k
     b.click(s.panels.sweep_run)
-    wait_for(lambda: s.studies_controller.sweep_job is not job and s.studies_controller.sweep_job.is_final, 60.0,
-             "the second sweep")
+    # the job is final before its callback has drawn it: wait for the status line, written last
+    wait_for(lambda: s.studies_controller.sweep_job is not job and s.studies_controller.sweep_job.is_final
+             and not status().startswith(("starting", "computing")), 60.0, "the second sweep drawn")
     assert s.studies_controller.sweep_job.status == "done"
     assert len(s.studies_controller.sweep["rows"]) == 6 and "note" not in s.studies_controller.sweep
     assert cache.misses - done_misses == 6 - k + 1  # the other points and the current design

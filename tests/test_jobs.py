@@ -208,6 +208,9 @@ def test_cancel_mid_job(jm):
     assert j.wait(5)
     print(f"cancel latency {1e3 * (time.perf_counter() - t0):.1f} ms")
     assert j.status == "cancelled" and 0 < j.progress < 1
+    # the final status takes the message; the last step the work reported stays to say where it was
+    assert not j.message.startswith("step ") and j.progress_message.startswith("step ")
+    assert j.elapsed is not None and 0 < j.elapsed < 10 and j.to_dict()["elapsed_seconds"] == round(j.elapsed, 6)
     assert not jm.cancel(j.id)  # already final
     assert not jm.cancel("nope")
 

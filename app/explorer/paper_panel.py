@@ -132,11 +132,7 @@ class PaperPanel:
         def fn(progress: Callable[[float, str], None], cancel: threading.Event) -> dict:
             return paper_comparison(PAPER_VOXEL, progress, cancel, assumptions=PAPER_ASSUMPTIONS, **PAPER_SCAN)
 
-        last: dict[str, Any] = {"message": "", "fraction": 0.0}  # the last progress (a stopped job's
-        # own message is its status)
-
         def on_progress(job: Job) -> None:
-            last.update(message=job.message, fraction=float(job.progress))
             self.progress.value = 100.0 * float(job.progress)  # type: ignore[misc]  # settable (viser's stub says read-only)
             self.status.content = f"{_checked_words(job.message, job.progress)} ({job.elapsed or 0.0:.0f} s)"
 
@@ -150,7 +146,7 @@ class PaperPanel:
                 self.result.content = comparison_markdown(job.result)
                 return
             why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
-            self.status.content = (f"**Stopped** at {_checked_words(last['message'], last['fraction'])} ({why}, "
+            self.status.content = (f"**Stopped** at {_checked_words(job.progress_message, job.progress)} ({why}, "
                                    f"{job.elapsed or 0.0:.0f} s): nothing kept; the button runs the whole check again")
             if job.status == "failed":
                 self.notify("Paper comparison failed", str(job.error))

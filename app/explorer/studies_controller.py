@@ -38,7 +38,6 @@ class StudiesController:
         self.sweep: dict | None = None  # the last sweep on screen
         self.surface_job: Job | None = None
         self.surface: dict | None = None  # the last (a, d_s) study on screen
-        self._messages: dict[str, str] = {}  # kind -> the last progress message of its latest job
 
     def wire(self) -> None:
         """Attach the two studies' buttons and the sweep's measure menu."""
@@ -201,14 +200,13 @@ class StudiesController:
                 p.surface_status.content = f"{len(xs)} x {len(ys)} points at h = {voxel:g} ({job.elapsed or 0.0:.0f} s)"
                 return
             why = "Stop pressed" if job.status == "cancelled" else f"failed: {md_text(str(job.error), 200)}"
-            p.surface_status.content = (f"**Stopped** at {md_text(status_of(job), 120)} ({why}, "
+            p.surface_status.content = (f"**Stopped** at {md_text(job.progress_message, 120)} ({why}, "
                                         f"{job.elapsed or 0.0:.0f} s): nothing drawn (the surface needs every point)"
                                         + ("; the points done are kept, so Run computes only the others."
                                            if job.status == "cancelled" else "."))
             if job.status == "failed":
                 ctx.notify("Study failed", str(job.error))
 
-        status_of = self._last_message
         self.surface_job = self._start(fn, "surface", p.surface_progress, p.surface_stop, p.surface_run, done,
                                        p.surface_status)
 
@@ -217,11 +215,9 @@ class StudiesController:
         ctx = self.ctx
 
         def on_progress(job: Job) -> None:
-            self._messages[kind] = job.message
             if not ctx.throttled(kind + "-progress", PROGRESS_INTERVAL):
                 bar.value = 100.0 * job.progress
                 status.content = f"computing {md_text(job.message, 120)} ({job.elapsed or 0.0:.0f} s)"
-        self._messages[kind] = ""
         try:
             job = ctx.jobs.submit(fn, kind=kind, client=ctx.job_client, supersede=True,
                                   on_done=done, on_progress=on_progress)
@@ -235,10 +231,6 @@ class StudiesController:
         run.disabled = True
         status.content = "starting..."
         return job
-
-    def _last_message(self, job: Job) -> str:
-        """The last progress message of the study ``job`` (its own message is its status once stopped)."""
-        return self._messages.get(job.kind, "")
 
     # ----- CSV ------------------------------------------------------------------------------------
     def download_sweep_csv(self) -> None:
