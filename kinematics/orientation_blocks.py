@@ -325,14 +325,14 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     first = min(int(first), rots.shape[0])
     left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first)
     # the first samples as single-sample nodes after the tree's
-    ones = np.arange(first, dtype=np.int64)
+    singles = np.arange(first, dtype=np.int64)  # the first samples, one node each
     left = np.concatenate([left, np.full(first, -1, np.int64)])
     right = np.concatenate([right, np.full(first, -1, np.int64)])
-    leaf = np.concatenate([leaf, ones])
-    centre = np.concatenate([centre, ones])
-    lo = np.concatenate([lo, perm.size + ones])
-    hi = np.concatenate([hi, perm.size + ones + 1])
-    perm = np.concatenate([perm, ones])
+    leaf = np.concatenate([leaf, singles])
+    centre = np.concatenate([centre, singles])
+    lo = np.concatenate([lo, perm.size + singles])
+    hi = np.concatenate([hi, perm.size + singles + 1])
+    perm = np.concatenate([perm, singles])
     slack = node_slack(us, perm, lo, hi, centre) + eps
     lo2 = (lmin + slack) ** 2
     hi2 = np.where((lmin + slack <= lmax - slack) & (leaf < 0)[:, None], (lmax - slack) ** 2, -1.0)
