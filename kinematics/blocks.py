@@ -59,21 +59,21 @@ LEVELS = int(math.ceil(math.log2(TOP_BLOCK))) + 1
 UNKNOWN, OK, FAIL = 0, 1, 2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo, hi):
     """False when the whole-arc bound rejects chain ``i`` over its sub-arc ``g`` (``seg_arc[i, g]``)
     with limits ``[lo, hi]``."""
     return not sub_arc_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo * lo, hi * hi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _stroke_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo, hi):
     """False when the whole-arc bound rejects chain ``i`` over its whole stroke (``arc[i]``) with
     limits ``[lo, hi]``."""
     return not chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, i, rho_lo, rho_hi, lo * lo, hi * hi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def decide_chain(px, py, pz, u, i, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc,
                  e_bound, e_relax, cone_relax, e_tight, can_ok, win):
     """OK / FAIL / UNKNOWN for chain ``i`` around the point P: OK when some sample passes with the leg
@@ -198,7 +198,7 @@ def sub_arcs(cos_t: np.ndarray, sin_t: np.ndarray, per: int = 12) -> tuple[np.nd
     return seg_k, seg_arc
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def block_centre(b0, bn, b, xs, ys, zs):
     """Centre of block ``b``'s voxel centres (its first voxel ``b0[b]``, ``bn[b]`` voxels per axis)."""
     return (0.5 * (xs[b0[b, 0]] + xs[b0[b, 0] + bn[b, 0] - 1]),
@@ -264,7 +264,7 @@ def _split(b0: np.ndarray, bn: np.ndarray, *inherited: np.ndarray) -> tuple[np.n
     return (np.concatenate(kids0), np.concatenate(kidsn), *(np.concatenate(lst) for lst in kids))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def n_children(bn, b):
     """Children of block ``b`` when it is split as :func:`_split` splits it: 2 per edge longer than one
     voxel (1, 2, 4 or 8)."""
@@ -275,7 +275,7 @@ def n_children(bn, b):
     return c
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def child_offsets(counts):
     """``offs[b]``: the first row of block ``b``'s children when every block's ``counts[b]`` children
     are written consecutively in block order (``offs[-1]``: their total)."""
@@ -286,7 +286,7 @@ def child_offsets(counts):
     return offs
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def write_child(b0, bn, b, d, k0, kn, m):
     """Write child ``d`` of block ``b`` (bit ``2 - a`` of ``d``: the upper half along axis ``a``, the
     first half the larger, as :func:`_split` halves) into row ``m`` of ``k0``/``kn``; False, writing

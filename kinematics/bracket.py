@@ -129,7 +129,7 @@ class VolumeBracket:
         return {**dataclasses.asdict(self), "gap": self.gap}
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _cube_chain(px, py, pz, delta, arc_slack, cone_slack, below, eps, i, win,
                 u, cos_t, sin_t, arc, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, jc):
     """OK (inside), FAIL (outside) or UNKNOWN for chain ``i`` over the cube (or block) of centre

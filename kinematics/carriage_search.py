@@ -52,7 +52,7 @@ _NE, _NR, _NZ = 73, 61, 21
 BLOCK = 5
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb):
     """The ``y`` components ``dy`` of a chain's two leg vectors (S joint less U joint) and their
     lengths: ``(dy0, l0, dy1, l1)`` at one carriage pose (``c, s = cos, sin`` of the carriage angle
@@ -66,7 +66,7 @@ def chain_legs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb):
             math.sqrt(dx1 * dx1 + dy1 * dy1 + bz1 * bz1))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     """The resolver's chain margin ``min_j min(l_j - l_min, l_max - l_j)`` at one carriage pose
     (``c, s = cos, sin`` of the carriage angle ``varpi``; ``rho = r - d``)."""
@@ -74,7 +74,7 @@ def _margin_cs(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     return min(min(l0 - lmin, lmax - l0), min(l1 - lmin, lmax - l1))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _lin(lo, hi, n, k):
     """``np.linspace(lo, hi, n)[k]``."""
     if n == 1:
@@ -84,7 +84,7 @@ def _lin(lo, hi, n, k):
     return lo + k * ((hi - lo) / (n - 1))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def work_arrays():
     """The work arrays of :func:`bounded_argmax`: per grid row its cosine, sine and a flag,
     and the bound of every block of the coarse grid."""
@@ -107,7 +107,7 @@ def scan_argmax(bx0, by0, bz0, bx1, by1, bz1, gamma, lo_e, hi_e, n_e, lo_r, hi_r
     return ke, kr
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _row_trig(gamma, lo_e, hi_e, n_e, a, CS):
     """``CS[a] = (cos, sin, 1)`` of ``gamma + eta_a`` of grid row ``a``, computed once (``CS[a, 2]``)."""
     if CS[a, 2] == 0.0:

@@ -86,7 +86,7 @@ CHUNK = 32768
 # compiled kernels
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _margin(bx0, by0, bz0, bx1, by1, bz1, varpi, rho, hb, lmin, lmax):
     """:func:`_margin_cs` at the carriage angle ``varpi`` (radians)."""
     return _margin_cs(bx0, by0, bz0, bx1, by1, bz1, math.cos(varpi), math.sin(varpi), rho, hb, lmin, lmax)

@@ -150,12 +150,12 @@ _NEAR_MOVE, _NEAR_START = 1.0, 1
 _MAX_MOVES = 100000
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _clamp(v, lo, hi):
     return lo if v < lo else (hi if v > hi else v)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m, sr):
     """1-D ascent in ``rho`` at one step ``sr``: from ``(r, m)`` towards the better side while the
     margin strictly grows. Returns ``(r, m)``."""
@@ -181,7 +181,7 @@ def _march(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, m,
     return r, m
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _profile(bx0, by0, bz0, bx1, by1, bz1, c, s, hb, lmin, lmax, r_lo, r_hi, r, sr, levels):
     """The best ``rho`` at the arc angle whose ``gamma + eta`` has cosine ``c`` and sine ``s``, by 1-D
     ascent from ``r``, ``levels`` steps from ``sr`` down by :data:`_ZOOM`. Returns ``(r, m)``."""
@@ -281,7 +281,7 @@ def _scan_rows(gamma, e_lo, e_hi, CS):
         CS[a, 0], CS[a, 1] = math.cos(gamma + e), math.sin(gamma + e)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     """:func:`kinematics.carriage_search._margin_cs` (the same value, bit for bit) with the active
     term's gradient in the platform's ``y`` and ``z`` and its leg length: ``(m, gy, gz, l, convex)``;
@@ -297,7 +297,7 @@ def _margin_grad(bx0, by0, bz0, bx1, by1, bz1, c, s, rho, hb, lmin, lmax):
     return m, -dy1 / l1, -bz1 / l1, l1, False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _coarse_best_bounded(bx0, by0, bz0, bx1, by1, bz1, gamma, e_lo, e_hi, r_lo, r_hi, hb, lmin, lmax, ST, D,
                          thr, CS, T, py, pz, need, c):
     """:func:`_coarse_best` with its scan points pruned by two upper bounds of their margin at the

@@ -79,7 +79,7 @@ def _constants(design: Design, orientation_deg: Sequence[float]):
     return u, R2, 0.5 * design.b * LEG_SIGN[0], 1.0 / design.characteristic_length
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _laguerre_step(A, x):
     """Laguerre's step at ``x`` for ``p(x) = det(x I - T)`` of the tridiagonal ``T`` (diagonal
     ``A[:, 8]``, off-diagonal ``A[:5, 9]``): with ``g = p'/p = sum 1/(x - lambda)`` and ``h = sum
@@ -115,7 +115,7 @@ def _laguerre_step(A, x):
     return -6.0 / den if den != 0.0 else 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _tridiagonal_eigen_range(G, A):
     """``(lo, hi, ok)``: the smallest and largest eigenvalue of the symmetric positive semidefinite
     6 x 6 ``G`` (overwritten) by a Householder reduction to tridiagonal form ``T`` (EISPACK
@@ -198,7 +198,7 @@ def _tridiagonal_eigen_range(G, A):
     return lo, hi, True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def plane_index(occ, i, ny, first):
     """The index of each reachable voxel ``(i, j, k)``, ``j < ny``, of plane ``i`` of ``occ`` in the C
     order of the reachable voxels (``first``: that of the plane's first one); (ny, nz) array."""
@@ -212,7 +212,7 @@ def plane_index(occ, i, ny, first):
     return index
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _gram(A, G):
     """``G = Q^T Q`` of the 6 x 6 ``Q`` in ``A[:, :6]``."""
     for a in range(6):
@@ -224,7 +224,7 @@ def _gram(A, G):
             G[b, a] = acc
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _carriage_trig(eta, CSV):
     """``CSV[i] = (cos, sin)`` of chain ``i``'s carriage angle ``varpi_i = 2 pi i / 3 + eta_i``, as
     :func:`_inverse_condition` takes them."""
@@ -233,7 +233,7 @@ def _carriage_trig(eta, CSV):
         CSV[i, 0], CSV[i, 1] = math.cos(varpi), math.sin(varpi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _inverse_condition(px, py, pz, u, R2, rho, CSV, hb, inv_L, A, G):
     """``1/kappa`` of ``J_h^{-1} J_q`` at one position and carriage pose (module docstring; the
     matrices of :func:`kinematics.dexterity._assemble_kernel`), the carriage angles given by their

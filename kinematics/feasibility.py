@@ -44,7 +44,7 @@ from .geometry import GAMMA, LEG_SIGN
 NOT_FOUND = -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def chain_points(px, py, pz, u, i):
     """The two S joints ``B_1, B_2`` of chain ``i`` for the platform centre ``P``: ``P + (R u)_ij``
     (``u`` holds the rotated platform points, shape (3, 2, 3))."""
@@ -52,7 +52,7 @@ def chain_points(px, py, pz, u, i):
             px + u[i, 1, 0], py + u[i, 1, 1], pz + u[i, 1, 2])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _leg_intervals(p, q, lmin2, lmax2):
     """(F2): the <= 2 intervals of rho for one leg as (n, lo0, hi0, lo1, hi1)."""
     if q > lmax2:
@@ -64,14 +64,14 @@ def _leg_intervals(p, q, lmin2, lmax2):
     return 1, p - ro, p + ro, 0.0, 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _overlap(lo_a, hi_a, lo_b, hi_b, rho_lo, rho_hi):
     lo = max(lo_a, lo_b, rho_lo)
     hi = min(hi_a, hi_b, rho_hi)
     return lo <= hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi):
     """Whether some rho in ``[rho_lo, rho_hi]`` lies in both legs' sets: leg 1's ``n1`` intervals
     ``[a0, a1]`` (and ``[a2, a3]``) and leg 2's ``n2`` intervals ``[c0, c1]`` (and ``[c2, c3]``)."""
@@ -87,7 +87,7 @@ def sets_meet(n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi):
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def cone_interval(alpha, beta, k, p, q):
     """The set ``{rho : alpha + beta rho >= k sqrt((rho - p)^2 + q)}`` (joint cone (J1) of
     :mod:`kinematics.joints`, ``0 <= k < 1``, ``q >= 0``) as ``(lo, hi)``; empty when ``lo > hi``.
@@ -146,7 +146,7 @@ def cone_interval(alpha, beta, k, p, q):
     return -big, min(x1, h_hi) + p
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _leg_cones(jc, j, p, m, q, bx, by, bz, c, s, shb, e, lo, hi):
     """Intersect ``[lo, hi]`` with the U- and S-cone intervals of leg ``j`` ((J1), relaxed by
     ``(1 + k) e``: the cone function is (1 + k)-Lipschitz in the platform position)."""
@@ -165,7 +165,7 @@ def _leg_cones(jc, j, p, m, q, bx, by, bz, c, s, shb, e, lo, hi):
     return lo, hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
     """Each leg's S joint in its carriage's rail frame at one carriage angle: ``(p1, m1, q1, p2, m2,
     q2)``, ``p`` along the rail, ``m`` across it from the U joint's offset, ``q = z^2 + m^2`` (F2)."""
@@ -178,14 +178,14 @@ def _leg_frames(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb):
     return p1, m1, q1, p2, m2, q2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def cones_set(jci):
     """Whether a chain's cone table ``jci`` (2, 8) (:func:`kinematics.joints.cone_table`) sets a joint
     cone (``k = -1`` marks none; every leg has the same two)."""
     return jci[0, 6] > -1.0 or jci[0, 7] > -1.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
     """Both legs' (F2) interval sets at one carriage angle and the rail ``[rho_lo, rho_hi]`` cut by
     the joint cones: ``(ok, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi)``; ``ok`` is
@@ -201,17 +201,17 @@ def _leg_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lma
     return rho_lo <= rho_hi, n1, a0, a1, a2, a3, n2, c0, c1, c2, c3, rho_lo, rho_hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _mx(a, b):
     return a if a > b else b
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _mn(a, b):
     return a if a < b else b
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
     """The test of :func:`_feasible_sets` without cones, from both legs'
     ``p``, ``q`` (F1) and the squared leg limits ``lo2 <= hi2``, without branches (so that a loop
@@ -223,7 +223,7 @@ def _passes(p1, q1, p2, q2, lo2, hi2, rho_lo, rho_hi):
     return _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi) & (q1 <= hi2) & (q2 <= hi2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi):
     """Whether a part of leg 1's set, a part of leg 2's and the rail meet (no branch): each leg's
     parts ``[p - ro, p - ri]`` and ``[p + ri, p + ro]`` with its outer radius ``ro`` given and
@@ -238,7 +238,7 @@ def _parts_meet(p1, q1, ro1, p2, q2, ro2, lo2, rho_lo, rho_hi):
             | (_mx(_mx(a2, c2), rho_lo) <= _mn(_mn(a3, c3), rho_hi)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
     """:func:`_feasible_at` for a chain without joint cones (the same answer as its interval sets,
     :func:`_feasible_sets`: :func:`_passes`), for the squared leg limits ``lo2 <= hi2``, inlined. One
@@ -268,7 +268,7 @@ def _feasible_at(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
     return _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e):
     """Both legs' (F2) interval sets (cut by the joint cones where ``jc`` sets them) meet on the rail
     (:func:`_leg_sets`, :func:`sets_meet`): the definition of :func:`_feasible_at`."""
@@ -286,7 +286,7 @@ def _feasible_sets(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2
     return _sets_test(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jc, cone_e)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def piece_meet(ua, ub, a0, a1, a2, a3, c0, c1, c2, c3, rho_lo, rho_hi):
     """The meet ``(lo, hi)`` of leg 1's interval ``ua`` (``[a0, a1]``, or ``[a2, a3]`` when ``ua`` is
     1), leg 2's interval ``ub`` (``[c0, c1]`` or ``[c2, c3]``) and the rail ``[rho_lo, rho_hi]``;
@@ -315,7 +315,7 @@ def feasible_rho(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, 
     return cnt
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _in_arc(wx, wy, c0, s0, c1, s1, cm, sm):
     """Whether the direction ``w`` lies in the stroke's arc ``[v0, v1]`` (at most a half-turn):
     ``(c0, s0, c1, s1, cm, sm) = (cos v0, sin v0, cos v1, sin v1, cos vm, sin vm)``, ``vm`` the arc's
@@ -388,7 +388,7 @@ def _chain_excluded(b1x, b1y, b1z, b2x, b2y, b2z, hb, arc, rho_lo, rho_hi, lmin2
                      rho_hi, lmin2, lmax2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arcs, i, rho_lo, rho_hi, lmin2, lmax2):
     """:func:`_chain_excluded` over the stroke ``arcs[i]`` (``arcs`` (m, 6)), read in place: no view
     of the table is made (in a parallel loop each view costs two atomic reference counts on the
@@ -397,7 +397,7 @@ def chain_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, arcs, i, rho_lo, rho_hi,
                      arcs[i, 5], rho_lo, rho_hi, lmin2, lmax2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def sub_arc_excluded_at(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lmin2, lmax2):
     """:func:`_chain_excluded` over the sub-arc ``seg_arc[i, g]`` (``seg_arc`` (3, m, 6)), read in
     place (:func:`chain_excluded_at`)."""

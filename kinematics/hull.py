@@ -41,7 +41,7 @@ from .parallel import KERNEL_LOCK
 QHULL_RASTER = "QJ"
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _facet_clip(eq, f, i, j, tol, lo, hi):
     """Column ``(i, j)``'s z-interval ``[lo, hi]`` cut by facet ``f`` (``n . p + d <= 0`` inside):
     ``(lo, hi, outside)``, ``outside`` (with ``lo > hi``) when a vertical facet leaves the column out."""
@@ -108,7 +108,7 @@ def _column_ends_kernel(occ, kbot, ktop):
             ktop[i, j] = hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _chain_flags(idx, val, m, upper, stack, flag):
     """Strict vertices of the upper (``upper``) or lower chain of the points ``(idx[q], val[q])``,
     ``q < m``, sorted by ``idx`` (Andrew's monotone chain; a point on or beyond the segment of its
@@ -168,7 +168,7 @@ def _line_extreme_kernel(kbot, ktop, axis, keep_bot, keep_top):
                 keep_bot[i, j] = False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _line_column(p, line, axis, ny):
     """Column ``(i, j)`` of point ``p`` of line ``line`` of :func:`_line_extreme_kernel` (``j`` may fall
     off the grid on a diagonal)."""

@@ -294,7 +294,7 @@ def kernel_tables(mech: Mechanism, rotation: np.ndarray, eta_step: float = 0.5,
 # compiled test
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _free(x, gap_lo, gap_hi, ng):
     for g in range(ng):
         if gap_lo[g] < x < gap_hi[g]:
@@ -357,7 +357,7 @@ def _sample_feasible(px, py, pz, k, l0, nl, s_lo, s_hi, w, base, u_axis, k_u, pl
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _balls_reject(px, py, pz, g, l0, nl, plat, centre, out2, in2):
     """The bound of ball row ``g`` (a chain's, or a block's): True when some leg's ball rejects ``P``."""
     for jj in range(nl):

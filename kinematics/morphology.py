@@ -159,7 +159,7 @@ def _unpack_kernel(P, p, out):
                     orow[k] = ((word >> np.uint64(k + p - 64 * q)) & one) != zero
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _popcount(x):
     """The number of set bits of the word ``x`` (SWAR)."""
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
@@ -168,7 +168,7 @@ def _popcount(x):
     return int((x * np.uint64(0x0101010101010101)) >> np.uint64(56))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _low_bit(x):
     """The index of the lowest set bit of the word ``x`` (not 0): its power of two is exact in a
     float, whose exponent is the index."""
@@ -176,7 +176,7 @@ def _low_bit(x):
     return math.frexp(float(b))[1] - 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _inside_bits(q, lo, hi):
     """The bits of word ``q`` whose padded z ``64 q + t`` lies in ``[lo, hi)``."""
     a = max(lo - 64 * q, 0)
@@ -284,7 +284,7 @@ def is_mirror_symmetric(mask: np.ndarray) -> bool:
         return bool(_mirror_kernel(m))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _valid_bits(q, nw, last):
     """The valid bits of word ``q`` of a row of ``nw`` words (``last``: those of the last word)."""
     return last if q == nw - 1 else ~np.uint64(0)

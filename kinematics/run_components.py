@@ -41,7 +41,7 @@ def _count_runs_kernel(occ, counts):
             counts[i * n1 + j + 1] = c
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _eight(row, k):
     """The bytes ``row[k] .. row[k + 7]`` as one word (little-endian)."""
     x = np.uint64(0)
@@ -83,7 +83,7 @@ def _fill_runs_kernel(occ, offs, rs, re):
                 re[q] = n2 - 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _find(parent, p):
     while parent[p] != p:
         parent[p] = parent[parent[p]]

@@ -48,7 +48,7 @@ def dealt_order(costs: np.ndarray, threads: int) -> np.ndarray:
     return out.ravel()
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def strided(pos: int, per: int, threads: int) -> int:
     """The item visited at position ``pos`` of a launch of ``threads * per`` positions in the strided
     order (module docstring); ``>= N`` for a position past the last item (the caller skips it)."""

@@ -57,7 +57,7 @@ def _summed_volume_kernel(field, s):
                 s[i + 1, j, k] += s[i, j, k]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def box_count(s, x0, y0, z0, x1, y1, z1):
     """Nonzero voxels of the box ``[x0, x1) x [y0, y1) x [z0, z1)`` from its table ``s``."""
     return (s[x1, y1, z1] - s[x0, y1, z1] - s[x1, y0, z1] - s[x1, y1, z0]

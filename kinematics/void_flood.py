@@ -50,7 +50,7 @@ def _seed_kernel_reference(cand, occ, full, out):
                 out[i, j, k] = hit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _leak(cand, occ, a, b, e):
     """Voxel ``(a, b, e)`` is unreachable and not a candidate, or lies outside the array."""
     n0, n1, n2 = cand.shape
@@ -59,7 +59,7 @@ def _leak(cand, occ, a, b, e):
     return not occ[a, b, e] and not cand[a, b, e]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _seed_edge(cand, occ, full, i, j, k):
     """:func:`_seed_at` behind its first test, inlined: the voxels of the outer layer are almost never
     candidates, and the call (its 26 bounds-tested reads compiled once) is made only for those that are."""
@@ -79,7 +79,7 @@ def _seed_at(cand, occ, full, i, j, k):
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _open(cand, occ, i, j, k):
     """Voxel ``(i, j, k)`` (inside the array) is unreachable and not a candidate: ``_leak`` without
     its bounds test and without a branch."""

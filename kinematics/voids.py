@@ -55,7 +55,7 @@ def void_mask_labelled(occupancy: np.ndarray, connectivity: int = 1) -> np.ndarr
     return voids[1:-1, 1:-1, 1:-1]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _no_ends(first, last, n):
     """A row of first and last indices along an axis of length ``n`` with no set voxel yet."""
     for k in range(first.shape[0]):
@@ -63,7 +63,7 @@ def _no_ends(first, last, n):
         last[k] = -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _no_extent(e, n1, n2):
     """A slice's candidate extent ``e = (j_lo, j_hi, k_lo, k_hi)`` with no candidate (``j_hi = -1``)."""
     e[0] = n1
@@ -72,7 +72,7 @@ def _no_extent(e, n1, n2):
     e[3] = -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _add_row(e, j, rlo, rhi):
     """Grow the slice extent ``e`` by row ``j``'s candidates, ``rlo .. rhi`` along z (none when
     ``rhi < 0``); the rows come in increasing ``j``."""
@@ -139,7 +139,7 @@ def _enclosed_ext_kernel(occ, out, ext):
             _add_row(ext[i], j, rlo, rhi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _mark_runs(offs, rs, re, c, v, first, last):
     """Over the voxels ``k`` of column ``c``'s runs: ``first[k] = min(first[k], v)``, ``last[k] = v``
     (the lines' ends, when the columns come in increasing ``v``)."""
@@ -191,7 +191,7 @@ def floored_x_ends(ends: tuple[np.ndarray, np.ndarray], n0: int) -> tuple[np.nda
     return ffx, flx
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _y_ends_runs(offs, rs, re, i, n1, fy, ly):
     """:func:`_x_ends_runs_kernel` along y in slice ``i``: ``fy[k]``, ``ly[k]`` (rows of ``n1``, ``-1``)."""
     _no_ends(fy, ly, n1)

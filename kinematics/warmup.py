@@ -20,6 +20,22 @@ The steps are independent (each builds its own tiny problem), so that several pr
 the compile into the same on-disk cache: :func:`run_unclaimed` runs the steps no process has claimed
 yet in a shared folder, a step at a time, and :func:`steps_done` says when all of them are done (the
 test suite's workers and its helper process do: ``tests/conftest.py``).
+
+What the first compile costs, and why the helpers are ``forceinline=True``. numba's own inlining
+(``inline="always"``) types a copy of the helper's code at every call site, and the caller's passes
+(a parallel kernel's most of all) then run over every copy: measured per pass, ``inline_inlinables``
+took 12.4 of ``feasibility._feasible_at``'s 15.0 s and 8.5 of ``bracket_children._parent_flags``'s
+10.6 s. A helper marked ``forceinline=True`` is compiled once and inlined by LLVM (its
+``alwaysinline``), after which numba prunes the reference counts of the inlined calls as before. So
+the helpers of every module are ``forceinline=True``, except in the three whose loops decide the
+bracket's children and the leg interference (``bracket_children``, ``interference``,
+``interference_blocks``): there numba's inlining stays, since a run with LLVM's inlining everywhere
+took the bracket (refine 2, h = 2) 529-558 ms against 420-448 ms, one process of each alternating,
+three times (load 1-2). On a fresh cache, in one process on the shared 2-core machine, the warm-up
+compiled in 326 s of one core with numba's inlining everywhere and in 250 s with it in those three
+modules only (2026-12-05; ``benchmarks/THROUGHPUT.md``, twentieth round). numba passes a caller's
+``forceinline`` to a plain function it compiles for it, so such a function may be inlined too: its
+code, not its results, depends on which caller compiled it first.
 """
 
 from __future__ import annotations
