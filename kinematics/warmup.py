@@ -190,9 +190,9 @@ def _general() -> None:
 
 
 #: The warm-up, in the order :func:`warm_up` runs it and :func:`run_unclaimed` claims it:
-#: ``(name, step)``. On a cold cache they compile for about 200 s of one core in all on a quiet host
-#: (413 s on a slow hour of the shared 2-core host: benchmarks/THROUGHPUT.md, sixteenth round, lists
-#: the longest kernels); the bracket's kernels (reached first by "engines") for about 57 s of it.
+#: ``(name, step)``. On a cold cache they compile for about 250 s of one core in all (the module
+#: docstring; 326 s before the helpers were ``forceinline``, 413 s on a slow hour of the shared host:
+#: benchmarks/THROUGHPUT.md, sixteenth and twentieth rounds, list the longest kernels).
 STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("engines", _engines), ("joints", _joints), ("orientation", _orientation), ("bracket", _bracket),
     ("task", _task), ("total orientation", _total_orientation), ("dexterity", _dexterity),

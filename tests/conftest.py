@@ -2,7 +2,7 @@
 (kinematics/warmup.py), so that no request in a test waits on a numba compile however busy the
 machine is (the kernels' on-disk cache then serves the CLI subprocesses too).
 
-On a cold cache (a fresh clone, as CI runs it) that compile is about 200 s of one core: numba
+On a cold cache (a fresh clone, as CI runs it) that compile is about 250 s of one core: numba
 compiles one kernel at a time. So the processes of the run share it (kinematics/warmup.run_unclaimed):
 each claims the next warm-up step that no process has claimed yet (a file created exclusively in the
 run's shared temporary folder), compiles it into the on-disk cache and marks it done, until every
