@@ -47,7 +47,8 @@ kernel's first compile from 87 s to 37 s of one core (a fresh cache, the quiet 2
 same speed (the bracket at h = 2, refine 2: 0.93-0.96 of its time, one A/B). This module keeps
 numba's inlining where the rest of the package has LLVM's (``forceinline=True``,
 :mod:`kinematics.warmup`): with LLVM's, its kernel compiled in 5 s instead of 32 s, but the bracket
-measured slower (529-558 ms against 420-448 ms at h = 2, refine 2).
+measured slower where every other function was pinned as a call (529-558 ms against 420-448 ms at
+h = 2, refine 2) and no faster where it was not.
 """
 
 from __future__ import annotations

@@ -325,7 +325,7 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     first = min(int(first), rots.shape[0])
     left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first)
     # the first samples as single-sample nodes after the tree's
-    singles = np.arange(first, dtype=np.int64)  # the first samples, one node each
+    singles = np.arange(first, dtype=np.int64)
     left = np.concatenate([left, np.full(first, -1, np.int64)])
     right = np.concatenate([right, np.full(first, -1, np.int64)])
     leaf = np.concatenate([leaf, singles])
