@@ -40,15 +40,19 @@ each cone with its own factor): with cones the bracket takes the per-child path.
 *Compile time.* numba inlines a function marked ``inline="always"`` into its caller's IR, and the
 caller's passes (the parallel kernel's most of all) then run over every copy. The child's rarer tests
 (the hint's, once per child and chain; the relaxed test of a sample that already passed the tight
-one, at most once; the scan for the window's upper end, on the levels that keep windows) and its
-sub-arc bounds are therefore calls of their own (:func:`_feasible_call`, :func:`_sub_arc_open`),
-compiled once; the two scans that decide most children keep their tests inlined. This took the
-kernel's first compile from 87 s to 37 s of one core (a fresh cache, the quiet 2-core machine) at the
-same speed (the bracket at h = 2, refine 2: 0.93-0.96 of its time, one A/B). This module keeps
-numba's inlining where the rest of the package has LLVM's (``forceinline=True``,
-:mod:`kinematics.warmup`): with LLVM's, its kernel compiled in 5 s instead of 32 s, but the bracket
-measured slower where every other function was pinned as a call (529-558 ms against 420-448 ms at
-h = 2, refine 2) and no faster where it was not.
+one, at most once; the scan for the window's upper end, on the levels that keep windows), its
+sub-arc bounds and the parent's flag pass are therefore functions of their own
+(:func:`_feasible_call`, :func:`_sub_arc_open`, :func:`_parent_flags`), compiled once by numba and
+inlined by LLVM (``forceinline=True``); the two scans that decide most children keep their tests
+inlined by numba. numba's inlining of the rarer tests took the kernel's first compile to 87 s of one
+core, against 37 s with them as calls (a fresh cache, the quiet 2-core machine) at the same speed;
+LLVM's inlining of those calls (twenty-first round) took 0.93 of the bracket's time at h = 2,
+refine 2 (389 against 417 ms, medians of seven processes of each alternating, load 1.2-1.6; the same
+bracket) for 1.6 s more of the bracket's first compile. This module keeps numba's inlining for the
+scans' tests where the rest of the package has LLVM's (:mod:`kinematics.warmup`): with LLVM's, its
+kernel compiled in 5 s instead of 32 s, but the bracket measured slower where every other function
+was pinned as a call (529-558 ms against 420-448 ms at h = 2, refine 2) and no faster where it was
+not.
 """
 
 from __future__ import annotations
@@ -122,7 +126,7 @@ def _flag_run(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi,
                   flags)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=True)
 def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rho_hi, lmin, lmax, klo, khi, r1, r0, x,
                   flags):
     """``flags[i, k]`` for (at least) the samples ``klo..khi`` of chain ``i`` at the parent's centre
@@ -162,17 +166,17 @@ def _parent_flags(px, py, pz, u, i, cos_t, sin_t, seg_k, seg_arc, hb, rho_lo, rh
         done = b
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=True)
 def _sub_arc_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo, hi):
-    """:func:`kinematics.blocks._segment_open` as a call of its own, not inlined into the caller
-    (module docstring, *Compile time*)."""
+    """:func:`kinematics.blocks._segment_open`, compiled once by numba and inlined by LLVM, not
+    typed again at each call site (module docstring, *Compile time*)."""
     return _segment_open(b1x, b1y, b1z, b2x, b2y, b2z, hb, seg_arc, i, g, rho_lo, rho_hi, lo, hi)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=True)
 def _feasible_call(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2):
-    """:func:`kinematics.feasibility.feasible_plain` as a call of its own, for the child's rarer tests
-    (module docstring, *Compile time*)."""
+    """:func:`kinematics.feasibility.feasible_plain` for the child's rarer tests, compiled once by numba
+    and inlined by LLVM (module docstring, *Compile time*)."""
     return feasible_plain(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lo2, hi2)
 
 

@@ -67,7 +67,7 @@ __all__ = ["segment_distance", "segment_closest", "interference_free", "clear_co
 SPREAD = 4
 
 
-@njit(cache=True)
+@njit(cache=True, forceinline=True)
 def segment_distance(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     """Distance between the segments ``[A, B]`` and ``[C, D]`` (closest points by clamped
     parameters, Ericson, *Real-Time Collision Detection*, sec. 5.1.9)."""
@@ -146,7 +146,7 @@ def _piece_witness(lo, hi, c, s, hb, b1x, b1y, b1z, b2x, b2y, b2z, dmin):
     return math.nan
 
 
-@njit(cache=True)
+@njit(cache=True, forceinline=True)
 def _sample_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, jci, dmin, pieces):
     """The witness ``rho`` of one arc sample (module doc, step 2): the first probe, interval by interval
     of :func:`kinematics.feasibility.feasible_rho` (cut by the joint cones of ``jci``), at which the
@@ -160,7 +160,7 @@ def _sample_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin
     return math.nan
 
 
-@njit(cache=True)
+@njit(cache=True, forceinline=True)
 def _plain_witness(b1x, b1y, b1z, b2x, b2y, b2z, c, s, hb, rho_lo, rho_hi, lmin2, lmax2, dmin):
     """:func:`_sample_witness` for a chain without joint cones, the same number (tested): the same
     intervals in the same order (both legs' (F2) sets met on the rail by ``piece_meet``, as
@@ -197,7 +197,7 @@ def scan_sample(step, n, flip):
     return n - 1 - k if flip else k
 
 
-@njit(cache=True)
+@njit(cache=True, forceinline=True)
 def _witnesses(b1x, b1y, b1z, b2x, b2y, b2z, cos_t, sin_t, i, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin,
                cap, wit, skip, sb, pieces, flip, start, found):
     """Up to ``cap`` witness carriage poses of chain ``i`` (module doc, step 2) as the two U joints
@@ -248,7 +248,7 @@ def _clear(bp, wit, i, ia, j, ib, dmin):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, forceinline=True)
 def _pose_clear(px, py, pz, u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, jc, dmin, sel, skip, sb,
                 wit, bp, pieces, pick, cnt, screen):
     """Module doc, steps 2-3, for one platform pose (``u``: its rotated platform points); the chosen

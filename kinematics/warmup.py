@@ -29,13 +29,18 @@ took 12.4 of ``feasibility._feasible_at``'s 15.0 s and 8.5 of ``bracket_children
 ``alwaysinline``), after which numba prunes the reference counts of the inlined calls as before. So
 the helpers of every module are ``forceinline=True``, except in the three whose loops decide the
 bracket's children and the leg interference (``bracket_children``, ``interference``,
-``interference_blocks``): there numba's inlining stays, since with LLVM's inlining everywhere (and
-every other function pinned as a call, ``forceinline=False``) the bracket (refine 2, h = 2) took
-529-558 ms against 420-448 ms, one process of each alternating, three times (load 1-2); without the
-pinning the bracket's times were within the host's noise, neither faster nor clearly slower. On a
-fresh cache, in one process on the shared 2-core machine, the warm-up compiled in 326 s of one core
-with numba's inlining everywhere and in 250 s with it in those three modules only (2026-12-05;
-``benchmarks/THROUGHPUT.md``, twentieth round). numba passes a caller's
+``interference_blocks``): there numba's inlining stays for the helpers that had it, since with
+LLVM's inlining everywhere (and every other function pinned as a call, ``forceinline=False``) the
+bracket (refine 2, h = 2) took 529-558 ms against 420-448 ms, one process of each alternating, three
+times (load 1-2); without the pinning the bracket's times were within the host's noise, neither
+faster nor clearly slower. On a fresh cache, in one process on the shared 2-core machine, the
+warm-up compiled in 326 s of one core with numba's inlining everywhere and in 250 s with it in
+those three modules only (2026-12-05; ``benchmarks/THROUGHPUT.md``, twentieth round). The leg
+interference's functions that were calls of their own (the segment distance, the witness scans, the
+per-voxel search, the blocks' clear certificate, its walks and bounds) are ``forceinline=True``
+too: the engine with leg interference at h = 1 took 0.84 of its time (430 against 514 ms, medians
+of three processes of each alternating, load 1.1-1.3; the same voxels), for about 8 s more of
+its first compile (twenty-first round). numba passes a caller's
 ``forceinline`` to a plain function it compiles for it, so such a function may be inlined too: its
 code, not its results, depends on which caller compiled it first.
 """
