@@ -323,7 +323,7 @@ def reachable_on_grid(design: Design, candidates: np.ndarray, axes: tuple[np.nda
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (xs, ys, zs))
     first = min(int(first), rots.shape[0])
-    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first)
+    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first, cancel)
     # the first samples as single-sample nodes after the tree's
     singles = np.arange(first, dtype=np.int64)
     left = np.concatenate([left, np.full(first, -1, np.int64)])

@@ -54,33 +54,26 @@ CHUNK = 16384
 #: ``m^2`` at a node of ``m``: 34 s holding the whole server at the root of the explorer's 74,425
 #: orientations (tilt 30, torsion 60, step 2); the default 15/15/5 set (657) keeps it everywhere.
 CENTRE_EXACT = 1024
+#: Member visits per step of the tree's build (:func:`_build_steps`; cancellation is checked between
+#: steps): about 20-40 ms of one core.
+BUILD_WORK = 2_000_000
 
 
 @njit(cache=True, nogil=True)
-def _build(coords, flat):
-    """The splits of :func:`build_tree`, depth first without recursion: per node (preorder)
-    ``left, right, leaf, centre`` and its members ``perm[lo:hi]`` (each node's members stay in its
-    range while its descendants reorder them). The centre of a node of at most :data:`CENTRE_EXACT`
-    members is the member whose largest angle to the others is smallest: the angle of ``R_a R_b^T``
-    is ``arccos((tr(R_a R_b^T) - 1) / 2)``, decreasing in ``tr(R_a R_b^T) = flat[a] . flat[b]``, so
-    it is the member whose smallest trace is largest; of a larger node, the member whose trace with
-    the members' mean matrix is largest (module docstring). Without the GIL: a large set's build
-    takes a second, during which the explorer's other threads keep serving."""
-    n = coords.shape[0]
-    size = 2 * n - 1
-    left = np.full(size, -1, np.int64)
-    right = np.full(size, -1, np.int64)
-    leaf = np.full(size, -1, np.int64)
-    centre = np.full(size, -1, np.int64)
-    lo = np.empty(size, np.int64)
-    hi = np.empty(size, np.int64)
-    perm = np.arange(n)
-    # stack of (lo, hi, parent, side): side 0 = the parent's left child
-    st = np.empty((size + 1, 4), np.int64)
-    st[0, 0], st[0, 1], st[0, 2], st[0, 3] = 0, n, -1, 0
-    sp = 0
-    k = 0
-    while sp >= 0:
+def _build_steps(coords, flat, left, right, leaf, centre, lo, hi, perm, st, sp, k, work):
+    """The splits of :func:`build_tree`, depth first without recursion, from the stack ``st[:sp + 1]``
+    and the next node number ``k`` until the stack is empty or about ``work`` member visits are done
+    (a node's centre costs ``m^2`` visits at ``m <= CENTRE_EXACT`` members, its split ``m log m``):
+    per node (preorder) ``left, right, leaf, centre`` and its members ``perm[lo:hi]`` (each node's
+    members stay in its range while its descendants reorder them). Returns ``(sp, k)`` (``sp < 0``:
+    the tree is complete), so that :func:`_build` checks cancellation between calls. The centre of a
+    node of at most :data:`CENTRE_EXACT` members is the member whose largest angle to the others is
+    smallest: the angle of ``R_a R_b^T`` is ``arccos((tr(R_a R_b^T) - 1) / 2)``, decreasing in
+    ``tr(R_a R_b^T) = flat[a] . flat[b]``, so it is the member whose smallest trace is largest; of a
+    larger node, the member whose trace with the members' mean matrix is largest (module docstring).
+    Without the GIL: the explorer's other threads keep serving meanwhile."""
+    done = 0
+    while sp >= 0 and done < work:
         a0, a1, par, side = st[sp, 0], st[sp, 1], st[sp, 2], st[sp, 3]
         sp -= 1
         lo[k], hi[k] = a0, a1
@@ -91,6 +84,7 @@ def _build(coords, flat):
                 right[par] = k
         members = perm[a0:a1].copy()
         m = members.size
+        done += m * m if m <= CENTRE_EXACT else 20 * m
         if m == 1:
             leaf[k] = members[0]
             centre[k] = members[0]
@@ -143,6 +137,32 @@ def _build(coords, flat):
         sp += 1
         st[sp, 0], st[sp, 1], st[sp, 2], st[sp, 3] = a0, a0 + ha.size, k, 0
         k += 1
+    return sp, k
+
+
+def _build(coords: np.ndarray, flat: np.ndarray, cancel: CancelToken = None, work: int | None = None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The tree of :func:`build_tree` for ``n`` samples' ``coords`` (n, 3) and flattened rotations
+    ``flat`` (n, 9): ``(left, right, leaf, centre, perm, lo, hi)``, built by :func:`_build_steps` in
+    steps of about ``work`` member visits (:data:`BUILD_WORK` by default), with ``cancel`` checked
+    before each (the build of the explorer's largest set, 376,809 orientations, takes about 3 s)."""
+    work = BUILD_WORK if work is None else int(work)
+    n = coords.shape[0]
+    size = 2 * n - 1
+    left = np.full(size, -1, np.int64)
+    right = np.full(size, -1, np.int64)
+    leaf = np.full(size, -1, np.int64)
+    centre = np.full(size, -1, np.int64)
+    lo = np.empty(size, np.int64)
+    hi = np.empty(size, np.int64)
+    perm = np.arange(n, dtype=np.int64)
+    # stack of (lo, hi, parent, side): side 0 = the parent's left child
+    st = np.empty((size + 1, 4), np.int64)
+    st[0] = (0, n, -1, 0)
+    sp, k = 0, 0
+    while sp >= 0:
+        check(cancel)
+        sp, k = _build_steps(coords, flat, left, right, leaf, centre, lo, hi, perm, st, sp, k, work)
     return left, right, leaf, centre, perm, lo, hi
 
 
@@ -181,13 +201,14 @@ def node_slack(us: np.ndarray, perm: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     return out
 
 
-def build_tree(samples: np.ndarray, rots: np.ndarray, first: int = 0
+def build_tree(samples: np.ndarray, rots: np.ndarray, first: int = 0, cancel: CancelToken = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The tree of the module docstring over ``samples[first:]`` (M, 3: azimuth, tilt, torsion in
     degrees) with rotations ``rots[first:]`` (M, 3, 3), numbered as the whole set. Returns per node
     ``(left, right, sample, centre)``: children (-1 for a single sample), the sample of a leaf (-1
     otherwise), the centre sample; and ``(perm, lo, hi)``: node ``k``'s members are
-    ``perm[lo[k]:hi[k]]``. Node 0 is the root. Children are ordered as the samples (hardest first)."""
+    ``perm[lo[k]:hi[k]]``. Node 0 is the root. Children are ordered as the samples (hardest first).
+    ``cancel`` is checked between the build's steps (:func:`_build`)."""
     samples, rots = samples[first:], rots[first:]
     az, th = np.radians(samples[:, 0]), samples[:, 1]
     coords = np.stack([th * np.cos(az), th * np.sin(az), samples[:, 2]], axis=1)
@@ -195,7 +216,7 @@ def build_tree(samples: np.ndarray, rots: np.ndarray, first: int = 0
         z = np.zeros(0, np.int64)
         return z, z, z, z, z, z, z
     left, right, leaf, centre, perm, lo, hi = _build(np.ascontiguousarray(coords),
-                                                     np.ascontiguousarray(rots.reshape(-1, 9)))
+                                                     np.ascontiguousarray(rots.reshape(-1, 9)), cancel)
     if first:
         leaf = np.where(leaf >= 0, leaf + first, -1)
         centre = centre + first
@@ -314,7 +335,7 @@ def reachable_at_all(design: Design, points: np.ndarray, samples: np.ndarray, ro
     _u, cos_t, sin_t, arc, hb, rho_lo, rho_hi, lmin2, lmax2, _ = kernel_args(design, np.eye(3), n_eta)
     us, jcs = rotation_tables(design, rots, Joints())
     first = min(int(first), rots.shape[0])
-    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first)
+    left, right, leaf, centre, perm, lo, hi = build_tree(samples, rots, first, cancel)
     lmin, lmax = math.sqrt(lmin2), math.sqrt(lmax2)
     eps = rounding_margin(lmax, (pts[:, 0], pts[:, 1], pts[:, 2]))
     e = node_slack(us, perm, lo, hi, centre) + eps

@@ -285,6 +285,39 @@ def test_unknown_method_is_refused(plain):
                                     method="fast")
 
 
+def test_orientation_tree_build_in_steps_is_the_same_tree_and_honours_a_stop(monkeypatch):
+    """The tree's build runs in steps of bounded work with the cancel token checked between them
+    (kinematics/orientation_tree._build): cut into steps of any size it is the same tree, node for
+    node, as built in one step; and a Stop pressed during the build ends it at the next step, here
+    after exactly as many steps as the token allowed, not at the end of the build."""
+    from paraspace.kinematics import orientation_tree as ot
+    from paraspace.kinematics.progress import Cancelled
+
+    samples = orientation_samples(10.0, 20.0, 3.0)  # 1,241: both centre rules, several hundred nodes
+    rots = tt_rotations(samples[:, 0], samples[:, 1], samples[:, 2])
+    az, th = np.radians(samples[:, 0]), samples[:, 1]
+    coords = np.ascontiguousarray(np.stack([th * np.cos(az), th * np.sin(az), samples[:, 2]], axis=1))
+    flat = np.ascontiguousarray(rots.reshape(-1, 9))
+    whole = ot._build(coords, flat, None, 1 << 62)
+    assert whole[0].size == 2 * samples.shape[0] - 1
+    for work in (1, 5_000, 300_000, ot.BUILD_WORK):
+        steps = []
+        tree = ot._build(coords, flat, lambda steps=steps: steps.append(1) and False, work)
+        assert all(np.array_equal(a, b) for a, b in zip(tree, whole)), work
+        if work == 1:  # one node a step: a step per node
+            assert len(steps) == whole[0].size
+    calls = []
+
+    def stop_after_three() -> bool:
+        calls.append(1)
+        return len(calls) > 3
+
+    monkeypatch.setattr(ot, "BUILD_WORK", 5_000)  # steps small enough that this set takes many
+    with pytest.raises(Cancelled):
+        ot.build_tree(samples, rots, 0, stop_after_three)
+    assert len(calls) == 4  # three steps ran, the fourth check stopped the build
+
+
 @pytest.mark.parametrize("tilt,torsion,step", [(15.0, 15.0, 5.0), (20.0, 10.0, 5.0), (10.0, 20.0, 5.0),
                                                 (10.0, 20.0, 3.0)])  # 1,241: the root's centre by the mean
 def test_orientation_tree_groups_and_slack(tilt, torsion, step):
