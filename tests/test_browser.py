@@ -488,6 +488,39 @@ def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browse
     assert s.state.design.d_s == 50.0 and box.input_value() == "150"
     assert "The design keeps d_s = 50" in message()
     assert "a=120" in page.evaluate("() => location.search") and "d_s=1" not in page.evaluate("() => location.search")
+    # typed beyond the track and left at once, without Enter: by Tab (the browser's change event came
+    # first, and the box went back to the last applied value) and by a click elsewhere (the box's blur
+    # clamped it to the track's end before the server's wider track arrived); a value typed below a
+    # track's lower end (the total orientation's angle step 2 under its track's 2.5) likewise; on a
+    # fresh page (this one holds the refused d_s = 150)
+    page, s = open_page(browser, explorer, "voxel=6")
+    full_volume_text(page)
+    other = _number_box(page, s, "l_s")
+    for key, typed, leave in (("b", "45", "Tab"), ("l_min", "250", "click")):
+        box = _number_box(page, s, key)
+        assert float(typed) > s.panels.design[key].max  # beyond the track
+        box.click()
+        box.press("Control+a")
+        box.press_sequentially(typed, delay=150)
+        if leave == "Tab":
+            box.press("Tab")
+        else:
+            other.click()
+        wait_for(lambda key=key, typed=typed: getattr(s.state.design, key) == float(typed), 30, f"{key} = {typed}")
+        time.sleep(1.5)
+        assert getattr(s.state.design, key) == float(typed) and box.input_value() == typed, (key, leave)
+    step = s.dexterous.step
+    page.get_by_role("tab", name="Pose").click()
+    page.get_by_text("Total-orientation workspace").first.click()
+    box = handle_box(page, step)
+    assert step.min > 2.0
+    box.click()
+    box.press("Control+a")
+    box.press("2")
+    box.press("Tab")
+    wait_for(lambda: step.value == 2.0, 30, "angle step 2 applied")
+    time.sleep(1.5)
+    assert step.value == 2.0 and box.input_value() == "2"
 
 
 def _watch_design(session: ClientSession, key: str, stop: threading.Event, seen: list[float]) -> None:

@@ -73,12 +73,19 @@ TYPING_PAUSE_MS = 800
 #: Put into the page's head: a number box (Mantine's NumberInput, inside every slider) applies what
 #: is typed only on Enter, on leaving the box, or after a pause of :data:`TYPING_PAUSE_MS` - never
 #: a keystroke's prefix ("120" typed key by key never applies 12). The keystrokes' ``input`` events
-#: are held at the document (capture phase, before React's root listener sees them); on Enter, blur
-#: or the pause the box's whole text goes to React in two ``input`` events: an empty box (not a
-#: number: nothing is applied), then the text, which it applies. The number box diffs each text
-#: against the one it last saw, and a single event from "0" to a text two or more characters longer
-#: that ends the same ("0" -> "100", "-10", "101") was undone and never sent (found typing a pose on
-#: 2026-12-05; "0" -> "50" and "20" -> "200" went through); from an empty box every text is new.
+#: are held at the document (capture phase, before React's root listener sees them); on Enter, on
+#: the ``change`` event the browser sends when Tab moves the focus on (before ``blur``: React took it
+#: as the box's value and put the held text back to the last applied one, so "a = 120" then Tab
+#: left a = 50), on ``blur`` or after the pause the box's whole text goes to React in two ``input``
+#: events: an empty box (not a number: nothing is applied), then the text, which it applies. The
+#: number box diffs each text against the one it last saw, and a single event from "0" to a text
+#: two or more characters longer that ends the same ("0" -> "100", "-10", "101") was undone and
+#: never sent (found typing a pose on 2026-12-05; "0" -> "50" and "20" -> "200" went through); from
+#: an empty box every text is new. The box's ``focusout`` never reaches React: on it Mantine clamps
+#: the value to the track's ends and sends that end, before the server's wider track (which a value
+#: beyond it gets, :func:`paraspace.app.explorer.typed_values.hold_typed_values`) has arrived: "a =
+#: 120" typed and then a click elsewhere applied a = 100, and an angle step of 2 typed below the
+#: track's 2.5 applied 2.5 (2026-12-05, typing key by key in headless Chromium).
 TYPING_GATE = (
     "<script>(function(){var P=" + str(TYPING_PAUSE_MS) + ",q=new Map();"
     "var S=Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set;"
@@ -90,7 +97,10 @@ TYPING_GATE = (
     "v.stopImmediatePropagation();var t=q.get(e);if(t!==undefined)clearTimeout(t);"
     "q.set(e,setTimeout(function(){go(e);},P));},true);"
     "document.addEventListener('keydown',function(v){if(v.key==='Enter'&&q.has(v.target))go(v.target);},true);"
+    "document.addEventListener('change',function(v){if(q.has(v.target))go(v.target);},true);"
     "document.addEventListener('blur',function(v){if(q.has(v.target))go(v.target);},true);"
+    "document.addEventListener('focusout',function(v){var e=v.target;if(!own(e))return;if(q.has(e))go(e);"
+    "v.stopImmediatePropagation();},true);"
     "})();</script>").encode()
 #: How long viser's "Software WebGL rendering detected" notice stays the first time, milliseconds.
 WEBGL_NOTICE_MS = 8000

@@ -5,7 +5,9 @@ accepts the whole valid range (a = 120, a cone of 80 degrees). The browser's box
 NumberInput, viser 1.1.1) clamps its value to the track's ends when it loses focus, and sends that end
 as a new value: a typed value that had been applied, or refused, became the track's end at the next
 click elsewhere, which is a value nobody typed. :func:`hold_typed_values` widens the track as soon as
-a value beyond it arrives, so the box has nothing to clamp.
+a value beyond it arrives, so the box has nothing to clamp once the wider track is in the page; the
+page's typing gate (:data:`paraspace.app.explorer.pagehook.TYPING_GATE`) keeps the box's blur from
+clamping before then.
 """
 
 from __future__ import annotations
