@@ -459,8 +459,11 @@ def handle_box(page: Page, handle: Any) -> Any:
 def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browser, explorer: Explorer) -> None:
     """Trust item 1: a value typed beyond the slider's track (a = 120, Table I's track ends at 100) is
     applied and stays 120 when the box loses focus (the browser's box clamps to the track's ends on
-    blur: it became 100); a refused value (d_s = 150 > r = 100) stays refused after the blur, never
-    applied as the track's end."""
+    blur: it became 100), whether the box is left after Enter, by Tab (the browser's change event came
+    first, and the box went back to the last applied value) or by a click elsewhere (the box's blur
+    clamped it to the track's end before the server's wider track arrived), and a value typed below a
+    track's lower end likewise (the total orientation's angle step 2 under its track's 2.5); a refused
+    value (d_s = 150 > r = 100) stays refused after the blur, never applied as the track's end."""
     page, s = open_page(browser, explorer, "voxel=6")
     full_volume_text(page)
     box = _number_box(page, s, "a")
@@ -474,29 +477,7 @@ def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browse
     time.sleep(2.0)
     assert s.state.design.a == 120.0 and box.input_value() == "120"
     assert s.panels.design["a"].max >= 120.0  # the track holds the value
-    box = _number_box(page, s, "d_s")
-    box.click()
-    box.press("Control+a")
-    box.press_sequentially("150", delay=150)
-    box.press("Enter")
-    def message() -> str:
-        return s.panels.design_message.content.replace("\\", "")  # markdown-escaped
-
-    wait_for(lambda: s.panels.design_message.visible and "d_s = 150 is invalid" in message(), 30, "d_s = 150 refused")
-    other.click()
-    time.sleep(2.0)
-    assert s.state.design.d_s == 50.0 and box.input_value() == "150"
-    assert "The design keeps d_s = 50" in message()
-    assert "a=120" in page.evaluate("() => location.search") and "d_s=1" not in page.evaluate("() => location.search")
-    # typed beyond the track and left at once, without Enter: by Tab (the browser's change event came
-    # first, and the box went back to the last applied value) and by a click elsewhere (the box's blur
-    # clamped it to the track's end before the server's wider track arrived); a value typed below a
-    # track's lower end (the total orientation's angle step 2 under its track's 2.5) likewise; on a
-    # fresh page (this one holds the refused d_s = 150)
-    page, s = open_page(browser, explorer, "voxel=6")
-    full_volume_text(page)
-    other = _number_box(page, s, "l_s")
-    for key, typed, leave in (("b", "45", "Tab"), ("l_min", "250", "click")):
+    for key, typed, leave in (("b", "45", "Tab"), ("l_min", "250", "click")):  # left at once, no Enter
         box = _number_box(page, s, key)
         assert float(typed) > s.panels.design[key].max  # beyond the track
         box.click()
@@ -521,6 +502,21 @@ def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browse
     wait_for(lambda: step.value == 2.0, 30, "angle step 2 applied")
     time.sleep(1.5)
     assert step.value == 2.0 and box.input_value() == "2"
+    page.get_by_role("tab", name="Design").click()
+    box = _number_box(page, s, "d_s")
+    box.click()
+    box.press("Control+a")
+    box.press_sequentially("150", delay=150)
+    box.press("Enter")
+    def message() -> str:
+        return s.panels.design_message.content.replace("\\", "")  # markdown-escaped
+
+    wait_for(lambda: s.panels.design_message.visible and "d_s = 150 is invalid" in message(), 30, "d_s = 150 refused")
+    other.click()
+    time.sleep(2.0)
+    assert s.state.design.d_s == 50.0 and box.input_value() == "150"
+    assert "The design keeps d_s = 50" in message()
+    assert "a=120" in page.evaluate("() => location.search") and "d_s=1" not in page.evaluate("() => location.search")
 
 
 def _watch_design(session: ClientSession, key: str, stop: threading.Event, seen: list[float]) -> None:
