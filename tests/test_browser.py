@@ -482,13 +482,13 @@ def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browse
         assert float(typed) > s.panels.design[key].max  # beyond the track
         box.click()
         box.press("Control+a")
-        box.press_sequentially(typed, delay=150)
+        box.press_sequentially(typed, delay=100)
         if leave == "Tab":
             box.press("Tab")
         else:
             other.click()
         wait_for(lambda key=key, typed=typed: getattr(s.state.design, key) == float(typed), 30, f"{key} = {typed}")
-        time.sleep(1.5)
+        time.sleep(1.0)  # the former gate's clamp came within a tenth of a second
         assert getattr(s.state.design, key) == float(typed) and box.input_value() == typed, (key, leave)
     step = s.dexterous.step
     page.get_by_role("tab", name="Pose").click()
@@ -500,7 +500,7 @@ def test_a_typed_value_beyond_the_track_survives_leaving_the_box(browser: Browse
     box.press("2")
     box.press("Tab")
     wait_for(lambda: step.value == 2.0, 30, "angle step 2 applied")
-    time.sleep(1.5)
+    time.sleep(1.0)
     assert step.value == 2.0 and box.input_value() == "2"
     page.get_by_role("tab", name="Design").click()
     box = _number_box(page, s, "d_s")
