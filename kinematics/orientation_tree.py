@@ -63,7 +63,8 @@ BUILD_WORK = 2_000_000
 def _build_steps(coords, flat, left, right, leaf, centre, lo, hi, perm, st, sp, k, work):
     """The splits of :func:`build_tree`, depth first without recursion, from the stack ``st[:sp + 1]``
     and the next node number ``k`` until the stack is empty or about ``work`` member visits are done
-    (a node's centre costs ``m^2`` visits at ``m <= CENTRE_EXACT`` members, its split ``m log m``):
+    (a node of ``m <= CENTRE_EXACT`` members counts ``m^2``, its exact centre; a larger one ``20 m``,
+    its mean centre and its split):
     per node (preorder) ``left, right, leaf, centre`` and its members ``perm[lo:hi]`` (each node's
     members stay in its range while its descendants reorder them). Returns ``(sp, k)`` (``sp < 0``:
     the tree is complete), so that :func:`_build` checks cancellation between calls. The centre of a
